@@ -1,0 +1,67 @@
+# g2tom: every target bootstraps .venv by itself.
+#   make run                      the paper's full study on the default scenario
+#   make test                     the test suite
+#   make run SCENARIO=published   a bundled scenario by name, or SCENARIO=path/to/file.toml
+#   make cube DATA=out SET="oxide.n_realizations=100 cube.weights=area"
+PYTHON   ?= python3
+VENV     := .venv
+G2TOM    := $(VENV)/bin/g2tom
+SCENARIO ?= paper
+DATA     ?= data
+SET      ?=
+ARGS     := --config $(SCENARIO) --data-dir $(DATA) $(foreach s,$(SET),--set $(s))
+SOURCES  := $(shell find pipeline -name '*.py' -o -name '*.toml')
+ANALYSIS := $(shell find analysis -name '*.py')
+STAMPS   := $(DATA)/.stamps
+
+.PHONY: all run test bench figures report stamps contact oxide cube fits surrogate params clean FORCE
+all: run
+
+$(VENV)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(VENV)/bin/pip install --quiet --upgrade pip
+	$(VENV)/bin/pip install --quiet -e '.[test]'
+	touch $@
+
+# The stamps are rewritten only when a stage's parameters change, so make re-runs a stage
+# exactly when its configuration, its inputs or the code changed.
+$(STAMPS)/%.json: FORCE | $(VENV)/.installed
+	@$(G2TOM) stamp $(ARGS)
+FORCE:
+
+$(DATA)/contact.nc: $(STAMPS)/contact.json $(SOURCES) | $(VENV)/.installed
+	$(G2TOM) contact $(ARGS)
+$(DATA)/oxide.nc: $(STAMPS)/oxide.json $(SOURCES) | $(VENV)/.installed
+	$(G2TOM) oxide $(ARGS)
+$(DATA)/cube.nc: $(STAMPS)/cube.json $(DATA)/contact.nc $(DATA)/oxide.nc $(SOURCES) | $(VENV)/.installed
+	$(G2TOM) cube $(ARGS)
+$(DATA)/fits.nc: $(STAMPS)/fits.json $(DATA)/cube.nc $(SOURCES) | $(VENV)/.installed
+	$(G2TOM) fits $(ARGS)
+$(DATA)/surrogate.nc: $(STAMPS)/surrogate.json $(DATA)/fits.nc $(SOURCES) | $(VENV)/.installed
+	$(G2TOM) surrogate $(ARGS)
+
+contact: $(DATA)/contact.nc
+oxide: $(DATA)/oxide.nc
+cube: $(DATA)/cube.nc
+fits: $(DATA)/fits.nc
+surrogate: $(DATA)/surrogate.nc
+
+figures: $(DATA)/surrogate.nc $(ANALYSIS)
+	$(G2TOM) figures $(ARGS)
+
+report: figures
+	$(G2TOM) report $(ARGS)
+
+run: report
+
+bench: | $(VENV)/.installed
+	$(G2TOM) bench $(ARGS)
+
+params: | $(VENV)/.installed
+	$(G2TOM) params $(ARGS)
+
+test: | $(VENV)/.installed
+	$(VENV)/bin/python -m pytest
+
+clean:
+	rm -rf $(DATA)/*.nc $(DATA)/figures $(DATA)/bench $(DATA)/report.* $(STAMPS)

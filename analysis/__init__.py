@@ -1,0 +1,1 @@
+"""Analysis: reductions, figures and the report built from the stage outputs."""

@@ -1,0 +1,35 @@
+"""All figures of ``make figures``, written under ``<data_dir>/figures``.
+
+Each figure family lives in its own module exposing
+``write(scenario, data_dir, out_dir) -> list[Path]``; a family whose input file is missing
+is an error (run the stages first).
+"""
+
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+
+import matplotlib
+
+from pipeline.config import Scenario
+
+matplotlib.use("Agg")
+
+__all__ = ["FAMILIES", "write_figures"]
+
+FAMILIES: tuple[str, ...] = (
+    "analysis.figures_contact",
+    "analysis.figures_oxide",
+    "analysis.figures_results",
+)
+
+
+def write_figures(scenario: Scenario, data_dir: str | Path) -> list[Path]:
+    """Write every figure family and return the files written."""
+    out_dir = Path(data_dir) / "figures"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    written: list[Path] = []
+    for name in FAMILIES:
+        written += importlib.import_module(name).write(scenario, Path(data_dir), out_dir)
+    return written

@@ -1,0 +1,47 @@
+"""Benchmarks behind ``make bench``: run time against error, as ratios to a plain reference.
+
+Each module ``pipeline.bench.<name>`` exposes ``run(scenario) -> dict`` returning JSON-ready
+figures (medians of repeated timings, errors, ratios to a reference run in the same process).
+:func:`run_benchmarks` prints them and saves ``<data_dir>/bench/<name>.json``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import platform
+import os
+from pathlib import Path
+from typing import Any, Iterable
+
+from pipeline import __version__
+from pipeline.config import Scenario
+from pipeline.store import atomic_path
+
+__all__ = ["BENCHMARKS", "run_benchmarks"]
+
+BENCHMARKS: tuple[str, ...] = ("contact", "oxide", "cube")
+
+
+def _machine() -> dict[str, Any]:
+    return {"cores": os.cpu_count(), "python": platform.python_version(), "g2tom": __version__}
+
+
+def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str] | None = None) -> dict[str, Path]:
+    """Run the benchmarks (all, or ``only`` those named), print and save each as JSON."""
+    names = tuple(only) if only else BENCHMARKS
+    unknown = [n for n in names if n not in BENCHMARKS]
+    if unknown:
+        raise ValueError(f"--only {unknown[0]!r} is not a benchmark: choose from {', '.join(BENCHMARKS)}")
+    out_dir = Path(data_dir) / "bench"
+    written: dict[str, Path] = {}
+    for name in names:
+        module = importlib.import_module(f"pipeline.bench.{name}")
+        result = {"benchmark": name, "scenario": scenario.name, "machine": _machine(), **module.run(scenario)}
+        text = json.dumps(result, indent=2, sort_keys=False, default=float)
+        print(f"== bench {name} ==\n{text}")
+        target = out_dir / f"{name}.json"
+        with atomic_path(target) as tmp:
+            tmp.write_text(text + "\n")
+        written[name] = target
+    return written

@@ -1,0 +1,583 @@
+"""Scenarios: the parameter set of a run, loaded from TOML, overridden and validated.
+
+A scenario is a nested, frozen set of dataclasses, one per section (``material``,
+``roughness``, ...). Every field declares its unit, meaning and allowed range in its
+metadata, so validation, documentation and provenance all come from one place. All values
+are SI unless a field's unit says otherwise (``loading.delta_max`` is in units of sigma).
+
+Bundled scenarios (``paper``, ``published``) live in :mod:`pipeline.scenarios` and are
+chosen by name; any other value of ``--config`` is read as a TOML file path.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import hashlib
+import json
+import math
+import tomllib
+import warnings
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+__all__ = [
+    "ConfigError",
+    "Scenario",
+    "load_scenario",
+    "bundled_scenarios",
+    "parameter_table",
+    "STAGE_INPUTS",
+]
+
+
+class ConfigError(ValueError):
+    """A parameter is unknown, malformed or outside its allowed range."""
+
+
+def _spec(
+    unit: str,
+    doc: str,
+    *,
+    gt: float | None = None,
+    ge: float | None = None,
+    lt: float | None = None,
+    le: float | None = None,
+    choices: tuple[str, ...] | None = None,
+    key: str | None = None,
+    each: bool = False,
+) -> dict[str, Any]:
+    """Field metadata: unit, description and allowed range (``each`` applies it per element)."""
+    return {
+        "unit": unit,
+        "doc": doc,
+        "gt": gt,
+        "ge": ge,
+        "lt": lt,
+        "le": le,
+        "choices": choices,
+        "key": key,
+        "each": each,
+    }
+
+
+def _param(default: Any, unit: str, doc: str, **limits: Any) -> Any:
+    if isinstance(default, list):
+        return field(default_factory=lambda: list(default), metadata=_spec(unit, doc, **limits))
+    return field(default=default, metadata=_spec(unit, doc, **limits))
+
+
+@dataclass(frozen=True)
+class Material:
+    """Effective elastic and electrical properties of the contacting pair (Table 1)."""
+
+    E: float = _param(2.1e11, "Pa", "Young's modulus of both bodies", gt=0)
+    nu: float = _param(0.3, "1", "Poisson's ratio of both bodies", gt=-1, lt=0.5)
+    rho: float = _param(7.2e-7, "ohm m", "effective resistivity rho* = (rho1 + rho2)/2", gt=0)
+
+    @property
+    def E_star(self) -> float:
+        """Effective modulus E* = E / (2 (1 - nu^2)) of two equal bodies, in Pa."""
+        return self.E / (2.0 * (1.0 - self.nu**2))
+
+
+@dataclass(frozen=True)
+class Roughness:
+    """Greenwood–Williamson asperity statistics (Table 1)."""
+
+    sigma: float = _param(20e-6, "m", "standard deviation of asperity heights", gt=0)
+    eta: float = _param(2e8, "m-2", "asperity density (asperities per unit area)", gt=0)
+    beta: float = _param(30e-6, "m", "mean asperity tip radius", gt=0)
+
+
+@dataclass(frozen=True)
+class Indenter:
+    """Axisymmetric indenter profile."""
+
+    shape: str = _param(
+        "sphere", "1", "indenter profile", choices=("sphere", "cone", "flat_punch")
+    )
+    radius: float = _param(10e-3, "m", "effective radius R* of the sphere", gt=0)
+    cone_angle: float = _param(
+        0.01, "rad", "cone: angle between the flank and the flat (profile r tan angle)", gt=0, lt=math.pi / 2
+    )
+    punch_radius: float = _param(1e-3, "m", "flat punch: radius of the flat face", gt=0)
+    edge_radius: float = _param(10e-3, "m", "flat punch: radius of the rounded edge", gt=0)
+
+
+@dataclass(frozen=True)
+class Loading:
+    """Approaches delta: evenly spaced from ``delta_max`` down to ``delta_min`` (units of sigma)."""
+
+    delta_max: float = _param(2.0, "sigma", "first (lightest) approach delta/sigma")
+    delta_min: float = _param(-3.0, "sigma", "last (heaviest) approach delta/sigma")
+    n_delta: int = _param(20, "1", "number of approaches", ge=1)
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Numerical settings of the Greenwood–Tripp solve and of the discretisation into spots."""
+
+    solver: str = _param(
+        "newton", "1", "Greenwood–Tripp solver", choices=("newton", "fixed_point")
+    )
+    n_radial: int = _param(400, "1", "number of radial nodes", ge=8)
+    r_max: float = _param(0.3, "R*", "outer radius of the radial domain, in units of R*", gt=0)
+    tolerance: float = _param(1e-10, "1", "Newton: relative residual to reach", gt=0, lt=1)
+    max_iterations: int = _param(200, "1", "iteration limit of either solver", ge=1)
+    relaxation: float = _param(0.3, "1", "fixed point: relaxation zeta", gt=0, le=1)
+    fixed_point_tolerance: float = _param(
+        1e-3, "1", "fixed point: relative displacement change epsilon", gt=0, lt=1
+    )
+    area_interpolation: str = _param(
+        "separation",
+        "1",
+        "how A* reaches the cell centres: interpolate the separation and evaluate A* there, "
+        "or interpolate A* linearly (the published study)",
+        choices=("separation", "area_fraction"),
+    )
+    window: float = _param(0.4, "R*", "side of the square spot window, in units of R*", gt=0)
+
+
+@dataclass(frozen=True)
+class Oxide:
+    """Thresholded Gaussian random fields (Sect. 2.6, Table 2)."""
+
+    xi: list[float] = _param(
+        [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9], "1", "oxide fractions", gt=0, lt=1, each=True
+    )
+    lambda_: list[float] = _param(
+        [1.0, 3.0, 5.0, 7.0, 9.0, 11.0, 13.0, 15.0, 17.0, 19.0, 21.0, 23.0],
+        "1",
+        "normalized correlation lengths l_O sqrt(eta)",
+        gt=0,
+        each=True,
+        key="lambda",
+    )
+    n_realizations: int = _param(500, "1", "random fields per correlation length", ge=2)
+    seed: int = _param(20240531, "1", "root seed of every random stream", ge=0)
+    hurst: float = _param(0.5, "1", "Hurst exponent H of the spectrum k^-2(1+H)", gt=0, lt=1)
+    ks_ratio: float = _param(3.0, "1", "upper to lower cut-off wavenumber ks/k1", gt=1)
+    amplitudes: str = _param(
+        "ideal", "1", "spectral amplitudes", choices=("ideal", "rayleigh")
+    )
+    threshold: str = _param(
+        "theoretical",
+        "1",
+        "threshold rule: Gaussian quantile sqrt(2) erfcinv(2 xi), or each realization's own quantile",
+        choices=("theoretical", "empirical"),
+    )
+    chunk: int = _param(50, "1", "realizations per dask chunk", ge=1)
+
+
+@dataclass(frozen=True)
+class Cube:
+    """Greenwood multi-spot resistance over xi x lambda x delta x realization."""
+
+    weights: str = _param(
+        "radius",
+        "1",
+        "interaction weights: spot radii (Eq. 13) or cell contact areas (the published code)",
+        choices=("radius", "area"),
+    )
+    crop_tolerance: float = _param(
+        1e-6, "1", "spots are cropped while their bounded effect on R stays below this", ge=0, lt=1
+    )
+    method: str = _param(
+        "auto", "1", "interaction sum algorithm", choices=("auto", "fft", "gemm", "direct")
+    )
+    chunk: int = _param(25, "1", "realizations per dask chunk", ge=1)
+
+
+@dataclass(frozen=True)
+class Fits:
+    """Reductions over realizations and power-law fits R' = alpha F'^-gamma."""
+
+    reduction: str = _param(
+        "geometric_mean",
+        "1",
+        "reduction over realizations that is fitted",
+        choices=("geometric_mean", "arithmetic_mean", "median"),
+    )
+    min_force: float = _param(200.0, "N", "fit only load steps with F >= min_force", ge=0)
+    n_bootstrap: int = _param(400, "1", "bootstrap resamples over realizations", ge=10)
+    confidence: float = _param(0.95, "1", "confidence level of the intervals", gt=0, lt=1)
+    seed: int = _param(7, "1", "seed of the bootstrap", ge=0)
+
+
+@dataclass(frozen=True)
+class Surrogate:
+    """Truncated-SVD polynomial surrogate of alpha(xi, lambda) and gamma(xi, lambda) (Eq. 26)."""
+
+    rank: int = _param(2, "1", "SVD rank r", ge=1)
+    alpha_order_w: int = _param(3, "1", "alpha: polynomial order in w = log(lambda)", ge=0)
+    alpha_order_z: int = _param(2, "1", "alpha: polynomial order in z = -log(1 - xi)", ge=0)
+    gamma_order_w: int = _param(2, "1", "gamma: polynomial order in w = log(lambda)", ge=0)
+    gamma_order_z: int = _param(1, "1", "gamma: polynomial order in z = -log(1 - xi)", ge=0)
+
+
+SECTIONS: dict[str, type] = {
+    "material": Material,
+    "roughness": Roughness,
+    "indenter": Indenter,
+    "loading": Loading,
+    "contact": Contact,
+    "oxide": Oxide,
+    "cube": Cube,
+    "fits": Fits,
+    "surrogate": Surrogate,
+}
+
+#: Parameters each stage depends on (whole sections or single ``section.key`` entries);
+#: a stage's config hash covers these and the hashes of the stages it reads.
+STAGE_INPUTS: dict[str, tuple[str, ...]] = {
+    "contact": ("material", "roughness", "indenter", "loading", "contact"),
+    "oxide": ("roughness.eta", "indenter.radius", "contact.window", "oxide"),
+    "cube": ("material.rho", "cube"),
+    "fits": ("fits",),
+    "surrogate": ("surrogate",),
+}
+STAGE_UPSTREAM: dict[str, tuple[str, ...]] = {
+    "contact": (),
+    "oxide": (),
+    "cube": ("contact", "oxide"),
+    "fits": ("cube",),
+    "surrogate": ("fits",),
+}
+
+
+def _key(f: dataclasses.Field) -> str:
+    return f.metadata.get("key") or f.name
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A complete, validated parameter set."""
+
+    name: str = "custom"
+    description: str = ""
+    material: Material = field(default_factory=Material)
+    roughness: Roughness = field(default_factory=Roughness)
+    indenter: Indenter = field(default_factory=Indenter)
+    loading: Loading = field(default_factory=Loading)
+    contact: Contact = field(default_factory=Contact)
+    oxide: Oxide = field(default_factory=Oxide)
+    cube: Cube = field(default_factory=Cube)
+    fits: Fits = field(default_factory=Fits)
+    surrogate: Surrogate = field(default_factory=Surrogate)
+
+    # ----------------------------------------------------------------- derived values
+    @property
+    def deltas(self) -> "list[float]":
+        """Approaches delta in m, lightest first."""
+        n = self.loading.n_delta
+        lo, hi = self.loading.delta_min, self.loading.delta_max
+        if n == 1:
+            return [hi * self.roughness.sigma]
+        return [(hi + (lo - hi) * i / (n - 1)) * self.roughness.sigma for i in range(n)]
+
+    @property
+    def cell_size(self) -> float:
+        """Cell pitch 1/sqrt(eta), in m."""
+        return 1.0 / math.sqrt(self.roughness.eta)
+
+    @property
+    def n_cells(self) -> int:
+        """Cells along one side of the window: the odd number closest to window/cell size."""
+        n = self.contact.window * self.indenter.radius / self.cell_size
+        k = int(round((n - 1.0) / 2.0))
+        return 2 * max(k, 0) + 1
+
+    # ----------------------------------------------------------------- provenance
+    def to_dict(self) -> dict[str, Any]:
+        """Nested plain dict ``{section: {key: value}}`` plus name and description."""
+        out: dict[str, Any] = {"name": self.name, "description": self.description}
+        for section in SECTIONS:
+            obj = getattr(self, section)
+            out[section] = {_key(f): getattr(obj, f.name) for f in dataclasses.fields(obj)}
+        return out
+
+    def flat(self) -> dict[str, Any]:
+        """``{"section.key": value}`` for every parameter."""
+        d = self.to_dict()
+        return {f"{s}.{k}": v for s in SECTIONS for k, v in d[s].items()}
+
+    def stage_parameters(self, stage: str) -> dict[str, Any]:
+        """The parameters ``stage`` depends on directly, as ``{"section.key": value}``."""
+        flat = self.flat()
+        wanted = STAGE_INPUTS[stage]
+        return {
+            k: v
+            for k, v in flat.items()
+            if any(k == w or k.startswith(w + ".") for w in wanted)
+        }
+
+    def config_hash(self, stage: str | None = None) -> str:
+        """SHA-256 (16 hex digits) of a stage's parameters and its upstream stages' hashes.
+
+        With ``stage=None`` the hash covers the whole scenario (name and description aside).
+        """
+        if stage is None:
+            payload: Any = self.flat()
+        else:
+            payload = {
+                "stage": stage,
+                "parameters": self.stage_parameters(stage),
+                "upstream": {u: self.config_hash(u) for u in STAGE_UPSTREAM[stage]},
+            }
+        text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+# --------------------------------------------------------------------------- validation
+def _fmt_range(meta: Mapping[str, Any]) -> str:
+    parts = []
+    if meta["choices"]:
+        return "one of " + ", ".join(repr(c) for c in meta["choices"])
+    if meta["gt"] is not None:
+        parts.append(f"> {meta['gt']:g}")
+    if meta["ge"] is not None:
+        parts.append(f">= {meta['ge']:g}")
+    if meta["lt"] is not None:
+        parts.append(f"< {meta['lt']:g}")
+    if meta["le"] is not None:
+        parts.append(f"<= {meta['le']:g}")
+    return " and ".join(parts) if parts else "any finite value"
+
+
+def _check_scalar(name: str, value: Any, kind: type, meta: Mapping[str, Any]) -> Any:
+    unit = meta["unit"]
+    allowed = _fmt_range(meta)
+    where = f"{name} = {value!r}"
+    if kind is str:
+        if not isinstance(value, str) or (meta["choices"] and value not in meta["choices"]):
+            raise ConfigError(f"{where} is not allowed: must be {allowed}")
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConfigError(f"{where} is not a number: must be {allowed} ({unit})")
+    if kind is int:
+        if isinstance(value, float) and not value.is_integer():
+            raise ConfigError(f"{where} is not an integer: must be an integer {allowed}")
+        value = int(value)
+    else:
+        value = float(value)
+        if not math.isfinite(value):
+            raise ConfigError(f"{where} is not finite: must be {allowed} ({unit})")
+    ok = (
+        (meta["gt"] is None or value > meta["gt"])
+        and (meta["ge"] is None or value >= meta["ge"])
+        and (meta["lt"] is None or value < meta["lt"])
+        and (meta["le"] is None or value <= meta["le"])
+    )
+    if not ok:
+        raise ConfigError(f"{where} is out of range: must be {allowed} ({unit})")
+    return value
+
+
+def _element_kind(f: dataclasses.Field) -> tuple[type, bool]:
+    ann = str(f.type)
+    if ann.startswith("list"):
+        return (float if "float" in ann else int if "int" in ann else str), True
+    return {"float": float, "int": int, "str": str}[ann], False
+
+
+def _check_field(section: str, f: dataclasses.Field, value: Any) -> Any:
+    name = f"{section}.{_key(f)}"
+    kind, is_list = _element_kind(f)
+    if not is_list:
+        return _check_scalar(name, value, kind, f.metadata)
+    if not isinstance(value, (list, tuple)) or len(value) == 0:
+        raise ConfigError(f"{name} = {value!r} must be a non-empty list of numbers")
+    out = [_check_scalar(f"{name}[{i}]", v, kind, f.metadata) for i, v in enumerate(value)]
+    if len(set(out)) != len(out) or out != sorted(out):
+        raise ConfigError(f"{name} = {value!r} must be strictly increasing")
+    return out
+
+
+def _all_keys() -> list[str]:
+    return [f"{s}.{_key(f)}" for s, cls in SECTIONS.items() for f in dataclasses.fields(cls)]
+
+
+def _unknown(name: str) -> ConfigError:
+    keys = _all_keys()
+    leaf = name.rsplit(".", 1)[-1]
+    exact_leaf = [k for k in keys if k.rsplit(".", 1)[-1].lower() == leaf.lower()]
+    close = exact_leaf or difflib.get_close_matches(name, keys, n=1, cutoff=0.5)
+    if not close:
+        close = difflib.get_close_matches(
+            leaf, [k.rsplit(".", 1)[-1] for k in keys], n=1, cutoff=0.6
+        )
+        close = [k for k in keys if close and k.endswith("." + close[0])][:1]
+    hint = f"; did you mean '{close[0]}'?" if close else ""
+    return ConfigError(f"unknown parameter '{name}'{hint}")
+
+
+def _cross_checks(s: Scenario) -> None:
+    if s.loading.delta_min > s.loading.delta_max:
+        raise ConfigError(
+            f"loading.delta_min = {s.loading.delta_min!r} is out of range: must be <= "
+            f"loading.delta_max = {s.loading.delta_max!r} (sigma)"
+        )
+    if s.loading.n_delta > 1 and s.loading.delta_min == s.loading.delta_max:
+        raise ConfigError(
+            "loading.delta_min must differ from loading.delta_max when loading.n_delta > 1"
+        )
+    window = s.contact.window * s.indenter.radius
+    if window > 2 * s.contact.r_max * s.indenter.radius:
+        raise ConfigError(
+            f"contact.window = {s.contact.window!r} is out of range: the spot window must lie "
+            f"inside the radial domain, so it must be <= 2 * contact.r_max = {2 * s.contact.r_max:g} (R*)"
+        )
+    if s.n_cells < 3:
+        raise ConfigError(
+            f"contact.window = {s.contact.window!r} is out of range: the window holds fewer than "
+            f"3 cells of pitch 1/sqrt(eta) = {s.cell_size:.3g} m"
+        )
+    longest = max(s.oxide.lambda_) * s.cell_size
+    if longest > window:
+        n_modes = _modes_in_band(s, max(s.oxide.lambda_))
+        if n_modes == 0:
+            raise ConfigError(
+                f"oxide.lambda = {max(s.oxide.lambda_):g} is out of range: the window "
+                f"({window:.3g} m) holds no Fourier mode of the band k1..ks; it must be "
+                f"<= {window / s.cell_size:.3g} for this window"
+            )
+        warnings.warn(
+            f"oxide.lambda = {max(s.oxide.lambda_):g}: the correlation length "
+            f"({longest:.3g} m) exceeds the window ({window:.3g} m); the band holds only "
+            f"{n_modes} independent Fourier modes",
+            stacklevel=3,
+        )
+
+
+def _modes_in_band(s: Scenario, lam: float) -> int:
+    """Number of independent (half-plane) wave vectors of the window's lattice in [k1, ks]."""
+    side = s.n_cells * s.cell_size
+    k1 = math.pi / (lam * s.cell_size)
+    ks = s.oxide.ks_ratio * k1
+    step = 2 * math.pi / side
+    m = int(ks / step) + 1
+    count = 0
+    for i in range(-m, m + 1):
+        for j in range(-m, m + 1):
+            k = step * math.hypot(i, j)
+            if k1 <= k <= ks:
+                count += 1
+    return count // 2
+
+
+def _build(data: Mapping[str, Any], *, name: str, description: str) -> Scenario:
+    sections: dict[str, Any] = {}
+    for key in data:
+        if key not in SECTIONS:
+            raise _unknown(key)
+    for section, cls in SECTIONS.items():
+        given = dict(data.get(section, {}))
+        by_key = {_key(f): f for f in dataclasses.fields(cls)}
+        for k in given:
+            if k not in by_key:
+                raise _unknown(f"{section}.{k}")
+        kwargs = {
+            by_key[k].name: _check_field(section, by_key[k], v) for k, v in given.items()
+        }
+        sections[section] = cls(**kwargs)
+    scenario = Scenario(name=name, description=description, **sections)
+    _cross_checks(scenario)
+    return scenario
+
+
+# --------------------------------------------------------------------------- loading
+def bundled_scenarios() -> list[str]:
+    """Names of the scenarios shipped with the package."""
+    files = resources.files("pipeline.scenarios")
+    return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".toml"))
+
+
+def _parse_value(text: str) -> Any:
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text  # a bare word such as fixed_point
+
+
+def _read_toml(config: str | Path) -> tuple[dict[str, Any], str]:
+    text_name = str(config)
+    if text_name in bundled_scenarios():
+        text = resources.files("pipeline.scenarios").joinpath(f"{text_name}.toml").read_text()
+        return tomllib.loads(text), text_name
+    path = Path(config)
+    if not path.is_file():
+        raise ConfigError(
+            f"--config {text_name!r} is neither a bundled scenario "
+            f"({', '.join(bundled_scenarios())}) nor a TOML file"
+        )
+    try:
+        return tomllib.loads(path.read_text()), path.stem
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"--config {text_name!r}: not valid TOML ({exc})") from None
+
+
+def load_scenario(
+    config: str | Path = "paper", overrides: Iterable[str] | Mapping[str, Any] = ()
+) -> Scenario:
+    """Load a bundled scenario by name or a TOML file, apply overrides and validate.
+
+    Parameters
+    ----------
+    config
+        A bundled scenario name (see :func:`bundled_scenarios`) or a path to a TOML file.
+        A file may set ``base = "paper"`` to start from a bundled scenario.
+    overrides
+        ``"section.key=value"`` strings (values in TOML syntax) or a mapping
+        ``{"section.key": value}``.
+
+    Raises
+    ------
+    ConfigError
+        Naming the parameter, its value and the allowed range.
+    """
+    data, name = _read_toml(config)
+    base = data.pop("base", None)
+    if base is not None:
+        if base not in bundled_scenarios():
+            raise ConfigError(f"base = {base!r} is not a bundled scenario ({', '.join(bundled_scenarios())})")
+        merged, _ = _read_toml(base)
+        for section, values in data.items():
+            if isinstance(values, dict) and isinstance(merged.get(section), dict):
+                merged[section].update(values)
+            else:
+                merged[section] = values
+        data = merged
+    name = str(data.pop("name", name))
+    description = str(data.pop("description", ""))
+    items = overrides.items() if isinstance(overrides, Mapping) else (
+        _split_override(o) for o in overrides
+    )
+    for dotted, value in items:
+        section, _, key = dotted.partition(".")
+        if section not in SECTIONS or not key:
+            raise _unknown(dotted)
+        data.setdefault(section, {})[key] = value
+    return _build(data, name=name, description=description)
+
+
+def _split_override(text: str) -> tuple[str, Any]:
+    if "=" not in text:
+        raise ConfigError(f"--set {text!r}: expected key=value, e.g. roughness.sigma=2e-5")
+    key, _, value = text.partition("=")
+    return key.strip(), _parse_value(value.strip())
+
+
+def parameter_table() -> list[tuple[str, Any, str, str, str]]:
+    """Every parameter as ``(key, default, unit, allowed range, description)``."""
+    rows = []
+    for section, cls in SECTIONS.items():
+        default = cls()
+        for f in dataclasses.fields(cls):
+            rows.append(
+                (f"{section}.{_key(f)}", getattr(default, f.name), f.metadata["unit"],
+                 _fmt_range(f.metadata), f.metadata["doc"])
+            )
+    return rows

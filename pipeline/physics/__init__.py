@@ -1,0 +1,1 @@
+"""Pure numpy/scipy physics: no xarray, no I/O."""

@@ -1,0 +1,1 @@
+"""Bundled scenarios, chosen by name (``--config paper``)."""

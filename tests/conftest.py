@@ -1,0 +1,34 @@
+"""Shared fixtures: small scenarios that keep the suite fast."""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import pytest  # noqa: E402
+
+from pipeline.config import Scenario, load_scenario  # noqa: E402
+
+SMALL_OVERRIDES = {
+    "loading.n_delta": 6,
+    "contact.n_radial": 160,
+    "oxide.xi": [0.2, 0.5, 0.8],
+    "oxide.lambda": [1.0, 5.0, 13.0],
+    "oxide.n_realizations": 8,
+    "oxide.chunk": 3,
+    "cube.chunk": 3,
+    "fits.n_bootstrap": 50,
+}
+
+
+@pytest.fixture(scope="session")
+def paper() -> Scenario:
+    """The default scenario, unchanged."""
+    return load_scenario("paper")
+
+
+@pytest.fixture(scope="session")
+def small() -> Scenario:
+    """The paper scenario shrunk to a few approaches, fractions, lengths and realizations."""
+    return load_scenario("paper", SMALL_OVERRIDES)
