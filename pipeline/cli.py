@@ -19,7 +19,7 @@ from typing import Callable, Sequence  # noqa: E402
 
 from pipeline.compute import ComputeOptions  # noqa: E402
 from pipeline.config import STAGE_INPUTS, ConfigError, Scenario, load_scenario, parameter_table  # noqa: E402
-from pipeline.store import StaleInputError  # noqa: E402
+from pipeline.store import StaleInputError, atomic_path  # noqa: E402
 
 __all__ = ["main", "STAGES"]
 
@@ -65,10 +65,22 @@ def _options(args: argparse.Namespace) -> ComputeOptions:
 
 
 def _run_stage(name: str, scenario: Scenario, args: argparse.Namespace) -> None:
+    options = _options(args)
     module = importlib.import_module(STAGES[name])
     start = time.perf_counter()
-    path = module.run(scenario, args.data_dir, _options(args))
-    print(f"{name}: wrote {path} in {time.perf_counter() - start:.2f} s", file=sys.stderr)
+    path = module.run(scenario, args.data_dir, options)
+    elapsed = time.perf_counter() - start
+    _record_timing(args.data_dir, name, elapsed)
+    print(f"{name}: wrote {path} in {elapsed:.2f} s", file=sys.stderr)
+
+
+def _record_timing(data_dir: Path, stage: str, seconds: float) -> None:
+    """Merge a stage's wall time into ``<data_dir>/timings.json`` (read by the report)."""
+    path = Path(data_dir) / "timings.json"
+    timings = json.loads(path.read_text()) if path.is_file() else {}
+    timings[stage] = round(seconds, 3)
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(timings, indent=1, sort_keys=True) + "\n")
 
 
 def _cmd_stage(args: argparse.Namespace, scenario: Scenario) -> None:

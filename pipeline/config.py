@@ -539,19 +539,22 @@ def load_scenario(
         Naming the parameter, its value and the allowed range.
     """
     data, name = _read_toml(config)
+    name = str(data.pop("name", name))
+    description = str(data.pop("description", ""))
     base = data.pop("base", None)
     if base is not None:
         if base not in bundled_scenarios():
             raise ConfigError(f"base = {base!r} is not a bundled scenario ({', '.join(bundled_scenarios())})")
         merged, _ = _read_toml(base)
+        merged.pop("name", None)
+        base_description = str(merged.pop("description", ""))
+        description = description or base_description
         for section, values in data.items():
             if isinstance(values, dict) and isinstance(merged.get(section), dict):
                 merged[section].update(values)
             else:
                 merged[section] = values
         data = merged
-    name = str(data.pop("name", name))
-    description = str(data.pop("description", ""))
     items = overrides.items() if isinstance(overrides, Mapping) else (
         _split_override(o) for o in overrides
     )

@@ -1,0 +1,130 @@
+"""Scenario loading, overrides, validation messages and configuration hashes."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import pytest
+
+from pipeline.config import ConfigError, bundled_scenarios, load_scenario, parameter_table
+
+
+def test_bundled_scenarios_are_listed() -> None:
+    assert {"paper", "published"} <= set(bundled_scenarios())
+
+
+def test_paper_scenario_embeds_tables_1_and_2(paper) -> None:
+    assert paper.material.E == 2.1e11 and paper.material.nu == 0.3
+    assert paper.material.E_star == pytest.approx(1.1538e11, rel=1e-4)
+    assert paper.roughness.sigma == 20e-6 and paper.roughness.eta == 2e8
+    assert paper.roughness.beta == 30e-6 and paper.indenter.radius == 10e-3
+    assert len(paper.oxide.xi) == 9 and len(paper.oxide.lambda_) == 12
+    assert paper.oxide.n_realizations == 500
+    deltas = paper.deltas
+    assert len(deltas) == 20
+    assert deltas[0] == pytest.approx(2 * 20e-6) and deltas[-1] == pytest.approx(-3 * 20e-6)
+    assert paper.n_cells == 57  # 0.4 R* sqrt(eta) = 56.6 -> nearest odd count
+
+
+def test_published_differs_only_in_its_conventions(paper) -> None:
+    published = load_scenario("published")
+    diff = {k for k, v in published.flat().items() if paper.flat()[k] != v}
+    assert diff == {
+        "contact.solver",
+        "contact.n_radial",
+        "contact.area_interpolation",
+        "cube.weights",
+    }
+
+
+def test_override_strings_and_mappings_agree() -> None:
+    a = load_scenario("paper", ["roughness.sigma=1.5e-5", "contact.solver=fixed_point"])
+    b = load_scenario("paper", {"roughness.sigma": 1.5e-5, "contact.solver": "fixed_point"})
+    assert a == b and a.roughness.sigma == 1.5e-5
+
+
+def test_toml_file_with_base(tmp_path) -> None:
+    path = tmp_path / "mine.toml"
+    path.write_text('base = "paper"\n[roughness]\nsigma = 1e-5\n')
+    s = load_scenario(path)
+    assert s.name == "mine" and s.roughness.sigma == 1e-5 and s.roughness.eta == 2e8
+
+
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [
+        ("roughness.sigma=-1e-6", "roughness.sigma = -1e-06 is out of range: must be > 0 (m)"),
+        ("roughness.eta=0", "roughness.eta = 0 is out of range: must be > 0"),
+        ("roughness.beta=-3", "roughness.beta"),
+        ("indenter.radius=0", "indenter.radius"),
+        ("material.E=-2e11", "material.E"),
+        ("material.rho=0", "material.rho"),
+        ("material.nu=0.5", "material.nu = 0.5 is out of range: must be > -1 and < 0.5"),
+        ("material.nu=-1", "material.nu"),
+        ("material.E=nan", "material.E = nan is not finite"),
+        ("roughness.sigma=inf", "roughness.sigma = inf is not finite"),
+        ("oxide.xi=[0.0, 0.5]", "oxide.xi[0] = 0.0 is out of range: must be > 0 and < 1"),
+        ("oxide.lambda=[-1.0]", "oxide.lambda[0] = -1.0 is out of range: must be > 0"),
+        ("oxide.n_realizations=1", "oxide.n_realizations = 1 is out of range: must be >= 2"),
+        ("oxide.hurst=1.0", "oxide.hurst"),
+        ("oxide.ks_ratio=1", "oxide.ks_ratio"),
+        ("contact.solver=magic", "contact.solver = 'magic' is not allowed: must be one of 'newton', 'fixed_point'"),
+        ("loading.n_delta=2.5", "loading.n_delta = 2.5 is not an integer"),
+        ("loading.delta_min=3", "loading.delta_min = 3.0 is out of range: must be <= loading.delta_max"),
+        ("oxide.xi=[0.5, 0.2]", "must be strictly increasing"),
+    ],
+)
+def test_bad_values_name_parameter_value_and_range(override: str, message: str) -> None:
+    with pytest.raises(ConfigError) as err:
+        load_scenario("paper", [override])
+    assert message in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("override", "suggestion"),
+    [
+        ("roughness.sigam=1", "roughness.sigma"),
+        ("sigma=1", "roughness.sigma"),
+        ("oxide.n_realisations=3", "oxide.n_realizations"),
+        ("materials.E=1", "material.E"),
+    ],
+)
+def test_unknown_key_suggests_nearest(override: str, suggestion: str) -> None:
+    with pytest.raises(ConfigError, match=f"did you mean '{suggestion}'"):
+        load_scenario("paper", [override])
+
+
+def test_malformed_override_and_missing_file() -> None:
+    with pytest.raises(ConfigError, match="expected key=value"):
+        load_scenario("paper", ["roughness.sigma"])
+    with pytest.raises(ConfigError, match="neither a bundled scenario"):
+        load_scenario("no/such/file.toml")
+
+
+def test_large_correlation_length_warns_with_mode_count() -> None:
+    with pytest.warns(UserWarning, match=r"oxide.lambda = 60.*independent Fourier modes"):
+        load_scenario("paper", ["oxide.lambda=[60.0]"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        load_scenario("paper")
+
+
+def test_stage_hashes_follow_only_their_inputs(paper) -> None:
+    oxide_change = load_scenario("paper", ["oxide.seed=1"])
+    assert oxide_change.config_hash("contact") == paper.config_hash("contact")
+    assert oxide_change.config_hash("oxide") != paper.config_hash("oxide")
+    # downstream stages inherit their inputs' hashes
+    assert oxide_change.config_hash("cube") != paper.config_hash("cube")
+    assert oxide_change.config_hash("fits") != paper.config_hash("fits")
+    fit_change = load_scenario("paper", ["fits.min_force=100"])
+    assert fit_change.config_hash("cube") == paper.config_hash("cube")
+    assert fit_change.config_hash("fits") != paper.config_hash("fits")
+
+
+def test_parameter_table_documents_every_parameter(paper) -> None:
+    rows = parameter_table()
+    assert {r[0] for r in rows} == set(paper.flat())
+    for key, _default, unit, allowed, doc in rows:
+        assert unit and allowed and doc, key
+    assert not any(isinstance(v, float) and not math.isfinite(v) for v in paper.flat().values())
