@@ -31,6 +31,9 @@ def test_write_records_provenance_and_reads_back(tmp_path, small) -> None:
     assert ds.attrs["roughness.sigma"] == small.roughness.sigma
     assert json.loads(ds.attrs["parameters"])["oxide"]["n_realizations"] == 8
     assert [p.name for p in tmp_path.iterdir()] == ["contact.nc"]
+    umask = os.umask(0)
+    os.umask(umask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask
 
 
 def test_stale_or_missing_input_is_refused(tmp_path, small) -> None:

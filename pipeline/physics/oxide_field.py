@@ -1,0 +1,323 @@
+"""Band-limited Gaussian random fields for the oxide islands (Sect. 2.6), pure numpy/scipy.
+
+The field is periodic over the square spot window of side ``L = n_cells * cell_size``, so its
+wave vectors lie on the lattice ``k = 2 pi (i, j) / L`` (``i`` along x, ``j`` along y). It is
+
+    psi(x, y) = Re sum_k c_k exp(i (k_x x + k_y y)),
+
+summed over one wave vector of every Hermitian pair (the half plane ``j > 0`` or ``j = 0,
+i > 0``) inside the band ``k1 <= |k| <= ks`` with ``k1 = pi / l_O``, ``l_O = lambda *
+cell_size`` and ``ks = ks_ratio * k1``. The complex coefficients are ``c_k = a_k exp(i phi_k)``
+with uniform random phases ``phi_k`` and amplitudes ``a_k`` proportional to ``sqrt(Phi(|k|))``,
+``Phi(k) = k^-2(1+H)`` ("ideal"), optionally multiplied by a unit Rayleigh variate
+("rayleigh"). The field has no mean mode, and its variance over one period is
+``sum |c_k|^2 / 2``; every realization is rescaled so that this variance is exactly 1, i.e. the
+field is rescaled by its own standard deviation over the whole window (the standard deviation a
+fine image of the field would have), not by the sample standard deviation of the few cell values.
+
+Exact values at the cell centres. The centres are ``x_p = (p - m) h`` with ``h = L / n``,
+``m = (n - 1) / 2`` (``n`` odd), so ``exp(2 pi i i x_p / L) = exp(2 pi i (i mod n)(p - m) / n)``:
+a mode takes at the centres exactly the values of the lattice mode ``(i mod n, j mod n)``.
+Folding every coefficient onto that n x n spectrum and doing one n x n inverse FFT gives the
+continuous field's point values, also where ``ks`` lies above the grid's Nyquist frequency
+(lambda near 1); :func:`field_at_points` and :func:`fine_grid` are the slow references.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import erfcinv
+
+__all__ = [
+    "Band",
+    "band",
+    "field_stream",
+    "coefficients",
+    "cell_values",
+    "field_at_points",
+    "fine_grid",
+    "theoretical_threshold",
+    "empirical_threshold",
+    "covered_count",
+]
+
+#: Resolution of lambda in the random-stream key: lambda values closer than this share a stream.
+LAMBDA_KEY_SCALE = 1_000_000
+
+
+@dataclass(frozen=True)
+class Band:
+    """The wave vectors of one correlation length on the window's lattice.
+
+    Attributes
+    ----------
+    i, j
+        Integer lattice indices of the wave vectors ``2 pi (i, j) / period`` (x and y), one per
+        Hermitian pair, in a fixed order (ascending ``j``, then ``i``): the order of the draws.
+    weight
+        Amplitude ``sqrt(Phi(|k|))`` of every mode, scaled so that an "ideal" field has unit
+        variance, dimensionless.
+    period
+        Side ``L`` of the periodic window, in m.
+    """
+
+    i: np.ndarray
+    j: np.ndarray
+    weight: np.ndarray
+    period: float
+
+    @property
+    def size(self) -> int:
+        """Number of independent modes (Hermitian pairs) in the band."""
+        return int(self.i.size)
+
+
+def band(n_cells: int, cell_size: float, lam: float, ks_ratio: float, hurst: float) -> Band:
+    """Lattice wave vectors in ``k1 <= |k| <= ks`` with their spectral amplitudes.
+
+    Parameters
+    ----------
+    n_cells
+        Cells along one side of the window; the period is ``n_cells * cell_size``.
+    cell_size
+        Cell pitch 1/sqrt(eta), in m.
+    lam
+        Normalized correlation length ``lambda = l_O sqrt(eta)``, dimensionless, > 0.
+    ks_ratio
+        Upper to lower cut-off ``ks / k1``, > 1.
+    hurst
+        Hurst exponent H in (0, 1) of the spectrum ``Phi(k) = k^-2(1+H)``.
+
+    Returns
+    -------
+    Band
+
+    Raises
+    ------
+    ValueError
+        If a parameter is out of range or the band holds no lattice mode.
+    """
+    _check_band_parameters(n_cells, cell_size, lam, ks_ratio, hurst)
+    period = n_cells * cell_size
+    # |k| in units of the lattice step 2 pi / L: k1 = pi / (lam h) -> n / (2 lam).
+    k1 = n_cells / (2.0 * lam)
+    ks = ks_ratio * k1
+    top = int(np.floor(ks))
+    j, i = np.meshgrid(np.arange(0, top + 1), np.arange(-top, top + 1), indexing="ij")
+    i, j = i.ravel(), j.ravel()
+    radius = np.hypot(i, j)
+    keep = (radius >= k1) & (radius <= ks) & ((j > 0) | (i > 0))
+    i, j, radius = i[keep], j[keep], radius[keep]
+    if i.size == 0:
+        raise ValueError(
+            f"lambda = {lam:g}: the band k1..ks holds no Fourier mode of a window of "
+            f"{n_cells} cells"
+        )
+    weight = radius ** (-(1.0 + hurst))
+    weight *= np.sqrt(2.0 / np.sum(weight**2))
+    return Band(i=i, j=j, weight=weight, period=period)
+
+
+def _check_band_parameters(
+    n_cells: int, cell_size: float, lam: float, ks_ratio: float, hurst: float
+) -> None:
+    if n_cells < 1 or n_cells % 2 == 0:
+        raise ValueError(f"n_cells = {n_cells} is out of range: must be odd and >= 1")
+    if not cell_size > 0:
+        raise ValueError(f"cell_size = {cell_size} is out of range: must be > 0 (m)")
+    if not lam > 0:
+        raise ValueError(f"lambda = {lam} is out of range: must be > 0")
+    if not ks_ratio > 1:
+        raise ValueError(f"ks_ratio = {ks_ratio} is out of range: must be > 1")
+    if not 0 < hurst < 1:
+        raise ValueError(f"hurst = {hurst} is out of range: must be in (0, 1)")
+
+
+def field_stream(seed: int, lam: float, realization: int) -> np.random.Generator:
+    """The random stream of one field, independent of chunking, workers and evaluation order.
+
+    The stream is ``SeedSequence(seed, spawn_key=(round(lam * 1e6), realization))``: it is keyed
+    on the value of lambda (not its position in the list), so adding or removing a correlation
+    length leaves the other fields unchanged.
+
+    Parameters
+    ----------
+    seed
+        Root seed of the scenario, >= 0.
+    lam
+        Normalized correlation length, > 0.
+    realization
+        Realization index, >= 0.
+    """
+    key = (int(round(lam * LAMBDA_KEY_SCALE)), int(realization))
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key)))
+
+
+def coefficients(modes: Band, rng: np.random.Generator, amplitudes: str = "ideal") -> np.ndarray:
+    """Complex mode coefficients ``c_k`` of one unit-variance field.
+
+    Draws the phases (uniform on [0, 2 pi)) first, then, for "rayleigh", one unit Rayleigh
+    factor per mode; both in the band's mode order.
+
+    Parameters
+    ----------
+    modes
+        The band, from :func:`band`.
+    rng
+        The field's stream, from :func:`field_stream`.
+    amplitudes
+        "ideal" (fixed amplitudes ``sqrt(Phi)``) or "rayleigh" (``sqrt(Phi)`` times Rayleigh).
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex, shape (modes.size,), with ``sum |c|^2 / 2 = 1`` (unit variance over the window).
+    """
+    phase = np.exp(2j * np.pi * rng.random(modes.size))
+    if amplitudes == "ideal":
+        return modes.weight * phase
+    if amplitudes != "rayleigh":
+        raise ValueError(f"amplitudes = {amplitudes!r} is not allowed: must be 'ideal' or 'rayleigh'")
+    amplitude = modes.weight * rng.rayleigh(1.0, modes.size)
+    return amplitude * np.sqrt(2.0 / np.sum(amplitude**2)) * phase
+
+
+def cell_values(modes: Band, coeffs: np.ndarray, n_cells: int) -> np.ndarray:
+    """Exact values of fields at the n x n cell centres, by folding the modes onto the grid.
+
+    Parameters
+    ----------
+    modes
+        The band, built for the same ``n_cells``.
+    coeffs
+        Complex coefficients, shape (..., modes.size).
+    n_cells
+        Cells along one side (odd).
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, shape (..., n_cells, n_cells), indexed ``[..., y, x]`` like
+        ``grid.cell_centres(n_cells, cell_size)``.
+    """
+    n = n_cells
+    folded = (modes.j % n) * n + (modes.i % n)
+    order = np.argsort(folded, kind="stable")
+    sorted_bins = folded[order]
+    starts = np.flatnonzero(np.r_[True, sorted_bins[1:] != sorted_bins[:-1]])
+    lead = coeffs.shape[:-1]
+    spectrum = np.zeros(lead + (n * n,), dtype=complex)
+    spectrum[..., sorted_bins[starts]] = np.add.reduceat(coeffs[..., order], starts, axis=-1)
+    values = np.fft.ifft2(spectrum.reshape(lead + (n, n)), norm="forward").real
+    # FFT index q is the centre offset p - m (mod n): shift so index p is the p-th centre.
+    return np.fft.fftshift(values, axes=(-2, -1))
+
+
+def field_at_points(modes: Band, coeffs: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Value of one field at arbitrary points by direct summation of its modes.
+
+    Parameters
+    ----------
+    modes
+        The band.
+    coeffs
+        Complex coefficients of one field, shape (modes.size,).
+    x, y
+        Point coordinates in m (broadcast together), relative to the window centre.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64 with the broadcast shape of ``x`` and ``y``.
+    """
+    x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
+    top = int(max(np.abs(modes.i).max(), modes.j.max()))
+    table = np.zeros((top + 1, 2 * top + 1), dtype=complex)  # [j, i + top]
+    table[modes.j, modes.i + top] = coeffs
+    step = 2.0 * np.pi / modes.period
+    ex = np.exp(1j * step * np.outer(x.ravel(), np.arange(-top, top + 1)))
+    ey = np.exp(1j * step * np.outer(y.ravel(), np.arange(0, top + 1)))
+    return np.einsum("pj,pj->p", ey, ex @ table.T).real.reshape(x.shape)
+
+
+def fine_grid(modes: Band, coeffs: np.ndarray, n_pixels: int) -> np.ndarray:
+    """Synthesis of fields on a fine n_pixels x n_pixels image of the window (the slow way).
+
+    Pixel ``(a, b)`` lies at ``(x, y) = (b, a) * period / n_pixels`` relative to the window
+    centre (the centre is pixel (0, 0); coordinates wrap with the period).
+
+    Parameters
+    ----------
+    modes
+        The band; every mode must lie below the image's Nyquist index ``n_pixels / 2``.
+    coeffs
+        Complex coefficients, shape (..., modes.size).
+    n_pixels
+        Image side in pixels.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, shape (..., n_pixels, n_pixels), indexed ``[..., y, x]``.
+    """
+    top = max(np.abs(modes.i).max(), modes.j.max())
+    if 2 * top >= n_pixels:
+        raise ValueError(
+            f"n_pixels = {n_pixels} is too small: modes up to index {top} need more than {2 * top}"
+        )
+    lead = coeffs.shape[:-1]
+    spectrum = np.zeros(lead + (n_pixels, n_pixels), dtype=complex)
+    spectrum[..., modes.j % n_pixels, modes.i % n_pixels] = coeffs
+    return np.fft.ifft2(spectrum, norm="forward").real
+
+
+def theoretical_threshold(xi: np.ndarray) -> np.ndarray:
+    """Gaussian threshold ``psi0 = sqrt(2) erfcinv(2 xi)``: P(psi >= psi0) = xi for N(0, 1).
+
+    Parameters
+    ----------
+    xi
+        Oxide fractions in (0, 1).
+
+    Returns
+    -------
+    numpy.ndarray
+        Thresholds, dimensionless, same shape as ``xi``.
+    """
+    xi = np.asarray(xi, dtype=float)
+    if np.any((xi <= 0) | (xi >= 1)):
+        raise ValueError(f"xi = {xi} is out of range: every value must be in (0, 1)")
+    return np.sqrt(2.0) * erfcinv(2.0 * xi)
+
+
+def covered_count(xi: np.ndarray, n_points: int) -> np.ndarray:
+    """Number of covered cells the empirical rule aims at: ``round(xi * n_points)`` (half to even)."""
+    return np.rint(np.asarray(xi, dtype=float) * n_points).astype(int)
+
+
+def empirical_threshold(values: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    """Each field's own threshold so that exactly ``round(xi N)`` of its N values are covered.
+
+    The threshold is the ``K``-th largest value itself (``K = round(xi N)``), so ``values >=
+    threshold`` covers exactly K cells unless the K-th and (K+1)-th largest values are equal
+    (ties; then the tied cells are all covered). K = 0 gives +inf (nothing covered).
+
+    Parameters
+    ----------
+    values
+        Field values, shape (..., N); compared in their own dtype.
+    xi
+        Oxide fractions in (0, 1), shape (n_xi,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Thresholds, shape (n_xi, ...), dtype of ``values``.
+    """
+    n = values.shape[-1]
+    count = covered_count(xi, n)
+    ordered = np.sort(values, axis=-1)  # ascending: K-th largest is at N - K
+    padded = np.concatenate([ordered, np.full(values.shape[:-1] + (1,), np.inf, values.dtype)], axis=-1)
+    return np.moveaxis(padded[..., n - count], -1, 0)

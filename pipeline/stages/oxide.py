@@ -1,0 +1,185 @@
+"""Stage 2: oxide ensembles, thresholded Gaussian random fields over lambda and realization.
+
+One unit-variance field per (lambda, realization) is evaluated exactly at the cell centres
+(:mod:`pipeline.physics.oxide_field`) and serves every oxide fraction xi. A cell is OXIDE where
+``psi >= threshold`` and CONDUCTING where ``psi < threshold``, comparing the stored float32
+values, so later stages rebuild bit-identical masks from ``psi`` and ``threshold``.
+
+Threshold rules (``oxide.threshold``):
+
+* ``theoretical``: ``psi0 = sqrt(2) erfcinv(2 xi)``, the same for every field.
+* ``empirical``: each field's own quantile: the ``K``-th largest of its N float32 cell values,
+  ``K = round(xi N)`` (half to even), so exactly K cells are covered (unless float32 values tie
+  at the threshold, when every tied cell is covered).
+
+Every field has its own random stream (``oxide_field.field_stream``), so ``psi`` does not depend
+on the dask chunking, the scheduler, the worker count or the order of evaluation.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import dask
+import dask.array as da
+import numpy as np
+import xarray as xr
+
+from pipeline import store
+from pipeline.compute import ComputeOptions, dask_context
+from pipeline.config import Scenario
+from pipeline.physics import oxide_field
+from pipeline.physics.grid import cell_centres
+
+__all__ = ["build", "run", "bands"]
+
+
+def bands(scenario: Scenario) -> list[oxide_field.Band]:
+    """The wave-vector band of every correlation length of the scenario, in ``oxide.lambda`` order."""
+    ox = scenario.oxide
+    return [
+        oxide_field.band(scenario.n_cells, scenario.cell_size, lam, ox.ks_ratio, ox.hurst)
+        for lam in ox.lambda_
+    ]
+
+
+def _psi_block(
+    realizations: np.ndarray,
+    *,
+    modes: list[oxide_field.Band],
+    lambdas: list[float],
+    seed: int,
+    amplitudes: str,
+    n_cells: int,
+) -> np.ndarray:
+    """Fields of a chunk of realizations at every lambda: float32 (lambda, realization, y, x)."""
+    out = np.empty((len(lambdas), realizations.size, n_cells, n_cells), dtype=np.float32)
+    for a, (lam, band) in enumerate(zip(lambdas, modes)):
+        coeffs = np.stack(
+            [
+                oxide_field.coefficients(band, oxide_field.field_stream(seed, lam, r), amplitudes)
+                for r in realizations
+            ]
+        )
+        out[a] = oxide_field.cell_values(band, coeffs, n_cells)
+    return out
+
+
+def _threshold_block(psi: np.ndarray, *, xi: np.ndarray, rule: str) -> np.ndarray:
+    """float32 thresholds (xi, lambda, realization) of a chunk of fields."""
+    if rule == "theoretical":
+        value = oxide_field.theoretical_threshold(xi).astype(np.float32)
+        return np.broadcast_to(value[:, None, None], (xi.size,) + psi.shape[:2]).copy()
+    return oxide_field.empirical_threshold(psi.reshape(psi.shape[:2] + (-1,)), xi)
+
+
+def _fraction_block(psi: np.ndarray, threshold: np.ndarray) -> np.ndarray:
+    """Covered fraction (xi, lambda, realization) of the cell centres: mean of psi >= threshold."""
+    flat = psi.reshape(psi.shape[:2] + (-1,))
+    covered = flat[None] >= threshold[..., None]
+    return covered.sum(axis=-1) / flat.shape[-1]
+
+
+def _lazy(scenario: Scenario) -> tuple[da.Array, da.Array, da.Array]:
+    """Dask arrays psi, threshold and oxide_fraction, chunked over realization."""
+    ox = scenario.oxide
+    n = scenario.n_cells
+    xi = np.asarray(ox.xi, dtype=float)
+    realization = da.arange(ox.n_realizations, chunks=ox.chunk)
+    psi = da.map_blocks(
+        _psi_block,
+        realization,
+        modes=bands(scenario),
+        lambdas=list(ox.lambda_),
+        seed=ox.seed,
+        amplitudes=ox.amplitudes,
+        n_cells=n,
+        new_axis=[0, 2, 3],
+        chunks=((len(ox.lambda_),), realization.chunks[0], (n,), (n,)),
+        dtype=np.float32,
+        meta=np.empty((0, 0, 0, 0), np.float32),
+    )
+    # Index letters: z = xi, l = lambda, r = realization; y, x are reduced (one chunk each).
+    threshold = da.blockwise(
+        _threshold_block, "zlr", psi, "lryx",
+        xi=xi, rule=ox.threshold, new_axes={"z": xi.size}, concatenate=True,
+        dtype=np.float32, meta=np.empty((0, 0, 0), np.float32),
+    )
+    fraction = da.blockwise(
+        _fraction_block, "zlr", psi, "lryx", threshold, "zlr",
+        concatenate=True, dtype=np.float64, meta=np.empty((0, 0, 0), np.float64),
+    )
+    return psi, threshold, fraction
+
+
+def _dataset(scenario: Scenario, psi: np.ndarray, threshold: np.ndarray, fraction: np.ndarray) -> xr.Dataset:
+    """Wrap the computed arrays with coordinates and attributes."""
+    ox = scenario.oxide
+    centres = cell_centres(scenario.n_cells, scenario.cell_size)
+    modes = bands(scenario)
+    coords = {
+        "lambda": ("lambda", np.asarray(ox.lambda_, float),
+                   {"units": "1", "long_name": "normalized oxide correlation length l_O sqrt(eta)"}),
+        "realization": ("realization", np.arange(ox.n_realizations),
+                        {"units": "1", "long_name": "realization index of the random field"}),
+        "xi": ("xi", np.asarray(ox.xi, float), {"units": "1", "long_name": "nominal oxide fraction"}),
+        "y": ("y", centres, {"units": "m", "long_name": "cell-centre y coordinate from the axis"}),
+        "x": ("x", centres, {"units": "m", "long_name": "cell-centre x coordinate from the axis"}),
+        "correlation_length": ("lambda", np.asarray(ox.lambda_, float) * scenario.cell_size,
+                               {"units": "m", "long_name": "oxide correlation length l_O = pi / k1"}),
+    }
+    data_vars = {
+        "psi": (("lambda", "realization", "y", "x"), psi, {
+            "units": "1",
+            "long_name": "unit-variance Gaussian random field at the cell centres",
+            "comment": "oxide where psi >= threshold, conducting where psi < threshold (float32)",
+        }),
+        "threshold": (("xi", "lambda", "realization"), threshold, {
+            "units": "1",
+            "long_name": "threshold psi0 used for each field",
+            "rule": ox.threshold,
+        }),
+        "oxide_fraction": (("xi", "lambda", "realization"), fraction, {
+            "units": "1",
+            "long_name": "realized oxide-covered fraction of the cell centres",
+        }),
+        "n_modes": ("lambda", np.array([m.size for m in modes]), {
+            "units": "1",
+            "long_name": "independent Fourier modes (Hermitian pairs) in the band k1..ks",
+        }),
+    }
+    attrs = {
+        "oxide_rule": "a cell is oxide where psi >= threshold (float32 comparison)",
+        "field_normalization": "each realization has unit variance over the whole periodic window",
+        "random_streams": "SeedSequence(oxide.seed, spawn_key=(round(lambda * 1e6), realization))",
+        "period": scenario.n_cells * scenario.cell_size,
+        "period_units": "m",
+    }
+    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=False)) -> xr.Dataset:
+    """Compute the oxide ensemble of ``scenario`` with dask over realization chunks.
+
+    Parameters
+    ----------
+    scenario
+        The validated scenario (section ``oxide``, the cell grid).
+    options
+        Where dask runs (see :func:`pipeline.compute.dask_context`).
+
+    Returns
+    -------
+    xarray.Dataset
+        In memory: ``psi`` (lambda, realization, y, x) float32, ``threshold`` and
+        ``oxide_fraction`` (xi, lambda, realization), ``n_modes`` (lambda).
+    """
+    psi, threshold, fraction = _lazy(scenario)
+    with dask_context(options):
+        psi, threshold, fraction = dask.compute(psi, threshold, fraction)
+    return _dataset(scenario, psi, threshold, fraction)
+
+
+def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
+    """Build the ensemble and write ``<data_dir>/oxide.nc`` atomically; return its path."""
+    return store.write_dataset(build(scenario, options), data_dir, "oxide", scenario)
