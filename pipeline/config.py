@@ -123,8 +123,15 @@ class Contact:
     solver: str = _param(
         "newton", "1", "Greenwood–Tripp solver", choices=("newton", "fixed_point")
     )
-    n_radial: int = _param(400, "1", "number of radial nodes", ge=8)
+    n_radial: int = _param(720, "1", "number of radial nodes", ge=8)
     r_max: float = _param(0.3, "R*", "outer radius of the radial domain, in units of R*", gt=0)
+    radial_grid: str = _param(
+        "graded",
+        "1",
+        "radial nodes: uniform, or uniform where asperities can touch (rigid gap < 4 sigma at "
+        "the heaviest approach) and 4 times coarser beyond",
+        choices=("uniform", "graded"),
+    )
     tolerance: float = _param(1e-10, "1", "Newton: relative residual to reach", gt=0, lt=1)
     max_iterations: int = _param(200, "1", "iteration limit of either solver", ge=1)
     relaxation: float = _param(0.3, "1", "fixed point: relaxation zeta", gt=0, le=1)
@@ -186,7 +193,13 @@ class Cube:
         1e-6, "1", "spots are cropped while their bounded effect on R stays below this", ge=0, lt=1
     )
     method: str = _param(
-        "auto", "1", "interaction sum algorithm", choices=("auto", "fft", "gemm", "direct")
+        "auto",
+        "1",
+        "interaction sum algorithm: auto (the fastest, folded), folded (dft_gemm on the four "
+        "mirror-parity quarters), dft_gemm or fft_gemm (real DFT along x as a GEMM or by FFT, "
+        "then Toeplitz GEMM along y), fft (2-D real FFT, Parseval), gemm (dense 1/d), "
+        "direct (double sum)",
+        choices=("auto", "folded", "dft_gemm", "fft_gemm", "fft", "gemm", "direct"),
     )
     chunk: int = _param(25, "1", "realizations per dask chunk", ge=1)
 

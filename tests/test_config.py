@@ -33,6 +33,7 @@ def test_published_differs_only_in_its_conventions(paper) -> None:
     assert diff == {
         "contact.solver",
         "contact.n_radial",
+        "contact.radial_grid",
         "contact.area_interpolation",
         "cube.weights",
     }

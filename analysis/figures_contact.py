@@ -1,0 +1,112 @@
+"""Figures of stage 1: the Greenwood–Tripp solution (paper Fig. 4) and its spots (Fig. 5)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.collections import EllipseCollection
+
+from pipeline.config import Scenario
+from pipeline.physics.asperity import area_fraction
+from pipeline.physics.hertz import hertz_force
+from pipeline.store import read_stage
+
+__all__ = ["write", "FIG5_DELTAS", "FIG4_DELTA"]
+
+#: delta / sigma of the four panels of Fig. 5 and of Fig. 4 (Table 1).
+FIG5_DELTAS: tuple[float, ...] = (2.0, 0.0, -1.75, -3.0)
+FIG4_DELTA = -2.0
+
+
+def _nearest(ds: xr.Dataset, target: float) -> int:
+    return int(np.argmin(np.abs(ds.delta_sigma.values - target)))
+
+
+def _fig4(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
+    rough, e_star = scenario.roughness, scenario.material.E_star
+    radius = scenario.indenter.radius
+    k = _nearest(ds, FIG4_DELTA)
+    one = ds.isel(delta=k)
+    sigma = rough.sigma
+    rn = ds.r.values / np.sqrt(radius * sigma)
+    p_bar = e_star * np.sqrt(sigma * radius)
+    keep = rn <= 3.5 * max(1.0, float(one.hertz_radius) / np.sqrt(radius * sigma))
+    fig, ax = plt.subplots(2, 3, figsize=(13, 7.5), constrained_layout=True)
+    title = f"delta/sigma = {float(one.delta_sigma):.2f}, F = {float(one.force):.0f} N"
+    a = ax[0, 0]
+    a.plot(rn[keep], one.pressure[keep] / p_bar, label="Greenwood–Tripp")
+    a.plot(rn[keep], one.hertz_pressure[keep] / p_bar, "--", label="Hertz, same force")
+    a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$p/(E^*\sqrt{\sigma R^*})$", title="(a) pressure")
+    a.legend()
+    a = ax[0, 1]
+    a.plot(rn[keep], (one.delta.values + one.profile[keep]) / sigma, "k--", label="initial (rigid)")
+    a.plot(rn[keep], one.separation[keep] / sigma, label="Greenwood–Tripp")
+    a.plot(rn[keep], one.hertz_separation[keep] / sigma, ":", label="Hertz")
+    a.axhline(0, color="0.6", lw=0.8)
+    a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"gap above mean plane / $\sigma$",
+          title="(b) configuration")
+    a.legend()
+    a = ax[0, 2]
+    a.plot(rn[keep], one.displacement[keep] / sigma, label="Greenwood–Tripp")
+    a.plot(rn[keep], one.hertz_displacement[keep] / sigma, "--", label="Hertz")
+    a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$u/\sigma$", title="(c) displacement")
+    a.legend()
+    a = ax[1, 0]
+    a.plot(rn[keep], one.area_fraction[keep], label=r"$A^*$")
+    a.axvline(float(one.hertz_radius) / np.sqrt(radius * sigma), color="C1", ls="--", label="Hertz radius")
+    a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$A^*$", title="(d) area fraction")
+    a.legend()
+    a = ax[1, 1]
+    rigid = area_fraction(one.delta.values + one.profile.values, sigma, rough.eta, rough.beta)
+    a.semilogy(rn, one.area_fraction, label=r"$A^*$")
+    a.semilogy(rn, rigid, "--", label="Eq. 22 (rigid, with the 1/2)")
+    a.set_ylim(1e-30, 1.0)
+    a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$A^*$", title="(e) area fraction, semi-log")
+    a.legend()
+    a = ax[1, 2]
+    d = ds.delta_sigma.values
+    a.semilogy(d, ds.force, "o-", label="Greenwood–Tripp")
+    hertz = hertz_force(-ds.delta.values, radius, e_star)
+    a.semilogy(d[hertz > 0], hertz[hertz > 0], "s--", label="Hertz, same interpenetration")
+    a.invert_xaxis()
+    a.set(xlabel=r"$\delta/\sigma$", ylabel="force, N", title="(f) force")
+    a.legend()
+    fig.suptitle(f"Greenwood–Tripp contact ({scenario.name}): {title}")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def _fig5(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
+    x_mm = ds.x.values * 1e3
+    xx, yy = np.meshgrid(x_mm, ds.y.values * 1e3)
+    offsets = np.column_stack([xx.ravel(), yy.ravel()])
+    fig, axes = plt.subplots(1, 4, figsize=(16, 4.4), constrained_layout=True)
+    for ax, target in zip(axes, FIG5_DELTAS):
+        one = ds.isel(delta=_nearest(ds, target))
+        diam = 2e3 * one.spot_radius.values.ravel()
+        ax.add_collection(EllipseCollection(diam, diam, np.zeros_like(diam), units="x",
+                                            offsets=offsets, offset_transform=ax.transData,
+                                            facecolors="k", edgecolors="none"))
+        for value, style, label in ((one.hertz_radius, "C0", "Hertz"), (one.holm_radius, "C3", "Holm–Greenwood")):
+            if np.isfinite(value):
+                ax.add_patch(plt.Circle((0, 0), 1e3 * float(value), fill=False, color=style, lw=1.5, label=label))
+        ax.set(xlim=(x_mm[0], x_mm[-1]), ylim=(x_mm[0], x_mm[-1]), aspect="equal", xlabel="x, mm",
+               title=f"delta/sigma = {float(one.delta_sigma):.2f}, F = {float(one.force):.0f} N")
+    axes[0].set_ylabel("y, mm")
+    axes[0].legend(loc="upper right", fontsize=8)
+    fig.suptitle(f"Contact spots, one per cell of side 1/sqrt(eta) ({scenario.name})")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
+    """Write fig4_contact.png and fig5_spots.png from ``<data_dir>/contact.nc``."""
+    ds = read_stage(data_dir, "contact", scenario)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    return [_fig4(ds, scenario, out_dir / "fig4_contact.png"), _fig5(ds, scenario, out_dir / "fig5_spots.png")]

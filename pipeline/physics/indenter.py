@@ -1,0 +1,64 @@
+"""Axisymmetric indenter profiles: the initial gap above the tip, as a function of radius."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+__all__ = ["SHAPES", "profile"]
+
+SHAPES: tuple[str, ...] = ("sphere", "cone", "flat_punch")
+
+
+def _positive(name: str, value: float, unit: str) -> None:
+    if not (np.isfinite(value) and value > 0):
+        raise ValueError(f"{name} = {value!r} is out of range: must be > 0 ({unit})")
+
+
+def profile(
+    r: ArrayLike,
+    shape: str = "sphere",
+    *,
+    radius: float = 10e-3,
+    cone_angle: float = 0.01,
+    punch_radius: float = 1e-3,
+    edge_radius: float = 10e-3,
+) -> np.ndarray:
+    """Height of the undeformed indenter surface above its lowest point, z(r) >= 0.
+
+    Parameters
+    ----------
+    r
+        Radial coordinate, m (>= 0).
+    shape
+        ``"sphere"``: paraboloid r^2 / (2 R) (Hertz's approximation of a sphere);
+        ``"cone"``: r tan(angle); ``"flat_punch"``: flat for r <= b, then a parabolic
+        rounded edge (r - b)^2 / (2 R_e).
+    radius
+        Sphere radius R*, m.
+    cone_angle
+        Angle between the cone flank and the flat, rad, in (0, pi/2).
+    punch_radius
+        Radius b of the punch's flat face, m.
+    edge_radius
+        Radius R_e of the rounded edge, m.
+
+    Returns
+    -------
+    numpy.ndarray
+        z(r) in m, same shape as ``r``.
+    """
+    r = np.asarray(r, dtype=float)
+    if shape == "sphere":
+        _positive("radius", radius, "m")
+        return r * r / (2.0 * radius)
+    if shape == "cone":
+        if not (0 < cone_angle < np.pi / 2):
+            raise ValueError(f"cone_angle = {cone_angle!r} is out of range: must be in (0, pi/2) (rad)")
+        return r * np.tan(cone_angle)
+    if shape == "flat_punch":
+        _positive("punch_radius", punch_radius, "m")
+        _positive("edge_radius", edge_radius, "m")
+        excess = np.maximum(r - punch_radius, 0.0)
+        return excess * excess / (2.0 * edge_radius)
+    raise ValueError(f"shape = {shape!r} is not allowed: must be one of {', '.join(SHAPES)}")

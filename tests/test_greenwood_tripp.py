@@ -1,0 +1,139 @@
+"""Influence matrix, solvers and limits of the axisymmetric Greenwood–Tripp solve."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.special import ellipkm1, i0e
+
+from pipeline.config import load_scenario
+from pipeline.physics import greenwood_tripp as gt
+from pipeline.physics.asperity import asperity_pressure
+from pipeline.physics.hertz import hertz_force, hertz_radius, roughness_parameter
+from pipeline.physics.indenter import profile
+from pipeline.stages.contact import solve_scenario
+
+
+def _quad_displacement(r_nodes, p_nodes, r, e_star):
+    """Eq. 18 for the piecewise-linear pressure by adaptive quadrature, element by element."""
+    def integrand(rho):
+        return rho / (rho + r) * np.interp(rho, r_nodes, p_nodes) * ellipkm1(((rho - r) / (rho + r)) ** 2)
+    total = sum(quad(integrand, a, b, epsabs=0, epsrel=1e-12, limit=200)[0]
+                for a, b in zip(r_nodes[:-1], r_nodes[1:]))
+    return 4.0 / (math.pi * e_star) * total
+
+
+def test_influence_matrix_matches_quadrature_of_linear_pressure():
+    r = gt.radial_nodes(41, 4.0)
+    p = np.exp(-r**2) * (1 + r)
+    u = gt.influence_matrix(r, 2.0) @ p
+    for i in (0, 1, 2, 7, 25, 40):
+        assert u[i] == pytest.approx(_quad_displacement(r, p, r[i], 2.0), rel=1e-8)
+
+
+def test_influence_matrix_gaussian_pressure_converges_second_order():
+    """p = exp(-r^2/s^2) gives u = sqrt(pi) s e^{-r^2/2s^2} I0(r^2/2s^2) / E*."""
+    errors = []
+    for n in (100, 200, 400):
+        r = gt.radial_nodes(n, 6.0)
+        exact = math.sqrt(math.pi) * i0e(r**2 / 2)
+        errors.append(np.max(np.abs(gt.influence_matrix(r, 1.0) @ np.exp(-r**2) - exact)) / exact.max())
+    assert errors[-1] < 3e-5
+    assert 3.5 < errors[0] / errors[1] < 4.5 and 3.5 < errors[1] / errors[2] < 4.5
+
+
+def test_influence_matrix_hertz_displacement():
+    a, p0, e_star = 2.0, 1.0, 1.0
+    r = gt.radial_nodes(400, 6.0)
+    u = gt.influence_matrix(r, e_star) @ (p0 * np.sqrt(np.clip(1 - r**2 / a**2, 0, None)))
+    inside = r <= a
+    exact = math.pi * p0 * (2 * a**2 - r[inside] ** 2) / (4 * a * e_star)
+    np.testing.assert_allclose(u[inside], exact, rtol=2e-3)  # sqrt edge: O(h^1.5)
+
+
+def test_force_weights_exact_for_linear_pressure():
+    r = gt.graded_nodes(50, 3.0, 1.0)
+    assert gt.force_weights(r) @ (1 - r / 3.0) == pytest.approx(math.pi * 9 / 3, rel=1e-13)
+
+
+def test_graded_nodes():
+    r = gt.graded_nodes(100, 3.0, 2.0)
+    steps = np.diff(r)
+    assert len(r) == 100 and r[0] == 0 and r[-1] == 3.0 and np.all(steps > 0)
+    assert steps[-1] / steps[0] == pytest.approx(4.0, rel=0.1)
+    np.testing.assert_array_equal(gt.graded_nodes(10, 3.0, 5.0), gt.radial_nodes(10, 3.0))
+
+
+@pytest.mark.parametrize("bad", [{"n": 1}, {"r_max": 0.0}, {"r_max": float("nan")}])
+def test_radial_nodes_validation(bad):
+    args = {"n": 10, "r_max": 1.0, **bad}
+    with pytest.raises(ValueError, match="out of range"):
+        gt.radial_nodes(args["n"], args["r_max"])
+
+
+def test_solver_validation():
+    with pytest.raises(ValueError, match="solver = 'gauss'"):
+        gt.solve(np.eye(2), np.zeros(2), [0.0], gt.Layer(1, 1, 1, 1), solver="gauss")
+
+
+def _check_residual(scenario, r, sols):
+    """Recompute max|u - M p(u)| / max|M p(u)| independently of the solver."""
+    rough = scenario.roughness
+    m = gt.influence_matrix(r, scenario.material.E_star)
+    z = profile(r, radius=scenario.indenter.radius)
+    for delta, sol in zip(scenario.deltas, sols):
+        image = m @ asperity_pressure(delta + z + sol.displacement, rough.sigma, rough.eta,
+                                      rough.beta, scenario.material.E_star)
+        yield np.max(np.abs(sol.displacement - image)) / np.max(np.abs(image))
+
+
+def test_newton_residual_and_fixed_point_agreement(small):
+    r, newton = solve_scenario(small)
+    residuals = list(_check_residual(small, r, newton))
+    assert max(residuals) <= 1e-10
+    assert all(s.converged and s.residual <= 1e-10 for s in newton)
+    _, fixed = solve_scenario(small, solver="fixed_point")
+    assert all(s.converged for s in fixed)
+    for a, b in zip(newton, fixed):
+        np.testing.assert_allclose(b.displacement, a.displacement, rtol=0,
+                                   atol=5e-3 * np.max(a.displacement))
+
+
+def test_fixed_point_not_converged_is_reported(small):
+    sc = load_scenario("paper", {"loading.n_delta": 2, "contact.n_radial": 40, "contact.max_iterations": 2})
+    _, fixed = solve_scenario(sc, solver="fixed_point")
+    assert not any(s.converged for s in fixed) and all(s.iterations == 2 for s in fixed)
+
+
+def test_roughness_parameter_at_minus_two_sigma():
+    """Table 1 at delta = -2 sigma: sigma R*/a^2 ~= 0.361 (Sect. 2.5.1)."""
+    sc = load_scenario("paper", {"loading.n_delta": 1, "loading.delta_max": -2.0})
+    r, (sol,) = solve_scenario(sc)
+    rough, e_star, radius = sc.roughness, sc.material.E_star, sc.indenter.radius
+    p = asperity_pressure(-2 * rough.sigma + profile(r, radius=radius) + sol.displacement,
+                          rough.sigma, rough.eta, rough.beta, e_star)
+    a = hertz_radius(gt.force_weights(r) @ p, radius, e_star)
+    assert roughness_parameter(rough.sigma, radius, a) == pytest.approx(0.361, rel=0.01)
+
+
+def _limit_force(stiffening: float) -> tuple[float, float]:
+    """Force of a smooth (sigma = 1 nm), stiffened layer and Hertz's at the same interpenetration."""
+    radius, e_star, delta = 10e-3, 1.15e11, -20e-6
+    layer = gt.Layer(sigma=1e-9, eta=2e8 * stiffening, beta=30e-6, e_star=e_star)
+    r = gt.radial_nodes(400, 1e-3)
+    (sol,) = gt.solve(gt.influence_matrix(r, e_star), profile(r, radius=radius), [delta], layer)
+    assert sol.converged
+    p = asperity_pressure(delta + profile(r, radius=radius) + sol.displacement,
+                          layer.sigma, layer.eta, layer.beta, e_star)
+    return float(gt.force_weights(r) @ p), float(hertz_force(-delta, radius, e_star))
+
+
+def test_hertz_limit():
+    """As sigma -> 0 delta is the interpenetration of smooth bodies; a stiff layer gives Hertz."""
+    soft, hertz = _limit_force(1e2)
+    stiff, _ = _limit_force(1e6)
+    assert abs(stiff / hertz - 1) < 2e-4
+    assert abs(stiff / hertz - 1) < abs(soft / hertz - 1)
