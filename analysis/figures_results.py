@@ -1,0 +1,189 @@
+"""Result figures: Barber's bounds (Fig. 3), resistance and conductance against load
+(Figs. 8, 9), alpha and gamma with their surrogate (Fig. 10) and G2TOM against the
+p-averaged Barber bounds (Fig. 11).
+
+Selections follow the paper and fall back to the nearest values the scenario computed:
+Figs. 8–9 at xi in {0.3, 0.5, 0.7} and lambda in {9, 19}; Fig. 11 (a) at lambda = 5 with
+s = sigma and p = 0.6, (b) at lambda = 15 with s = 2 sigma and p = 0.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import xarray as xr
+from matplotlib.collections import LineCollection
+
+from pipeline.config import Scenario
+from pipeline.physics import barber
+from pipeline.physics.surrogate import evaluate
+from pipeline.store import read_stage
+
+__all__ = ["write"]
+
+FIG8_XI = (0.3, 0.5, 0.7)
+FIG8_LAMBDA = (9.0, 19.0)
+FIG11 = ((5.0, 1.0, 0.6), (15.0, 2.0, 0.0))  # (lambda, s/sigma, p)
+FIG11_XI = (0.1, 0.3, 0.5, 0.7, 0.9)
+FIG11_MAX_FORCE = 16.0
+#: At most this many realizations are drawn as grey lines per curve.
+MAX_GREY = 200
+COLORS = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+
+
+def nearest(available: np.ndarray, wanted: tuple[float, ...]) -> list[float]:
+    """The available values nearest to each wanted one, without repeats, in order."""
+    out: list[float] = []
+    for w in wanted:
+        value = float(available[np.argmin(np.abs(np.asarray(available) - w))])
+        if value not in out:
+            out.append(value)
+    return out
+
+
+def _save(fig: plt.Figure, path: Path) -> Path:
+    fig.savefig(path, dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
+def fig3_bounds(path: Path) -> Path:
+    """Fig. 3: clean and oxide-extended bounds (Eqs. 8, 9) and their geometric mean."""
+    force = np.geomspace(1e-2, 1e2, 200)
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for xi, color in zip((0.0, 0.3, 0.5, 0.7), ["k"] + COLORS):
+        upper, lower = barber.oxide_bounds(force, xi)
+        label = "clean" if xi == 0 else f"xi = {xi:g}"
+        ax.plot(force, upper, color=color, label=f"{label}: upper")
+        ax.plot(force, lower, color=color, ls="--", label=f"{label}: lower")
+        ax.plot(force, barber.p_average(force, xi, 0.0), color=color, ls=":", lw=1)
+    ax.plot([], [], "k:", lw=1, label="geometric mean <kappa'>_p=0")
+    ax.set(xscale="log", yscale="log", xlabel="F' = 2F / (E* sqrt(R* s^3))",
+           ylabel="kappa' = 2 rho* kappa / sqrt(R* s)", title="Barber's bounds with oxide (Eqs. 8-10)")
+    ax.legend(fontsize=7, ncol=2)
+    ax.grid(True, which="both", alpha=0.3)
+    return _save(fig, path)
+
+
+def _grey(ax: plt.Axes, x: np.ndarray, curves: np.ndarray) -> None:
+    """Each realization (rows of ``curves``) as a faint grey line; non-finite points dropped."""
+    segments = []
+    for row in curves[:MAX_GREY]:
+        ok = np.isfinite(row) & (row > 0)
+        if ok.sum() > 1:
+            segments.append(np.column_stack([x[ok], row[ok]]))
+    ax.add_collection(LineCollection(segments, colors="0.6", alpha=0.12, lw=0.5, zorder=1))
+
+
+def _load_panel(ax: plt.Axes, cube: xr.Dataset, fits: xr.Dataset, lam: float, xis: list[float], normalized: bool) -> None:
+    """R(F) (or kappa'(F')) at one lambda for several xi: grey lines, band, markers, fit."""
+    scale = float(fits["resistance_scale"])
+    x = fits["force_normalized"].values if normalized else fits["force"].values
+    fitted = fits["fitted"].values.astype(bool)
+    dense = np.geomspace(x[fitted].min(), x[fitted].max(), 50)
+    f_dense = dense if normalized else dense * fits["force_normalized"].values[fitted][0] / x[fitted][0]
+
+    def show(r: np.ndarray) -> np.ndarray:
+        with np.errstate(divide="ignore"):
+            return scale / r if normalized else r
+
+    for xi, color in zip(xis, COLORS):
+        cell = {"xi": xi, "lambda": lam}
+        _grey(ax, x, show(cube["resistance"].sel(cell).transpose("realization", "delta").values))
+        q = fits["resistance_quantile"].sel(cell)
+        lo, hi = show(q.sel(quantile=0.16).values), show(q.sel(quantile=0.84).values)
+        top = np.nanmax(np.where(np.isfinite(np.r_[lo, hi]), np.r_[lo, hi], np.nan)) * 10
+        ax.fill_between(x, np.nan_to_num(lo, posinf=top), np.nan_to_num(hi, posinf=top), color=color, alpha=0.25, lw=0, zorder=2)
+        ax.plot(x, show(fits["geometric_mean"].sel(cell).values), "o", color=color, ms=4, zorder=3, label=f"xi = {xi:g}")
+        alpha, gamma = float(fits["alpha"].sel(cell)), float(fits["gamma"].sel(cell))
+        r_fit = alpha * scale * f_dense**-gamma
+        ax.plot(dense, show(r_fit), color=color, lw=1.2, zorder=4)
+    ax.plot(x, show(fits["resistance_clean"].values), "k-", lw=1, label="clean")
+    ax.set(xscale="log", yscale="log", title=f"lambda = l_O sqrt(eta) = {lam:g}")
+    ax.set_xlim(x[x > 0].min(), x.max())
+    ax.grid(True, which="both", alpha=0.3)
+
+
+def fig_load(path: Path, cube: xr.Dataset, fits: xr.Dataset, normalized: bool) -> Path:
+    """Fig. 8 (R against F, ohm and N) or Fig. 9 (kappa' = 1/R' against F')."""
+    lams = nearest(fits["lambda"].values, FIG8_LAMBDA)
+    xis = nearest(fits["xi"].values, FIG8_XI)
+    fig, axes = plt.subplots(1, len(lams), figsize=(5.5 * len(lams), 4.5), squeeze=False, sharey=True)
+    for ax, lam in zip(axes[0], lams):
+        _load_panel(ax, cube, fits, lam, xis, normalized)
+        ax.set_xlabel("F' = 2F / (E* sqrt(R* sigma^3))" if normalized else "force F (N)")
+    axes[0, 0].set_ylabel("kappa' = 1/R' = 2 rho* / (R sqrt(R* sigma))" if normalized else "resistance R (ohm)")
+    axes[0, 0].legend(fontsize=8)
+    what = "normalized conductance" if normalized else "resistance"
+    fig.suptitle(f"{what}: band 16-84 %, markers geometric mean, lines power-law fit (grey: realizations)", fontsize=9)
+    return _save(fig, path)
+
+
+def fig10_alpha_gamma(path: Path, fits: xr.Dataset, surrogate: xr.Dataset) -> Path:
+    """Fig. 10: fitted alpha, gamma against xi per lambda, the surrogate, and its error map."""
+    lams = fits["lambda"].values
+    xi_dense = np.linspace(float(fits.xi.min()), float(fits.xi.max()), 100)
+    colors = plt.cm.viridis(np.linspace(0, 1, lams.size))
+    fig, axes = plt.subplots(2, 2, figsize=(11, 8.5), layout="constrained")
+    for col, name in enumerate(("alpha", "gamma")):
+        ax = axes[0, col]
+        for lam, color in zip(lams, colors):
+            value = fits[name].sel({"lambda": lam})
+            ci = fits[f"{name}_ci"].sel({"lambda": lam})
+            err = np.abs(np.vstack([value - ci.sel(bound="lower"), ci.sel(bound="upper") - value]))
+            ax.errorbar(fits.xi, value, yerr=err, fmt="o", ms=3, color=color, capsize=2, label=f"{lam:g}")
+            coef = (surrogate[f"{name}_coef_w"].values, surrogate[f"{name}_coef_z"].values)
+            ax.plot(xi_dense, evaluate(*coef, lam, xi_dense), color=color, lw=1)
+        ax.set(xlabel="oxide fraction xi", ylabel=name, title=f"{name}: fits (markers, CI) and SVD surrogate (lines)")
+        ax.grid(True, alpha=0.3)
+        error = 100 * surrogate[f"{name}_relative_error"].transpose("lambda", "xi")
+        ax = axes[1, col]
+        limit = max(float(np.abs(error).max()), 1e-6)
+        mesh = ax.imshow(error.values, origin="lower", cmap="RdBu_r", vmin=-limit, vmax=limit, aspect="auto")
+        ax.set_xticks(range(fits.xi.size), [f"{v:g}" for v in fits.xi.values])
+        ax.set_yticks(range(lams.size), [f"{v:g}" for v in lams])
+        ax.set(xlabel="xi", ylabel="lambda", title=f"{name}: surrogate relative error (%)")
+        fig.colorbar(mesh, ax=ax)
+    axes[0, 0].legend(title="lambda", fontsize=7, ncol=2)
+    return _save(fig, path)
+
+
+def fig11_barber(path: Path, fits: xr.Dataset) -> Path:
+    """Fig. 11: G2TOM geometric-mean conductance against the p-average of Eq. 10."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    force_n = fits["force_normalized"].values
+    show = (force_n > 0) & (force_n <= FIG11_MAX_FORCE)
+    dense = np.geomspace(force_n[show].min(), force_n[show].max(), 100)
+    xis = nearest(fits["xi"].values, FIG11_XI)
+    for ax, (lam_wanted, s_ratio, p), letter in zip(axes, FIG11, "ab"):
+        lam = nearest(fits["lambda"].values, (lam_wanted,))[0]
+        for xi, color in zip(xis, COLORS):
+            kappa = 1.0 / fits["geometric_mean_normalized"].sel(xi=xi, **{"lambda": lam}).values
+            ax.plot(force_n[show], kappa[show], "o", color=color, ms=4, label=f"G2TOM xi = {xi:g}")
+            ax.plot(dense, barber.p_average_sigma(dense, xi, p, s_ratio), "--", color=color, lw=1)
+        clean = 1.0 / fits["resistance_clean_normalized"].values
+        ax.plot(force_n[show], clean[show], "ks", ms=4, label="G2TOM clean")
+        ax.plot(dense, barber.p_average_sigma(dense, 0.0, p, s_ratio), "k--", lw=1, label=f"Barber <kappa'>_p={p:g}")
+        ax.set(xscale="log", yscale="log", xlabel="F' = 2F / (E* sqrt(R* sigma^3))",
+               title=f"({letter}) lambda = {lam:g}, s = {s_ratio:g} sigma, p = {p:g}")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].set_ylabel("kappa' = 1/R'")
+    axes[0].legend(fontsize=7)
+    return _save(fig, path)
+
+
+def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
+    """Write Figs. 3, 8, 9, 10 and 11 under ``out_dir``; returns the files in that order."""
+    cube = read_stage(data_dir, "cube", scenario)
+    fits = read_stage(data_dir, "fits", scenario)
+    surrogate = read_stage(data_dir, "surrogate", scenario)
+    out_dir = Path(out_dir)
+    return [
+        fig3_bounds(out_dir / "fig3_bounds.png"),
+        fig_load(out_dir / "fig8_resistance.png", cube, fits, normalized=False),
+        fig_load(out_dir / "fig9_conductance.png", cube, fits, normalized=True),
+        fig10_alpha_gamma(out_dir / "fig10_alpha_gamma.png", fits, surrogate),
+        fig11_barber(out_dir / "fig11_barber.png", fits),
+    ]

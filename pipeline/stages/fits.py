@@ -1,0 +1,187 @@
+"""Stage 4: reductions over realizations and power-law fits R' = alpha F'^-gamma (Eq. 25).
+
+Reads ``cube.nc``, writes ``fits.nc``. For every (xi, lambda) the chosen reduction
+(``fits.reduction``, geometric mean by default) of R' is fitted by least squares in log-log
+over the load steps with F >= ``fits.min_force``; the clean surface is fitted the same way.
+
+Uncertainty: percentile bootstrap over realizations (``fits.n_bootstrap`` resamples, seed
+``fits.seed``, level ``fits.confidence``): each resample redraws the realizations with
+replacement, recomputes the reduction at every fitted step and refits. The clean surface
+has a single deterministic curve, so its interval is the classical least-squares one
+(Student t on the fitted steps) and only reflects the misfit of the power law.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+from scipy import stats
+
+from analysis.reductions import DIM, reduce_realizations, resistance_scale
+from pipeline.compute import ComputeOptions
+from pipeline.config import ConfigError, Scenario
+from pipeline.physics.powerlaw import (
+    bootstrap_log_mean,
+    bootstrap_median,
+    fit_power_law,
+    percentile_interval,
+    resample_counts,
+)
+from pipeline.store import read_stage, write_dataset
+
+__all__ = ["build", "run"]
+
+GRID = ("xi", "lambda")
+
+
+def fitted_steps(scenario: Scenario, force: xr.DataArray) -> xr.DataArray:
+    """Boolean mask (delta) of the load steps with F >= fits.min_force.
+
+    Raises
+    ------
+    ConfigError
+        If fewer than two steps qualify.
+    """
+    mask = force >= scenario.fits.min_force
+    if int(mask.sum()) < 2:
+        raise ConfigError(
+            f"fits.min_force = {scenario.fits.min_force:g} is out of range: only "
+            f"{int(mask.sum())} load step(s) reach it (forces {force.min().item():.3g}.."
+            f"{force.max().item():.3g} N); a fit needs >= 2"
+        )
+    return mask
+
+
+def _bootstrap(scenario: Scenario, normalized: np.ndarray, force_n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bootstrap alpha and gamma, each shaped (xi, lambda, resample).
+
+    ``normalized`` holds R' on the fitted steps, shape (xi, lambda, step, realization).
+    """
+    rng = np.random.default_rng(scenario.fits.seed)
+    counts = resample_counts(normalized.shape[-1], scenario.fits.n_bootstrap, rng)
+    if scenario.fits.reduction == "median":
+        reduced = bootstrap_median(normalized, counts)
+    else:
+        reduced = bootstrap_log_mean(normalized, counts, scenario.fits.reduction == "geometric_mean")
+    fit = fit_power_law(force_n, np.moveaxis(reduced, -1, -2))
+    return fit.alpha, fit.gamma
+
+
+def _interval(samples: np.ndarray, confidence: float) -> np.ndarray:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN cells stay NaN
+        return percentile_interval(samples, confidence)
+
+
+def _clean_fit(scenario: Scenario, clean: np.ndarray, force_n: np.ndarray, mask: np.ndarray) -> dict[str, xr.DataArray]:
+    """Least-squares fit of the clean surface with Student-t intervals."""
+    fit = fit_power_law(force_n, clean, mask)
+    lx = np.log(force_n[mask])
+    n = lx.size
+    t = stats.t.ppf(0.5 * (1.0 + scenario.fits.confidence), max(n - 2, 1))
+    s2 = np.nansum(fit.residual**2) / max(n - 2, 1)
+    sxx = np.sum((lx - lx.mean()) ** 2)
+    se_slope = np.sqrt(s2 / sxx)
+    se_intercept = np.sqrt(s2 * (1.0 / n + lx.mean() ** 2 / sxx))
+    log_alpha = np.log(fit.alpha)
+    bound = {"bound": ["lower", "upper"]}
+    return {
+        "alpha_clean": xr.DataArray(fit.alpha, attrs={"units": "1", "long_name": "alpha of the clean surface"}),
+        "gamma_clean": xr.DataArray(fit.gamma, attrs={"units": "1", "long_name": "gamma of the clean surface"}),
+        "alpha_clean_ci": xr.DataArray(
+            np.exp([log_alpha - t * se_intercept, log_alpha + t * se_intercept]), dims="bound", coords=bound,
+            attrs={"units": "1", "long_name": "confidence interval of alpha_clean", "method": "least-squares Student t"},
+        ),
+        "gamma_clean_ci": xr.DataArray(
+            [fit.gamma - t * se_slope, fit.gamma + t * se_slope], dims="bound", coords=bound,
+            attrs={"units": "1", "long_name": "confidence interval of gamma_clean", "method": "least-squares Student t"},
+        ),
+        "fit_residual_clean": xr.DataArray(fit.residual, dims="delta", attrs={"units": "1", "long_name": "log residual of the clean fit"}),
+        "fit_residual_rms_clean": xr.DataArray(fit.residual_rms, attrs={"units": "1", "long_name": "RMS log residual of the clean fit"}),
+    }
+
+
+#: Units and long names of the coordinates, used where the input does not carry them.
+COORD_LABELS = {
+    "xi": ("1", "oxide fraction"),
+    "lambda": ("1", "normalized oxide correlation length l_O sqrt(eta)"),
+    "delta": ("m", "approach of the sphere tip to the mean plane"),
+    "force": ("N", "normal force"),
+    "force_normalized": ("1", "normalized force F' = 2F/(E* sqrt(R* sigma^3))"),
+    "quantile": ("1", "quantile over realizations"),
+}
+
+
+def _label_coords(ds: xr.Dataset) -> None:
+    """Give every known coordinate of ``ds`` units and a long name if it lacks them."""
+    for name, (units, long_name) in COORD_LABELS.items():
+        if name in ds.coords:
+            ds[name].attrs.setdefault("units", units)
+            ds[name].attrs.setdefault("long_name", long_name)
+
+
+def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
+    """Reductions and power-law fits of a resistance cube.
+
+    Parameters
+    ----------
+    scenario
+        Supplies ``fits.*`` and the normalization (material.rho, roughness.sigma,
+        indenter.radius).
+    cube
+        ``resistance`` (xi, lambda, delta, realization) in ohm (+inf = open circuit),
+        ``resistance_clean`` (delta), coords ``force`` (N) and ``force_normalized`` on delta.
+
+    Returns
+    -------
+    xarray.Dataset
+        See the module docstring and the variables' attributes.
+    """
+    resistance = cube["resistance"].transpose(*GRID, "delta", DIM)
+    scale = resistance_scale(scenario)
+    ds = reduce_realizations(resistance, scale)
+    mask = fitted_steps(scenario, cube["force"])
+    force_n = cube["force_normalized"].values
+    center = ds[f"{scenario.fits.reduction}_normalized"]
+
+    fit = fit_power_law(force_n, center.values, mask.values)
+    steps = np.flatnonzero(mask.values)
+    boot_alpha, boot_gamma = _bootstrap(scenario, resistance.values[:, :, steps, :] / scale, force_n[steps])
+    bound = ("bound", ["lower", "upper"])
+    level = f"{100 * scenario.fits.confidence:g} % percentile bootstrap over realizations"
+
+    ds["alpha"] = (GRID, fit.alpha, {"units": "1", "long_name": "alpha of R' = alpha F'^-gamma"})
+    ds["gamma"] = (GRID, fit.gamma, {"units": "1", "long_name": "gamma of R' = alpha F'^-gamma"})
+    for name, boot in (("alpha", boot_alpha), ("gamma", boot_gamma)):
+        ds[f"{name}_ci"] = (GRID + ("bound",), _interval(boot, scenario.fits.confidence),
+                            {"units": "1", "long_name": f"confidence interval of {name}", "method": level})
+    ds = ds.assign_coords(bound=bound[1])
+    ds["fit_residual"] = (GRID + ("delta",), fit.residual, {"units": "1", "long_name": "log(R') - log(alpha F'^-gamma) on the fitted steps"})
+    ds["fit_residual_rms"] = (GRID, fit.residual_rms, {"units": "1", "long_name": "RMS of the log residuals"})
+    ds["n_fitted"] = (GRID, fit.n_points, {"units": "1", "long_name": "finite fitted steps"})
+    ds["fitted"] = mask.astype("int8").assign_attrs(
+        units="1", long_name=f"1 where the step was fitted (F >= {scenario.fits.min_force:g} N)"
+    )
+
+    clean = cube["resistance_clean"]
+    ds["resistance_clean"] = clean.assign_attrs(units="ohm", long_name="clean-surface resistance")
+    ds["resistance_clean_normalized"] = (clean / scale).assign_attrs(units="1", long_name="clean-surface R'")
+    for name, value in _clean_fit(scenario, (clean / scale).values, force_n, mask.values).items():
+        ds[name] = value
+    ds["resistance_scale"] = ((), scale, {"units": "ohm", "long_name": "2 rho*/sqrt(R* sigma): R' = R / resistance_scale"})
+    _label_coords(ds)
+    ds.attrs["reduction"] = scenario.fits.reduction
+    ds.attrs["normalization"] = "R' = R sqrt(R* sigma)/(2 rho*); F' = 2F/(E* sqrt(R* sigma^3)) (Eq. 25)"
+    return ds
+
+
+def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
+    """Read ``cube.nc``, fit, write ``fits.nc``; returns the written path.
+
+    ``options`` is accepted for the stage interface; the fits are in-memory numpy work.
+    """
+    cube = read_stage(data_dir, "cube", scenario)
+    return write_dataset(build(scenario, cube), data_dir, "fits", scenario)

@@ -1,0 +1,73 @@
+"""Result figures and the report on a synthetic cube run through stages 4-5."""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import pytest
+
+from analysis import figures_results
+from analysis.report import Block, to_html, to_markdown, write_report
+from pipeline.cli import main
+from pipeline.config import Scenario
+from pipeline.store import write_dataset
+from tests.test_fits_stage import cli_overrides, synthetic_cube
+
+FIGURES = ["fig3_bounds.png", "fig8_resistance.png", "fig9_conductance.png", "fig10_alpha_gamma.png", "fig11_barber.png"]
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory, small: Scenario) -> Path:
+    """fits and surrogate stages run by the CLI on a synthetic cube with some open circuits."""
+    data = tmp_path_factory.mktemp("data")
+    write_dataset(synthetic_cube(small, open_share=0.25), data, "cube", small)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # surrogate orders reduced on a 3 x 3 grid
+        for stage in ("fits", "surrogate"):
+            assert main([stage, "--data-dir", str(data), "--no-progress", *cli_overrides(small)]) == 0
+    (data / "bench").mkdir()
+    (data / "bench" / "cube.json").write_text(json.dumps([{"method": "fft", "seconds": 1.5}]))
+    return data
+
+
+def test_stage_files(run_dir: Path) -> None:
+    for name in ("fits.nc", "surrogate.nc", "table3.csv", "table3.md", "timings.json"):
+        assert (run_dir / name).stat().st_size > 0
+    assert len((run_dir / "table3.csv").read_text().splitlines()) == 10
+
+
+def test_figures_written_and_non_empty(run_dir: Path, small: Scenario) -> None:
+    out = run_dir / "figures"
+    out.mkdir(exist_ok=True)
+    paths = figures_results.write(small, run_dir, out)
+    assert [p.name for p in paths] == FIGURES
+    for p in paths:
+        assert p.stat().st_size > 10_000, p
+
+
+def test_report_has_everything(run_dir: Path, small: Scenario) -> None:
+    out = run_dir / "figures"
+    out.mkdir(exist_ok=True)
+    (out / "extra_stage_figure.png").write_bytes(b"\x89PNG")
+    assert main(["report", "--data-dir", str(run_dir), *cli_overrides(small)]) == 0
+    md = (run_dir / "report.md").read_text()
+    page = (run_dir / "report.html").read_text()
+    for text in ("Clean-surface fit", "Table 3", "Table 4", "cross-validation", "Timings", "Benchmarks",
+                 "fits.min_force", "figures/extra_stage_figure.png", "fft"):
+        assert text in md and text in page, text
+    assert md.count("![") == page.count("<img") == len(list(out.glob("*.png")))
+
+
+def test_report_without_stage_files(tmp_path, small: Scenario) -> None:
+    paths = write_report(small, tmp_path)
+    assert "Not available" in paths[0].read_text()
+
+
+def test_renderers_escape() -> None:
+    blocks = [Block("h1", "a <b>"), Block("table", rows=(("x|y", "z"), ("1", "<2>")))]
+    assert "x\\|y" in to_markdown(blocks)
+    assert "&lt;2&gt;" in to_html(blocks, "t")
+    with pytest.raises(ValueError, match="unknown block"):
+        to_markdown([Block("video")])
