@@ -1,0 +1,399 @@
+"""Greenwood's multi-spot constriction resistance (Eqs. 11-15) of partly oxidized spot sets.
+
+For spots of radius ``a_i`` on a regular square cell grid of pitch ``h``, conducting states
+``phi_i`` in {0, 1} and interaction weights ``w_i`` (``a_i`` for Greenwood's Eq. 13, or the
+cell contact areas ``A_i = pi a_i^2`` as in the reference study's code):
+
+    R_self = rho* / (2 sum_i phi_i a_i)
+    R_int  = rho* sum_{i != j} phi_i phi_j w_i w_j / d_ij / (pi (sum_i phi_i w_i)^2)
+    R      = R_self + R_int
+
+No conducting spot is an open circuit (all three terms +inf); exactly one gives R_int = 0.
+
+The interaction sum ``Q`` is the only costly part. :func:`resistance` evaluates it for a batch
+of oxide masks and every load step with one of the exact algorithms of
+:mod:`pipeline.physics.interaction_fft` (or the direct double sum, the reference), on a
+centred square crop per load step that drops spots whose effect on ``R`` is provably below a
+tolerance. Entries whose own bound exceeds the tolerance are recomputed on the whole window,
+so every entry's relative error from cropping is bounded by the tolerance (see
+:func:`crop_error_bound`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Iterator
+
+import numpy as np
+
+from pipeline.physics.interaction_fft import (
+    interaction_dft_gemm,
+    interaction_fft,
+    interaction_fft_gemm,
+    interaction_folded,
+    interaction_gemm,
+    scratch,
+)
+
+__all__ = [
+    "METHODS",
+    "greenwood_terms",
+    "interaction_direct",
+    "pair_sum_points",
+    "interaction_sum",
+    "crop_slice",
+    "choose_crops",
+    "crop_error_bound",
+    "ChunkResult",
+    "resistance",
+]
+
+#: Maps per fixed-size block; every block has exactly this many columns (the last one is
+#: padded), so each map's result is bit-identical whatever the batch it arrives in.
+BLOCK = 128
+
+
+def interaction_direct(u: np.ndarray, pitch: float) -> np.ndarray:
+    """Interaction sum by the plain double sum over conducting spot pairs (the reference).
+
+    Parameters
+    ----------
+    u
+        Weights, shape (batch, n, n); zero where no spot conducts.
+    pitch
+        Cell pitch ``h``, in m.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``sum_{i != j} u_i u_j / d_ij`` per map, shape (batch,), in units of ``u**2 / m``.
+    """
+    out = np.zeros(u.shape[0])
+    for b, weights in enumerate(u):
+        iy, ix = np.nonzero(weights)
+        out[b] = pair_sum_points(ix * pitch, iy * pitch, weights[iy, ix])
+    return out
+
+
+def pair_sum_points(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> float:
+    """``sum_{i != j} w_i w_j / d_ij`` over an arbitrary list of distinct points.
+
+    Parameters
+    ----------
+    x, y
+        Point coordinates, shape (n,), in m.
+    w
+        Weights, shape (n,).
+
+    Returns
+    -------
+    float
+        The double sum, in units of ``w**2 / m``.
+    """
+    d = np.hypot(x[:, None] - x[None, :], y[:, None] - y[None, :])
+    np.fill_diagonal(d, np.inf)
+    return float(np.sum(w[:, None] * w[None, :] / d))
+
+
+METHODS: dict[str, Callable[[np.ndarray, float], np.ndarray]] = {
+    "direct": interaction_direct,
+    "gemm": interaction_gemm,
+    "fft": interaction_fft,
+    "fft_gemm": interaction_fft_gemm,
+    "dft_gemm": interaction_dft_gemm,
+    "folded": interaction_folded,
+}
+#: Safety factor on the oxide-free ratio sum(a)/sum(w) when sizing crops for non-radius weights.
+CROP_MARGIN = 10.0
+#: What ``method = "auto"`` runs: the fastest exact algorithm measured by ``make bench``.
+AUTO_METHOD = "folded"
+
+
+def interaction_sum(u: np.ndarray, pitch: float, method: str = "auto") -> np.ndarray:
+    """Interaction sum ``sum_{i != j} u_i u_j / d_ij`` of each map, by the named algorithm.
+
+    Parameters
+    ----------
+    u
+        Weights, shape (batch, n, n).
+    pitch
+        Cell pitch, in m.
+    method
+        ``auto``, ``direct``, ``gemm``, ``fft``, ``fft_gemm``, ``dft_gemm`` or ``folded``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (batch,), in units of ``u**2 / m``, never negative.
+    """
+    name = AUTO_METHOD if method == "auto" else method
+    if name not in METHODS:
+        raise ValueError(f"method = {method!r} is not allowed: must be auto or one of {', '.join(METHODS)}")
+    return np.maximum(METHODS[name](u, pitch), 0.0)
+
+
+def greenwood_terms(
+    radius_sum: np.ndarray,
+    weight_sum: np.ndarray,
+    pair_sum: np.ndarray,
+    n_conducting: np.ndarray,
+    rho: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Greenwood's resistance and its two terms from the spot sums.
+
+    Parameters
+    ----------
+    radius_sum
+        ``sum_i phi_i a_i``, in m.
+    weight_sum
+        ``sum_i phi_i w_i``, in the unit of the weights (m or m^2).
+    pair_sum
+        ``sum_{i != j} phi_i phi_j w_i w_j / d_ij``, in (unit of w)^2 / m.
+    n_conducting
+        Number of conducting spots.
+    rho
+        Effective resistivity rho*, in ohm m.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(R, R_self, R_int)`` in ohm, broadcast shape; +inf where no spot conducts, and
+        ``R_int = 0`` where only one does.
+    """
+    radius_sum, weight_sum, pair_sum, n_conducting = np.broadcast_arrays(
+        np.asarray(radius_sum, float), np.asarray(weight_sum, float),
+        np.asarray(pair_sum, float), np.asarray(n_conducting),
+    )
+    open_circuit = n_conducting == 0
+    interacting = (n_conducting > 1) & (pair_sum > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r_self = np.where(open_circuit, np.inf, rho / (2.0 * radius_sum))
+        r_int = np.where(interacting, rho * pair_sum / (np.pi * weight_sum**2), 0.0)
+    r_int = np.where(open_circuit, np.inf, r_int)
+    return r_self + r_int, r_self, r_int
+
+
+def crop_slice(n_cells: int, size: int) -> slice:
+    """Centred slice of ``size`` cells out of ``n_cells`` (same parity, ``size <= n_cells``)."""
+    if size > n_cells or (n_cells - size) % 2:
+        raise ValueError(f"crop size {size} must be <= {n_cells} with the same parity")
+    start = (n_cells - size) // 2
+    return slice(start, start + size)
+
+
+def choose_crops(radius: np.ndarray, weights: np.ndarray, pitch: float, tolerance: float) -> np.ndarray:
+    """Smallest centred square crop per load step whose cropping bound stays within tolerance.
+
+    Dropping conducting weight ``eps`` outside the crop changes the interaction sum by at most
+    ``eps (2 s_w - eps) / h`` (every pair is at least one pitch apart), so the relative change
+    of ``R >= R_self`` is at most ``4 eps s_a / (pi s_w h)``, and ``eps`` is at most the
+    unmasked weight outside the crop. For radius weights ``s_a / s_w = 1`` for every oxide
+    mask, so the crop is safe for all of them. For other weights the ratio depends on the
+    mask; the crop is sized with :data:`CROP_MARGIN` times the oxide-free ratio, and entries
+    that still exceed the tolerance are recomputed uncropped by :func:`resistance`.
+
+    Parameters
+    ----------
+    radius, weights
+        Spot radii (m) and interaction weights, shape (n_delta, n, n).
+    pitch
+        Cell pitch, in m.
+    tolerance
+        Allowed relative change of ``R``; 0 keeps the whole window.
+
+    Returns
+    -------
+    numpy.ndarray
+        Crop sizes in cells, shape (n_delta,), same parity as ``n``.
+    """
+    n = radius.shape[-1]
+    sizes = np.full(radius.shape[0], n, dtype=int)
+    if tolerance <= 0:
+        return sizes
+    margin = 1.0 if np.array_equal(radius, weights) else CROP_MARGIN
+    for k, (a, w) in enumerate(zip(radius, weights)):
+        if not w.sum() > 0:
+            continue
+        ratio = margin * a.sum() / w.sum()
+        for size in range(1 + (n + 1) % 2, n, 2):
+            c = crop_slice(n, size)
+            outside = w.sum() - w[c, c].sum()
+            if 4.0 * outside * ratio / (np.pi * pitch) <= tolerance:
+                sizes[k] = size
+                break
+    return sizes
+
+
+def crop_error_bound(
+    radius_sum: np.ndarray,
+    weight_sum: np.ndarray,
+    outside_sum: np.ndarray,
+    resistance_cropped: np.ndarray,
+    pitch: float,
+    rho: float,
+) -> np.ndarray:
+    """Upper bound on the relative error of ``R`` from dropping the spots outside a crop.
+
+    The dropped conducting weight ``eps`` changes the interaction sum by at most
+    ``eps (2 s_w - eps) / h`` and never increases ``R``, so the cropped value ``R'`` is a
+    lower bound of ``R`` and ``(R - R') / R <= rho eps (2 s_w - eps) / (pi s_w^2 h R')``.
+
+    Parameters
+    ----------
+    radius_sum
+        ``s_a = sum phi a`` over all spots, in m (0 marks an open circuit).
+    weight_sum
+        ``s_w = sum phi w`` over all spots.
+    outside_sum
+        ``eps = sum phi w`` over the spots outside the crop.
+    resistance_cropped
+        ``R'`` computed with the cropped interaction sum, in ohm.
+    pitch
+        Cell pitch, in m.
+    rho
+        Effective resistivity, in ohm m.
+
+    Returns
+    -------
+    numpy.ndarray
+        The bound, 0 where nothing was dropped or the circuit is open.
+    """
+    eps = np.asarray(outside_sum, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        delta_r = rho * eps * (2.0 * weight_sum - eps) / (np.pi * weight_sum**2 * pitch)
+        bound = delta_r / resistance_cropped
+    keep = (eps > 0) & (np.asarray(radius_sum) > 0) & np.isfinite(resistance_cropped)
+    return np.where(keep, bound, 0.0)
+
+
+@dataclass
+class ChunkResult:
+    """Greenwood terms of a batch of masks at every load step; arrays of shape (batch, n_delta).
+
+    Attributes
+    ----------
+    resistance, resistance_self, resistance_interaction
+        ``R``, ``R_self``, ``R_int`` in ohm (+inf for an open circuit).
+    n_conducting
+        Conducting spots (int32).
+    crop_bound
+        Bound on the relative error of ``R`` from cropping (0 where uncropped).
+    n_uncropped
+        Entries recomputed on the whole window because their crop bound exceeded the tolerance.
+    """
+
+    resistance: np.ndarray
+    resistance_self: np.ndarray
+    resistance_interaction: np.ndarray
+    n_conducting: np.ndarray
+    crop_bound: np.ndarray
+    n_uncropped: int
+
+
+def _blocks(masks: np.ndarray) -> Iterator[np.ndarray]:
+    """Blocks of exactly :data:`BLOCK` of the (batch, n, n) masks, the last padded with False."""
+    for start in range(0, masks.shape[0], BLOCK):
+        block = masks[start : start + BLOCK]
+        if block.shape[0] < BLOCK:
+            pad = np.zeros((BLOCK - block.shape[0],) + masks.shape[1:], dtype=bool)
+            block = np.concatenate([block, pad])
+        yield block
+
+
+def _block_pair_sums(
+    masks: np.ndarray, weights: np.ndarray, crops: np.ndarray, pitch: float, method: str
+) -> np.ndarray:
+    """Cropped interaction sums of one block, shape (BLOCK, n_delta).
+
+    The weight maps are laid out (x, y, map) in memory, the layout the ``*_gemm`` transforms
+    consume, and passed on as (map, y, x) views of it.
+    """
+    n = masks.shape[-1]
+    columns = np.ascontiguousarray(masks.transpose(2, 1, 0))
+    weights_xy = weights.transpose(0, 2, 1)
+    out = np.empty((masks.shape[0], weights.shape[0]))
+    for k, size in enumerate(crops):
+        c = crop_slice(n, int(size))
+        u = scratch("weights", (int(size), int(size), masks.shape[0]))
+        np.multiply(columns[c, c], weights_xy[k, c, c, None], out=u)
+        out[:, k] = interaction_sum(u.transpose(2, 1, 0), pitch, method)
+    return out
+
+
+def _recompute_uncropped(
+    masks: np.ndarray, weights: np.ndarray, pair_sum: np.ndarray, redo: np.ndarray,
+    pitch: float, method: str,
+) -> None:
+    """Overwrite ``pair_sum[b, k]`` for the flagged entries with whole-window sums, in place."""
+    for k in np.flatnonzero(redo.any(axis=0)):
+        rows = np.flatnonzero(redo[:, k])
+        for start in range(0, rows.size, BLOCK):
+            chosen = rows[start : start + BLOCK]
+            block = np.zeros((BLOCK,) + masks.shape[1:], dtype=bool)
+            block[: chosen.size] = masks[chosen]
+            pair_sum[chosen, k] = interaction_sum(block * weights[k], pitch, method)[: chosen.size]
+
+
+def resistance(
+    masks: np.ndarray,
+    radius: np.ndarray,
+    weights: np.ndarray,
+    pitch: float,
+    rho: float,
+    crops: np.ndarray,
+    tolerance: float,
+    method: str = "auto",
+) -> ChunkResult:
+    """Greenwood's resistance of every (mask, load step) pair.
+
+    Parameters
+    ----------
+    masks
+        Cells whose spot centre is free of oxide, bool, shape (batch, n, n) as (y, x).
+    radius
+        Spot radii ``a_i`` per load step, shape (n_delta, n, n), in m; 0 means no spot.
+    weights
+        Interaction weights per load step, same shape: ``radius`` or the cell contact areas.
+    pitch
+        Cell pitch, in m.
+    rho
+        Effective resistivity rho*, in ohm m.
+    crops
+        Crop size per load step (see :func:`choose_crops`); ``n`` everywhere disables cropping.
+    tolerance
+        Entries whose crop bound exceeds this are recomputed on the whole window.
+    method
+        Interaction algorithm (see :func:`interaction_sum`).
+
+    Returns
+    -------
+    ChunkResult
+        Arrays of shape (batch, n_delta).
+    """
+    batch, n = masks.shape[0], masks.shape[-1]
+    n_delta = radius.shape[0]
+    spots = (radius > 0).reshape(n_delta, n * n).astype(np.float64)
+    a_flat = radius.reshape(n_delta, n * n)
+    w_flat = weights.reshape(n_delta, n * n)
+    outside = np.ones((n_delta, n, n))
+    for k, size in enumerate(crops):
+        c = crop_slice(n, int(size))
+        outside[k, c, c] = 0.0
+    w_out = (weights * outside).reshape(n_delta, n * n)
+    parts: list[np.ndarray] = []
+    for block in _blocks(masks):
+        m = scratch("masks", (BLOCK, n * n))
+        np.copyto(m, block.reshape(BLOCK, n * n))
+        sums = np.stack([m @ spots.T, m @ a_flat.T, m @ w_flat.T, m @ w_out.T])
+        pair = _block_pair_sums(block, weights, crops, pitch, method)
+        parts.append(np.concatenate([sums, pair[None]]))
+    count, s_a, s_w, eps, pair = np.concatenate(parts, axis=1)[:, :batch]
+    n_cond = np.rint(count).astype(np.int32)
+    r_crop = greenwood_terms(s_a, s_w, pair, n_cond, rho)[0]
+    bound = crop_error_bound(s_a, s_w, eps, r_crop, pitch, rho)
+    redo = bound > tolerance
+    if redo.any():
+        _recompute_uncropped(masks, weights, pair, redo, pitch, method)
+        bound = np.where(redo, 0.0, bound)
+    r, r_self, r_int = greenwood_terms(s_a, s_w, pair, n_cond, rho)
+    return ChunkResult(r, r_self, r_int, n_cond, bound, int(redo.sum()))

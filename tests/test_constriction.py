@@ -1,0 +1,223 @@
+"""Greenwood's multi-spot resistance: the double sum, the fast exact paths and cropping."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from pipeline.physics import constriction as cn
+from pipeline.physics import interaction_fft as fi
+
+RHO = 7.2e-7  # ohm m
+PITCH = 7.0e-5  # m
+FAST = ("gemm", "fft", "fft_gemm", "dft_gemm", "folded")
+
+
+def _gaussian_spots(n: int, widths: tuple[float, ...], peak: float = 2e-6) -> np.ndarray:
+    """Radii (m) of a centred Gaussian-like profile per load step, shape (len(widths), n, n)."""
+    c = np.arange(n) - (n - 1) / 2.0
+    r2 = c[:, None] ** 2 + c[None, :] ** 2
+    return np.stack([peak * np.exp(-r2 / (2.0 * s**2)) for s in widths])
+
+
+def _weights(radius: np.ndarray, kind: str) -> np.ndarray:
+    return radius if kind == "radius" else np.pi * radius**2
+
+
+def _whole(radius: np.ndarray) -> np.ndarray:
+    return np.full(radius.shape[0], radius.shape[-1])
+
+
+def _rel(a: np.ndarray, b: np.ndarray) -> float:
+    finite = np.isfinite(b)
+    assert np.array_equal(finite, np.isfinite(a))
+    return float(np.max(np.abs(a[finite] / b[finite] - 1.0), initial=0.0))
+
+
+random_maps = st.tuples(
+    st.integers(1, 9),  # n
+    st.integers(1, 5),  # batch
+    st.floats(0.0, 1.0),  # conducting probability
+    st.integers(0, 2**32 - 1),  # seed
+)
+
+
+@settings(max_examples=40, deadline=None)
+@given(random_maps, st.floats(1e-6, 1e-3))
+def test_fast_paths_equal_double_sum(case, pitch):
+    n, batch, p, seed = case
+    rng = np.random.default_rng(seed)
+    u = rng.lognormal(-12.0, 2.0, (batch, n, n)) * (rng.random((batch, n, n)) < p)
+    reference = cn.interaction_direct(u, pitch)
+    scale = np.sum(u, axis=(1, 2)) ** 2 / pitch  # |Q| <= scale
+    for method in FAST:
+        q = cn.interaction_sum(u, pitch, method)
+        assert np.all(np.abs(q - reference) <= 1e-13 * scale), method
+
+
+@settings(max_examples=25, deadline=None)
+@given(random_maps, st.sampled_from(["radius", "area"]))
+def test_resistance_fast_equals_direct(case, kind):
+    n, batch, p, seed = case
+    rng = np.random.default_rng(seed)
+    radius = rng.random((3, n, n)) * 1e-6 * (rng.random((3, n, n)) < 0.9)
+    masks = rng.random((batch, n, n)) < p
+    weights = _weights(radius, kind)
+    ref = cn.resistance(masks, radius, weights, PITCH, RHO, _whole(radius), 0.0, "direct")
+    for method in FAST + ("auto",):
+        got = cn.resistance(masks, radius, weights, PITCH, RHO, _whole(radius), 0.0, method)
+        assert _rel(got.resistance, ref.resistance) <= 1e-12
+        assert _rel(got.resistance_interaction + got.resistance_self, ref.resistance) <= 1e-12
+        np.testing.assert_array_equal(got.n_conducting, ref.n_conducting)
+
+
+def test_single_spot_is_rho_over_2a():
+    radius = np.zeros((1, 5, 5))
+    radius[0, 1, 3] = 3e-6
+    for method in FAST + ("direct",):
+        res = cn.resistance(np.ones((1, 5, 5), bool), radius, radius, PITCH, RHO, [5], 0.0, method)
+        assert res.resistance[0, 0] == pytest.approx(RHO / (2 * 3e-6), rel=1e-15)
+        assert res.resistance_interaction[0, 0] == 0.0
+        assert res.n_conducting[0, 0] == 1
+
+
+@pytest.mark.parametrize("kind", ["radius", "area"])
+def test_two_spots_by_hand(kind):
+    a1, a2 = 2e-6, 5e-6
+    radius = np.zeros((1, 6, 6))
+    radius[0, 0, 1], radius[0, 4, 4] = a1, a2
+    w1, w2 = (a1, a2) if kind == "radius" else (math.pi * a1**2, math.pi * a2**2)
+    d = PITCH * math.hypot(4, 3)
+    expected = RHO / (2 * (a1 + a2)) + RHO * 2 * w1 * w2 / d / (math.pi * (w1 + w2) ** 2)
+    for method in FAST + ("direct",):
+        res = cn.resistance(np.ones((1, 6, 6), bool), radius, _weights(radius, kind), PITCH, RHO, [6], 0.0, method)
+        assert res.resistance[0, 0] == pytest.approx(expected, rel=1e-14)
+
+
+def test_all_oxidized_is_open_circuit():
+    radius = _gaussian_spots(7, (1.0, 3.0))
+    res = cn.resistance(np.zeros((2, 7, 7), bool), radius, radius, PITCH, RHO, [7, 7], 1e-6)
+    for term in (res.resistance, res.resistance_self, res.resistance_interaction):
+        assert np.all(np.isposinf(term))
+    assert np.all(res.n_conducting == 0)
+
+
+def test_spot_permutation_and_grid_symmetries():
+    rng = np.random.default_rng(3)
+    x, y, w = rng.random(30), rng.random(30), rng.random(30)
+    perm = rng.permutation(30)
+    assert cn.pair_sum_points(x[perm], y[perm], w[perm]) == pytest.approx(cn.pair_sum_points(x, y, w), rel=1e-14)
+    u = rng.random((1, 9, 9)) * (rng.random((1, 9, 9)) < 0.5)
+    iy, ix = np.nonzero(u[0])
+    points = cn.pair_sum_points(ix * PITCH, iy * PITCH, u[0, iy, ix])
+    for image in (u, u[:, ::-1], u[:, :, ::-1], u.transpose(0, 2, 1)):
+        for method in FAST:
+            assert cn.interaction_sum(np.ascontiguousarray(image), PITCH, method)[0] == pytest.approx(points, rel=1e-13)
+
+
+def test_resistance_scales_with_rho():
+    rng = np.random.default_rng(4)
+    radius = _gaussian_spots(9, (1.5, 3.0))
+    masks = rng.random((5, 9, 9)) < 0.5
+    one = cn.resistance(masks, radius, radius, PITCH, 1.0, [9, 9], 0.0)
+    scaled = cn.resistance(masks, radius, radius, PITCH, 3.5, [9, 9], 0.0)
+    np.testing.assert_allclose(scaled.resistance, 3.5 * one.resistance, rtol=1e-15)
+
+
+def test_results_bit_identical_whatever_the_batch():
+    rng = np.random.default_rng(5)
+    radius = _gaussian_spots(13, (1.0, 2.0, 4.0))
+    masks = rng.random((300, 13, 13)) < 0.4
+    crops = cn.choose_crops(radius, radius, PITCH, 1e-6)
+    whole = cn.resistance(masks, radius, radius, PITCH, RHO, crops, 1e-6).resistance
+    pieces = [cn.resistance(masks[i : i + 7], radius, radius, PITCH, RHO, crops, 1e-6).resistance for i in range(0, 300, 7)]
+    np.testing.assert_array_equal(np.concatenate(pieces), whole)
+    perm = rng.permutation(300)
+    np.testing.assert_array_equal(cn.resistance(masks[perm], radius, radius, PITCH, RHO, crops, 1e-6).resistance, whole[perm])
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.sampled_from(["radius", "area"]),
+    st.sampled_from([1e-2, 1e-4, 1e-6]),
+    st.floats(0.05, 1.0),
+    st.sampled_from([14, 15]),
+)
+def test_crop_error_within_tolerance_and_bound(seed, kind, tolerance, p, n):
+    rng = np.random.default_rng(seed)
+    radius = _gaussian_spots(n, tuple(rng.uniform(0.7, 4.0, 3))) * rng.uniform(0.5, 1.5, (3, n, n))
+    weights = _weights(radius, kind)
+    masks = rng.random((12, n, n)) < p
+    crops = cn.choose_crops(radius, weights, PITCH, tolerance)
+    exact = cn.resistance(masks, radius, weights, PITCH, RHO, _whole(radius), 0.0, "direct").resistance
+    cropped = cn.resistance(masks, radius, weights, PITCH, RHO, crops, tolerance)
+    finite = np.isfinite(exact)
+    error = np.abs(cropped.resistance[finite] / exact[finite] - 1.0)
+    assert np.all(error <= tolerance)
+    assert np.all(error <= cropped.crop_bound[finite] + 1e-13)
+    assert np.all(cropped.crop_bound <= tolerance)
+
+
+def test_crops_shrink_with_tolerance_and_vanish_at_zero():
+    radius = _gaussian_spots(21, (1.0, 2.0, 5.0))
+    assert list(cn.choose_crops(radius, radius, PITCH, 0.0)) == [21, 21, 21]
+    loose = cn.choose_crops(radius, radius, PITCH, 1e-2)
+    tight = cn.choose_crops(radius, radius, PITCH, 1e-8)
+    assert np.all(loose <= tight) and loose[0] < 21
+    assert np.all(np.diff(tight) >= 0)
+
+
+def test_radius_crops_need_no_recomputation():
+    """For radius weights the crop bound holds for every mask, so nothing falls back."""
+    rng = np.random.default_rng(6)
+    radius = _gaussian_spots(17, (1.0, 3.0))
+    masks = rng.random((40, 17, 17)) < 0.05
+    crops = cn.choose_crops(radius, radius, PITCH, 1e-6)
+    assert cn.resistance(masks, radius, radius, PITCH, RHO, crops, 1e-6).n_uncropped == 0
+
+
+def test_area_entries_above_tolerance_are_recomputed():
+    """Only spots outside the crop conduct: the bound fails and the whole window is used."""
+    radius = _gaussian_spots(15, (1.5,))
+    weights = _weights(radius, "area")
+    crops = cn.choose_crops(radius, weights, PITCH, 1e-6)
+    assert crops[0] < 15
+    c = cn.crop_slice(15, int(crops[0]))
+    masks = np.ones((2, 15, 15), bool)
+    masks[0, c, c] = False
+    res = cn.resistance(masks, radius, weights, PITCH, RHO, crops, 1e-6)
+    exact = cn.resistance(masks, radius, weights, PITCH, RHO, [15], 0.0, "direct")
+    assert res.n_uncropped == 1
+    assert res.resistance[0, 0] == pytest.approx(exact.resistance[0, 0], rel=1e-13)
+    assert res.resistance[1, 0] == pytest.approx(exact.resistance[1, 0], rel=1e-6)
+
+
+def test_interaction_weights_change_only_the_interaction_term():
+    rng = np.random.default_rng(7)
+    radius = _gaussian_spots(11, (1.0, 3.0))
+    masks = rng.random((6, 11, 11)) < 0.5
+    by_radius = cn.resistance(masks, radius, radius, PITCH, RHO, [11, 11], 0.0)
+    by_area = cn.resistance(masks, radius, _weights(radius, "area"), PITCH, RHO, [11, 11], 0.0)
+    np.testing.assert_array_equal(by_radius.resistance_self, by_area.resistance_self)
+    assert not np.allclose(by_radius.resistance_interaction, by_area.resistance_interaction)
+
+
+def test_greenwood_terms_open_and_single():
+    r, r_self, r_int = cn.greenwood_terms([0.0, 2e-6], [0.0, 2e-6], [0.0, 0.0], [0, 1], RHO)
+    assert np.isposinf(r[0]) and np.isposinf(r_self[0]) and np.isposinf(r_int[0])
+    assert r_int[1] == 0.0 and r[1] == RHO / 4e-6
+
+
+def test_padded_length_avoids_wrap():
+    for n in (1, 2, 13, 57):
+        assert fi.padded_length(n) >= 2 * n - 1
+
+
+def test_unknown_method_is_rejected():
+    with pytest.raises(ValueError, match="method"):
+        cn.interaction_sum(np.zeros((1, 3, 3)), PITCH, "magic")
