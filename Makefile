@@ -14,7 +14,7 @@ SOURCES  := $(shell find pipeline -name '*.py' -o -name '*.toml')
 ANALYSIS := $(shell find analysis -name '*.py')
 STAMPS   := $(DATA)/.stamps
 
-.PHONY: all run test bench figures report stamps contact oxide cube fits surrogate params clean FORCE
+.PHONY: all run test bench figures report contact oxide cube fits surrogate params clean FORCE
 all: run
 
 $(VENV)/.installed: pyproject.toml
@@ -46,12 +46,14 @@ cube: $(DATA)/cube.nc
 fits: $(DATA)/fits.nc
 surrogate: $(DATA)/surrogate.nc
 
-figures: $(DATA)/surrogate.nc $(ANALYSIS)
+$(DATA)/figures/.written: $(DATA)/surrogate.nc $(ANALYSIS) $(SOURCES) | $(VENV)/.installed
 	$(G2TOM) figures $(ARGS)
-
-report: figures
+	touch $@
+$(DATA)/report.md: $(DATA)/figures/.written $(wildcard $(DATA)/bench/*.json) | $(VENV)/.installed
 	$(G2TOM) report $(ARGS)
 
+figures: $(DATA)/figures/.written
+report: $(DATA)/report.md
 run: report
 
 bench: | $(VENV)/.installed
@@ -64,4 +66,4 @@ test: | $(VENV)/.installed
 	$(VENV)/bin/python -m pytest
 
 clean:
-	rm -rf $(DATA)/*.nc $(DATA)/figures $(DATA)/bench $(DATA)/report.* $(STAMPS)
+	rm -rf $(DATA)/*.nc $(DATA)/figures $(DATA)/bench $(DATA)/report.* $(DATA)/table3.* $(DATA)/timings.json $(STAMPS)
