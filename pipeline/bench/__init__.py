@@ -9,22 +9,46 @@ from __future__ import annotations
 
 import importlib
 import json
-import platform
 import os
+import platform
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, Mapping
 
 from pipeline import __version__
 from pipeline.config import Scenario
 from pipeline.store import atomic_path
 
-__all__ = ["BENCHMARKS", "run_benchmarks"]
+__all__ = ["BENCHMARKS", "run_benchmarks", "summary_lines"]
 
 BENCHMARKS: tuple[str, ...] = ("contact", "oxide", "cube")
 
 
 def _machine() -> dict[str, Any]:
     return {"cores": os.cpu_count(), "python": platform.python_version(), "g2tom": __version__}
+
+
+def _short(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    if isinstance(value, list) and len(value) > 4 and all(isinstance(v, (int, float)) for v in value):
+        return f"[{len(value)} values, {min(value):.4g} .. {max(value):.4g}]"
+    return str(value)
+
+
+def summary_lines(result: Mapping[str, Any], prefix: str = "") -> list[str]:
+    """``key: value`` lines of a nested result, long numeric lists shown as count and range."""
+    lines: list[str] = []
+    for key, value in result.items():
+        if key == "machine":
+            continue
+        if isinstance(value, Mapping):
+            lines += summary_lines(value, f"{prefix}{key}.")
+        elif isinstance(value, list) and value and all(isinstance(v, Mapping) for v in value):
+            for i, item in enumerate(value):
+                lines += summary_lines(item, f"{prefix}{key}[{i}].")
+        else:
+            lines.append(f"  {prefix}{key}: {_short(value)}")
+    return lines
 
 
 def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str] | None = None) -> dict[str, Path]:
@@ -39,7 +63,9 @@ def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str]
         module = importlib.import_module(f"pipeline.bench.{name}")
         result = {"benchmark": name, "scenario": scenario.name, "machine": _machine(), **module.run(scenario)}
         text = json.dumps(result, indent=2, sort_keys=False, default=float)
-        print(f"== bench {name} ==\n{text}")
+        print(f"== bench {name} ==")
+        for line in summary_lines(result):
+            print(line)
         target = out_dir / f"{name}.json"
         with atomic_path(target) as tmp:
             tmp.write_text(text + "\n")
