@@ -196,10 +196,10 @@ class Cube:
         "auto",
         "1",
         "interaction sum algorithm: auto (the fastest, folded), folded (dft_gemm on the four "
-        "mirror-parity quarters), dft_gemm or fft_gemm (real DFT along x as a GEMM or by FFT, "
+        "mirror-parity quarters), dft_gemm (real DFT along x as a GEMM, "
         "then Toeplitz GEMM along y), fft (2-D real FFT, Parseval), gemm (dense 1/d), "
         "direct (double sum)",
-        choices=("auto", "folded", "dft_gemm", "fft_gemm", "fft", "gemm", "direct"),
+        choices=("auto", "folded", "dft_gemm", "fft", "gemm", "direct"),
     )
     chunk: int = _param(25, "1", "realizations per dask chunk", ge=1)
 

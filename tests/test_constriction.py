@@ -14,7 +14,7 @@ from pipeline.physics import interaction_fft as fi
 
 RHO = 7.2e-7  # ohm m
 PITCH = 7.0e-5  # m
-FAST = ("gemm", "fft", "fft_gemm", "dft_gemm", "folded")
+FAST = ("gemm", "fft", "dft_gemm", "folded")
 
 
 def _gaussian_spots(n: int, widths: tuple[float, ...], peak: float = 2e-6) -> np.ndarray:

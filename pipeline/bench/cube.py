@@ -74,7 +74,7 @@ def _paths(
     whole = np.full(radius.shape[0], n)
     tol = scenario.cube.crop_tolerance
     crops = constriction.choose_crops(radius, weights, pitch, tol)
-    spectral = ("folded", "dft_gemm", "fft_gemm", "fft")
+    spectral = ("folded", "dft_gemm", "fft")
     paths = {f"{m}_uncropped": (m, whole, 0.0) for m in spectral + ("gemm",)}
     paths.update({f"{m}_cropped": (m, crops, tol) for m in spectral})
     return paths

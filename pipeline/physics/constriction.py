@@ -29,7 +29,6 @@ import numpy as np
 from pipeline.physics.interaction_fft import (
     interaction_dft_gemm,
     interaction_fft,
-    interaction_fft_gemm,
     interaction_folded,
     interaction_gemm,
     scratch,
@@ -99,7 +98,6 @@ METHODS: dict[str, Callable[[np.ndarray, float], np.ndarray]] = {
     "direct": interaction_direct,
     "gemm": interaction_gemm,
     "fft": interaction_fft,
-    "fft_gemm": interaction_fft_gemm,
     "dft_gemm": interaction_dft_gemm,
     "folded": interaction_folded,
 }
@@ -119,7 +117,7 @@ def interaction_sum(u: np.ndarray, pitch: float, method: str = "auto") -> np.nda
     pitch
         Cell pitch, in m.
     method
-        ``auto``, ``direct``, ``gemm``, ``fft``, ``fft_gemm``, ``dft_gemm`` or ``folded``.
+        ``auto``, ``direct``, ``gemm``, ``fft``, ``dft_gemm`` or ``folded``.
 
     Returns
     -------
