@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import os
-from contextlib import ExitStack, contextmanager
+from contextlib import ExitStack
 from dataclasses import dataclass
-from typing import Iterator
+from typing import Any
 
 import dask
 
-__all__ = ["ComputeOptions", "dask_context"]
+__all__ = ["ComputeOptions", "compute"]
+
+#: Runs shorter than this (s) show no local progress bar.
+PROGRESS_AFTER = 3.0
 
 
 @dataclass(frozen=True)
@@ -19,13 +22,13 @@ class ComputeOptions:
     Attributes
     ----------
     scheduler
-        Address of an existing ``dask.distributed`` scheduler, or None for local threads.
+        Address of an existing ``dask.distributed`` scheduler, or None for local work.
     workers
         Local worker count: a local ``dask.distributed`` cluster of that many single-threaded
         worker processes when ``distributed`` is installed, else that many threads. None
         means the threaded scheduler with one thread per core.
     progress
-        Show a progress bar for dask computations.
+        Show a progress bar while computing.
     """
 
     scheduler: str | None = None
@@ -33,36 +36,60 @@ class ComputeOptions:
     progress: bool = True
 
 
-@contextmanager
-def dask_context(options: ComputeOptions) -> Iterator[None]:
-    """Configure dask for the duration of a stage according to ``options``."""
-    with ExitStack() as stack:
-        if options.scheduler:
-            from distributed import Client  # optional dependency: g2tom[distributed]
-
-            stack.enter_context(Client(options.scheduler))
-        elif options.workers is not None and options.workers > 1 and _want_local_cluster():
-            from distributed import Client, LocalCluster
-
-            cluster = stack.enter_context(
-                LocalCluster(n_workers=options.workers, threads_per_worker=1, processes=True)
-            )
-            stack.enter_context(Client(cluster))
-        else:
-            stack.enter_context(
-                dask.config.set(scheduler="threads", num_workers=options.workers or os.cpu_count())
-            )
-        if options.progress and not options.scheduler:
-            from dask.diagnostics import ProgressBar
-
-            stack.enter_context(ProgressBar(minimum=3.0, dt=0.5))
-        yield
-
-
-def _want_local_cluster() -> bool:
-    """A local ``distributed`` cluster is used for ``--workers`` when distributed is installed."""
+def _distributed_available() -> bool:
     try:
         import distributed  # noqa: F401
     except ImportError:
         return False
     return True
+
+
+def _client(stack: ExitStack, options: ComputeOptions) -> Any:
+    """A ``distributed.Client`` for ``options``, or None for the local threaded scheduler."""
+    if options.scheduler:
+        from distributed import Client  # optional dependency: g2tom[distributed]
+
+        return stack.enter_context(Client(options.scheduler))
+    if options.workers is not None and options.workers > 1 and _distributed_available():
+        from distributed import Client, LocalCluster
+
+        cluster = stack.enter_context(
+            LocalCluster(n_workers=options.workers, threads_per_worker=1, processes=True,
+                         dashboard_address=None)
+        )
+        return stack.enter_context(Client(cluster))
+    return None
+
+
+def compute(*collections: Any, options: ComputeOptions) -> tuple[Any, ...]:
+    """Compute dask collections where ``options`` says, with a progress bar if asked.
+
+    Parameters
+    ----------
+    *collections
+        Dask arrays or delayed objects.
+    options
+        Scheduler address, local worker count and progress display.
+
+    Returns
+    -------
+    tuple
+        The computed values, in the order given (as :func:`dask.compute`).
+    """
+    with ExitStack() as stack:
+        client = _client(stack, options)
+        if client is None:
+            stack.enter_context(
+                dask.config.set(scheduler="threads", num_workers=options.workers or os.cpu_count())
+            )
+            if options.progress:
+                from dask.diagnostics import ProgressBar
+
+                stack.enter_context(ProgressBar(minimum=PROGRESS_AFTER, dt=0.5))
+            return dask.compute(*collections)
+        futures = client.compute(list(collections))
+        if options.progress:
+            from distributed import progress
+
+            progress(futures)
+        return tuple(client.gather(futures))

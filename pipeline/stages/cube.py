@@ -18,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline import store
-from pipeline.compute import ComputeOptions, dask_context
+from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
 from pipeline.physics import constriction
 
@@ -113,8 +113,7 @@ def _compute(
         )
         for start in range(0, psi.shape[1], chunk)
     ]
-    with dask_context(options):
-        pieces = dask.compute(*tasks)
+    pieces = compute(*tasks, options=options)
     out: dict[str, Any] = {
         name: np.concatenate([p[name] for p in pieces], axis=-1) for name in _TERMS
     }
@@ -222,7 +221,7 @@ def build(
     oxide
         ``psi`` (lambda, realization, y, x) and ``threshold`` (xi, lambda, realization).
     options
-        Where dask runs (see :func:`pipeline.compute.dask_context`).
+        Where dask runs (see :func:`pipeline.compute.compute`).
 
     Returns
     -------

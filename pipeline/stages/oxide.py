@@ -20,13 +20,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import dask
 import dask.array as da
 import numpy as np
 import xarray as xr
 
 from pipeline import store
-from pipeline.compute import ComputeOptions, dask_context
+from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
 from pipeline.physics import oxide_field
 from pipeline.physics.grid import cell_centres
@@ -166,7 +165,7 @@ def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=
     scenario
         The validated scenario (section ``oxide``, the cell grid).
     options
-        Where dask runs (see :func:`pipeline.compute.dask_context`).
+        Where dask runs (see :func:`pipeline.compute.compute`).
 
     Returns
     -------
@@ -175,8 +174,7 @@ def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=
         ``oxide_fraction`` (xi, lambda, realization), ``n_modes`` (lambda).
     """
     psi, threshold, fraction = _lazy(scenario)
-    with dask_context(options):
-        psi, threshold, fraction = dask.compute(psi, threshold, fraction)
+    psi, threshold, fraction = compute(psi, threshold, fraction, options=options)
     return _dataset(scenario, psi, threshold, fraction)
 
 
