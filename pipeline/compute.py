@@ -24,9 +24,10 @@ class ComputeOptions:
     scheduler
         Address of an existing ``dask.distributed`` scheduler, or None for local work.
     workers
-        Local worker count: a local ``dask.distributed`` cluster of that many single-threaded
-        worker processes when ``distributed`` is installed, else that many threads. None
-        means the threaded scheduler with one thread per core.
+        Local worker count: for more than one, a local ``dask.distributed`` cluster of that
+        many single-threaded worker processes when ``distributed`` is installed; otherwise
+        (and for one) that many threads. None means the threaded scheduler with one thread
+        per core.
     progress
         Show a progress bar while computing.
     """

@@ -402,7 +402,10 @@ def _check_field(section: str, f: dataclasses.Field, value: Any) -> Any:
     if not is_list:
         return _check_scalar(name, value, kind, f.metadata)
     if not isinstance(value, (list, tuple)) or len(value) == 0:
-        raise ConfigError(f"{name} = {value!r} must be a non-empty list of numbers")
+        raise ConfigError(
+            f"{name} = {value!r} is not allowed: must be a non-empty list of numbers, each "
+            f"{_fmt_range(f.metadata)} ({f.metadata['unit']})"
+        )
     out = [_check_scalar(f"{name}[{i}]", v, kind, f.metadata) for i, v in enumerate(value)]
     if len(set(out)) != len(out) or out != sorted(out):
         raise ConfigError(f"{name} = {value!r} must be strictly increasing")
@@ -435,13 +438,17 @@ def _cross_checks(s: Scenario) -> None:
         )
     if s.loading.n_delta > 1 and s.loading.delta_min == s.loading.delta_max:
         raise ConfigError(
-            "loading.delta_min must differ from loading.delta_max when loading.n_delta > 1"
+            f"loading.delta_min = {s.loading.delta_min!r} must differ from loading.delta_max = "
+            f"{s.loading.delta_max!r} when loading.n_delta = {s.loading.n_delta} > 1 (sigma)"
         )
     window = s.contact.window * s.indenter.radius
-    if window > 2 * s.contact.r_max * s.indenter.radius:
+    r_max = s.contact.r_max * s.indenter.radius
+    corner = math.sqrt(2.0) * (s.n_cells - 1) / 2.0 * s.cell_size  # radius of the corner cell centres
+    if corner > r_max:
         raise ConfigError(
-            f"contact.window = {s.contact.window!r} is out of range: the spot window must lie "
-            f"inside the radial domain, so it must be <= 2 * contact.r_max = {2 * s.contact.r_max:g} (R*)"
+            f"contact.window = {s.contact.window!r} is out of range: its corner cell centres lie at "
+            f"r = {corner:.6g} m, beyond the radial domain r <= contact.r_max * R* = {r_max:.6g} m; "
+            f"the window must be <= about sqrt(2) * contact.r_max = {math.sqrt(2) * s.contact.r_max:.4g} (R*)"
         )
     if s.n_cells < 3:
         raise ConfigError(
@@ -466,19 +473,13 @@ def _cross_checks(s: Scenario) -> None:
 
 
 def _modes_in_band(s: Scenario, lam: float) -> int:
-    """Number of independent (half-plane) wave vectors of the window's lattice in [k1, ks]."""
-    side = s.n_cells * s.cell_size
-    k1 = math.pi / (lam * s.cell_size)
-    ks = s.oxide.ks_ratio * k1
-    step = 2 * math.pi / side
-    m = int(ks / step) + 1
-    count = 0
-    for i in range(-m, m + 1):
-        for j in range(-m, m + 1):
-            k = step * math.hypot(i, j)
-            if k1 <= k <= ks:
-                count += 1
-    return count // 2
+    """Independent (half-plane) wave vectors of the window's lattice in k1 <= |k| <= ks."""
+    from pipeline.physics.oxide_field import band  # numpy only when the check needs it
+
+    try:
+        return band(s.n_cells, s.cell_size, lam, s.oxide.ks_ratio, s.oxide.hurst).size
+    except ValueError:  # the band holds no lattice mode
+        return 0
 
 
 def _build(data: Mapping[str, Any], *, name: str, description: str) -> Scenario:
@@ -487,7 +488,10 @@ def _build(data: Mapping[str, Any], *, name: str, description: str) -> Scenario:
         if key not in SECTIONS:
             raise _unknown(key)
     for section, cls in SECTIONS.items():
-        given = dict(data.get(section, {}))
+        table = data.get(section, {})
+        if not isinstance(table, Mapping):
+            raise ConfigError(f"{section} = {table!r} is not allowed: must be a [{section}] table of parameters")
+        given = dict(table)
         by_key = {_key(f): f for f in dataclasses.fields(cls)}
         for k in given:
             if k not in by_key:

@@ -74,6 +74,10 @@ def test_toml_file_with_base(tmp_path) -> None:
         ("loading.n_delta=2.5", "loading.n_delta = 2.5 is not an integer"),
         ("loading.delta_min=3", "loading.delta_min = 3.0 is out of range: must be <= loading.delta_max"),
         ("oxide.xi=[0.5, 0.2]", "must be strictly increasing"),
+        ("oxide.xi=0.5", "oxide.xi = 0.5 is not allowed: must be a non-empty list of numbers, each > 0 and < 1"),
+        ("loading.delta_min=2", "loading.delta_min = 2.0 must differ from loading.delta_max = 2.0"),
+        # the corner cells (r = 0.28 R*) must lie inside the radial domain, not just the half-side
+        ("contact.r_max=0.25", "contact.window = 0.4 is out of range: its corner cell centres lie at r = 0.0028 m"),
     ],
 )
 def test_bad_values_name_parameter_value_and_range(override: str, message: str) -> None:
@@ -94,6 +98,20 @@ def test_bad_values_name_parameter_value_and_range(override: str, message: str) 
 def test_unknown_key_suggests_nearest(override: str, suggestion: str) -> None:
     with pytest.raises(ConfigError, match=f"did you mean '{suggestion}'"):
         load_scenario("paper", [override])
+
+
+def test_window_fits_the_radial_domain_exactly() -> None:
+    """sqrt(2) * 28 cells * 1/sqrt(eta) = 0.28 R*: r_max = 0.28 is enough, 0.279 is not."""
+    assert load_scenario("paper", ["contact.r_max=0.28"]).n_cells == 57
+    with pytest.raises(ConfigError, match="contact.window = 0.4 is out of range"):
+        load_scenario("paper", ["contact.r_max=0.279"])
+
+
+def test_section_that_is_not_a_table(tmp_path) -> None:
+    path = tmp_path / "bad.toml"
+    path.write_text("material = 3\n")
+    with pytest.raises(ConfigError, match=r"material = 3 is not allowed: must be a \[material\] table"):
+        load_scenario(path)
 
 
 def test_malformed_override_and_missing_file() -> None:

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import xarray as xr
 
+from pipeline.bench import contact as bench_contact
 from pipeline.cli import main
 from pipeline.compute import ComputeOptions
-from pipeline.config import load_scenario
+from pipeline.config import ConfigError, load_scenario
 from pipeline.physics.grid import cell_centres
 from pipeline.stages import contact
 from tests.conftest import SMALL_OVERRIDES
@@ -68,6 +71,13 @@ def test_published_conventions():
     centre = sc.n_cells // 2
     np.testing.assert_allclose(out.spot_area[:, centre, centre] / sc.cell_size**2,
                                out.area_fraction[:, 0], rtol=1e-12)
+    # ... and an off-axis cell the chord between its two nodes, not A* of the interpolated gap
+    cell = out.spot_area[:, centre, centre + 5].values / sc.cell_size**2
+    chord = [np.interp(5 * sc.cell_size, out.r, row) for row in out.area_fraction.values]
+    np.testing.assert_allclose(cell, chord, rtol=1e-12)
+    other = contact.build(load_scenario("published", {"loading.n_delta": 4,
+                                                      "contact.area_interpolation": "separation"}))
+    assert np.max(np.abs(other.spot_area[:, centre, centre + 5].values / sc.cell_size**2 / cell - 1)) > 3e-3
 
 
 @pytest.mark.parametrize("shape", ["cone", "flat_punch"])
@@ -95,8 +105,15 @@ def test_window_corner_outside_radial_domain(tmp_path, capsys):
     code = main(["contact", "--set", "contact.r_max=0.25", "--set", "contact.n_radial=40",
                  "--set", "loading.n_delta=1", "--data-dir", str(tmp_path), "--no-progress"])
     assert code == 2
-    assert "contact.window = 0.4: cell radius" in capsys.readouterr().err
+    assert "contact.window = 0.4 is out of range: its corner cell centres" in capsys.readouterr().err
     assert target.read_text() == "previous"
+
+
+def test_window_check_of_the_stage_itself(small):
+    """A scenario built around the validation still gets a ConfigError naming the window."""
+    sc = dataclasses.replace(small, contact=dataclasses.replace(small.contact, r_max=0.25))
+    with pytest.raises(ConfigError, match="contact.window = 0.4: cell radius .* is out of range"):
+        contact.build(sc)
 
 
 @pytest.mark.parametrize(
@@ -125,3 +142,17 @@ def test_validation_errors_leave_data_untouched(tmp_path, capsys, override, mess
     err = capsys.readouterr().err
     assert message in err, err
     assert target.read_text() == "previous"
+
+
+def test_bench_reports_times_and_force_errors(small, monkeypatch):
+    monkeypatch.setattr(bench_contact, "_REPEATS", 1)
+    sc = load_scenario("paper", {**SMALL_OVERRIDES, "loading.n_delta": 3, "contact.n_radial": 60})
+    result = bench_contact.run(sc)
+    assert result["reference"]["n_radial"] == 240 and len(result["reference"]["force_N"]) == 3
+    cases = {(c["solver"], c["n_radial"], c["radial_grid"]): c for c in result["cases"]}
+    assert set(cases) == {("newton", 60, "graded"), ("fixed_point", 60, "graded"), ("newton", 60, "uniform"),
+                          ("newton", 20, "uniform"), ("fixed_point", 20, "uniform")}
+    assert all(c["all_converged"] and c["solve_seconds"] > 0 for c in cases.values())
+    # the 20-node published grid is far coarser than the scenario's graded grid
+    assert cases[("newton", 60, "graded")]["force_max_rel_error"] < 0.2 * cases[("newton", 20, "uniform")][
+        "force_max_rel_error"]

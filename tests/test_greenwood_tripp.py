@@ -12,7 +12,14 @@ from scipy.special import ellipkm1, i0e
 from pipeline.config import load_scenario
 from pipeline.physics import greenwood_tripp as gt
 from pipeline.physics.asperity import asperity_pressure
-from pipeline.physics.hertz import hertz_force, hertz_radius, roughness_parameter
+from pipeline.physics.hertz import (
+    hertz_approach,
+    hertz_displacement,
+    hertz_force,
+    hertz_pressure,
+    hertz_radius,
+    roughness_parameter,
+)
 from pipeline.physics.indenter import profile
 from pipeline.stages.contact import solve_scenario
 
@@ -95,6 +102,8 @@ def test_newton_residual_and_fixed_point_agreement(small):
     residuals = list(_check_residual(small, r, newton))
     assert max(residuals) <= 1e-10
     assert all(s.converged and s.residual <= 1e-10 for s in newton)
+    # a true Newton step: a wrong Jacobian or a chord never refreshed needs 16-21 steps here
+    assert max(s.iterations for s in newton) <= 12
     _, fixed = solve_scenario(small, solver="fixed_point")
     assert all(s.converged for s in fixed)
     for a, b in zip(newton, fixed):
@@ -102,10 +111,77 @@ def test_newton_residual_and_fixed_point_agreement(small):
                                    atol=5e-3 * np.max(a.displacement))
 
 
-def test_fixed_point_not_converged_is_reported(small):
+def test_fixed_point_not_converged_is_reported():
     sc = load_scenario("paper", {"loading.n_delta": 2, "contact.n_radial": 40, "contact.max_iterations": 2})
     _, fixed = solve_scenario(sc, solver="fixed_point")
     assert not any(s.converged for s in fixed) and all(s.iterations == 2 for s in fixed)
+
+
+def test_fixed_point_stops_at_the_papers_criterion():
+    """Stop at the first k with ||u'_{k+1} - u_k|| <= zeta eps ||u_k|| (Sect. 2.5.1), not before."""
+    sc = load_scenario("published", {"loading.n_delta": 1, "loading.delta_max": -2.0})
+    r = gt.radial_nodes(sc.contact.n_radial, sc.contact.r_max * sc.indenter.radius)
+    rough = sc.roughness
+    layer = gt.Layer(rough.sigma, rough.eta, rough.beta, sc.material.E_star)
+    args = (gt.influence_matrix(r, layer.e_star), profile(r, radius=sc.indenter.radius), [-2 * rough.sigma], layer)
+    zeta, eps = 0.3, 1e-3
+    (done,) = gt.solve(*args, solver="fixed_point", relaxation=zeta, fixed_point_tolerance=eps)
+    n = done.iterations
+    assert done.converged and 5 < n < 30
+    u = [gt.solve(*args, solver="fixed_point", relaxation=zeta, fixed_point_tolerance=eps,
+                  max_iterations=k)[0].displacement for k in (n - 2, n - 1)] + [done.displacement]
+    ratio = [np.max(np.abs(b - a)) / np.max(np.abs(a)) for a, b in zip(u[:-1], u[1:])]
+    assert ratio[0] > zeta * eps >= ratio[1]
+
+
+def test_fixed_point_without_load_converges_at_once():
+    """Zero pressure everywhere (far apart): u = 0 is the solution, not a failure to converge."""
+    v, it, res, ok = gt.solve_fixed_point(np.zeros((3, 3)), np.full(3, 50.0), 0.3, 1e-3, 50)
+    assert ok and it == 1 and res == 0.0 and not v.any()
+
+
+def test_hertz_fields_against_the_influence_matrix():
+    """Hertz displacement (inside and outside a) = M p_Hertz; the deformed gap closes inside a."""
+    radius, e_star, force = 1.0, 1.0, 1e-3
+    a = float(hertz_radius(force, radius, e_star))
+    r = gt.radial_nodes(801, 4 * a)
+    p = hertz_pressure(r, a, force)
+    assert gt.force_weights(r) @ p == pytest.approx(force, rel=1e-3)
+    u = hertz_displacement(r, a, force, e_star)
+    np.testing.assert_allclose(u, gt.influence_matrix(r, e_star) @ p, rtol=1e-3)
+    gap = profile(r, radius=radius) - hertz_approach(a, radius) + u
+    np.testing.assert_allclose(gap[r <= a], 0.0, atol=1e-12 * a)
+    assert np.all(gap[r > a] > 0)
+    assert float(hertz_force(hertz_approach(a, radius), radius, e_star)) == pytest.approx(force, rel=1e-12)
+
+
+def test_hertz_fields_vanish_without_load():
+    r = np.linspace(0, 1, 5)
+    assert not hertz_pressure(r, 0.0, 0.0).any() and not hertz_displacement(r, 0.0, 0.0, 1.0).any()
+    assert roughness_parameter(1.0, 1.0, 0.0) == np.inf
+    with pytest.raises(ValueError, match=r"force = -1 is out of range: must be >= 0 \(N\)"):
+        hertz_radius(np.array([-1.0, 2.0]), 1.0, 1.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"shape": "torus"}, "shape = 'torus' is not allowed: must be one of sphere, cone, flat_punch"),
+        ({"radius": 0.0}, "radius = 0.0 is out of range: must be > 0 (m)"),
+        ({"shape": "cone", "cone_angle": np.float64(2.0)}, "cone_angle = 2.0 is out of range"),
+        ({"shape": "flat_punch", "edge_radius": -1.0}, "edge_radius = -1.0 is out of range"),
+    ],
+)
+def test_profile_validation(kwargs, message):
+    with pytest.raises(ValueError) as err:
+        profile([0.0, 1.0], **kwargs)
+    assert message in str(err.value)
+
+
+def test_profiles():
+    r = np.array([0.0, 1.0, 3.0])
+    np.testing.assert_allclose(profile(r, "cone", cone_angle=0.1), r * math.tan(0.1))
+    np.testing.assert_allclose(profile(r, "flat_punch", punch_radius=1.0, edge_radius=2.0), [0, 0, 1.0])
 
 
 def test_roughness_parameter_at_minus_two_sigma():

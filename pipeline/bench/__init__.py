@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from pipeline import __version__
-from pipeline.config import Scenario
+from pipeline.config import ConfigError, Scenario
 from pipeline.store import atomic_path
 
 __all__ = ["BENCHMARKS", "run_benchmarks", "summary_lines"]
@@ -52,11 +52,22 @@ def summary_lines(result: Mapping[str, Any], prefix: str = "") -> list[str]:
 
 
 def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str] | None = None) -> dict[str, Path]:
-    """Run the benchmarks (all, or ``only`` those named), print and save each as JSON."""
+    """Run the benchmarks (all, or ``only`` those named), print and save each as JSON.
+
+    Returns
+    -------
+    dict
+        Benchmark name -> the ``<data_dir>/bench/<name>.json`` written.
+
+    Raises
+    ------
+    ConfigError
+        If ``only`` names an unknown benchmark (the CLI then exits with status 2).
+    """
     names = tuple(only) if only else BENCHMARKS
     unknown = [n for n in names if n not in BENCHMARKS]
     if unknown:
-        raise ValueError(f"--only {unknown[0]!r} is not a benchmark: choose from {', '.join(BENCHMARKS)}")
+        raise ConfigError(f"--only {unknown[0]!r} is not a benchmark: must be one of {', '.join(BENCHMARKS)}")
     out_dir = Path(data_dir) / "bench"
     written: dict[str, Path] = {}
     for name in names:

@@ -288,7 +288,7 @@ def solve_fixed_point(a: np.ndarray, x0: np.ndarray, relaxation: float, toleranc
         size = np.max(np.abs(v))
         v = new
         it += 1
-        if size > 0 and change <= relaxation * tolerance * size:
+        if change <= relaxation * tolerance * size:  # from u = 0 only when p(x0) = 0 everywhere
             return v, it, _relative_residual(v, a @ _pressure(x0 + v)), True
     return v, it, _relative_residual(v, a @ _pressure(x0 + v)), False
 

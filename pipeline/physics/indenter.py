@@ -12,7 +12,7 @@ SHAPES: tuple[str, ...] = ("sphere", "cone", "flat_punch")
 
 def _positive(name: str, value: float, unit: str) -> None:
     if not (np.isfinite(value) and value > 0):
-        raise ValueError(f"{name} = {value!r} is out of range: must be > 0 ({unit})")
+        raise ValueError(f"{name} = {float(value)!r} is out of range: must be > 0 ({unit})")
 
 
 def profile(
@@ -54,7 +54,7 @@ def profile(
         return r * r / (2.0 * radius)
     if shape == "cone":
         if not (0 < cone_angle < np.pi / 2):
-            raise ValueError(f"cone_angle = {cone_angle!r} is out of range: must be in (0, pi/2) (rad)")
+            raise ValueError(f"cone_angle = {float(cone_angle)!r} is out of range: must be in (0, pi/2) (rad)")
         return r * np.tan(cone_angle)
     if shape == "flat_punch":
         _positive("punch_radius", punch_radius, "m")
