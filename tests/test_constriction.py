@@ -128,16 +128,21 @@ def test_resistance_scales_with_rho():
     np.testing.assert_allclose(scaled.resistance, 3.5 * one.resistance, rtol=1e-15)
 
 
-def test_results_bit_identical_whatever_the_batch():
+@pytest.mark.parametrize(("kind", "p"), [("radius", 0.4), ("area", 0.05)])
+def test_results_bit_identical_whatever_the_batch(kind, p):
+    """Also for the entries recomputed uncropped (sparse masks with area weights)."""
     rng = np.random.default_rng(5)
     radius = _gaussian_spots(13, (1.0, 2.0, 4.0))
-    masks = rng.random((300, 13, 13)) < 0.4
-    crops = cn.choose_crops(radius, radius, PITCH, 1e-6)
-    whole = cn.resistance(masks, radius, radius, PITCH, RHO, crops, 1e-6).resistance
-    pieces = [cn.resistance(masks[i : i + 7], radius, radius, PITCH, RHO, crops, 1e-6).resistance for i in range(0, 300, 7)]
+    weights = _weights(radius, kind)
+    masks = rng.random((300, 13, 13)) < p
+    crops = cn.choose_crops(radius, weights, PITCH, 1e-6)
+    full = cn.resistance(masks, radius, weights, PITCH, RHO, crops, 1e-6)
+    assert (full.n_uncropped > 0) == (kind == "area")
+    whole = full.resistance
+    pieces = [cn.resistance(masks[i : i + 7], radius, weights, PITCH, RHO, crops, 1e-6).resistance for i in range(0, 300, 7)]
     np.testing.assert_array_equal(np.concatenate(pieces), whole)
     perm = rng.permutation(300)
-    np.testing.assert_array_equal(cn.resistance(masks[perm], radius, radius, PITCH, RHO, crops, 1e-6).resistance, whole[perm])
+    np.testing.assert_array_equal(cn.resistance(masks[perm], radius, weights, PITCH, RHO, crops, 1e-6).resistance, whole[perm])
 
 
 @settings(max_examples=20, deadline=None)

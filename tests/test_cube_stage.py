@@ -12,8 +12,9 @@ from scipy.special import erfcinv
 from pipeline import store
 from pipeline.compute import ComputeOptions
 from pipeline.config import load_scenario
-from pipeline.physics import constriction
+from pipeline.physics import constriction, oxide_field
 from pipeline.stages import cube
+from pipeline.stages import oxide as oxide_stage
 
 N = 13
 PITCH = 7.07e-5  # m
@@ -141,6 +142,22 @@ def test_some_open_circuits_are_kept_as_inf(inputs):
     assert np.all(ds["n_open"].values[-1] >= 3)
     assert np.all(np.isposinf(ds["resistance"].values[-1, :, :, :3]))
     assert not np.isnan(ds["resistance"].values).any()
+
+
+def test_threshold_ties_are_oxide_as_in_the_oxide_stage(inputs):
+    """An empirical threshold is one of the field's own float32 values: that cell is oxide."""
+    contact, oxide = inputs
+    psi = oxide["psi"].values
+    threshold = oxide_field.empirical_threshold(psi.reshape(psi.shape[:2] + (-1,)), np.asarray(XI))
+    assert threshold.dtype == np.float32
+    assert np.all((psi[None] == threshold[..., None, None]).any(axis=(-2, -1)))  # a tie in every field
+    ties = oxide.assign(threshold=(("xi", "lambda", "realization"), threshold))
+    ds = cube.build(_scenario(), contact, ties, OPTIONS)
+    covered = oxide_field.covered_count(np.asarray(XI), N * N)
+    expected = N * N - covered[:, None, None, None]  # every cell holds a spot (radius > 0)
+    np.testing.assert_array_equal(ds["n_conducting"], np.broadcast_to(expected, ds["n_conducting"].shape))
+    fraction = oxide_stage._fraction_block(psi, threshold)  # the oxide stage's own count
+    np.testing.assert_array_equal(ds["n_conducting"].isel(delta=0), np.rint(N * N * (1.0 - fraction)))
 
 
 def test_resistance_scales_with_rho(inputs, built):

@@ -95,6 +95,17 @@ def test_power_spectrum_band_and_slope(hurst: float, amplitudes: str) -> None:
     assert slope == pytest.approx(-2 * (1 + hurst), abs=0.02 if amplitudes == "ideal" else 0.2)
 
 
+def test_band_edges_are_inclusive() -> None:
+    """k1 <= |k| <= ks with both cut-offs on lattice radii: 15 cells, lambda = 1.5 -> k1 = 5, ks = 15."""
+    modes = of.band(15, CELL, 1.5, 3.0, 0.5)
+    j, i = np.meshgrid(np.arange(0, 16), np.arange(-15, 16), indexing="ij")
+    r2 = i**2 + j**2  # exact integers: no rounding at the edges
+    keep = ((j > 0) | (i > 0)) & (r2 >= 5**2) & (r2 <= 15**2)
+    expected = set(zip(i[keep].tolist(), j[keep].tolist()))
+    assert set(zip(modes.i.tolist(), modes.j.tolist())) == expected
+    assert {(5, 0), (3, 4), (0, 5), (15, 0), (9, 12), (-12, 9)} <= expected
+
+
 @pytest.mark.parametrize("amplitudes", ["ideal", "rayleigh"])
 @pytest.mark.parametrize("lam", [1.0, 5.0, 23.0])
 def test_unit_variance_over_the_window(lam: float, amplitudes: str) -> None:

@@ -52,12 +52,14 @@ def _subset_masks(oxide: xr.Dataset, count: int, seed: int = 0) -> np.ndarray:
 
 
 def _timed(func: Any, *args: Any) -> tuple[Any, float]:
+    """``func(*args)`` and its wall time in s."""
     start = time.perf_counter()
     result = func(*args)
     return result, time.perf_counter() - start
 
 
 def _max_rel_error(value: np.ndarray, reference: np.ndarray) -> float:
+    """Largest ``|value / reference - 1|`` over finite entries; inf if the open circuits differ."""
     finite = np.isfinite(reference)
     if not np.array_equal(finite, np.isfinite(value)):
         return math.inf

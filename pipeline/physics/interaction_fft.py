@@ -138,6 +138,7 @@ def _toeplitz_stack(n_cells: int, length: int) -> np.ndarray:
 
 
 def _check_blocks(u: np.ndarray) -> int:
+    """Side ``n`` of a (batch, n, n) stack of weight maps; ValueError for any other shape."""
     if u.ndim != 3 or u.shape[1] != u.shape[2]:
         raise ValueError(f"weights must have shape (batch, n, n), got {u.shape}")
     return u.shape[1]

@@ -123,6 +123,7 @@ def band(n_cells: int, cell_size: float, lam: float, ks_ratio: float, hurst: flo
 def _check_band_parameters(
     n_cells: int, cell_size: float, lam: float, ks_ratio: float, hurst: float
 ) -> None:
+    """Raise ValueError for a parameter of :func:`band` out of range."""
     if n_cells < 1 or n_cells % 2 == 0:
         raise ValueError(f"n_cells = {n_cells} is out of range: must be odd and >= 1")
     if not cell_size > 0:
@@ -150,6 +151,11 @@ def field_stream(seed: int, lam: float, realization: int) -> np.random.Generator
         Normalized correlation length, > 0.
     realization
         Realization index, >= 0.
+
+    Returns
+    -------
+    numpy.random.Generator
+        A PCG64 generator private to this (seed, lambda, realization).
     """
     key = (int(round(lam * LAMBDA_KEY_SCALE)), int(realization))
     return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key)))

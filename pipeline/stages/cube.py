@@ -30,6 +30,13 @@ _TERMS = ("resistance", "resistance_self", "resistance_interaction", "n_conducti
 def spot_maps(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, np.ndarray, float]:
     """Spot radii and interaction weights per load step, and the cell pitch.
 
+    Parameters
+    ----------
+    scenario
+        Supplies ``cube.weights`` (``radius`` or ``area``).
+    contact
+        ``spot_radius`` and ``spot_area`` (delta, y, x) on evenly spaced cell centres ``x``.
+
     Returns
     -------
     tuple
@@ -49,6 +56,7 @@ def spot_maps(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, np.n
 
 
 def _check_grids(contact: xr.Dataset, oxide: xr.Dataset) -> None:
+    """Raise ValueError unless both files share one square grid of cell centres."""
     for axis in ("x", "y"):
         if contact[axis].size != oxide[axis].size or not np.allclose(
             contact[axis].values, oxide[axis].values, rtol=1e-9, atol=0
@@ -147,6 +155,7 @@ def _measured_crop_error(
 
 
 def _attrs(units: str, long_name: str, **extra: Any) -> dict[str, Any]:
+    """CF-style attributes ``units`` and ``long_name`` plus any ``extra`` ones."""
     return {"units": units, "long_name": long_name, **extra}
 
 
