@@ -96,7 +96,8 @@ def _load_panel(ax: plt.Axes, cube: xr.Dataset, fits: xr.Dataset, lam: float, xi
         lo, hi = show(q.sel(quantile=0.16).values), show(q.sel(quantile=0.84).values)
         top = np.nanmax(np.where(np.isfinite(np.r_[lo, hi]), np.r_[lo, hi], np.nan)) * 10
         ax.fill_between(x, np.nan_to_num(lo, posinf=top), np.nan_to_num(hi, posinf=top), color=color, alpha=0.25, lw=0, zorder=2)
-        ax.plot(x, show(fits["geometric_mean"].sel(cell).values), "o", color=color, ms=4, zorder=3, label=f"xi = {xi:g}")
+        center = fits[fits.attrs["reduction"]].sel(cell).values  # the reduction that was fitted
+        ax.plot(x, show(center), "o", color=color, ms=4, zorder=3, label=f"xi = {xi:g}")
         alpha, gamma = float(fits["alpha"].sel(cell)), float(fits["gamma"].sel(cell))
         r_fit = alpha * scale * f_dense**-gamma
         ax.plot(dense, show(r_fit), color=color, lw=1.2, zorder=4)
@@ -117,7 +118,8 @@ def fig_load(path: Path, cube: xr.Dataset, fits: xr.Dataset, normalized: bool) -
     axes[0, 0].set_ylabel("kappa' = 1/R' = 2 rho* / (R sqrt(R* sigma))" if normalized else "resistance R (ohm)")
     axes[0, 0].legend(fontsize=8)
     what = "normalized conductance" if normalized else "resistance"
-    fig.suptitle(f"{what}: band 16-84 %, markers geometric mean, lines power-law fit (grey: realizations)", fontsize=9)
+    center = fits.attrs["reduction"].replace("_", " ")
+    fig.suptitle(f"{what}: band 16-84 %, markers {center}, lines its power-law fit (grey: realizations)", fontsize=9)
     return _save(fig, path)
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import html
 import json
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,7 +18,7 @@ from typing import Any
 import xarray as xr
 
 from pipeline import __version__
-from pipeline.config import Scenario
+from pipeline.config import Scenario, parameter_table
 from pipeline.stages.surrogate import PARAMETERS, table3_rows
 from pipeline.store import StaleInputError, atomic_path, read_stage
 
@@ -36,6 +37,24 @@ class Block:
     text: str = ""
     rows: tuple[tuple[str, ...], ...] = ()
     src: str = ""
+
+
+#: Captions of the known figures, keyed by file stem; other figures are captioned by their stem.
+CAPTIONS = {
+    "fig3_bounds": "Fig. 3: Barber's clean and oxide-extended conductance bounds (Eqs. 8-9) and their geometric mean",
+    "fig4_contact": "Fig. 4: Greenwood-Tripp solution of the rough Hertzian contact",
+    "fig5_spots": "Fig. 5: discrete contact spots",
+    "fig6_oxide": "Fig. 6: random oxide fields and thresholded oxides",
+    "fig8_resistance": "Fig. 8: resistance R against force F: 16-84 % band, the fitted reduction (markers) and its power-law fit",
+    "fig9_conductance": "Fig. 9: normalized conductance kappa' = 1/R' against F'",
+    "fig10_alpha_gamma": "Fig. 10: fitted alpha and gamma with their SVD surrogate (Eq. 26) and its relative error",
+    "fig11_barber": "Fig. 11: G2TOM against the p-average of the oxide-extended Barber bounds (Eq. 10)",
+}
+
+
+def _figure_order(path: Path) -> tuple[Any, ...]:
+    """Sort key that puts fig3 before fig10 (numbers compared as numbers)."""
+    return tuple(int(part) if part.isdigit() else part for part in re.split(r"(\d+)", path.stem))
 
 
 def _fmt(value: Any) -> str:
@@ -69,7 +88,8 @@ def _fit_blocks(fits: xr.Dataset, scenario: Scenario) -> list[Block]:
             ["RMS log residual", float(fits["fit_residual_rms_clean"]), "", ""],
         ]),
         Block("p", f"Oxidized cells: reduction '{f.reduction}' over realizations (geometric and arithmetic "
-                   f"means over conducting realizations only), {f.n_bootstrap} bootstrap resamples over "
+                   f"means over conducting realizations only); {100 * f.confidence:g} % percentile intervals of "
+                   f"alpha and gamma (fits.nc: alpha_ci, gamma_ci) from {f.n_bootstrap} bootstrap resamples over "
                    f"realizations (seed {f.seed}); largest open-circuit probability on the fitted steps "
                    f"{float(fits['open_probability'].isel(delta=fits['fitted'].values.astype(bool)).max()):.3g}."),
     ]
@@ -123,7 +143,11 @@ def _run_blocks(scenario: Scenario, data_dir: Path) -> list[Block]:
         for path in bench:
             blocks += _json_blocks(path.name, json.loads(path.read_text()))
     blocks.append(Block("h2", "Parameters"))
-    blocks.append(_table(["parameter", "value"], [[k, v] for k, v in scenario.flat().items()]))
+    values = scenario.flat()
+    blocks.append(_table(
+        ["parameter", "value", "unit", "meaning"],
+        [[key, values[key], unit, doc] for key, _default, unit, _allowed, doc in parameter_table()],
+    ))
     return blocks
 
 
@@ -139,8 +163,8 @@ def build_blocks(scenario: Scenario, data_dir: str | Path) -> list[Block]:
     sur, missing = _load(data_dir, "surrogate", scenario)
     blocks += missing if sur is None else _surrogate_blocks(sur)
     blocks.append(Block("h2", "Figures"))
-    figures = sorted((data_dir / "figures").glob("*.png"))
-    blocks += [Block("img", p.stem, src=p.relative_to(data_dir).as_posix()) for p in figures]
+    figures = sorted((data_dir / "figures").glob("*.png"), key=_figure_order)
+    blocks += [Block("img", CAPTIONS.get(p.stem, p.stem), src=p.relative_to(data_dir).as_posix()) for p in figures]
     if not figures:
         blocks.append(Block("p", "No figures: run `g2tom figures` first."))
     return blocks + _run_blocks(scenario, data_dir)
@@ -161,7 +185,7 @@ def to_markdown(blocks: list[Block]) -> str:
         elif b.kind == "pre":
             out.append("```\n" + b.text + "\n```")
         elif b.kind == "img":
-            out.append(f"![{b.text}]({b.src})")
+            out.append(f"![{b.text}]({b.src})\n\n*{b.text}*")
         elif b.kind == "table":
             header, *rows = b.rows
             lines = ["| " + " | ".join(_md_cell(c) for c in header) + " |", "|" + "---|" * len(header)]

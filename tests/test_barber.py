@@ -80,8 +80,12 @@ def test_sigma_normalization() -> None:
     force = np.array([0.5, 2.0, 16.0])
     # s = sigma: the two normalizations coincide
     np.testing.assert_allclose(barber.p_average_sigma(force, 0.3, 0.6, 1.0), barber.p_average(force, 0.3, 0.6))
-    k2 = barber.p_average_sigma(force, 0.3, 0.0, 2.0)
-    np.testing.assert_allclose(k2, barber.p_average(force / 2**1.5, 0.3, 0.0) * np.sqrt(2.0))
+    # s = 2 sigma, through physical units: F from F'_sigma, F'_s from F, kappa from kappa'_s
+    e_star, r_star, rho, sigma = 1.15e11, 0.01, 7.2e-7, 2e-5
+    s = 2.0 * sigma
+    f_newton = force * e_star * np.sqrt(r_star * sigma**3) / 2
+    kappa = barber.p_average(2 * f_newton / (e_star * np.sqrt(r_star * s**3)), 0.3, 0.0) * np.sqrt(r_star * s) / (2 * rho)
+    np.testing.assert_allclose(barber.p_average_sigma(force, 0.3, 0.0, 2.0), 2 * rho * kappa / np.sqrt(r_star * sigma))
 
 
 def test_bad_input() -> None:

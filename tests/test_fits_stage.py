@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 import xarray as xr
+from scipy import stats
 
 from analysis.reductions import (
     force_scale,
@@ -181,3 +182,45 @@ def assert_labelled(ds: xr.Dataset) -> None:
 
 def test_outputs_are_labelled(small: Scenario) -> None:
     assert_labelled(fits.build(small, synthetic_cube(small)))
+
+
+def test_bootstrap_redraws_realizations_jointly_across_steps(small: Scenario) -> None:
+    # Each realization is the exact power law times its own factor, the same at every step:
+    # a resample that keeps whole realizations changes alpha but never gamma. Redrawing the
+    # realizations independently at each step would scatter gamma.
+    cube = synthetic_cube(small, noise=0.0)
+    factor = np.exp(0.5 * np.random.default_rng(5).standard_normal(cube.sizes["realization"]))
+    cube["resistance"] = cube["resistance"] * xr.DataArray(factor, dims="realization")
+    ds = fits.build(small, cube)
+    g_ci, a_ci = ds["gamma_ci"].values, ds["alpha_ci"].values
+    np.testing.assert_allclose(g_ci[..., 0], g_ci[..., 1], rtol=1e-9)
+    assert np.all(a_ci[..., 1] > 1.05 * a_ci[..., 0])
+
+
+@pytest.mark.parametrize("open_step", [False, True])
+def test_clean_interval_is_the_least_squares_one(open_step: bool) -> None:
+    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "loading.n_delta": 10})
+    cube = synthetic_cube(scenario, noise=0.0)
+    wiggle = np.exp(0.05 * np.random.default_rng(2).standard_normal(cube.sizes["delta"]))
+    if open_step:  # a non-finite clean value on a fitted step must not count as a point
+        wiggle[-1] = np.inf
+    cube["resistance_clean"] = cube["resistance_clean"] * xr.DataArray(wiggle, dims="delta")
+    ds = fits.build(scenario, cube)
+    use = ds["fitted"].values.astype(bool) & np.isfinite(ds["resistance_clean"].values)
+    lx = np.log(ds["force_normalized"].values[use])
+    ly = np.log(ds["resistance_clean_normalized"].values[use])
+    ref = stats.linregress(lx, ly)
+    t = stats.t.ppf(0.975, lx.size - 2)
+    np.testing.assert_allclose(ds["gamma_clean"], -ref.slope, rtol=1e-12)
+    np.testing.assert_allclose(ds["gamma_clean_ci"], [-ref.slope - t * ref.stderr, -ref.slope + t * ref.stderr], rtol=1e-9)
+    np.testing.assert_allclose(
+        np.log(ds["alpha_clean_ci"]), [ref.intercept - t * ref.intercept_stderr, ref.intercept + t * ref.intercept_stderr],
+        rtol=1e-9,
+    )
+
+
+def test_clean_interval_undefined_on_two_steps() -> None:
+    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "fits.min_force": 1000.0})
+    ds = fits.build(scenario, synthetic_cube(scenario, noise=0.0))
+    assert int(ds["fitted"].sum()) == 2
+    assert np.all(np.isnan(ds["gamma_clean_ci"])) and np.all(np.isnan(ds["alpha_clean_ci"]))

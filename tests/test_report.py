@@ -6,13 +6,17 @@ import json
 import warnings
 from pathlib import Path
 
+import matplotlib.pyplot as plt
+import numpy as np
 import pytest
 
 from analysis import figures_results
 from analysis.report import Block, to_html, to_markdown, write_report
 from pipeline.cli import main
-from pipeline.config import Scenario
+from pipeline.config import Scenario, load_scenario
+from pipeline.stages import fits as fits_stage
 from pipeline.store import write_dataset
+from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import cli_overrides, synthetic_cube
 
 FIGURES = ["fig3_bounds.png", "fig8_resistance.png", "fig9_conductance.png", "fig10_alpha_gamma.png", "fig11_barber.png"]
@@ -58,6 +62,11 @@ def test_report_has_everything(run_dir: Path, small: Scenario) -> None:
                  "fits.min_force", "figures/extra_stage_figure.png", "fft"):
         assert text in md and text in page, text
     assert md.count("![") == page.count("<img") == len(list(out.glob("*.png")))
+    # figures in numeric order, captioned; the bootstrap intervals are described
+    order = [md.index(f"figures/{name}") for name in FIGURES]  # FIGURES is in numeric order
+    assert order == sorted(order)
+    assert "Fig. 11: G2TOM against the p-average" in md and "Fig. 11: G2TOM against the p-average" in page
+    assert "95 % percentile intervals of alpha and gamma" in md
 
 
 def test_report_without_stage_files(tmp_path, small: Scenario) -> None:
@@ -71,3 +80,24 @@ def test_renderers_escape() -> None:
     assert "&lt;2&gt;" in to_html(blocks, "t")
     with pytest.raises(ValueError, match="unknown block"):
         to_markdown([Block("video")])
+
+
+def test_load_figure_markers_are_the_fitted_reduction() -> None:
+    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "fits.reduction": "median"})
+    cube = synthetic_cube(scenario, noise=0.5)
+    ds = fits_stage.build(scenario, cube)
+    xi, lam = float(ds.xi[1]), float(ds["lambda"][1])
+    fig, ax = plt.subplots()
+    figures_results._load_panel(ax, cube, ds, lam, [xi], normalized=False)
+    markers = [line for line in ax.get_lines() if line.get_marker() == "o"]
+    plt.close(fig)
+    cell = {"xi": xi, "lambda": lam}
+    np.testing.assert_allclose(markers[0].get_ydata(), ds["median"].sel(cell).values)
+    assert not np.allclose(ds["median"].sel(cell), ds["geometric_mean"].sel(cell))
+
+
+def test_report_parameters_carry_units(run_dir: Path, small: Scenario) -> None:
+    assert main(["report", "--data-dir", str(run_dir), *cli_overrides(small)]) == 0
+    md = (run_dir / "report.md").read_text()
+    assert "| roughness.sigma | 2e-05 | m | standard deviation of asperity heights |" in md
+    assert "| material.rho | 7.2e-07 | ohm m |" in md

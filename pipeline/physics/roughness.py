@@ -10,8 +10,10 @@ they are estimated from all directions at once, as averages over the map:
 second-order central finite differences on the interior pixels, not by FFT: a measured map
 is not periodic, and the jump at its edges would leak into an FFT spectrum and inflate m4.
 For a spectral component of wavelength L the finite differences underestimate m2 and m4
-by a relative (2 pi h / L)^2 / 6 and / 12 (h: pixel size), i.e. under 1 % above 16 pixels per
-wavelength. The best-fit plane is removed before anything is computed.
+by a relative (k h)^2 / 4 and (k h)^2 / 8 on average over directions (k = 2 pi / L, h: pixel
+size; up to (k h)^2 / 3 and / 6 along a grid axis): about 4 % and 2 % at 16 pixels per
+wavelength, under 1 % and 0.5 % above 32. The best-fit plane is removed before anything is
+computed.
 
 Then ``sigma = sqrt(m0)``, ``eta = sqrt(3)/(18 pi) m4/m2`` and ``beta = 0.737/sqrt(m4)``.
 Note that sigma here is the standard deviation of the surface heights; the asperity-height

@@ -79,10 +79,11 @@ def _interval(samples: np.ndarray, confidence: float) -> np.ndarray:
 def _clean_fit(scenario: Scenario, clean: np.ndarray, force_n: np.ndarray, mask: np.ndarray) -> dict[str, xr.DataArray]:
     """Least-squares fit of the clean surface with Student-t intervals."""
     fit = fit_power_law(force_n, clean, mask)
-    lx = np.log(force_n[mask])
+    lx = np.log(force_n[np.isfinite(fit.residual)])  # the steps that entered the fit
     n = lx.size
-    t = stats.t.ppf(0.5 * (1.0 + scenario.fits.confidence), max(n - 2, 1))
-    s2 = np.nansum(fit.residual**2) / max(n - 2, 1)
+    dof = n - 2  # no interval from two points: the line passes through both
+    t = stats.t.ppf(0.5 * (1.0 + scenario.fits.confidence), dof) if dof >= 1 else np.nan
+    s2 = np.nansum(fit.residual**2) / dof if dof >= 1 else np.nan
     sxx = np.sum((lx - lx.mean()) ** 2)
     se_slope = np.sqrt(s2 / sxx)
     se_intercept = np.sqrt(s2 * (1.0 / n + lx.mean() ** 2 / sxx))

@@ -85,12 +85,16 @@ def _loo(name: str, matrix: np.ndarray, lam: np.ndarray, xi: np.ndarray, rank: i
     else:
         best = np.unravel_index(np.nanargmin(scan), scan.shape)
         attrs.update(best=scan[best], best_order_w=int(best[0]), best_order_z=int(best[1]))
-        better = bool(np.isfinite(configured) and scan[best] < configured)
-        attrs["verdict"] = (
-            f"orders (w {best[0]}, z {best[1]}) generalize better ({scan[best]:.3g} vs {configured:.3g})"
-            if better
-            else f"the configured orders (w {order[0]}, z {order[1]}) generalize best ({configured:.3g})"
-        )
+        if not np.isfinite(configured):
+            attrs["verdict"] = (
+                f"the configured orders (w {order[0]}, z {order[1]}) cannot be cross-validated on this grid "
+                f"(outside the scan, or one line fewer does not determine them); the best scanned orders are "
+                f"(w {best[0]}, z {best[1]}) ({scan[best]:.3g})"
+            )
+        elif scan[best] < configured:
+            attrs["verdict"] = f"orders (w {best[0]}, z {best[1]}) generalize better ({scan[best]:.3g} vs {configured:.3g})"
+        else:
+            attrs["verdict"] = f"the configured orders (w {order[0]}, z {order[1]}) generalize best ({configured:.3g})"
     return xr.DataArray(
         scan, dims=("order_w", "order_z"),
         coords={"order_w": np.arange(MAX_ORDER_W + 1), "order_z": np.arange(MAX_ORDER_Z + 1)}, attrs=attrs,
