@@ -25,7 +25,8 @@ $(VENV)/.installed: pyproject.toml
 
 # The stamps are rewritten only when a stage's parameters change, so make re-runs a stage
 # exactly when its configuration, its inputs or the code changed.
-$(STAMPS)/%.json: FORCE | $(VENV)/.installed
+STAMP_FILES := $(foreach s,contact oxide cube fits surrogate,$(STAMPS)/$(s).json)
+$(STAMP_FILES) &: FORCE | $(VENV)/.installed
 	@$(G2TOM) stamp $(ARGS)
 FORCE:
 

@@ -15,11 +15,13 @@ import sys  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
-from typing import Callable, Sequence  # noqa: E402
+from typing import TYPE_CHECKING, Callable, Sequence  # noqa: E402
 
-from pipeline.compute import ComputeOptions  # noqa: E402
 from pipeline.config import STAGE_INPUTS, ConfigError, Scenario, load_scenario, parameter_table  # noqa: E402
-from pipeline.store import StaleInputError, atomic_path  # noqa: E402
+from pipeline.errors import StaleInputError  # noqa: E402
+
+if TYPE_CHECKING:
+    from pipeline.compute import ComputeOptions
 
 __all__ = ["main", "STAGES"]
 
@@ -57,6 +59,8 @@ def _compute_args(p: argparse.ArgumentParser) -> None:
 
 
 def _options(args: argparse.Namespace) -> ComputeOptions:
+    from pipeline.compute import ComputeOptions  # dask only for commands that compute
+
     if args.workers is not None and args.workers < 1:
         raise ConfigError(f"--workers = {args.workers} is out of range: must be >= 1")
     return ComputeOptions(
@@ -76,6 +80,8 @@ def _run_stage(name: str, scenario: Scenario, args: argparse.Namespace) -> None:
 
 def _record_timing(data_dir: Path, stage: str, seconds: float) -> None:
     """Merge a stage's wall time into ``<data_dir>/timings.json`` (read by the report)."""
+    from pipeline.store import atomic_path
+
     path = Path(data_dir) / "timings.json"
     timings = json.loads(path.read_text()) if path.is_file() else {}
     timings[stage] = round(seconds, 3)

@@ -20,12 +20,9 @@ import xarray as xr
 
 from pipeline import __version__
 from pipeline.config import STAGE_UPSTREAM, Scenario
+from pipeline.errors import StaleInputError
 
 __all__ = ["StaleInputError", "stage_path", "provenance", "write_dataset", "read_stage", "atomic_path"]
-
-
-class StaleInputError(RuntimeError):
-    """A stage input is missing or was built from a different configuration."""
 
 
 def stage_path(data_dir: str | Path, stage: str) -> Path:
