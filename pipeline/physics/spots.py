@@ -10,6 +10,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
+from pipeline.physics.constriction import interaction_sum
+
 __all__ = [
     "cell_radii",
     "check_inside",
@@ -17,8 +19,6 @@ __all__ = [
     "interpolate_linear",
     "spot_areas",
     "spot_radii",
-    "interaction_sum",
-    "interaction_sum_direct",
     "holm_greenwood_radius",
 ]
 
@@ -82,69 +82,24 @@ def spot_radii(areas: ArrayLike) -> np.ndarray:
     return np.sqrt(np.asarray(areas, float) / np.pi)
 
 
-def _wrapped_offsets(n: int) -> np.ndarray:
-    """Cell offsets 0, 1, ..., n - 1, -n, ..., -1 of a circular convolution of length 2n."""
-    k = np.arange(2 * n)
-    return np.where(k >= n, k - 2 * n, k).astype(float)
-
-
-def interaction_sum(weights: ArrayLike, cell_size: float) -> np.ndarray:
-    """S = sum_{i != j} w_i w_j / d_ij over a regular cell grid, by zero-padded FFT convolution.
-
-    Parameters
-    ----------
-    weights
-        Shape (..., ny, nx), on cells of pitch ``cell_size``.
-    cell_size
-        Cell pitch, m.
-
-    Returns
-    -------
-    numpy.ndarray
-        Shape weights.shape[:-2], in (weight units)^2 / m.
-    """
-    w = np.asarray(weights, float)
-    ny, nx = w.shape[-2:]
-    dy = _wrapped_offsets(ny)
-    dx = _wrapped_offsets(nx)
-    dist = np.hypot(dy[:, None], dx[None, :])
-    kernel = np.divide(1.0, dist * cell_size, out=np.zeros_like(dist), where=dist > 0)
-    conv = np.fft.irfft2(np.fft.rfft2(w, s=(2 * ny, 2 * nx)) * np.fft.rfft2(kernel), s=(2 * ny, 2 * nx))
-    return np.sum(w * conv[..., :ny, :nx], axis=(-2, -1))
-
-
-def interaction_sum_direct(weights: ArrayLike, cell_size: float) -> np.ndarray:
-    """The double sum of :func:`interaction_sum`, term by term (slow reference, 2-D input)."""
-    w = np.asarray(weights, float)
-    ny, nx = w.shape
-    yy, xx = np.meshgrid(np.arange(ny), np.arange(nx), indexing="ij")
-    pts = np.column_stack([yy.ravel(), xx.ravel()]) * cell_size
-    flat = w.ravel()
-    total = 0.0
-    for i in range(len(flat)):
-        d = np.hypot(*(pts - pts[i]).T)
-        d[i] = np.inf
-        total += flat[i] * np.sum(flat / d)
-    return np.asarray(total)
-
-
 def holm_greenwood_radius(radii: ArrayLike, cell_size: float) -> np.ndarray:
     """Holm–Greenwood radius alpha_HG = pi (sum a)^2 / (2 sum_{i != j} a_i a_j / d_ij) (Eq. 13), m.
 
     Parameters
     ----------
     radii
-        Spot radii, shape (..., ny, nx), m.
+        Spot radii on a square cell grid, shape (..., n, n), m.
     cell_size
         Cell pitch, m.
 
     Returns
     -------
     numpy.ndarray
-        Shape radii.shape[:-2]; NaN where fewer than two spots have a nonzero radius.
+        Shape radii.shape[:-2]; NaN where fewer than two spots have a nonzero radius. The pair
+        sum is the exact one of the resistance stage (:func:`pipeline.physics.constriction.interaction_sum`).
     """
     a = np.asarray(radii, float)
     total = np.sum(a, axis=(-2, -1))
-    pairs = interaction_sum(a, cell_size)
-    ok = pairs > 0
+    pairs = interaction_sum(a.reshape((-1,) + a.shape[-2:]), cell_size).reshape(a.shape[:-2])
+    ok = np.count_nonzero(a, axis=(-2, -1)) >= 2
     return np.where(ok, np.pi * total**2 / (2.0 * np.where(ok, pairs, 1.0)), np.nan)
