@@ -16,7 +16,6 @@ Normalization (Eq. 25): ``R' = R sqrt(R* sigma) / (2 rho*)`` and
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import xarray as xr
@@ -27,8 +26,6 @@ from pipeline.physics.powerlaw import quantile_with_inf
 __all__ = [
     "DIM",
     "QUANTILES",
-    "resistance_scale",
-    "force_scale",
     "open_probability",
     "geometric_mean",
     "arithmetic_mean",
@@ -41,17 +38,6 @@ __all__ = [
 DIM = "realization"
 #: Quantiles of the band (16 % and 84 %) and the median.
 QUANTILES = (0.16, 0.5, 0.84)
-
-
-def resistance_scale(scenario: Scenario) -> float:
-    """2 rho* / sqrt(R* sigma), in ohm: R' = R / resistance_scale (Eq. 25)."""
-    return 2.0 * scenario.material.rho / math.sqrt(scenario.indenter.radius * scenario.roughness.sigma)
-
-
-def force_scale(scenario: Scenario) -> float:
-    """E* sqrt(R* sigma^3) / 2, in N: F' = F / force_scale (Eq. 25)."""
-    r, s = scenario.indenter.radius, scenario.roughness.sigma
-    return scenario.material.E_star * math.sqrt(r * s**3) / 2.0
 
 
 def open_probability(resistance: xr.DataArray) -> xr.DataArray:
@@ -109,7 +95,7 @@ def reduce_realizations(resistance: xr.DataArray, scale: float) -> xr.Dataset:
     resistance
         Resistance in ohm with a ``realization`` dimension (+inf = open circuit).
     scale
-        :func:`resistance_scale`, ohm.
+        :attr:`pipeline.config.Scenario.resistance_scale`, ohm.
 
     Returns
     -------

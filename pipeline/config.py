@@ -297,6 +297,16 @@ class Scenario:
         return 1.0 / math.sqrt(self.roughness.eta)
 
     @property
+    def resistance_scale(self) -> float:
+        """2 rho* / sqrt(R* sigma), in ohm: R' = R / resistance_scale (Eq. 25)."""
+        return 2.0 * self.material.rho / math.sqrt(self.indenter.radius * self.roughness.sigma)
+
+    @property
+    def force_scale(self) -> float:
+        """E* sqrt(R* sigma^3) / 2, in N: F' = F / force_scale (Eq. 25)."""
+        return self.material.E_star * math.sqrt(self.indenter.radius * self.roughness.sigma**3) / 2.0
+
+    @property
     def n_cells(self) -> int:
         """Cells along one side of the window: the odd number closest to window/cell size."""
         n = self.contact.window * self.indenter.radius / self.cell_size

@@ -24,7 +24,6 @@ import numpy as np
 import xarray as xr
 from scipy.interpolate import RegularGridInterpolator
 
-from analysis.reductions import force_scale, resistance_scale
 from pipeline.config import ConfigError, Scenario
 from pipeline.physics.surrogate import evaluate, to_w, to_z
 
@@ -143,7 +142,7 @@ def predict(surrogate: xr.Dataset, scenario: Scenario, force: float, xi: float, 
         If xi, lambda or F' lies outside the fitted ranges.
     """
     _check_inputs(force, xi, lam)
-    force_n = force / force_scale(scenario)
+    force_n = force / scenario.force_scale
     _warn_outside("xi", xi, surrogate["xi_range"].values)
     _warn_outside("lambda", lam, surrogate["lambda_range"].values)
     _warn_outside("F'", force_n, surrogate["force_normalized_range"].values)
@@ -154,7 +153,7 @@ def predict(surrogate: xr.Dataset, scenario: Scenario, force: float, xi: float, 
             f"the surrogate gives alpha = {alpha:.4g} <= 0 at xi = {xi:g}, lambda = {lam:g}: "
             "too far outside the fitted range"
         )
-    resistance = alpha * resistance_scale(scenario) * force_n**-gamma
+    resistance = alpha * scenario.resistance_scale * force_n**-gamma
     ratio_lower = _band_point(surrogate, "band_ratio_lower", xi, lam, force_n)
     ratio_upper = _band_point(surrogate, "band_ratio_upper", xi, lam, force_n)
     upper = math.inf if ratio_upper == 0 else resistance / ratio_upper  # 0: > 16 % open circuits

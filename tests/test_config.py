@@ -147,3 +147,10 @@ def test_parameter_table_documents_every_parameter(paper) -> None:
     for key, _default, unit, allowed, doc in rows:
         assert unit and allowed and doc, key
     assert not any(isinstance(v, float) and not math.isfinite(v) for v in paper.flat().values())
+
+
+def test_eq25_scales_by_hand(paper) -> None:
+    # R' = R sqrt(R* sigma) / (2 rho*),  F' = 2F / (E* sqrt(R* sigma^3))
+    assert paper.resistance_scale == pytest.approx(2 * 7.2e-7 / math.sqrt(1e-2 * 20e-6), rel=1e-14)
+    e_star = 2.1e11 / (2 * (1 - 0.3**2))
+    assert paper.force_scale == pytest.approx(e_star * math.sqrt(1e-2 * (20e-6) ** 3) / 2, rel=1e-14)

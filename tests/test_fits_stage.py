@@ -10,12 +10,10 @@ import xarray as xr
 from scipy import stats
 
 from analysis.reductions import (
-    force_scale,
     geometric_mean,
     open_probability,
     quantiles,
     reduce_realizations,
-    resistance_scale,
 )
 from pipeline.cli import main
 from pipeline.config import ConfigError, Scenario, load_scenario
@@ -57,13 +55,13 @@ def synthetic_cube(
     lam = np.asarray(scenario.oxide.lambda_)
     n_real = scenario.oxide.n_realizations
     force = np.geomspace(20.0, 5000.0, scenario.loading.n_delta)
-    force_n = force / force_scale(scenario)
+    force_n = force / scenario.force_scale
     alpha = true_alpha(lam, xi).T  # (xi, lambda)
     gamma = true_gamma(lam, xi).T
     clean = 0.8 * force_n**-0.23
     log_noise = noise * rng.standard_normal((xi.size, lam.size, force.size, n_real))
     r_norm = alpha[..., None, None] * force_n[:, None] ** -gamma[..., None, None] * np.exp(log_noise)
-    resistance = r_norm * resistance_scale(scenario)
+    resistance = r_norm * scenario.resistance_scale
     n_open = int(round(open_share * n_real))
     resistance[..., :n_open] = np.inf
     dims = ("xi", "lambda", "delta", "realization")
@@ -71,7 +69,7 @@ def synthetic_cube(
         {
             "resistance": (dims, resistance),
             "n_open": (dims[:3], np.full(resistance.shape[:3], n_open)),
-            "resistance_clean": ("delta", clean * resistance_scale(scenario)),
+            "resistance_clean": ("delta", clean * scenario.resistance_scale),
         },
         coords={
             "xi": xi,

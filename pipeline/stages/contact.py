@@ -6,7 +6,6 @@ Writes ``<data_dir>/contact.nc`` with dims ``delta`` and ``r`` (continuous field
 
 from __future__ import annotations
 
-import math
 import warnings
 from pathlib import Path
 
@@ -202,12 +201,10 @@ def _continuous_vars(scenario: Scenario, r: np.ndarray, f: dict[str, np.ndarray]
 
 def _scalar_vars(scenario: Scenario, force: np.ndarray, sols: list[gt.Solution]) -> dict:
     """Force, normalized force (Eq. 25) and the solver's report, over delta."""
-    rough = scenario.roughness
-    scale = scenario.material.E_star * math.sqrt(scenario.indenter.radius * rough.sigma**3)
     d = ("delta",)
     return {
         "force": _var(d, force, "normal force 2 pi integral p r dr", "N"),
-        "force_normalized": _var(d, 2 * force / scale, "normalized force 2F / (E* sqrt(R* sigma^3)) (Eq. 25)", "1"),
+        "force_normalized": _var(d, force / scenario.force_scale, "normalized force 2F / (E* sqrt(R* sigma^3)) (Eq. 25)", "1"),
         "iterations": _var(d, np.array([s.iterations for s in sols], dtype=np.int32),
                            f"{scenario.contact.solver} iterations", "1"),
         "residual": _var(d, np.array([s.residual for s in sols]),

@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-from analysis.reductions import DIM, reduce_realizations, resistance_scale
+from analysis.reductions import DIM, reduce_realizations
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
 from pipeline.physics.powerlaw import (
@@ -142,7 +142,7 @@ def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
         See the module docstring and the variables' attributes.
     """
     resistance = cube["resistance"].transpose(*GRID, "delta", DIM)
-    scale = resistance_scale(scenario)
+    scale = scenario.resistance_scale
     ds = reduce_realizations(resistance, scale)
     mask = fitted_steps(scenario, cube["force"])
     force_n = cube["force_normalized"].values
