@@ -23,7 +23,8 @@ def _set_args() -> list[str]:
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
     data = tmp_path_factory.mktemp("run")
-    status = main(["run", "--data-dir", str(data), "--no-progress", *_set_args()])
+    with pytest.warns(UserWarning, match=r"surrogate for alpha: rank/orders .* reduced to"):
+        status = main(["run", "--data-dir", str(data), "--no-progress", *_set_args()])
     assert status == 0
     return data
 
