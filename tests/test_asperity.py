@@ -12,6 +12,7 @@ from scipy.special import erfc
 from pipeline.physics.asperity import (
     area_fraction,
     asperity_integral,
+    asperity_integral_slope,
     asperity_pressure,
     asperity_stiffness,
     log_asperity_integral,
@@ -98,3 +99,12 @@ def test_bad_order(n):
 def test_bad_sigma(sigma):
     with pytest.raises(ValueError, match="sigma = .* out of range"):
         asperity_integral([0.0], sigma, 1.5)
+
+
+@pytest.mark.parametrize("n", [0.5, 1.0, 1.5])
+def test_slope_is_minus_the_derivative(n):
+    x = np.array([-30.0, -3.0, -0.4, 0.0, 0.7, 4.0, 11.0, 13.0])
+    step = 1e-5
+    f = lambda y: np.exp(log_asperity_integral(y, n))  # noqa: E731
+    numeric = -(f(x + step) - f(x - step)) / (2 * step)
+    np.testing.assert_allclose(asperity_integral_slope(x, n), numeric, rtol=1e-6)

@@ -21,6 +21,7 @@ from scipy.special import erfc, erfcx, gammaln, pbdv
 __all__ = [
     "log_asperity_integral",
     "asperity_integral",
+    "asperity_integral_slope",
     "area_fraction",
     "asperity_pressure",
     "asperity_stiffness",
@@ -102,6 +103,24 @@ def log_asperity_integral(x: ArrayLike, n: float) -> np.ndarray:
     return out
 
 
+def asperity_integral_slope(x: ArrayLike, n: float) -> np.ndarray:
+    """-d f_n / dx = n f_{n-1}(x), the slope of the normalized asperity integral.
+
+    Parameters
+    ----------
+    x
+        Separation in units of sigma, any real value (dimensionless).
+    n
+        Order, n > 0 (so that n - 1 > -1).
+
+    Returns
+    -------
+    numpy.ndarray
+        Positive, dimensionless (f_n falls as the separation grows).
+    """
+    return n * np.exp(log_asperity_integral(x, n - 1.0))
+
+
 def asperity_integral(h: ArrayLike, sigma: float, n: float) -> np.ndarray:
     """F_n(h) = integral_h^inf (z - h)^n phi(z) dz for Gaussian heights of std ``sigma``.
 
@@ -151,4 +170,7 @@ def asperity_pressure(h: ArrayLike, sigma: float, eta: float, beta: float, e_sta
 
 def asperity_stiffness(h: ArrayLike, sigma: float, eta: float, beta: float, e_star: float) -> np.ndarray:
     """-dp/dh = 2 eta E* sqrt(beta) F_{1/2}(h), in Pa/m (positive: p falls as h grows)."""
-    return 2.0 * eta * e_star * np.sqrt(beta) * asperity_integral(h, sigma, 0.5)
+    if not (np.isfinite(sigma) and sigma > 0):
+        raise ValueError(f"sigma = {sigma!r} is out of range: must be > 0 (m)")
+    x = np.asarray(h, dtype=float) / sigma
+    return (4.0 / 3.0) * eta * e_star * np.sqrt(beta * sigma) * asperity_integral_slope(x, 1.5)

@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike
 from scipy.linalg import lu_factor, lu_solve
 from scipy.special import eval_sh_legendre, ellipkm1
 
-from pipeline.physics.asperity import log_asperity_integral
+from pipeline.physics.asperity import asperity_integral_slope, log_asperity_integral
 
 __all__ = [
     "radial_nodes",
@@ -249,7 +249,7 @@ def solve_newton(a: np.ndarray, x0: np.ndarray, v: np.ndarray, tolerance: float,
     it, factors, refresh = 0, None, True
     while res > tolerance and it < max_iterations:
         if refresh:
-            slope = 1.5 * np.exp(log_asperity_integral(x0 + v, 0.5))  # -d f_{3/2}/dx
+            slope = asperity_integral_slope(x0 + v, 1.5)
             factors = lu_factor(eye + a * slope[None, :])
         step = lu_solve(factors, image - v)
         norm0 = np.max(np.abs(image - v))
