@@ -15,7 +15,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import xarray as xr
+from scipy.stats import norm
 
 from pipeline import __version__
 from pipeline.config import Scenario, parameter_table
@@ -95,28 +97,74 @@ def _fit_blocks(fits: xr.Dataset, scenario: Scenario) -> list[Block]:
     ]
 
 
+def _surrogate_model_blocks(sur: xr.Dataset) -> list[Block]:
+    """Method, model sizes, errors and the closed formulas of the surrogate."""
+    z_c = float(norm.ppf(0.5 + float(sur.attrs.get("fit_confidence", 0.95)) / 2.0))
+    method = sur.attrs.get("method", "paper")
+    rows = []
+    for p in PARAMETERS:
+        a = sur.attrs
+        err = np.abs(sur[f"{p}_relative_error"].values)
+        sigma = sur[f"{p}_fit_sigma"].values * z_c
+        half = np.expm1(sigma) if p == "alpha" else sigma / sur[f"{p}_fit"].values  # relative 95 % half-width
+        met = int(np.sum(err <= np.fmax(0.03, half)))
+        rows.append([p, a.get(f"{p}_transform", "identity"), int(a.get(f"{p}_rank", 0)), int(a.get(f"{p}_order_w", 0)),
+                     int(a.get(f"{p}_order_z", 0)), int(a.get(f"{p}_free_parameters", 0)), f"{100 * float(a.get(f'{p}_cv_rms', np.nan)):.2f}",
+                     f"{100 * err.max():.2f}", f"{100 * np.sqrt(np.mean(err**2)):.2f}", f"{met} / {err.size}"])
+    text = ("joint weighted least-squares fit of all coefficients of the rank-r model T(p) = sum_k P_k(w) Q_k(z), "
+            "each cell weighted by its confidence interval; transform, rank and orders chosen by leave-one-line-out "
+            "cross-validation" if method == "joint" else
+            "the paper's Sect. 3.1: truncated SVD of the grid matrix, each mode fitted by its own polynomial")
+    formulas = "\n".join(str(sur.attrs.get(f"{p}_formula", "")) for p in PARAMETERS)
+    return [
+        Block("h2", "Surrogate (Eq. 26)"),
+        Block("p", f"Method '{method}': {text}. Free parameters of a rank-r product of polynomial spaces of "
+                   f"dimensions p and q: r (p + q - r). CV: RMS relative error of each grid value predicted with its "
+                   f"lambda row or xi column left out. Target per cell: |error| <= max(3 %, the cell's "
+                   f"{100 * float(sur.attrs.get('fit_confidence', 0.95)):g} % half-width)."),
+        _table(["parameter", "transform T", "rank r", "order w", "order z", "free parameters", "CV RMS %",
+                "max |error| %", "RMS error %", "cells within target"], rows),
+        Block("p", "Closed formulas (w = LN(lambda), z = -LN(1 - xi); also in surrogate.json with everything the "
+                   "predictor needs):"),
+        Block("pre", formulas),
+    ]
+
+
 def _surrogate_blocks(sur: xr.Dataset) -> list[Block]:
-    blocks = [Block("h2", "Table 3: fitted and surrogate alpha, gamma")]
-    header = ["xi", "lambda"] + [f"{p} {c}" for p in PARAMETERS for c in ("fit", "SVD", "err %")]
+    blocks = _surrogate_model_blocks(sur)
+    blocks.append(Block("h2", "Table 3: fitted and surrogate alpha, gamma"))
+    header = ["xi", "lambda"] + [f"{p} {c}" for p in PARAMETERS for c in ("fit", "surrogate", "err %")]
     rows = [[r["xi"], r["lambda"]] + [f"{r[f'{p}_{c}']:.4f}" if c != "error_percent" else f"{r[f'{p}_{c}']:+.2f}"
                                       for p in PARAMETERS for c in ("fit", "surrogate", "error_percent")]
             for r in table3_rows(sur)]
     blocks.append(_table(header, rows))
     blocks.append(Block("h2", "Table 4: surrogate coefficients (ascending powers)"))
     for p in PARAMETERS:
+        transform = sur[f"{p}_coef_w"].attrs.get("transform", "identity")
+        what = f"ln {p}" if transform == "log" else p
         for axis, var in (("w = log lambda", "w"), ("z = -log(1 - xi)", "z")):
             coef = sur[f"{p}_coef_{var}"].values
-            blocks.append(Block("p", f"{p}, modes in {axis}:"))
+            blocks.append(Block("p", f"{what}, modes in {axis}:"))
             blocks.append(_table(["mode"] + [f"c{i}" for i in range(coef.shape[1])],
                                  [[k + 1] + [float(c) for c in row] for k, row in enumerate(coef)]))
-    blocks.append(Block("h2", "Leave-one-out cross-validation of the surrogate orders"))
+    blocks.append(Block("h2", "Leave-one-line-out cross-validation of the surrogate"))
     blocks.append(Block("p", "Each lambda row and each xi column is left out in turn and predicted by a surrogate "
                              "fitted to the rest; the score is the RMS relative error (NaN: not enough lines)."))
     for p in PARAMETERS:
-        loo = sur[f"{p}_loo"]
-        blocks.append(Block("p", f"{p}: {loo.attrs.get('verdict', '')}"))
-        blocks.append(_table(["order w \\ z"] + [str(int(z)) for z in loo.order_z.values],
-                             [[int(w)] + [float(v) for v in loo.sel(order_w=w).values] for w in loo.order_w.values]))
+        if f"{p}_loo" in sur:
+            loo = sur[f"{p}_loo"]
+            blocks.append(Block("p", f"{p}: {loo.attrs.get('verdict', '')}"))
+            blocks.append(_table(["order w \\ z"] + [str(int(z)) for z in loo.order_z.values],
+                                 [[int(w)] + [float(v) for v in loo.sel(order_w=w).values] for w in loo.order_w.values]))
+        elif f"{p}_cv_rms" in sur:
+            score = sur[f"{p}_cv_rms"].values
+            order = [i for i in np.argsort(score) if np.isfinite(score[i])][:12]
+            keys = ("transform", "rank", "order_w", "order_z", "free_parameters")
+            chosen = tuple(str(sur.attrs.get(f"{p}_{k}")) for k in keys)
+            blocks.append(Block("p", f"{p}: the best-scoring candidates (chosen: the simplest within the tolerance of the best; marked *):"))
+            blocks.append(_table(["", *keys, "CV RMS %"], [
+                ["*" if tuple(str(sur[f"{p}_cv_{k}"].values[i]) for k in keys) == chosen else "",
+                 *(sur[f"{p}_cv_{k}"].values[i] for k in keys), f"{100 * score[i]:.2f}"] for i in order]))
     return blocks
 
 

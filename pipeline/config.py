@@ -222,13 +222,44 @@ class Fits:
 
 @dataclass(frozen=True)
 class Surrogate:
-    """Truncated-SVD polynomial surrogate of alpha(xi, lambda) and gamma(xi, lambda) (Eq. 26)."""
+    """Surrogate of alpha(xi, lambda) and gamma(xi, lambda) (Eq. 26) and the predictor's warning.
 
-    rank: int = _param(2, "1", "SVD rank r", ge=1)
-    alpha_order_w: int = _param(3, "1", "alpha: polynomial order in w = log(lambda)", ge=0)
-    alpha_order_z: int = _param(2, "1", "alpha: polynomial order in z = -log(1 - xi)", ge=0)
-    gamma_order_w: int = _param(2, "1", "gamma: polynomial order in w = log(lambda)", ge=0)
-    gamma_order_z: int = _param(1, "1", "gamma: polynomial order in z = -log(1 - xi)", ge=0)
+    ``method = "paper"`` is the paper's SVD-then-polyfit with the fixed rank and orders below;
+    ``method = "joint"`` fits all coefficients of the rank-r model at once in the chosen
+    transform, weighted by each cell's interval, with transform, rank and orders chosen by
+    leave-one-line-out cross-validation within the ``max_*`` limits.
+    """
+
+    method: str = _param(
+        "joint", "1", "paper: SVD modes fitted one by one (Sect. 3.1); joint: weighted joint fit, "
+        "rank/orders by cross-validation", choices=("paper", "joint"),
+    )
+    rank: int = _param(2, "1", "paper method: SVD rank r", ge=1)
+    alpha_order_w: int = _param(3, "1", "paper method: alpha polynomial order in w = log(lambda)", ge=0)
+    alpha_order_z: int = _param(2, "1", "paper method: alpha polynomial order in z = -log(1 - xi)", ge=0)
+    gamma_order_w: int = _param(2, "1", "paper method: gamma polynomial order in w = log(lambda)", ge=0)
+    gamma_order_z: int = _param(1, "1", "paper method: gamma polynomial order in z = -log(1 - xi)", ge=0)
+    alpha_transform: str = _param(
+        "log", "1", "joint method: alpha fitted as log(alpha), as alpha, or the better by cross-validation",
+        choices=("log", "identity", "auto"),
+    )
+    gamma_transform: str = _param(
+        "auto", "1", "joint method: gamma fitted as log(gamma), as gamma, or the better by cross-validation",
+        choices=("log", "identity", "auto"),
+    )
+    max_rank: int = _param(3, "1", "joint method: highest rank tried by cross-validation", ge=1)
+    max_order_w: int = _param(4, "1", "joint method: highest order in w tried by cross-validation", ge=0)
+    max_order_z: int = _param(3, "1", "joint method: highest order in z tried by cross-validation", ge=0)
+    weight_floor: float = _param(
+        0.01, "1", "joint method: lower bound on a cell's relative 95 % half-width in its weight", gt=0, lt=1
+    )
+    cv_tolerance: float = _param(
+        0.05, "1", "joint method: the simplest model within (1 + this) x the best cross-validated error wins",
+        ge=0, le=1,
+    )
+    warn_error: float = _param(
+        0.05, "1", "predict: warn where the local cross-validated surrogate error of ln R exceeds this", gt=0
+    )
 
 
 SECTIONS: dict[str, type] = {
@@ -250,7 +281,21 @@ STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "oxide": ("roughness.eta", "indenter.radius", "contact.window", "oxide"),
     "cube": ("material.rho", "cube"),
     "fits": ("fits",),
-    "surrogate": ("surrogate",),
+    "surrogate": (
+        "surrogate.method",
+        "surrogate.rank",
+        "surrogate.alpha_order_w",
+        "surrogate.alpha_order_z",
+        "surrogate.gamma_order_w",
+        "surrogate.gamma_order_z",
+        "surrogate.alpha_transform",
+        "surrogate.gamma_transform",
+        "surrogate.max_rank",
+        "surrogate.max_order_w",
+        "surrogate.max_order_z",
+        "surrogate.weight_floor",
+        "surrogate.cv_tolerance",
+    ),
 }
 STAGE_UPSTREAM: dict[str, tuple[str, ...]] = {
     "contact": (),

@@ -1,4 +1,4 @@
-"""The predictor of Eq. 27: API and `g2tom predict`."""
+"""The predictor of Eq. 27: API, band components, surrogate.json and `g2tom predict`."""
 
 from __future__ import annotations
 
@@ -12,55 +12,134 @@ import xarray as xr
 from pipeline.cli import main
 from pipeline.config import ConfigError, Scenario
 from pipeline.physics.surrogate import evaluate
-from pipeline.predict import ExtrapolationWarning, load_surrogate, predict
+from pipeline.predict import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
 from pipeline.stages import fits, surrogate
 from pipeline.store import write_dataset
 from tests.test_fits_stage import cli_overrides, synthetic_cube
 
 
-@pytest.fixture(scope="module")
-def surrogate_ds(small: Scenario) -> xr.Dataset:
+def _build(small: Scenario, **kwargs) -> xr.Dataset:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # orders reduced on the 3 x 3 grid
-        return surrogate.build(small, fits.build(small, synthetic_cube(small, noise=0.2)))
+        return surrogate.build(small, fits.build(small, synthetic_cube(small, **kwargs)))
+
+
+@pytest.fixture(scope="module")
+def surrogate_ds(small: Scenario) -> xr.Dataset:
+    return _build(small, noise=0.2)
+
+
+@pytest.fixture(scope="module")
+def data_dir(tmp_path_factory, small: Scenario):
+    """fits.nc written, then the surrogate stage run: surrogate.nc and surrogate.json."""
+    path = tmp_path_factory.mktemp("predict")
+    write_dataset(fits.build(small, synthetic_cube(small, noise=0.2)), path, "fits", small)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        surrogate.run(small, path, None)
+    return path
+
+
+def _quiet(*args, **kwargs) -> xr.Dataset:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SurrogateErrorWarning)
+        return predict(*args, **kwargs)
 
 
 def test_equals_eq27_by_hand(small: Scenario, surrogate_ds: xr.Dataset) -> None:
     force, xi, lam = 1500.0, 0.4, 4.0
     m, r, s = small.material, small.indenter.radius, small.roughness.sigma
     e_star = m.E / (2 * (1 - m.nu**2))
-    alpha = evaluate(surrogate_ds["alpha_coef_w"].values, surrogate_ds["alpha_coef_z"].values, lam, xi)
-    gamma = evaluate(surrogate_ds["gamma_coef_w"].values, surrogate_ds["gamma_coef_z"].values, lam, xi)
+    coef = {p: (surrogate_ds[f"{p}_coef_w"].values, surrogate_ds[f"{p}_coef_z"].values,
+                surrogate_ds[f"{p}_coef_w"].attrs["transform"]) for p in ("alpha", "gamma")}
+    assert coef["alpha"][2] == "log"
+    alpha = float(np.exp(evaluate(coef["alpha"][0], coef["alpha"][1], lam, xi)))
+    gamma = float(evaluate(*coef["gamma"][:2], lam, xi, coef["gamma"][2]))
     by_hand = alpha * 2 * m.rho / math.sqrt(r * s) * (2 * force / (e_star * math.sqrt(r * s**3))) ** -gamma
     with warnings.catch_warnings():
         warnings.simplefilter("error", ExtrapolationWarning)
-        result = predict(surrogate_ds, small, force, xi, lam)
-    assert result.resistance == pytest.approx(float(by_hand), rel=1e-12)
-    assert result.lower < result.resistance < result.upper
+        result = _quiet(surrogate_ds, small, force, xi, lam)
+    assert float(result["resistance"]) == pytest.approx(by_hand, rel=1e-12)
+    assert float(result["alpha"]) == pytest.approx(alpha, rel=1e-14)
+    assert result["lower"] < result["resistance"] < result["upper"]
+    assert result["resistance"].attrs["units"] == "ohm"
 
 
-def test_band_matches_the_data_on_the_grid(small: Scenario, surrogate_ds: xr.Dataset) -> None:
-    xi, lam = small.oxide.xi[1], small.oxide.lambda_[1]
-    step = 1
+def test_band_components_add_up(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+    rng = np.random.default_rng(0)
+    f_range = surrogate_ds["force"].values
+    force = rng.uniform(f_range.min(), f_range.max(), 200)
+    xi = rng.uniform(0.2, 0.8, 200)
+    lam = rng.uniform(1.0, 13.0, 200)
+    r = _quiet(surrogate_ds, small, force, xi, lam)
+    assert r["resistance"].dims == ("query",)
+    for side in ("lower", "upper"):
+        expected = np.sqrt(r[f"spread_{side}"] ** 2 + r["fit_error"] ** 2 + r["surrogate_error"] ** 2)
+        np.testing.assert_allclose(r[f"total_{side}"], expected, rtol=1e-13)
+    np.testing.assert_allclose(r["lower"], r["resistance"] * np.exp(-r["total_lower"]), rtol=1e-13)
+    np.testing.assert_allclose(r["upper"], r["resistance"] * np.exp(r["total_upper"]), rtol=1e-13)
+    np.testing.assert_allclose(r["realization_lower"], r["resistance"] * np.exp(-r["spread_lower"]), rtol=1e-13)
+    for name in ("spread_lower", "spread_upper", "fit_error", "surrogate_error"):
+        assert (r[name] > 0).all(), name
+    # every component widens the band beyond the realization spread alone
+    assert (r["lower"] < r["realization_lower"]).all() and (r["upper"] > r["realization_upper"]).all()
+
+
+def test_band_components_match_the_tables_on_the_grid(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+    xi, lam, step = small.oxide.xi[1], small.oxide.lambda_[1], 1
+    cell = {"xi": xi, "lambda": lam}
     f = float(surrogate_ds["force"][step])
-    result = predict(surrogate_ds, small, f, xi, lam)
-    ratio = surrogate_ds["band_ratio_lower"].sel(xi=xi, **{"lambda": lam})[step]
-    assert result.lower / result.resistance == pytest.approx(float(ratio), rel=1e-9)
+    ln_f = math.log(float(surrogate_ds["force_normalized"][step]))
+    r = _quiet(surrogate_ds, small, f, xi, lam)
+    ratio = float(surrogate_ds["band_ratio_lower"].sel(cell)[step])
+    assert float(r["realization_lower"] / r["resistance"]) == pytest.approx(ratio, rel=1e-9)
+    s_a, s_g = (float(surrogate_ds[f"{p}_fit_sigma"].sel(cell)) for p in ("alpha", "gamma"))
+    e_a, e_g = (float(surrogate_ds[f"{p}_cv_error"].sel(cell)) for p in ("alpha", "gamma"))
+    assert float(r["fit_error"]) == pytest.approx(math.hypot(s_a, ln_f * s_g), rel=1e-9)
+    assert float(r["surrogate_error"]) == pytest.approx(math.hypot(e_a, ln_f * e_g), rel=1e-9)
+    # the fit's sigma is its 95 % interval over 2 x 1.96
+    ci = fits.build(small, synthetic_cube(small, noise=0.2))["alpha_ci"].sel(cell)
+    assert s_a == pytest.approx(float(np.log(ci[1] / ci[0])) / (2 * 1.959963984540054), rel=1e-9)
 
 
-@pytest.mark.parametrize("kwargs, name", [
-    ({"xi": 0.95}, "xi"), ({"lam": 40.0}, "lambda"), ({"force": 1.0}, "F'"),
-])
-def test_warns_outside_fitted_range(small: Scenario, surrogate_ds: xr.Dataset, kwargs: dict, name: str) -> None:
-    args = {"force": 1500.0, "xi": 0.4, "lam": 4.0, **kwargs}
-    with pytest.warns(ExtrapolationWarning, match=f"{name} = .* outside the fitted range"):
-        predict(surrogate_ds, small, **args)
+def test_vectorized_xarray_queries(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+    force = xr.DataArray([1000.0, 2000.0, 3000.0], dims="force", coords={"force": [1000.0, 2000.0, 3000.0]})
+    xi = xr.DataArray([0.3, 0.5], dims="xi")
+    r = _quiet(surrogate_ds, small, force, xi, 5.0)
+    assert r["resistance"].dims == ("force", "xi") and r["resistance"].shape == (3, 2)
+    one = _quiet(surrogate_ds, small, 2000.0, 0.5, 5.0)
+    assert float(r["resistance"].sel(force=2000.0)[1]) == pytest.approx(float(one["resistance"]), rel=1e-14)
+    assert float(r["upper"][1, 1]) == pytest.approx(float(one["upper"]), rel=1e-12)
+    grid = _quiet(surrogate_ds, small, np.array([[1000.0], [2000.0]]), np.array([0.3, 0.5, 0.7]), 5.0)
+    assert grid["resistance"].shape == (2, 3)
+
+
+def test_extrapolation_is_refused_unless_asked(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+    for kwargs, name in (({"xi": 0.95}, "xi"), ({"lam": 40.0}, "lambda"), ({"force": 1.0}, "F'")):
+        args = {"force": 1500.0, "xi": 0.4, "lam": 4.0, **kwargs}
+        with pytest.raises(ConfigError, match=f"{name} = .* outside the fitted range .* pass --extrapolate"):
+            predict(surrogate_ds, small, **args)
+        with pytest.warns(ExtrapolationWarning, match=f"{name} = .* outside the fitted range"):
+            _quiet(surrogate_ds, small, **args, extrapolate=True)
+
+
+def test_warns_where_the_surrogate_error_is_large(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+    r = _quiet(surrogate_ds, small, 1500.0, 0.4, 4.0)
+    below, above = 2 * float(r["surrogate_error"]), 0.5 * float(r["surrogate_error"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SurrogateErrorWarning)
+        predict(surrogate_ds, small, 1500.0, 0.4, 4.0, warn_error=below)
+    with pytest.warns(SurrogateErrorWarning, match="exceeds surrogate.warn_error"):
+        predict(surrogate_ds, small, 1500.0, 0.4, 4.0, warn_error=above)
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    ({"force": 0.0}, "--force = 0.0 is out of range"),
-    ({"xi": 1.0}, "--xi = 1.0 is out of range"),
-    ({"lam": -2.0}, "--lambda = -2.0 is out of range"),
+    ({"force": 0.0}, "force = 0.0 is out of range"),
+    ({"force": math.nan}, "force = nan is out of range"),
+    ({"xi": 1.0}, "xi = 1.0 is out of range"),
+    ({"lam": -2.0}, "lambda = -2.0 is out of range"),
+    ({"lam": [1.0, 2.0, -1.0]}, r"lambda = -1.0 \(query 3 of 3\) is out of range"),
+    ({"force": [1000.0, 2000.0], "xi": [0.3, 0.4, 0.5]}, "must be numbers or arrays that broadcast"),
 ])
 def test_bad_input_raises(small: Scenario, surrogate_ds: xr.Dataset, kwargs: dict, message: str) -> None:
     args = {"force": 1500.0, "xi": 0.4, "lam": 4.0, **kwargs}
@@ -68,37 +147,90 @@ def test_bad_input_raises(small: Scenario, surrogate_ds: xr.Dataset, kwargs: dic
         predict(surrogate_ds, small, **args)
 
 
-def test_cli(tmp_path, capsys, small: Scenario, surrogate_ds: xr.Dataset) -> None:
-    path = write_dataset(surrogate_ds, tmp_path, "surrogate", small)
-    base = ["predict", "--data-dir", str(tmp_path), *cli_overrides(small)]
-    assert main(base + ["--force", "1500", "--xi", "0.4", "--lambda", "4"]) == 0
-    out = capsys.readouterr()
-    assert "R_el =" in out.out and "ohm" in out.out and "warning" not in out.err
-    expected = predict(load_surrogate(path), small, 1500.0, 0.4, 4.0).resistance
-    assert float(out.out.split("R_el =")[1].split()[0]) == pytest.approx(expected, rel=1e-5)
+def test_json_gives_the_same_predictions_as_netcdf(small: Scenario, data_dir) -> None:
+    from_json = load_surrogate(data_dir / "surrogate.json")
+    from_nc = load_surrogate(data_dir / "surrogate.nc")
+    rng = np.random.default_rng(1)
+    f = rng.uniform(800.0, 4000.0, 300)
+    args = (f, rng.uniform(0.2, 0.8, 300), rng.uniform(1.0, 13.0, 300))
+    xr.testing.assert_identical(_quiet(from_json, small, *args), _quiet(from_nc, small, *args))
+    assert from_json.info["alpha_formula"].startswith("alpha = EXP(")
+
+
+def test_band_is_unbounded_with_many_open_circuits(small: Scenario) -> None:
+    ds = _build(small, noise=0.2, open_share=0.25)
+    result = _quiet(ds, small, 1500.0, 0.4, 4.0)
+    assert float(result["upper"]) == math.inf and 0 < float(result["lower"]) < float(result["resistance"])
+    assert float(result["open_probability"]) == pytest.approx(0.25)
+
+
+# ------------------------------------------------------------------ CLI
+def _rows(text: str) -> list[dict[str, float]]:
+    header, *lines = text.strip().splitlines()
+    keys = header.split(",")
+    return [dict(zip(keys, map(float, line.split(",")))) for line in lines]
+
+
+def test_cli_lists_csv_and_output(tmp_path, capsys, small: Scenario, data_dir) -> None:
+    base = ["predict", "--data-dir", str(data_dir), *cli_overrides(small)]
+    assert main(base + ["--force", "1500,2500", "--xi", "0.4", "--lambda", "4,6"]) == 0
+    rows = _rows(capsys.readouterr().out)
+    assert len(rows) == 2 and rows[1]["force_N"] == 2500 and rows[1]["lambda"] == 6
+    expected = _quiet(load_surrogate(data_dir / "surrogate.json"), small, [1500.0, 2500.0], 0.4, [4.0, 6.0])
+    np.testing.assert_allclose([r["resistance_ohm"] for r in rows], expected["resistance"], rtol=1e-9)
+    np.testing.assert_allclose([r["upper_ohm"] for r in rows], expected["upper"], rtol=1e-9)
     # material from the scenario, overridable with --set
     assert main(base + ["--set", "material.rho=1.44e-6", "--force", "1500", "--xi", "0.4", "--lambda", "4"]) == 0
-    doubled = float(capsys.readouterr().out.split("R_el =")[1].split()[0])
-    assert doubled == pytest.approx(2 * expected, rel=1e-5)
-    assert main(base + ["--force", "1500", "--xi", "0.95", "--lambda", "4"]) == 0
+    doubled = _rows(capsys.readouterr().out)[0]["resistance_ohm"]
+    assert doubled == pytest.approx(2 * rows[0]["resistance_ohm"], rel=1e-9)
+    queries = tmp_path / "q.csv"
+    queries.write_text("xi,lambda,force,note\n0.4,4,1500,a\n0.4,6,2500,b\n")
+    out = tmp_path / "out.csv"
+    assert main(base + ["--csv", str(queries), "--output", str(out)]) == 0
+    assert _rows(out.read_text()) == rows
+    # from surrogate.nc explicitly: the same numbers
+    assert main(base + ["--csv", str(queries), "--surrogate", str(data_dir / "surrogate.nc")]) == 0
+    assert _rows(capsys.readouterr().out) == rows
+    assert main(base + ["--force", "1500", "--xi", "0.95", "--lambda", "4", "--extrapolate"]) == 0
     assert "warning: xi = 0.95 lies outside the fitted range" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--force", "-5", "--xi", "0.4", "--lambda", "4"], "--force = -5.0 is out of range: must be > 0"),
-    (["--force", "5", "--xi", "0", "--lambda", "4"], "--xi = 0.0 is out of range: must be in (0, 1)"),
-    (["--force", "5", "--xi", "0.4", "--lambda", "0"], "--lambda = 0.0 is out of range: must be > 0"),
+    (["--force=-5", "--xi", "0.4", "--lambda", "4"], "force = -5.0 is out of range: must be finite and > 0"),
+    (["--force", "nan", "--xi", "0.4", "--lambda", "4"], "force = nan is out of range"),
+    (["--force", "5", "--xi", "0", "--lambda", "4"], "xi = 0.0 is out of range: must be in (0, 1)"),
+    (["--force", "5", "--xi", "0.4", "--lambda", "inf"], "lambda = inf is out of range"),
+    (["--force", "5,6", "--xi", "0.4,0.5,0.6", "--lambda", "4"], "lists of different lengths (--force 2, --xi 3, --lambda 1)"),
+    (["--force", "5,abc", "--xi", "0.4", "--lambda", "4"], "--force = '5,abc' is not a number"),
+    (["--force", "5", "--xi", "0.4"], "--lambda missing"),
+    (["--force", "1500", "--xi", "0.95", "--lambda", "4"], "xi = 0.95 lies outside the fitted range"),
     (["--force", "5", "--xi", "0.4", "--lambda", "4", "--surrogate", "/nonexistent/s.nc"], "does not exist"),
 ])
-def test_cli_bad_input(tmp_path, capsys, args: list[str], message: str) -> None:
-    assert main(["predict", "--data-dir", str(tmp_path), *args]) == 2
-    assert message in capsys.readouterr().err
+def test_cli_bad_input(capsys, small: Scenario, data_dir, args: list[str], message: str) -> None:
+    assert main(["predict", "--data-dir", str(data_dir), *cli_overrides(small), *args]) == 2
+    captured = capsys.readouterr()
+    assert message in captured.err and captured.err.count("\n") == 1 and captured.out == ""
 
 
-def test_band_is_unbounded_with_many_open_circuits(small: Scenario) -> None:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        ds = surrogate.build(small, fits.build(small, synthetic_cube(small, noise=0.2, open_share=0.25)))
-    result = predict(ds, small, 1500.0, 0.4, 4.0)
-    assert result.upper == math.inf and 0 < result.lower < result.resistance
-    assert result.open_probability == pytest.approx(0.25)
+@pytest.mark.parametrize("text, message", [
+    ("force,xi\n1500,0.4\n", "lacks column(s) lambda"),
+    ("force,xi,lambda\n1500,0.4,abc\n", "line 2: lambda = 'abc' is not a number"),
+    ("force,xi,lambda\n1500,0.4\n", "line 2: 2 fields, the header has 3"),
+    ("force,xi,lambda\n", "at least one query"),
+    ("force,xi,lambda\n1500,0.4,4\n-3,0.4,4\n", "force = -3.0 (query 2 of 2) is out of range"),
+])
+def test_cli_malformed_csv(tmp_path, capsys, small: Scenario, data_dir, text: str, message: str) -> None:
+    path = tmp_path / "q.csv"
+    path.write_text(text)
+    assert main(["predict", "--data-dir", str(data_dir), *cli_overrides(small), "--csv", str(path)]) == 2
+    captured = capsys.readouterr()
+    assert message in captured.err and captured.err.count("\n") == 1
+
+
+def test_bench_vectorized_agrees_with_one_at_a_time(small: Scenario, monkeypatch: pytest.MonkeyPatch) -> None:
+    from pipeline.bench import predict as bench_predict
+
+    for name, value in (("_REPEATS", 1), ("_QUERIES", 2000), ("_LOOP_QUERIES", 20)):
+        monkeypatch.setattr(bench_predict, name, value)
+    result = bench_predict.run(small)
+    assert result["queries"] == 2000 and result["max_rel_difference_upper"] < 1e-12

@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from numpy.polynomial import polynomial as P
+from scipy.optimize import least_squares
 
-from pipeline.config import ConfigError
+from pipeline.config import ConfigError, load_scenario
 from pipeline.physics import surrogate as sg
 from pipeline.stages import fits, surrogate
+from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import assert_labelled, synthetic_cube, true_alpha
 
 LAM = np.array([1.0, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23])
@@ -74,9 +77,10 @@ def test_bad_input() -> None:
         sg.fit_surrogate(bad, LAM, XI, 2, 3, 2)
 
 
-def test_stage_builds_table3_and_cv(tmp_path, small) -> None:
+def test_paper_stage_builds_table3_and_cv(tmp_path, small) -> None:
+    paper_method = load_scenario("paper", {**SMALL_OVERRIDES, "surrogate.method": "paper"})
     with pytest.warns(UserWarning, match="reduced to"):
-        ds = surrogate.build(small, fits.build(small, synthetic_cube(small, noise=0.0)))
+        ds = surrogate.build(paper_method, fits.build(paper_method, synthetic_cube(paper_method, noise=0.0)))
     lam, xi = np.asarray(small.oxide.lambda_), np.asarray(small.oxide.xi)
     # small grid (3 x 3): orders are reduced to 2 in w, and alpha is quadratic there
     np.testing.assert_allclose(ds["alpha_fit"], true_alpha(lam, xi), rtol=1e-9)
@@ -91,7 +95,154 @@ def test_stage_builds_table3_and_cv(tmp_path, small) -> None:
     for name in ("band_ratio_lower", "band_ratio_upper", "open_probability"):
         assert ds[name].dims == ("lambda", "xi", "step")
     assert float(ds["force_normalized_range"][0]) > 0
+    assert ds.attrs["alpha_transform"] == "identity" and ds.attrs["method"] == "paper"
     assert_labelled(ds)
+
+
+def test_published_surrogate_numbers_unchanged_by_the_joint_method() -> None:
+    """The paper method's coefficients are the plain SVD-then-polyfit of Sect. 3.1, bit for bit."""
+    matrix = separable_rank2(LAM, XI) * np.exp(0.05 * np.random.default_rng(2).standard_normal((LAM.size, XI.size)))
+    model = sg.fit_surrogate(matrix, LAM, XI, 2, 3, 2)
+    U, s, Vt = np.linalg.svd(matrix, full_matrices=False)
+    u, v = U[:, :2] * np.sqrt(s[:2]), Vt[:2].T * np.sqrt(s[:2])
+    flip = np.where(v.sum(axis=0) < 0, -1.0, 1.0)
+    w, z = np.log(LAM), -np.log1p(-XI)
+    for k in range(2):
+        np.testing.assert_array_equal(model.coef_w[k], P.polyfit(w, u[:, k] * flip[k], 3))
+        np.testing.assert_array_equal(model.coef_z[k], P.polyfit(z, v[:, k] * flip[k], 2))
+    assert load_scenario("published").surrogate.method == "paper"
+
+
+def test_joint_stage_on_small_grid(small) -> None:
+    with pytest.warns(UserWarning, match=r"surrogate for alpha: rank/orders scanned up to .* reduced to"):
+        ds = surrogate.build(small, fits.build(small, synthetic_cube(small, noise=0.0)))
+    # 3 x 3 grid: orders <= 1 can be cross-validated; the chosen model is reported with its size
+    for p in ("alpha", "gamma"):
+        assert ds.attrs[f"{p}_order_w"] <= 1 and ds.attrs[f"{p}_order_z"] <= 1
+        assert ds.attrs[f"{p}_free_parameters"] == sg.free_parameters(ds.attrs[f"{p}_rank"], ds.attrs[f"{p}_order_w"], ds.attrs[f"{p}_order_z"])
+        assert np.isfinite(ds[f"{p}_cv_error"]).all() and np.isfinite(ds.attrs[f"{p}_cv_rms"])
+        assert ds[f"{p}_cv_rms"].dims == (f"{p}_candidate",)
+        # the candidate chosen scores what the attribute says
+        chosen = (ds[f"{p}_cv_rank"] == ds.attrs[f"{p}_rank"]) & (ds[f"{p}_cv_order_w"] == ds.attrs[f"{p}_order_w"]) & (
+            ds[f"{p}_cv_order_z"] == ds.attrs[f"{p}_order_z"]) & (ds[f"{p}_cv_transform"] == ds.attrs[f"{p}_transform"])
+        assert float(ds[f"{p}_cv_rms"][chosen.values][0]) == pytest.approx(ds.attrs[f"{p}_cv_rms"])
+    assert ds.attrs["alpha_transform"] == "log"
+    assert_labelled(ds)
+
+
+def test_joint_stage_needs_three_lines() -> None:
+    tiny = load_scenario("paper", {**SMALL_OVERRIDES, "oxide.xi": [0.2, 0.5]})
+    with pytest.raises(ConfigError, match="must each hold >= 3 values"):
+        surrogate.build(tiny, fits.build(tiny, synthetic_cube(tiny, noise=0.0)))
+
+
+# ------------------------------------------------------------------ joint fit
+def log_rank2(lam: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    """exp of a rank-2 field with orders (3, 2), spanning roughly 0.2 ... 5 like alpha."""
+    w, z = np.log(lam)[:, None], -np.log1p(-xi)[None, :]
+    return np.exp((-1.2 + 0.05 * w - 0.01 * w**3) * (1.0 - 0.3 * z) + (0.1 * w - 0.03 * w**2) * (0.2 + 0.5 * z + 0.3 * z**2))
+
+
+def test_free_parameters() -> None:
+    assert sg.free_parameters(2, 3, 2) == 10  # not the paper's 2 (4 + 3) = 14
+    assert sg.free_parameters(2, 2, 1) == 6  # = the full 3 x 2 tensor polynomial
+    assert sg.free_parameters(3, 2, 1) == 6
+    assert sg.free_parameters(1, 0, 0) == 1
+
+
+def test_joint_recovers_separable_rank2_in_log_exactly() -> None:
+    field = log_rank2(LAM, XI)
+    sigma = np.random.default_rng(3).uniform(0.005, 0.2, field.shape)  # unequal weights: the ALS path
+    model = sg.fit_joint(field, LAM, XI, 2, 3, 2, "log", sigma)
+    assert model.iterations > 0
+    np.testing.assert_allclose(model(LAM[:, None], XI[None, :]), field, rtol=1e-9)
+    np.testing.assert_allclose(model(4.0, 0.45), log_rank2(np.array([4.0]), np.array([0.45]))[0, 0], rtol=1e-9)
+    assert model.coef_w.shape == (2, 4) and model.coef_z.shape == (2, 3)
+    # the closed formula is the model
+    formula = sg.closed_formula(model.coef_w, model.coef_z, "log", "alpha").split("=", 1)[1]
+    value = eval(formula.replace("EXP", "np.exp").replace("^", "**"), {"np": np, "w": np.log(4.0), "z": -np.log1p(-0.45)})
+    assert value == pytest.approx(float(model(4.0, 0.45)), rel=1e-12)
+
+
+def test_joint_fit_reaches_the_weighted_optimum() -> None:
+    """ALS ends where a general nonlinear least-squares solver ends, from any start."""
+    rng = np.random.default_rng(5)
+    field = log_rank2(LAM, XI) * np.exp(0.05 * rng.standard_normal((LAM.size, XI.size)))
+    sigma = rng.uniform(0.01, 0.1, field.shape)
+    model = sg.fit_joint(field, LAM, XI, 2, 3, 2, "log", sigma)
+    A, B = np.vander(np.log(LAM), 4, increasing=True), np.vander(-np.log1p(-XI), 3, increasing=True)
+    t = np.log(field)
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        X, Y = x[:8].reshape(4, 2), x[8:].reshape(3, 2)
+        return ((t - A @ X @ Y.T @ B.T) / sigma).ravel()
+
+    als = np.sum(((t - np.log(model(LAM[:, None], XI[None, :]))) / sigma) ** 2)
+    general = min(np.sum(least_squares(residual, rng.standard_normal(14), method="lm", xtol=1e-15, ftol=1e-15).fun ** 2)
+                  for _ in range(5))
+    assert als <= general * (1 + 1e-8)
+    # ...and it is a better weighted fit than the paper's SVD-then-polyfit of the same orders
+    paper = sg.fit_surrogate(field, LAM, XI, 2, 3, 2)(LAM[:, None], XI[None, :])
+    assert als < np.sum(((t - np.log(paper)) / sigma) ** 2)
+
+
+def smooth_field(lam: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    """A smooth alpha-like field outside the model class: steep in xi, mild in lambda."""
+    w, z = np.log(lam)[:, None], -np.log1p(-xi)[None, :]
+    return 0.24 * np.exp(0.35 * z**1.6 * (1 + 0.15 * w) + 0.02 * np.sin(w))
+
+
+def test_grid_error_bounded_on_smooth_noisy_field() -> None:
+    rng = np.random.default_rng(11)
+    truth = smooth_field(LAM, XI)
+    half = 0.004 + 0.02 * (XI[None, :] ** 2) * np.ones((LAM.size, 1))  # relative 95 % half-widths, larger at high xi
+    data = truth * np.exp(half / 1.96 * rng.standard_normal(truth.shape))
+    sigma = np.fmax(half, 0.01)
+    best, _ = sg.select_model(data, LAM, XI, ("log",), 3, 4, 3, {"log": sigma}, 0.05)
+    model = sg.fit_joint(data, LAM, XI, best.rank, best.order_w, best.order_z, "log", sigma)
+    error = np.abs(model(LAM[:, None], XI[None, :]) / data - 1)
+    assert np.all(error <= np.fmax(0.03, half)), error.max()
+    assert best.score <= 0.05
+    # the paper's method with its orders misses the same field by more
+    paper = sg.fit_surrogate(data, LAM, XI, 2, 3, 2)(LAM[:, None], XI[None, :])
+    assert np.abs(paper / data - 1).max() > error.max()
+
+
+@pytest.mark.parametrize("rank, order_w, order_z", [(2, 3, 2), (1, 2, 1), (2, 1, 2)])
+def test_cross_validation_picks_the_true_orders(rank: int, order_w: int, order_z: int) -> None:
+    rng = np.random.default_rng(rank * 10 + order_w)
+    w, z = np.log(LAM)[:, None], -np.log1p(-XI)[None, :]
+    coef_w = rng.uniform(-1, 1, (rank, order_w + 1))
+    coef_z = rng.uniform(-1, 1, (rank, order_z + 1))
+    log_field = sum(P.polyval(w, cw) * P.polyval(z, cz) for cw, cz in zip(coef_w, coef_z))
+    field = np.exp(log_field + 0.002 * rng.standard_normal(log_field.shape))
+    best, tried = sg.select_model(field, LAM, XI, ("log",), 3, 4, 3, None, 0.05)
+    assert (best.rank, best.order_w, best.order_z) == (rank, order_w, order_z)
+    assert len(tried) > 20 and best.score < 0.01
+
+
+def test_cross_validate_matches_explicit_refits() -> None:
+    field = log_rank2(LAM, XI) * np.exp(0.05 * np.random.default_rng(4).standard_normal((LAM.size, XI.size)))
+    sigma = np.full(field.shape, 0.02)
+    sigma[:, -1] = 0.1
+    pred = sg.cross_validate(field, LAM, XI, 2, 2, 1, "log", sigma)
+    keep = np.arange(LAM.size) != 5
+    row = sg.fit_joint(field[keep], LAM[keep], XI, 2, 2, 1, "log", sigma[keep])(LAM[5], XI)
+    np.testing.assert_allclose(pred[0, 5], row, rtol=1e-12)
+    keep = np.arange(XI.size) != 8
+    col = sg.fit_joint(field[:, keep], LAM, XI[keep], 2, 2, 1, "log", sigma[:, keep])(LAM, XI[8])
+    np.testing.assert_allclose(pred[1, :, 8], col, rtol=1e-12)
+    assert sg.cross_validate(field[:3], LAM[:3], XI, 1, 2, 1) is None
+
+
+def test_joint_bad_input() -> None:
+    field = log_rank2(LAM, XI)
+    with pytest.raises(ValueError, match="orders"):
+        sg.fit_joint(field[:3], LAM[:3], XI, 2, 3, 2)
+    with pytest.raises(ValueError, match="positive"):
+        sg.fit_joint(-field, LAM, XI, 2, 3, 2, "log")
+    with pytest.raises(ValueError, match="sigma"):
+        sg.fit_joint(field, LAM, XI, 2, 3, 2, "log", np.zeros_like(field))
 
 
 def test_stage_rejects_unfitted_cells(small) -> None:

@@ -1,24 +1,41 @@
-"""Stage 5: the truncated-SVD polynomial surrogate of alpha and gamma (Eq. 26).
+"""Stage 5: the surrogate of alpha and gamma (Eq. 26) and the predictor's tables.
 
-Reads ``fits.nc``, writes ``surrogate.nc``, ``table3.csv`` and ``table3.md``.
+Reads ``fits.nc``; writes ``surrogate.nc``, ``surrogate.json`` (everything the predictor
+needs, see :mod:`pipeline.predict`), ``table3.csv`` and ``table3.md``.
+
+Two methods (``surrogate.method``):
+
+* ``paper``: the paper's Sect. 3.1: truncated SVD of the grid matrix, each mode fitted by its
+  own polynomial, with the configured rank and orders;
+* ``joint``: ``T(p) = sum_k P_k(w) Q_k(z)`` with T = log or identity, all coefficients fitted
+  at once by weighted least squares (weights 1 / max(relative 95 % half-width,
+  ``weight_floor``)^2 from ``fits.nc``'s ``{p}_ci``), transform, rank and orders chosen by
+  leave-one-line-out cross-validation (:func:`pipeline.physics.surrogate.select_model`).
 
 ``surrogate.nc`` holds, for ``p`` in (alpha, gamma):
 
-* ``{p}_coef_w`` (mode, {p}_power_w) and ``{p}_coef_z`` (mode, {p}_power_z): ascending
-  polynomial coefficients of the modes in w = log(lambda) and z = -log(1 - xi)
-  (the project's Table 4); ``{p}(lambda, xi) = sum_k P_k(w) Q_k(z)``;
-* ``{p}_mode_lambda`` / ``{p}_mode_xi``: the SVD modes on the grid, ``{p}_singular_values``;
+* ``{p}_coef_w`` ({p}_mode, {p}_power_w) and ``{p}_coef_z`` ({p}_mode, {p}_power_z): ascending
+  coefficients of the modes in w = log(lambda) and z = -log(1 - xi);
+  ``T(p)(lambda, xi) = sum_k P_k(w) Q_k(z)``, T named in their ``transform`` attribute;
 * ``{p}_fit``, ``{p}_surrogate``, ``{p}_relative_error`` (lambda, xi) (Table 3);
-* ``{p}_loo`` (order_w, order_z): leave-one-line-out RMS relative error for every order pair
-  (NaN where one line fewer cannot determine the fit), with the verdict in its attributes;
+* ``{p}_cv_error`` (lambda, xi): RMS over the two left-out predictions of each cell (its row
+  left out, its column left out) of ln(prediction / fit) for alpha and of
+  (prediction - fit) for gamma (NaN where the grid is too small to cross-validate);
+* ``{p}_fit_sigma`` (lambda, xi): the fit's confidence interval as one standard deviation of
+  ln alpha, or of gamma: (upper - lower) / (2 z_c), z_c the normal quantile of the level;
+* the model in the attributes ``{p}_transform``, ``{p}_rank``, ``{p}_order_w``,
+  ``{p}_order_z``, ``{p}_free_parameters`` (r (p + q - r)), ``{p}_cv_rms`` and
+  ``{p}_formula`` (a closed formula);
+* paper method: ``{p}_mode_lambda`` / ``{p}_mode_xi`` (SVD modes), ``{p}_singular_values``,
+  ``{p}_loo`` (order_w, order_z): leave-one-line-out RMS relative error for every order pair;
+  joint method: ``{p}_cv_rms`` ({p}_candidate) with the candidates' ``{p}_cv_transform``,
+  ``{p}_cv_rank``, ``{p}_cv_order_w``, ``{p}_cv_order_z``, ``{p}_cv_free_parameters``;
 * the clean fit (``alpha_clean``, ``gamma_clean`` and intervals) and the fitted ranges
   (``xi_range``, ``lambda_range``, ``force_normalized_range``, dim ``end``);
-* the band used by the predictor: ``band_ratio_lower`` = R'_16 / R'_c and
-  ``band_ratio_upper`` = R'_c / R'_84 (lambda, xi, step), with R'_c the fitted reduction, on
-  the fitted load steps (coordinate ``force_normalized`` on ``step``), and
-  ``open_probability`` on the same grid. Both ratios lie in [0, 1] for a sensible band; a
-  zero upper ratio means more than 16 % open circuits (R_84 = inf). The predictor
-  interpolates them linearly in (w, z, log F') and applies them to its R_el.
+* the realization band: ``band_ratio_lower`` = R'_16 / R'_c and ``band_ratio_upper`` =
+  R'_c / R'_84 (lambda, xi, step), R'_c the fitted reduction, on the fitted load steps
+  (coordinate ``force_normalized`` on ``step``), and ``open_probability`` on the same grid;
+  a zero upper ratio means more than 16 % open circuits (R_84 = inf).
 """
 
 from __future__ import annotations
@@ -28,24 +45,21 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from scipy.stats import norm
 
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
-from pipeline.physics.surrogate import fit_surrogate, order_scan
+from pipeline.physics import surrogate as sg
 from pipeline.stages.fits import COORD_LABELS
 from pipeline.store import atomic_path, read_stage, write_dataset
 
 __all__ = ["build", "run", "table3_rows", "table3_csv", "table3_markdown", "PARAMETERS"]
 
 PARAMETERS = ("alpha", "gamma")
-#: Highest orders tried by the cross-validation scan.
+#: Highest orders tried by the paper method's cross-validation scan.
 MAX_ORDER_W = 4
 MAX_ORDER_Z = 3
-
-
-def _orders(scenario: Scenario, name: str) -> tuple[int, int]:
-    s = scenario.surrogate
-    return getattr(s, f"{name}_order_w"), getattr(s, f"{name}_order_z")
+GRID = ("lambda", "xi")
 
 
 def _grid_matrix(fits: xr.Dataset, name: str) -> np.ndarray:
@@ -62,22 +76,46 @@ def _grid_matrix(fits: xr.Dataset, name: str) -> np.ndarray:
     return field.values
 
 
-def _effective(scenario: Scenario, name: str, n_lam: int, n_xi: int) -> tuple[int, int, int]:
+def _half_width(fits: xr.Dataset, name: str) -> np.ndarray:
+    """Half-width of the fit's confidence interval per cell (lambda, xi), in units of the parameter."""
+    ci = fits[f"{name}_ci"].transpose("lambda", "xi", "bound")
+    return (ci.sel(bound="upper").values - ci.sel(bound="lower").values) / 2.0
+
+
+def _fit_sigma(scenario: Scenario, fits: xr.Dataset, name: str) -> np.ndarray:
+    """One standard deviation of ln alpha (name alpha) or of gamma from the fit's interval."""
+    z_c = norm.ppf(0.5 + scenario.fits.confidence / 2.0)
+    ci = fits[f"{name}_ci"].transpose("lambda", "xi", "bound")
+    lower, upper = ci.sel(bound="lower").values, ci.sel(bound="upper").values
+    if name == "alpha":
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return (np.log(upper) - np.log(lower)) / (2.0 * z_c)
+    return (upper - lower) / (2.0 * z_c)
+
+
+def _cv_error(name: str, predictions: np.ndarray | None, matrix: np.ndarray) -> np.ndarray:
+    """Per-cell RMS of the left-out errors: of ln(pred/fit) for alpha, of pred - fit for gamma."""
+    if predictions is None:
+        return np.full(matrix.shape, np.nan)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        diff = np.log(predictions / matrix) if name == "alpha" else predictions - matrix
+    return np.sqrt(np.mean(diff**2, axis=0))
+
+
+def _reduced(name: str, what: str, wanted: tuple[int, ...], limits: tuple[int, ...], shape: tuple[int, int]) -> tuple[int, ...]:
     """Rank and orders clipped to what the grid can determine, with a warning if clipped."""
-    order_w, order_z = _orders(scenario, name)
-    rank = min(scenario.surrogate.rank, n_lam, n_xi)
-    eff = (rank, min(order_w, n_lam - 1), min(order_z, n_xi - 1))
-    if eff != (scenario.surrogate.rank, order_w, order_z):
+    eff = tuple(min(a, b) for a, b in zip(wanted, limits))
+    if eff != wanted:
         warnings.warn(
-            f"surrogate for {name}: rank/orders ({scenario.surrogate.rank}, w {order_w}, z {order_z}) "
-            f"reduced to ({eff[0]}, w {eff[1]}, z {eff[2]}) for a {n_lam} x {n_xi} (lambda x xi) grid",
-            stacklevel=3,
+            f"surrogate for {name}: rank/orders {what}({wanted[0]}, w {wanted[1]}, z {wanted[2]}) "
+            f"reduced to ({eff[0]}, w {eff[1]}, z {eff[2]}) for a {shape[0]} x {shape[1]} (lambda x xi) grid",
+            stacklevel=5,
         )
     return eff
 
 
 def _loo(name: str, matrix: np.ndarray, lam: np.ndarray, xi: np.ndarray, rank: int, order: tuple[int, int]) -> xr.DataArray:
-    scan = order_scan(matrix, lam, xi, rank, MAX_ORDER_W, MAX_ORDER_Z)
+    scan = sg.order_scan(matrix, lam, xi, rank, MAX_ORDER_W, MAX_ORDER_Z)
     configured = scan[order] if order[0] <= MAX_ORDER_W and order[1] <= MAX_ORDER_Z else np.nan
     attrs = {"units": "1", "long_name": f"leave-one-line-out RMS relative error of {name}", "configured": configured}
     if np.all(np.isnan(scan)):
@@ -101,24 +139,95 @@ def _loo(name: str, matrix: np.ndarray, lam: np.ndarray, xi: np.ndarray, rank: i
     )
 
 
-def _parameter(scenario: Scenario, fits: xr.Dataset, name: str) -> dict[str, xr.DataArray]:
+def _paper(scenario: Scenario, name: str, matrix: np.ndarray, lam: np.ndarray, xi: np.ndarray) -> tuple[dict, dict]:
+    """The paper's method: variables, model attributes and the left-out predictions."""
+    s = scenario.surrogate
+    wanted = (s.rank, getattr(s, f"{name}_order_w"), getattr(s, f"{name}_order_z"))
+    limits = (min(lam.size, xi.size), lam.size - 1, xi.size - 1)
+    rank, order_w, order_z = _reduced(name, "", wanted, limits, (lam.size, xi.size))
+    model = sg.fit_surrogate(matrix, lam, xi, rank, order_w, order_z)
+    predictions = sg.paper_loo_predictions(matrix, lam, xi, rank, order_w, order_z)
+    loo = _loo(name, matrix, lam, xi, rank, (order_w, order_z))
+    variables = {
+        f"{name}_mode_lambda": xr.DataArray(model.modes_w, dims=(f"{name}_mode", "lambda"), attrs={"units": "1", "long_name": f"{name}: SVD modes u_k(lambda) = sqrt(s_k) U_k"}),
+        f"{name}_mode_xi": xr.DataArray(model.modes_z, dims=(f"{name}_mode", "xi"), attrs={"units": "1", "long_name": f"{name}: SVD modes v_k(xi) = sqrt(s_k) V_k"}),
+        f"{name}_singular_values": xr.DataArray(model.singular_values, dims=("component",), attrs={"units": "1", "long_name": f"{name}: all singular values of the grid matrix"}),
+        f"{name}_loo": loo,
+    }
+    cv_rms = float(np.sqrt(np.mean((predictions / matrix - 1.0) ** 2))) if predictions is not None else float("nan")
+    info = {"transform": "identity", "rank": rank, "order_w": order_w, "order_z": order_z, "cv_rms": cv_rms,
+            "coef_w": model.coef_w, "coef_z": model.coef_z, "predictions": predictions}
+    return variables, info
+
+
+def _joint(scenario: Scenario, fits: xr.Dataset, name: str, matrix: np.ndarray, lam: np.ndarray, xi: np.ndarray) -> tuple[dict, dict]:
+    """The joint weighted fit with cross-validated transform, rank and orders."""
+    s = scenario.surrogate
+    if lam.size < 3 or xi.size < 3:
+        raise ConfigError(
+            f"oxide.xi ({xi.size} values) and oxide.lambda ({lam.size} values) must each hold >= 3 values for "
+            "surrogate.method = 'joint' (leave-one-line-out cross-validation), or use surrogate.method = 'paper'"
+        )
+    wanted = (s.max_rank, s.max_order_w, s.max_order_z)
+    limits = (min(lam.size, xi.size) - 1, lam.size - 2, xi.size - 2)  # one line fewer must determine them
+    max_rank, max_w, max_z = _reduced(name, "scanned up to ", wanted, limits, (lam.size, xi.size))
+    choice = getattr(s, f"{name}_transform")
+    transforms = sg.TRANSFORMS if choice == "auto" else (choice,)
+    if np.any(matrix <= 0) and "log" in transforms:
+        if choice == "log":
+            raise ConfigError(f"surrogate.{name}_transform = 'log' needs {name} > 0 on every cell (min {matrix.min():.4g})")
+        transforms = ("identity",)
+    relative = np.fmax(np.abs(_half_width(fits, name) / matrix), s.weight_floor)
+    sigma_of = {"log": relative, "identity": relative * np.abs(matrix)}
+    best, tried = sg.select_model(matrix, lam, xi, transforms, max_rank, max_w, max_z, sigma_of, s.cv_tolerance)
+    model = sg.fit_joint(matrix, lam, xi, best.rank, best.order_w, best.order_z, best.transform, sigma_of[best.transform])
+    dim = f"{name}_candidate"
+    labels = {"transform": ("1", "transform T"), "rank": ("1", "rank r"), "order_w": ("1", "order in w"),
+              "order_z": ("1", "order in z"), "free_parameters": ("1", "free parameters r (p + q - r)")}
+    variables = {
+        f"{name}_cv_rms": xr.DataArray([c.score for c in tried], dims=(dim,), attrs={
+            "units": "1", "long_name": f"{name}: leave-one-line-out RMS relative error of each candidate model"}),
+    }
+    for key, (units, long_name) in labels.items():
+        variables[f"{name}_cv_{key}"] = xr.DataArray(
+            [getattr(c, key) for c in tried], dims=(dim,), attrs={"units": units, "long_name": f"{name} candidates: {long_name}"}
+        )
+    info = {"transform": best.transform, "rank": model.rank, "order_w": best.order_w, "order_z": best.order_z,
+            "cv_rms": best.score, "coef_w": model.coef_w, "coef_z": model.coef_z, "predictions": best.predictions}
+    return variables, info
+
+
+def _parameter(scenario: Scenario, fits: xr.Dataset, name: str) -> tuple[dict[str, xr.DataArray], dict[str, object]]:
     matrix = _grid_matrix(fits, name)
     lam, xi = fits["lambda"].values, fits["xi"].values
-    rank, order_w, order_z = _effective(scenario, name, lam.size, xi.size)
-    model = fit_surrogate(matrix, lam, xi, rank, order_w, order_z)
-    values = model(lam[:, None], xi[None, :])
-    grid = ("lambda", "xi")
-    return {
-        f"{name}_coef_w": xr.DataArray(model.coef_w, dims=("mode", f"{name}_power_w"), attrs={"units": "1", "long_name": f"{name}: mode polynomials in w = log(lambda), ascending powers"}),
-        f"{name}_coef_z": xr.DataArray(model.coef_z, dims=("mode", f"{name}_power_z"), attrs={"units": "1", "long_name": f"{name}: mode polynomials in z = -log(1 - xi), ascending powers"}),
-        f"{name}_mode_lambda": xr.DataArray(model.modes_w, dims=("mode", "lambda"), attrs={"units": "1", "long_name": f"{name}: SVD modes u_k(lambda) = sqrt(s_k) U_k"}),
-        f"{name}_mode_xi": xr.DataArray(model.modes_z, dims=("mode", "xi"), attrs={"units": "1", "long_name": f"{name}: SVD modes v_k(xi) = sqrt(s_k) V_k"}),
-        f"{name}_singular_values": xr.DataArray(model.singular_values, dims=("component",), attrs={"units": "1", "long_name": f"{name}: all singular values of the grid matrix"}),
-        f"{name}_fit": xr.DataArray(matrix, dims=grid, attrs={"units": "1", "long_name": f"fitted {name}"}),
-        f"{name}_surrogate": xr.DataArray(values, dims=grid, attrs={"units": "1", "long_name": f"surrogate {name}"}),
-        f"{name}_relative_error": xr.DataArray(values / matrix - 1.0, dims=grid, attrs={"units": "1", "long_name": f"surrogate / fitted {name} - 1"}),
-        f"{name}_loo": _loo(name, matrix, lam, xi, rank, (order_w, order_z)),
+    if scenario.surrogate.method == "paper":
+        variables, info = _paper(scenario, name, matrix, lam, xi)
+    else:
+        variables, info = _joint(scenario, fits, name, matrix, lam, xi)
+    transform = str(info["transform"])
+    values = sg.evaluate(info["coef_w"], info["coef_z"], lam[:, None], xi[None, :], transform)
+    what = "log " + name if transform == "log" else name
+    variables.update({
+        f"{name}_coef_w": xr.DataArray(info["coef_w"], dims=(f"{name}_mode", f"{name}_power_w"), attrs={"units": "1", "long_name": f"{what}: mode polynomials in w = log(lambda), ascending powers", "transform": transform}),
+        f"{name}_coef_z": xr.DataArray(info["coef_z"], dims=(f"{name}_mode", f"{name}_power_z"), attrs={"units": "1", "long_name": f"{what}: mode polynomials in z = -log(1 - xi), ascending powers", "transform": transform}),
+        f"{name}_fit": xr.DataArray(matrix, dims=GRID, attrs={"units": "1", "long_name": f"fitted {name}"}),
+        f"{name}_surrogate": xr.DataArray(values, dims=GRID, attrs={"units": "1", "long_name": f"surrogate {name}"}),
+        f"{name}_relative_error": xr.DataArray(values / matrix - 1.0, dims=GRID, attrs={"units": "1", "long_name": f"surrogate / fitted {name} - 1"}),
+        f"{name}_cv_error": xr.DataArray(_cv_error(name, info["predictions"], matrix), dims=GRID, attrs={
+            "units": "1", "long_name": f"local leave-one-line-out RMS error of {'ln alpha' if name == 'alpha' else 'gamma'}"}),
+        f"{name}_fit_sigma": xr.DataArray(_fit_sigma(scenario, fits, name), dims=GRID, attrs={
+            "units": "1", "long_name": f"one standard deviation of {'ln alpha' if name == 'alpha' else 'gamma'} from the fit's interval"}),
+    })
+    attrs = {
+        f"{name}_transform": transform,
+        f"{name}_rank": int(info["rank"]),
+        f"{name}_order_w": int(info["order_w"]),
+        f"{name}_order_z": int(info["order_z"]),
+        f"{name}_free_parameters": sg.free_parameters(int(info["rank"]), int(info["order_w"]), int(info["order_z"])),
+        f"{name}_cv_rms": float(info["cv_rms"]),
+        f"{name}_formula": sg.closed_formula(info["coef_w"], info["coef_z"], transform, name),
     }
+    return variables, attrs
 
 
 def _band(fits: xr.Dataset) -> dict[str, xr.DataArray]:
@@ -143,8 +252,10 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
     """The surrogate dataset of a fits dataset (see the module docstring)."""
     ds = xr.Dataset(coords={"lambda": fits["lambda"].values, "xi": fits["xi"].values})
     for name in PARAMETERS:
-        for key, value in _parameter(scenario, fits, name).items():
+        variables, attrs = _parameter(scenario, fits, name)
+        for key, value in variables.items():
             ds[key] = value
+        ds.attrs.update(attrs)
     ds.update(_band(fits))
     steps = fits["fitted"].values.astype(bool)
     force_n = fits["force_normalized"].values[steps]
@@ -159,12 +270,15 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
         )
     for name in ("xi", "lambda"):
         ds[name].attrs = {"units": COORD_LABELS[name][0], "long_name": COORD_LABELS[name][1]}
-    ds["order_w"].attrs = {"units": "1", "long_name": "polynomial order in w tried by cross-validation"}
-    ds["order_z"].attrs = {"units": "1", "long_name": "polynomial order in z tried by cross-validation"}
+    for name in ("order_w", "order_z"):
+        if name in ds.coords:
+            ds[name].attrs = {"units": "1", "long_name": f"polynomial order in {name[-1]} tried by cross-validation"}
     for key in ("alpha_clean", "gamma_clean", "alpha_clean_ci", "gamma_clean_ci"):
         ds[key] = fits[key]
     ds.attrs["reduction"] = fits.attrs["reduction"]
-    ds.attrs["model"] = "p(lambda, xi) = sum_k P_k(log lambda) Q_k(-log(1 - xi)) (Eq. 26)"
+    ds.attrs["method"] = scenario.surrogate.method
+    ds.attrs["fit_confidence"] = scenario.fits.confidence
+    ds.attrs["model"] = "T(p)(lambda, xi) = sum_k P_k(log lambda) Q_k(-log(1 - xi)), T = log or identity (Eq. 26)"
     ds.attrs["predictor"] = "R_el = alpha 2 rho*/sqrt(R* sigma) F'^-gamma (Eq. 27)"
     return ds
 
@@ -194,7 +308,7 @@ def table3_csv(ds: xr.Dataset) -> str:
 
 def table3_markdown(ds: xr.Dataset) -> str:
     """Table 3 as a Markdown table."""
-    header = ["xi", "lambda", "alpha fit", "alpha SVD", "err %", "gamma fit", "gamma SVD", "err %"]
+    header = ["xi", "lambda", "alpha fit", "alpha surrogate", "err %", "gamma fit", "gamma surrogate", "err %"]
     lines = ["| " + " | ".join(header) + " |", "|" + "---:|" * len(header)]
     for row in table3_rows(ds):
         cells = [f"{row['xi']:g}", f"{row['lambda']:g}"]
@@ -205,14 +319,21 @@ def table3_markdown(ds: xr.Dataset) -> str:
 
 
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
-    """Read ``fits.nc``; write ``surrogate.nc``, ``table3.csv`` and ``table3.md``.
+    """Read ``fits.nc``; write ``surrogate.nc``, ``surrogate.json``, ``table3.csv`` and ``table3.md``.
 
     ``options`` is accepted for the stage interface; the work is small numpy linear algebra.
     """
+    from pipeline.predict import SurrogateTables  # the JSON format belongs to the predictor
+
     fits = read_stage(data_dir, "fits", scenario)
     ds = build(scenario, fits)
     path = write_dataset(ds, data_dir, "surrogate", scenario)
-    for name, text in (("table3.csv", table3_csv(ds)), ("table3.md", table3_markdown(ds))):
+    texts = {
+        "surrogate.json": SurrogateTables.from_dataset(read_stage(data_dir, "surrogate", scenario)).to_json(),
+        "table3.csv": table3_csv(ds),
+        "table3.md": table3_markdown(ds),
+    }
+    for name, text in texts.items():
         with atomic_path(Path(data_dir) / name) as tmp:
             tmp.write_text(text)
     return path

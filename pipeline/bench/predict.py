@@ -1,0 +1,77 @@
+"""Benchmark of the predictor: 10^5 vectorized queries against one query at a time.
+
+Builds surrogate tables on the scenario's (lambda, xi) grid with a log-space rank-2 model and
+smooth band tables (the timing does not depend on their values), times
+:func:`pipeline.predict.predict` on 10^5 random queries inside the fitted ranges (median of
+repeated runs), and, as the reference in the same process, the same predictor called once per
+query on a few hundred of them; reports both, their ratio per query, and the largest relative
+difference between the two on the common queries (they must agree).
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+import warnings
+from typing import Any, Callable
+
+import numpy as np
+
+from pipeline.config import Scenario
+from pipeline.predict import GRID_TABLES, STEP_TABLES, SurrogateTables, predict
+
+__all__ = ["run"]
+
+_REPEATS = 5
+_QUERIES = 100_000
+_LOOP_QUERIES = 300
+
+
+def _median_time(fn: Callable[[], Any]) -> tuple[float, Any]:
+    times, result = [], None
+    for _ in range(_REPEATS):
+        start = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times), result
+
+
+def _tables(scenario: Scenario) -> SurrogateTables:
+    lam, xi = np.asarray(scenario.oxide.lambda_, dtype=float), np.asarray(scenario.oxide.xi, dtype=float)
+    force_n = np.geomspace(0.5, 20.0, 16)
+    grid = np.add.outer(np.log(lam), -np.log1p(-xi))
+    tables = {name: 0.01 * (1 + k) * (1 + 0.1 * grid) for k, name in enumerate(GRID_TABLES)}
+    band = 0.8 - 0.02 * grid[..., None] * np.ones(force_n.size)
+    tables.update(dict(zip(STEP_TABLES, (band, band, np.zeros_like(band)))))
+    coef = {
+        "alpha": (np.array([[-1.2, 0.01, 0.01], [0.0, 0.1, -0.05]]), np.array([[1.2, -0.3], [0.05, 0.2]]), "log"),
+        "gamma": (np.array([[-1.2]]), np.array([[1.2, -0.26]]), "log"),
+    }
+    ranges = {"xi": (xi.min(), xi.max()), "lambda": (lam.min(), lam.max()), "force_normalized": (force_n[0], force_n[-1])}
+    return SurrogateTables(coef, lam, xi, force_n, ranges, tables, {"method": "bench"})
+
+
+def run(scenario: Scenario) -> dict[str, Any]:
+    """Time 10^5 vectorized predictions against one-at-a-time calls; JSON-ready figures."""
+    tables = _tables(scenario)
+    rng = np.random.default_rng(np.random.SeedSequence(20240531))
+    lo, hi = (r * scenario.force_scale for r in tables.ranges["force_normalized"])
+    force = rng.uniform(lo, hi, _QUERIES)
+    xi = rng.uniform(*tables.ranges["xi"], _QUERIES)
+    lam = rng.uniform(*tables.ranges["lambda"], _QUERIES)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        vector_s, result = _median_time(lambda: predict(tables, scenario, force, xi, lam))
+        start = time.perf_counter()
+        single = [float(predict(tables, scenario, force[i], xi[i], lam[i])["upper"]) for i in range(_LOOP_QUERIES)]
+        loop_per_query = (time.perf_counter() - start) / _LOOP_QUERIES
+    vector_per_query = vector_s / _QUERIES
+    return {
+        "queries": _QUERIES,
+        "vectorized_seconds": round(vector_s, 4),
+        "vectorized_per_query_seconds": vector_per_query,
+        "loop_per_query_seconds": loop_per_query,
+        "speedup_per_query": round(loop_per_query / vector_per_query, 1),
+        "max_rel_difference_upper": float(np.max(np.abs(np.array(single) / result["upper"].values[:_LOOP_QUERIES] - 1))),
+        "under_one_second": vector_s < 1.0,
+    }
