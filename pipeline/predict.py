@@ -62,6 +62,7 @@ __all__ = [
     "predict",
     "predict_cli",
     "OUTPUT_COLUMNS",
+    "to_csv",
 ]
 
 FORMAT = "g2tom-surrogate"

@@ -34,6 +34,9 @@ from numpy.typing import ArrayLike
 
 __all__ = [
     "TRANSFORMS",
+    "forward_transform",
+    "inverse_transform",
+    "closed_formula",
     "JointModel",
     "fit_joint",
     "free_parameters",
