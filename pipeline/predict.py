@@ -133,7 +133,7 @@ class SurrogateTables:
         )
 
     def to_json(self) -> str:
-        """The ``surrogate.json`` text (NaN written as null; floats round-trip exactly)."""
+        """The ``surrogate.json`` text (NaN written as null, infinities as "inf"; floats round-trip exactly)."""
         doc = {
             "format": FORMAT,
             "version": VERSION,
@@ -156,7 +156,7 @@ class SurrogateTables:
             },
             "ranges": {k: list(v) for k, v in self.ranges.items()},
             "grid": {"lambda": self.lam.tolist(), "xi": self.xi.tolist(), "force_normalized": self.force_normalized.tolist()},
-            "tables": {k: _nan_to_none(v) for k, v in self.tables.items()},
+            "tables": {k: _encode(v) for k, v in self.tables.items()},
             "info": self.info,
         }
         return json.dumps(doc, indent=1, allow_nan=False) + "\n"
@@ -170,7 +170,7 @@ class SurrogateTables:
                 raise ValueError(f"format is {doc.get('format')!r}, not {FORMAT!r}")
             coef = {p: (np.array(doc["parameters"][p]["coef_w"], dtype=float), np.array(doc["parameters"][p]["coef_z"], dtype=float),
                         str(doc["parameters"][p]["transform"])) for p in PARAMETERS}
-            tables = {k: np.array(_none_to_nan(doc["tables"][k]), dtype=float) for k in GRID_TABLES + STEP_TABLES}
+            tables = {k: np.array(_decode(doc["tables"][k]), dtype=float) for k in GRID_TABLES + STEP_TABLES}
             grid = doc["grid"]
             return cls(
                 coef=coef,
@@ -222,14 +222,22 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def _nan_to_none(a: np.ndarray) -> list:
-    return np.where(np.isnan(a), None, a.astype(object)).tolist()
+def _encode(a: np.ndarray) -> list:
+    """Nested lists for JSON: NaN as null, +-inf as the strings "inf" / "-inf"."""
+    out = a.astype(object)
+    out[np.isnan(a)] = None
+    out[np.isposinf(a)] = "inf"
+    out[np.isneginf(a)] = "-inf"
+    return out.tolist()
 
 
-def _none_to_nan(values: Any) -> Any:
+def _decode(values: Any) -> Any:
+    """Inverse of :func:`_encode`."""
     if isinstance(values, list):
-        return [_none_to_nan(v) for v in values]
-    return math.nan if values is None else values
+        return [_decode(v) for v in values]
+    if values is None:
+        return math.nan
+    return float(values) if isinstance(values, str) and values in ("inf", "-inf") else values
 
 
 def load_surrogate(path: str | Path) -> SurrogateTables:

@@ -234,3 +234,17 @@ def test_bench_vectorized_agrees_with_one_at_a_time(small: Scenario, monkeypatch
         monkeypatch.setattr(bench_predict, name, value)
     result = bench_predict.run(small)
     assert result["queries"] == 2000 and result["max_rel_difference_upper"] < 1e-12
+
+
+def test_json_round_trips_every_table_value(data_dir) -> None:
+    tables = load_surrogate(data_dir / "surrogate.nc")
+    tables.tables["band_ratio_lower"][0, 0, 0] = np.nan
+    tables.tables["band_ratio_upper"][0, 0, 1] = np.inf
+    back = type(tables).from_json(tables.to_json())
+    for name, values in tables.tables.items():
+        np.testing.assert_array_equal(back.tables[name], values)
+    for p, (cw, cz, t) in tables.coef.items():
+        np.testing.assert_array_equal(back.coef[p][0], cw)
+        np.testing.assert_array_equal(back.coef[p][1], cz)
+        assert back.coef[p][2] == t
+    assert back.ranges == tables.ranges
