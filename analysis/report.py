@@ -127,6 +127,15 @@ def _surrogate_model_blocks(sur: xr.Dataset) -> list[Block]:
         Block("p", "Closed formulas (w = LN(lambda), z = -LN(1 - xi); also in surrogate.json with everything the "
                    "predictor needs):"),
         Block("pre", formulas),
+        Block("p", "Predictor band (g2tom predict): three one-sigma half-widths in ln R, each reported: the "
+                   "realization spread (16-84 %), the fit's interval (sqrt(s_a^2 + (ln F' s_g)^2) from alpha_ci, "
+                   "gamma_ci) and the surrogate's local cross-validated error (sqrt(e_a^2 + (ln F' e_g)^2)), "
+                   "combined in quadrature per side: lower = R exp(-total_lower), upper = R exp(total_upper). "
+                   f"Local cross-validated error of ln alpha: median {100 * float(np.nanmedian(sur['alpha_cv_error'])):.2f} %, "
+                   f"largest {100 * float(np.nanmax(sur['alpha_cv_error'])):.2f} %; of gamma: median "
+                   f"{float(np.nanmedian(sur['gamma_cv_error'])):.3g}, largest {float(np.nanmax(sur['gamma_cv_error'])):.3g}."
+              if np.isfinite(sur["alpha_cv_error"]).any() else
+              "Predictor band: the grid is too small to cross-validate the surrogate; its error is not in the band."),
     ]
 
 

@@ -338,6 +338,13 @@ def _factor(coef: np.ndarray, rank: int) -> tuple[np.ndarray, np.ndarray]:
     return fw * flip[:, None], fz * flip[:, None]
 
 
+def _kron(left: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """``np.kron`` of two matrices (rows (i, j), columns (a, b)), without its generic overhead."""
+    n, p = left.shape
+    m, q = right.shape
+    return (left[:, None, :, None] * right[None, :, None, :]).reshape(n * m, p * q)
+
+
 def _weighted_lstsq(design: np.ndarray, target: np.ndarray, root_w: np.ndarray) -> np.ndarray:
     return np.linalg.lstsq(design * root_w[:, None], target * root_w, rcond=None)[0]
 
@@ -364,8 +371,8 @@ def _als(
     previous = objective(X @ Y.T)
     sweep = 0
     for sweep in range(1, max_sweeps + 1):
-        X = _weighted_lstsq(np.kron(A, B @ Y), target, root_w).reshape(p, rank)
-        Y = _weighted_lstsq(np.kron(A @ X, B), target, root_w).reshape(rank, q).T
+        X = _weighted_lstsq(_kron(A, B @ Y), target, root_w).reshape(p, rank)
+        Y = _weighted_lstsq(_kron(A @ X, B), target, root_w).reshape(rank, q).T
         current = objective(X @ Y.T)
         if previous - current <= tol * max(previous, 1e-300):
             break
@@ -431,7 +438,7 @@ def fit_joint(
     A, B = _vander(to_w(lam), order_w), _vander(to_z(xi), order_z)
     r = min(rank, order_w + 1, order_z + 1)
     if r == min(order_w + 1, order_z + 1):
-        coef = _weighted_lstsq(np.kron(A, B), t.ravel(), np.sqrt(weights.ravel())).reshape(order_w + 1, order_z + 1)
+        coef = _weighted_lstsq(_kron(A, B), t.ravel(), np.sqrt(weights.ravel())).reshape(order_w + 1, order_z + 1)
         sweeps = 0
     else:
         coef, sweeps = _als(t, weights, A, B, r, tol, max_sweeps)
