@@ -250,3 +250,26 @@ def test_stage_rejects_unfitted_cells(small) -> None:
     cube["resistance"][0, 0] = np.inf
     with pytest.raises(ConfigError, match="alpha could not be fitted"):
         surrogate.build(small, fits.build(small, cube))
+
+
+def test_cross_validation_picks_the_better_transform() -> None:
+    w, z = np.log(LAM)[:, None], -np.log1p(-XI)[None, :]
+    linear = 0.23 + 0.1 * z + 0.02 * w * z  # exact in gamma itself, rank 2, orders (1, 1)
+    best, _ = sg.select_model(linear, LAM, XI, sg.TRANSFORMS, 3, 4, 3, None, 0.05)
+    assert (best.transform, best.order_w, best.order_z) == ("identity", 1, 1) and best.score < 1e-10
+    best, _ = sg.select_model(np.exp(linear), LAM, XI, sg.TRANSFORMS, 3, 4, 3, None, 0.05)
+    assert (best.transform, best.order_w, best.order_z) == ("log", 1, 1) and best.score < 1e-10
+
+
+def test_weights_keep_an_uncertain_cell_from_pulling_the_fit() -> None:
+    field = log_rank2(LAM, XI)
+    data = field.copy()
+    data[-1, -1] *= 1.5  # one cell off by 50 %, with a wide interval
+    sigma = np.full(field.shape, 0.01)
+    sigma[-1, -1] = 10.0
+    rest = np.ones(field.shape, dtype=bool)
+    rest[-1, -1] = False
+    weighted = sg.fit_joint(data, LAM, XI, 2, 3, 2, "log", sigma)(LAM[:, None], XI[None, :])
+    plain = sg.fit_joint(data, LAM, XI, 2, 3, 2, "log")(LAM[:, None], XI[None, :])
+    assert np.abs(weighted / field - 1)[rest].max() < 1e-4
+    assert np.abs(plain / field - 1)[rest].max() > 1e-2

@@ -258,6 +258,8 @@ def order_scan(
 
 
 # --------------------------------------------------------------------------- joint fit
+#: Cross-validated RMS relative errors below this are exact to rounding: all equally good.
+EXACT = 1e-9
 #: Transforms T of the field that the joint surrogate is linear-in-coefficients for.
 TRANSFORMS = ("log", "identity")
 
@@ -517,7 +519,7 @@ def select_model(
     Every transform, every order pair up to the maxima and every rank up to
     ``min(max_rank, p, q)`` is scored by the RMS relative error of its left-out predictions.
     The chosen model is the one with the fewest free parameters whose score is within
-    ``(1 + tolerance)`` times the best score (ties: the lower score).
+    ``(1 + tolerance)`` times the best score, or below :data:`EXACT` (ties: the lower score).
 
     Parameters
     ----------
@@ -560,7 +562,7 @@ def select_model(
     if not scored:
         raise ValueError("no surrogate order can be cross-validated on this grid (need >= 3 points per axis)")
     best = min(c.score for c in scored)
-    eligible = [c for c in scored if c.score <= best * (1.0 + tolerance)]
+    eligible = [c for c in scored if c.score <= max(best * (1.0 + tolerance), EXACT)]
     return min(eligible, key=lambda c: (c.free_parameters, c.score)), tried
 
 
