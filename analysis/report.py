@@ -11,6 +11,7 @@ from __future__ import annotations
 import html
 import json
 import re
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -18,7 +19,7 @@ from typing import Any
 import xarray as xr
 
 from pipeline import __version__
-from pipeline.config import Scenario, parameter_table
+from pipeline.config import STAGE_INPUTS, Scenario, parameter_table
 from pipeline.stages.surrogate import PARAMETERS, table3_rows
 from pipeline.store import StaleInputError, atomic_path, read_stage
 
@@ -129,14 +130,35 @@ def _json_blocks(title: str, data: Any) -> list[Block]:
     return [Block("p", title), Block("pre", json.dumps(data, indent=1, sort_keys=True))]
 
 
-def _run_blocks(scenario: Scenario, data_dir: Path) -> list[Block]:
+def _timing_blocks(scenario: Scenario, data_dir: Path, report_seconds: float) -> list[Block]:
+    """Wall times of the runs that made the files this report describes, figures and report too.
+
+    ``timings.json`` keeps the last time of every step with the configuration hash it ran
+    with; steps run with another configuration (an earlier or a different run) are left out.
+    """
     blocks = [Block("h2", "Timings")]
-    timings = data_dir / "timings.json"
-    if timings.is_file():
-        t = json.loads(timings.read_text())
-        blocks.append(_table(["stage", "wall time (s)"], [[k, float(v)] for k, v in t.items()]))
-    else:
-        blocks.append(Block("p", "No timings.json (stages were not run through the g2tom command)."))
+    path = data_dir / "timings.json"
+    try:
+        recorded = json.loads(path.read_text()) if path.is_file() else {}
+    except (OSError, ValueError):
+        recorded = {}
+    expected = {stage: scenario.config_hash(stage) for stage in STAGE_INPUTS}
+    expected["figures"] = scenario.config_hash()
+    rows = [[step, float(recorded[step]["seconds"]), recorded[step].get("finished", "")]
+            for step in expected
+            if isinstance(recorded.get(step), dict) and recorded[step].get("config_hash") == expected[step]]
+    rows.append(["report", round(report_seconds, 3), "(this page)"])
+    rows.append(["total", round(sum(r[1] for r in rows), 3), ""])
+    blocks.append(_table(["step", "wall time (s)", "finished (UTC)"], rows))
+    left_out = [step for step in expected if step not in {r[0] for r in rows}]
+    if left_out:
+        blocks.append(Block("p", "No time of this configuration's run for: " + ", ".join(left_out)
+                            + " (run through another configuration, or not through the g2tom command)."))
+    return blocks
+
+
+def _run_blocks(scenario: Scenario, data_dir: Path, started: float) -> list[Block]:
+    blocks = _timing_blocks(scenario, data_dir, time.perf_counter() - started)
     bench = sorted((data_dir / "bench").glob("*.json"))
     if bench:
         blocks.append(Block("h2", "Benchmarks"))
@@ -151,8 +173,13 @@ def _run_blocks(scenario: Scenario, data_dir: Path) -> list[Block]:
     return blocks
 
 
-def build_blocks(scenario: Scenario, data_dir: str | Path) -> list[Block]:
-    """The whole report as blocks (figures linked relative to ``data_dir``)."""
+def build_blocks(scenario: Scenario, data_dir: str | Path, started: float | None = None) -> list[Block]:
+    """The whole report as blocks (figures linked relative to ``data_dir``).
+
+    ``started`` (a :func:`time.perf_counter` value) is when the report began, for its own
+    row in the timings table; default: now.
+    """
+    started = time.perf_counter() if started is None else started
     data_dir = Path(data_dir)
     blocks = [
         Block("h1", f"g2tom report: scenario '{scenario.name}'"),
@@ -167,7 +194,7 @@ def build_blocks(scenario: Scenario, data_dir: str | Path) -> list[Block]:
     blocks += [Block("img", CAPTIONS.get(p.stem, p.stem), src=p.relative_to(data_dir).as_posix()) for p in figures]
     if not figures:
         blocks.append(Block("p", "No figures: run `g2tom figures` first."))
-    return blocks + _run_blocks(scenario, data_dir)
+    return blocks + _run_blocks(scenario, data_dir, started)
 
 
 def _md_cell(text: str) -> str:
@@ -223,8 +250,9 @@ def to_html(blocks: list[Block], title: str) -> str:
 
 def write_report(scenario: Scenario, data_dir: str | Path) -> list[Path]:
     """Write ``report.md`` and ``report.html`` under ``data_dir`` atomically; returns both paths."""
+    started = time.perf_counter()
     data_dir = Path(data_dir)
-    blocks = build_blocks(scenario, data_dir)
+    blocks = build_blocks(scenario, data_dir, started)
     outputs = {
         data_dir / "report.md": to_markdown(blocks),
         data_dir / "report.html": to_html(blocks, f"g2tom report: {scenario.name}"),
