@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import xarray as xr
 
 from pipeline import __version__
@@ -51,6 +52,82 @@ CAPTIONS = {
     "fig10_alpha_gamma": "Fig. 10: fitted alpha and gamma with their SVD surrogate (Eq. 26) and its relative error",
     "fig11_barber": "Fig. 11: G2TOM against the p-average of the oxide-extended Barber bounds (Eq. 10)",
 }
+
+
+#: Benchmarks with a section of their own (not dumped with the other benchmark results).
+OWN_SECTIONS = ("frontier", "stability")
+#: Figures of the frontier benchmark, shown in "How fast, how accurate".
+FRONTIER_FIGURES = {
+    "frontier_contact": "Contact: error of the force and of the real contact area against solve time, per "
+                        "tolerance (labels: radial nodes), and the paper's relaxed fixed point",
+    "frontier_cube": "Cube: error of R, alpha and gamma against cube time per algorithm and crop tolerance, "
+                     "and the spot maps rounded to float32",
+    "frontier_ensemble": "Ensemble: relative half-width of the alpha and gamma intervals against the number of "
+                         "realizations per (xi, lambda), time on the top axis",
+}
+
+
+def _frontier_blocks(data_dir: Path) -> list[Block]:
+    """Section "How fast, how accurate": the frontier plots and a recommended setting per use."""
+    blocks = [Block("h2", "How fast, how accurate")]
+    summary = data_dir / "bench" / "frontier.json"
+    if not summary.is_file():
+        return blocks + [Block("p", "Not available: run `make bench` (or `g2tom bench --only frontier`).")]
+    result = json.loads(summary.read_text())
+    blocks.append(Block("p", "Each setting is timed (median of repeats) and its error measured against a reference "
+                             "in the same run: contact against Newton to 1e-12 on 4x the radial nodes; the cube against "
+                             "the dense gemm sum without cropping; the ensemble as the width of the bootstrap intervals. "
+                             "The machine was shared: read times as ratios within this run."))
+    rows = []
+    for use, r in result.get("recommended", {}).items():
+        rows.append([use, r["contact"], r["contact_seconds"], r["force_error"], r["area_error"], r["cube"],
+                     r["cube_seconds"], r["resistance_error"], r["alpha_error"], r["gamma_error"],
+                     r["n_realizations"], r["ensemble_seconds"], r["interval_halfwidth"],
+                     "yes" if r["targets_met"] else "no"])
+    blocks.append(Block("p", "Recommended setting per use: the fastest measured setting that meets the use's targets "
+                             "(max relative force error, max relative error of R, worst relative interval half-width "
+                             "of alpha and gamma over the (xi, lambda) subset)."))
+    blocks.append(_table(["use", "contact", "time (s)", "force err", "area err", "cube", "time (s)", "R err",
+                          "alpha err", "gamma err", "realizations", "time (s)", "CI half-width", "targets met"], rows))
+    for stem, caption in FRONTIER_FIGURES.items():
+        if (data_dir / "figures" / f"{stem}.png").is_file():
+            blocks.append(Block("img", caption, src=f"figures/{stem}.png"))
+    return blocks
+
+
+def _stability_blocks(data_dir: Path) -> list[Block]:
+    """Section "Stability map": per swept parameter, what converged and how hard it was."""
+    blocks = [Block("h2", "Stability map")]
+    path = data_dir / "bench" / "stability.nc"
+    if not path.is_file():
+        return blocks + [Block("p", "Not available: run `make bench` (or `g2tom bench --only stability`).")]
+    with xr.open_dataset(path) as ds:
+        ds = ds.load()
+    status = ds["status"].values.astype(str)
+    ran = np.isin(status, ("converged", "unconverged"))
+    blocks.append(Block("p", f"{status.size} parameter sets far beyond the paper's scene ({ds.attrs.get('base', '')}): "
+                             f"{int((status == 'converged').sum())} converged, {int((status == 'unconverged').sum())} "
+                             f"did not, {int((status == 'refused').sum())} refused by validation with a message, "
+                             f"{int((status == 'failed').sum())} failed. Of those solved, "
+                             f"{int(ds['finite_nonnegative'].values[ran].sum())} have no NaN or negative value, "
+                             f"{int(ds['force_monotone'].values[ran].sum())} a force growing with load and "
+                             f"{int(ds['resistance_falls'].values[ran].sum())} a clean resistance falling with load; "
+                             f"{int(ds['open_circuits'].values[ran].sum())} open circuits (+inf) were counted."))
+    rows = []
+    for parameter in dict.fromkeys(ds["parameter"].values.astype(str)):
+        sel = ds["parameter"].values.astype(str) == parameter
+        solved = sel & ran
+        rows.append([parameter, ", ".join(ds["value"].values.astype(str)[sel]),
+                     int((status[sel] == "converged").sum()), int((status[sel] != "converged").sum()),
+                     int(ds["iterations"].values[solved].max()) if solved.any() else "",
+                     float(np.nanmax(ds["residual"].values[solved])) if solved.any() else ""])
+    blocks.append(_table(["parameter", "values", "converged", "not (refused/failed/unconverged)",
+                          "max iterations", "worst residual"], rows))
+    notes = [f"{p}={v}: {m}" for p, v, st, m in zip(ds["parameter"].values.astype(str), ds["value"].values.astype(str),
+                                                    status, ds["message"].values.astype(str)) if st != "converged"]
+    if notes:
+        blocks.append(Block("pre", "\n".join(notes)))
+    return blocks
 
 
 def _figure_order(path: Path) -> tuple[Any, ...]:
@@ -159,7 +236,7 @@ def _timing_blocks(scenario: Scenario, data_dir: Path, report_seconds: float) ->
 
 def _run_blocks(scenario: Scenario, data_dir: Path, started: float) -> list[Block]:
     blocks = _timing_blocks(scenario, data_dir, time.perf_counter() - started)
-    bench = sorted((data_dir / "bench").glob("*.json"))
+    bench = [p for p in sorted((data_dir / "bench").glob("*.json")) if p.stem not in OWN_SECTIONS]
     if bench:
         blocks.append(Block("h2", "Benchmarks"))
         for path in bench:
@@ -190,10 +267,12 @@ def build_blocks(scenario: Scenario, data_dir: str | Path, started: float | None
     sur, missing = _load(data_dir, "surrogate", scenario)
     blocks += missing if sur is None else _surrogate_blocks(sur)
     blocks.append(Block("h2", "Figures"))
-    figures = sorted((data_dir / "figures").glob("*.png"), key=_figure_order)
+    figures = sorted((p for p in (data_dir / "figures").glob("*.png") if p.stem not in FRONTIER_FIGURES),
+                     key=_figure_order)
     blocks += [Block("img", CAPTIONS.get(p.stem, p.stem), src=p.relative_to(data_dir).as_posix()) for p in figures]
     if not figures:
         blocks.append(Block("p", "No figures: run `g2tom figures` first."))
+    blocks += _frontier_blocks(data_dir) + _stability_blocks(data_dir)
     return blocks + _run_blocks(scenario, data_dir, started)
 
 

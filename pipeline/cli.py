@@ -141,7 +141,7 @@ def _report_problems(data_dir: Path, scenario: Scenario) -> list[str]:
 
     problems = [p for p in (stage_problem(data_dir, s, scenario) for s in ("fits", "surrogate")) if p]
     stages = [stage_path(data_dir, s) for s in STAGES if stage_path(data_dir, s).is_file()]
-    figures = sorted((data_dir / "figures").glob("*.png"))
+    figures = sorted((data_dir / "figures").glob("fig*.png"))  # the study's figures, not the benchmarks'
     if not figures:
         problems.append(f"{data_dir / 'figures'} holds no figures: run `g2tom figures` (or `make figures`)")
     elif stages:

@@ -81,7 +81,7 @@ def test_cli_rejects_bad_input_with_status_2_and_touches_nothing(tmp_path, capsy
     assert main(["cube", "--data-dir", str(tmp_path), "--workers", "0"]) == 2
     assert "--workers = 0 is out of range" in capsys.readouterr().err
     assert main(["bench", "--data-dir", str(tmp_path), "--only", "contakt"]) == 2
-    assert "--only 'contakt' is not a benchmark: must be one of contact, oxide, cube" in capsys.readouterr().err
+    assert "--only 'contakt' is not a benchmark: must be one of contact, oxide, cube, frontier, stability" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["contact.nc"]
 
 
