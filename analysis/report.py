@@ -101,7 +101,7 @@ def _stability_blocks(data_dir: Path) -> list[Block]:
     path = data_dir / "bench" / "stability.nc"
     if not path.is_file():
         return blocks + [Block("p", "Not available: run `make bench` (or `g2tom bench --only stability`).")]
-    with xr.open_dataset(path) as ds:
+    with xr.open_dataset(path, decode_timedelta=False) as ds:
         ds = ds.load()
     status = ds["status"].values.astype(str)
     ran = np.isin(status, ("converged", "unconverged"))

@@ -244,7 +244,7 @@ def recommend(contact_rows: list[dict[str, Any]], cube_rows: list[dict[str, Any]
 def write(contact_rows: list[dict[str, Any]], cube_rows: list[dict[str, Any]], ensemble: xr.Dataset,
           target: str | Path) -> Path:
     """All three sweeps in one labelled netCDF file, written atomically."""
-    ds = xr.merge([_table(contact_rows, "contact"), _table(cube_rows, "cube"), ensemble], combine_attrs="drop")
+    ds = xr.merge([_table(contact_rows, "contact"), _table(cube_rows, "cube"), ensemble], combine_attrs="drop_conflicts")
     ds.attrs.update({"title": "g2tom accuracy-time frontier", "Conventions": "CF-1.10",
                      "contact_reference": "Newton to 1e-12 on 4x the scenario's radial nodes",
                      "cube_reference": "gemm, crop_tolerance 0, float64",
@@ -261,6 +261,13 @@ def plot(frontier: xr.Dataset, out_dir: str | Path) -> list[Path]:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter, NullLocator
+
+    def plain_time_axis(ax: Any) -> None:
+        """Time ticks at 1, 2, 5 x 10^k with plain labels, none on the minor ticks."""
+        ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.xaxis.set_minor_formatter(NullFormatter())
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -281,6 +288,7 @@ def plot(frontier: xr.Dataset, out_dir: str | Path) -> list[Path]:
         fp = solver == "fixed_point"
         ax.loglog(frontier["contact_seconds"].values[fp], np.maximum(frontier[f"contact_{err}"].values[fp], floor),
                   "s", color="k", label="relaxed fixed point (20 uniform; default grid)")
+        plain_time_axis(ax)
         ax.set_xlabel("solve time, s")
         ax.set_ylabel(f"max relative {err.replace('_error', '')} error")
         ax.grid(True, which="major", alpha=0.3)
@@ -298,6 +306,7 @@ def plot(frontier: xr.Dataset, out_dir: str | Path) -> list[Path]:
                 if sel.any():
                     ax.loglog(frontier["cube_seconds"].values[sel], np.maximum(frontier[f"cube_{err}"].values[sel], floor),
                               marker, label=f"{method} {precision}")
+        plain_time_axis(ax)
         ax.set_xlabel("cube time, s")
         ax.set_ylabel(f"max relative {err.replace('_error', '')} error")
         ax.grid(True, which="major", alpha=0.3)
@@ -318,8 +327,11 @@ def plot(frontier: xr.Dataset, out_dir: str | Path) -> list[Path]:
         ax.set_xlabel("realizations")
         ax.set_ylabel(f"relative half-width of the {name} interval")
         ax.grid(True, which="major", alpha=0.3)
+        ax.set_xticks(n, [str(int(v)) for v in n])
+        ax.xaxis.set_minor_locator(NullLocator())
         top = ax.secondary_xaxis("top", functions=(lambda x: x, lambda x: x))
-        top.set_xticks(n, [f"{t:.2g}s" for t in frontier["ensemble_seconds"].values], fontsize=7)
+        top.set_xticks(n, [f"{t:.2g} s" for t in frontier["ensemble_seconds"].values], fontsize=7)
+        top.xaxis.set_minor_locator(NullLocator())
     axes[1].legend(fontsize=6, ncol=2)
     fig.suptitle("Ensemble: interval width against realizations (top: time)")
     paths.append(out_dir / "frontier_ensemble.png")
@@ -337,6 +349,6 @@ def run(scenario: Scenario, data_dir: str | Path | None = None) -> dict[str, Any
                               "contact": contact_rows, "cube": cube_rows}
     if data_dir is not None:
         path = write(contact_rows, cube_rows, ensemble, Path(data_dir) / "bench" / "frontier.nc")
-        with xr.open_dataset(path) as ds:
+        with xr.open_dataset(path, decode_timedelta=False) as ds:
             plot(ds.load(), Path(data_dir) / "figures")
     return result

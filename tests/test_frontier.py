@@ -1,0 +1,84 @@
+"""The accuracy–time frontier benchmark: its sweeps, its recommendation and its file."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from pipeline.bench import frontier
+from pipeline.config import load_scenario
+
+
+def _ensemble(widths: list[float]) -> xr.Dataset:
+    n = np.array([25, 50, 100, 200])[: len(widths)]
+    w = np.array(widths)[:, None, None] * np.ones((1, 2, 1))
+    dims = ("n_realizations", "xi", "lambda")
+    return xr.Dataset(
+        {"alpha_halfwidth": (dims, w, {"units": "1", "long_name": "a"}),
+         "gamma_halfwidth": (dims, w / 2, {"units": "1", "long_name": "g"}),
+         "ensemble_seconds": (("n_realizations",), n * 0.01, {"units": "s", "long_name": "t"})},
+        coords={"n_realizations": ("n_realizations", n, {"units": "1", "long_name": "n"}),
+                "xi": ("xi", [0.2, 0.5], {"units": "1", "long_name": "xi"}),
+                "lambda": ("lambda", [3.0], {"units": "1", "long_name": "lambda"})},
+    )
+
+
+CONTACT = [
+    {"solver": "newton", "n_radial": 20, "radial_grid": "graded", "tolerance": 1e-4, "seconds": 0.01,
+     "force_error": 2e-3, "area_error": 5e-3, "converged": True},
+    {"solver": "newton", "n_radial": 120, "radial_grid": "graded", "tolerance": 1e-7, "seconds": 0.05,
+     "force_error": 4e-4, "area_error": 6e-4, "converged": True},
+    {"solver": "newton", "n_radial": 720, "radial_grid": "graded", "tolerance": 1e-10, "seconds": 0.5,
+     "force_error": 3e-6, "area_error": 1e-5, "converged": True},
+    {"solver": "fixed_point", "n_radial": 20, "radial_grid": "uniform", "tolerance": 1e-3, "seconds": 0.001,
+     "force_error": 1e-1, "area_error": 2e-1, "converged": True},
+]
+CUBE = [
+    {"method": "folded", "crop_tolerance": 1e-2, "precision": "float64", "seconds": 0.1, "simulations": 10,
+     "resistance_error": 5e-4, "alpha_error": 1e-4, "gamma_error": 1e-4},
+    {"method": "folded", "crop_tolerance": 1e-6, "precision": "float64", "seconds": 0.3, "simulations": 10,
+     "resistance_error": 1e-7, "alpha_error": 1e-8, "gamma_error": 1e-8},
+    {"method": "folded", "crop_tolerance": 0.0, "precision": "float32", "seconds": 0.01, "simulations": 10,
+     "resistance_error": 1e-9, "alpha_error": 1e-9, "gamma_error": 1e-9},
+]
+
+
+def test_recommendation_is_the_fastest_setting_meeting_each_target() -> None:
+    rec = frontier.recommend(CONTACT, CUBE, _ensemble([0.2, 0.09, 0.04, 0.02]))
+    quick, paper, publication = (rec[u] for u in frontier.USES)
+    assert quick["contact"] == "n_radial=120 tolerance=1e-07"  # the fixed point is fast but too far off
+    assert quick["cube"] == "method=folded crop_tolerance=0.01" and quick["n_realizations"] == 50
+    assert paper["contact"] == "n_radial=720 tolerance=1e-10" and paper["force_error"] == 3e-6
+    assert paper["cube"] == "method=folded crop_tolerance=1e-06"  # float32 is not a stage setting
+    assert paper["n_realizations"] == 100 and paper["interval_halfwidth"] == pytest.approx(0.04)
+    assert quick["targets_met"] and paper["targets_met"]
+    # nothing meets 1e-7 in force: the most accurate setting is shown and flagged
+    assert publication["contact"] == "n_radial=720 tolerance=1e-10" and not publication["targets_met"]
+
+
+def test_frontier_file_and_figures(tmp_path) -> None:
+    path = frontier.write(CONTACT, CUBE, _ensemble([0.2, 0.1]), tmp_path / "bench" / "frontier.nc")
+    with xr.open_dataset(path, decode_timedelta=False) as ds:
+        assert ds.sizes["contact"] == 4 and ds.sizes["cube"] == 3
+        np.testing.assert_array_equal(ds["contact_n_radial"].values, [20, 120, 720, 20])
+        assert ds["contact_seconds"].attrs["units"] == "s"
+        for name, var in ds.variables.items():
+            assert "units" in var.attrs and "long_name" in var.attrs, name
+        paths = frontier.plot(ds.load(), tmp_path / "figures")
+    assert [p.name for p in paths] == ["frontier_contact.png", "frontier_cube.png", "frontier_ensemble.png"]
+    assert all(p.stat().st_size > 10_000 for p in paths)
+
+
+def test_contact_sweep_errors_fall_with_nodes_and_tolerance(monkeypatch) -> None:
+    monkeypatch.setattr(frontier, "NODES", (20, 160))
+    monkeypatch.setattr(frontier, "TOLERANCES", (1e-3, 1e-10))
+    monkeypatch.setattr(frontier, "REPEATS", 1)
+    scenario = load_scenario("paper", {"contact.n_radial": 160, "loading.n_delta": 6})
+    rows = {(r["solver"], r["n_radial"], r["tolerance"]): r for r in frontier.contact_frontier(scenario)}
+    fine, coarse = rows["newton", 160, 1e-10], rows["newton", 20, 1e-10]
+    assert fine["force_error"] < coarse["force_error"] and fine["area_error"] < coarse["area_error"]
+    assert fine["force_error"] < 1e-3  # 4x refinement of the same graded grid: close already
+    assert rows["newton", 160, 1e-3]["force_error"] >= fine["force_error"]
+    assert ("fixed_point", 20, 1e-3) in rows and ("fixed_point", 160, 1e-3) in rows
+    assert all(r["seconds"] > 0 for r in rows.values())
