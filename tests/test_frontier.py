@@ -82,3 +82,38 @@ def test_contact_sweep_errors_fall_with_nodes_and_tolerance(monkeypatch) -> None
     assert rows["newton", 160, 1e-3]["force_error"] >= fine["force_error"]
     assert ("fixed_point", 20, 1e-3) in rows and ("fixed_point", 160, 1e-3) in rows
     assert all(r["seconds"] > 0 for r in rows.values())
+
+
+def test_report_sections_show_the_frontier_and_the_stability_map(tmp_path) -> None:
+    import json
+
+    from analysis.report import _frontier_blocks, _stability_blocks, to_markdown
+    from pipeline.bench import stability
+
+    assert "Not available" in to_markdown(_frontier_blocks(tmp_path) + _stability_blocks(tmp_path))
+    rec = frontier.recommend(CONTACT, CUBE, _ensemble([0.2, 0.09, 0.04, 0.02]))
+    (tmp_path / "bench").mkdir()
+    (tmp_path / "bench" / "frontier.json").write_text(json.dumps({"recommended": rec}))
+    with xr.open_dataset(frontier.write(CONTACT, CUBE, _ensemble([0.2, 0.1]), tmp_path / "bench" / "frontier.nc"),
+                         decode_timedelta=False) as ds:
+        frontier.plot(ds.load(), tmp_path / "figures")
+    base = {"status": "converged", "message": "", "iterations": 7, "residual": 3e-11, "seconds": 0.1,
+            "finite_nonnegative": True, "force_monotone": True, "resistance_falls": True,
+            "hertz_ratio": 0.9, "roughness_parameter": 0.01, "open_circuits": 2}
+    results = [
+        (stability.Case("roughness.sigma", 1e-9, {}), base),
+        (stability.Case("roughness.sigma", 1e-3, {}), {**base, "iterations": 12, "residual": 8e-11}),
+        (stability.Case("oxide.lambda", "[200]", {}), {**base, "status": "refused", "residual": float("nan"),
+                                                       "message": "oxide.lambda = 200 is out of range"}),
+    ]
+    stability.write_map(results, tmp_path / "bench" / "stability.nc")
+    md = to_markdown(_frontier_blocks(tmp_path) + _stability_blocks(tmp_path))
+    assert "## How fast, how accurate" in md and "## Stability map" in md
+    for use in frontier.USES:
+        assert f"| {use} |" in md
+    assert "| quick look | n_radial=120 tolerance=1e-07 | 0.05 | 0.0004 |" in md
+    for stem in ("frontier_contact", "frontier_cube", "frontier_ensemble"):
+        assert f"(figures/{stem}.png)" in md
+    assert "3 parameter sets" in md and "2 converged" in md and "1 refused" in md and "4 open circuits" in md
+    assert "| roughness.sigma | 1e-09, 0.001 | 2 | 0 | 12 | 8e-11 |" in md
+    assert "oxide.lambda=[200]: oxide.lambda = 200 is out of range" in md

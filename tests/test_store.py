@@ -145,3 +145,13 @@ def test_stamp_touches_a_damaged_or_foreign_stage_file(tmp_path, small) -> None:
     (tmp_path / "cube.nc").write_bytes(b"CDF\x01 truncated")
     assert main(["stamp", *args]) == 0
     assert (stamps / "cube.json").stat().st_mtime_ns > 1
+
+
+def test_unconverged_contact_is_refused_by_later_stages_unless_allowed(tmp_path, small) -> None:
+    ds = _dataset(1.0).assign_coords(delta_sigma=("delta", [2.0, 0.0, -3.0], {"units": "1", "long_name": "d"}))
+    ds["converged"] = ("delta", np.array([1, 0, 1], np.int8), {"units": "1", "long_name": "ok"})
+    ds["residual"] = ("delta", np.array([1e-12, 3e-4, 1e-12]), {"units": "1", "long_name": "res"})
+    write_dataset(ds, tmp_path, "contact", small)
+    with pytest.raises(StaleInputError, match=r"did not converge at delta/sigma = 0 .*residual 0.0003.*max_iterations"):
+        read_stage(tmp_path, "contact", small)
+    assert read_stage(tmp_path, "contact", small, allow_unconverged=True)["converged"].sum() == 2
