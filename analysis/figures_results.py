@@ -124,7 +124,7 @@ def fig_load(path: Path, cube: xr.Dataset, fits: xr.Dataset, normalized: bool) -
     axes[0, 0].set_ylabel("kappa' = 1/R' = 2 rho* / (R sqrt(R* sigma))" if normalized else "resistance R (ohm)")
     handles, labels = axes[0, 0].get_legend_handles_labels()
     center = fits.attrs["reduction"].replace("_", " ")
-    keys = [(Line2D([], [], color="k", lw=1.2), f"power-law fit of the {center}"),
+    keys = [(Line2D([], [], color="C0", lw=1.2), f"lines in colour: power-law fit of the {center}"),
             (Patch(color="0.5", alpha=0.35, lw=0), "16-84 % band over realizations"),
             (Line2D([], [], color="0.6", lw=0.8), "single realizations")]
     axes[0, 0].legend(handles + [h for h, _ in keys], labels + [t for _, t in keys], fontsize=7)

@@ -80,9 +80,10 @@ def _frontier_blocks(data_dir: Path) -> list[Block]:
                              "The machine was shared: read times as ratios within this run."))
     rows = []
     for use, r in result.get("recommended", {}).items():
-        rows.append([use, r["contact"], r["contact_seconds"], r["force_error"], r["area_error"], r["cube"],
-                     r["cube_seconds"], r["resistance_error"], r["alpha_error"], r["gamma_error"],
-                     r["n_realizations"], r["ensemble_seconds"], r["interval_halfwidth"],
+        numbers = [f"{r[k]:.3g}" for k in ("contact_seconds", "force_error", "area_error", "cube_seconds",
+                                           "resistance_error", "alpha_error", "gamma_error")]
+        rows.append([use, r["contact"], *numbers[:3], r["cube"], *numbers[3:], r["n_realizations"],
+                     f"{r['ensemble_seconds']:.3g}", f"{r['interval_halfwidth']:.3g}",
                      "yes" if r["targets_met"] else "no"])
     blocks.append(Block("p", "Recommended setting per use: the fastest measured setting that meets the use's targets "
                              "(max relative force error, max relative error of R, worst relative interval half-width "

@@ -111,7 +111,7 @@ def test_report_sections_show_the_frontier_and_the_stability_map(tmp_path) -> No
     assert "## How fast, how accurate" in md and "## Stability map" in md
     for use in frontier.USES:
         assert f"| {use} |" in md
-    assert "| quick look | n_radial=120 tolerance=1e-07 | 0.05 | 0.0004 |" in md
+    assert "| quick look | n_radial=120 tolerance=1e-07 | 0.05 | 0.0004 | 0.0006 | method=folded crop_tolerance=0.01 |" in md
     for stem in ("frontier_contact", "frontier_cube", "frontier_ensemble"):
         assert f"(figures/{stem}.png)" in md
     assert "3 parameter sets" in md and "2 converged" in md and "1 refused" in md and "4 open circuits" in md
