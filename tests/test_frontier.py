@@ -117,3 +117,23 @@ def test_report_sections_show_the_frontier_and_the_stability_map(tmp_path) -> No
     assert "3 parameter sets" in md and "2 converged" in md and "1 refused" in md and "4 open circuits" in md
     assert "| roughness.sigma | 1e-09, 0.001 | 2 | 0 | 12 | 8e-11 |" in md
     assert "oxide.lambda=[200]: oxide.lambda = 200 is out of range" in md
+
+
+def test_cube_and_ensemble_sweeps_measure_real_errors(monkeypatch) -> None:
+    monkeypatch.setattr(frontier, "CUBE_REALIZATIONS", 6)
+    monkeypatch.setattr(frontier, "METHODS", ("folded",))
+    monkeypatch.setattr(frontier, "CROPS", (0.0, 1e-2))
+    monkeypatch.setattr(frontier, "REPEATS", 1)
+    monkeypatch.setattr(frontier, "ENSEMBLE_REALIZATIONS", 24)
+    monkeypatch.setattr(frontier, "ENSEMBLE_COUNTS", (6, 24, 400))
+    scenario = load_scenario("paper", {"contact.n_radial": 160, "loading.n_delta": 6})
+    rows = {(r["crop_tolerance"], r["precision"]): r for r in frontier.cube_frontier(scenario)}
+    assert rows[0.0, "float64"]["resistance_error"] < 1e-12  # exact algorithm against the dense sum
+    assert 1e-8 < rows[1e-2, "float64"]["resistance_error"] <= 1e-2  # cropping error within its tolerance
+    assert 0 < rows[0.0, "float32"]["resistance_error"] < 1e-6  # float32 spot maps: rounding only
+    ens = frontier.ensemble_frontier(scenario)
+    assert list(ens["n_realizations"].values) == [6, 24]  # counts beyond the ensemble are dropped
+    for name in ("alpha", "gamma"):
+        width = ens[f"{name}_halfwidth"]
+        assert (width > 0).all() and float(width.isel(n_realizations=1).mean()) < float(width.isel(n_realizations=0).mean())
+    assert ens["ensemble_seconds"].values[1] > ens["ensemble_seconds"].values[0]

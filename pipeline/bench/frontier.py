@@ -47,7 +47,7 @@ TOLERANCES = (1e-4, 1e-7, 1e-10)
 #: Cube sweep: algorithms and crop tolerances; (xi, lambda) subset and realizations.
 METHODS = ("folded", "fft", "gemm")
 CROPS = (0.0, 1e-6, 1e-4, 1e-2)
-SUBSET = {"oxide.xi": [0.2, 0.5, 0.8], "oxide.lambda": [3.0, 11.0, 23.0]}
+SUBSET = {"xi": [0.2, 0.5, 0.8], "lambda_": [3.0, 11.0, 23.0]}
 CUBE_REALIZATIONS = 40
 #: Ensemble sweep: the largest ensemble and the prefixes fitted.
 ENSEMBLE_REALIZATIONS = 400
@@ -124,11 +124,9 @@ def _float32(contact_ds: xr.Dataset) -> xr.Dataset:
 
 def cube_frontier(scenario: Scenario) -> list[dict[str, Any]]:
     """Every (algorithm, crop tolerance, precision) with its time and errors in R, alpha, gamma."""
-    from pipeline.config import load_scenario
     from pipeline.stages import contact, cube, fits, oxide
 
-    base = load_scenario(scenario_source(scenario), {**SUBSET, "oxide.n_realizations": CUBE_REALIZATIONS,
-                                                     "fits.n_bootstrap": 10})
+    base = _replace(_replace(scenario, "oxide", **SUBSET, n_realizations=CUBE_REALIZATIONS), "fits", n_bootstrap=10)
     quiet = ComputeOptions(progress=False)
     contact_ds, oxide_ds = contact.build(base), oxide.build(base, quiet)
 
@@ -154,19 +152,11 @@ def cube_frontier(scenario: Scenario) -> list[dict[str, Any]]:
     return rows
 
 
-def scenario_source(scenario: Scenario) -> str:
-    """The bundled scenario a benchmark rebuilds variants from (``paper`` for custom ones)."""
-    from pipeline.config import bundled_scenarios
-
-    return scenario.name if scenario.name in bundled_scenarios() else "paper"
-
-
 def ensemble_frontier(scenario: Scenario) -> xr.Dataset:
     """Interval widths of alpha and gamma and time against the number of realizations."""
-    from pipeline.config import load_scenario
     from pipeline.stages import contact, cube, fits, oxide
 
-    base = load_scenario(scenario_source(scenario), {**SUBSET, "oxide.n_realizations": ENSEMBLE_REALIZATIONS})
+    base = _replace(scenario, "oxide", **SUBSET, n_realizations=ENSEMBLE_REALIZATIONS)
     quiet = ComputeOptions(progress=False)
     contact_ds = contact.build(base)
     t_oxide, oxide_ds = _median_time(lambda: oxide.build(base, quiet), repeats=1)
