@@ -125,14 +125,19 @@ def _cmd_figures(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.store import stage_problem
 
     _preflight(args, scenario, scene=False)
-    problems = [p for p in (stage_problem(args.data_dir, s, scenario) for s in STAGES) if p]
-    if problems:  # checked before drawing, so no figure is replaced by half a set
-        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
-        raise StaleInputError(f"figures not written: {problems[0]}{more}")
+    # checked before drawing, so that no figure is replaced by half a set
+    _refuse_if("figures", [p for p in (stage_problem(args.data_dir, s, scenario) for s in STAGES) if p])
     start = time.perf_counter()
     for path in write_figures(scenario, args.data_dir):
         print(f"figure: {path}", file=sys.stderr)
     _record_timing(args.data_dir, "figures", time.perf_counter() - start, scenario.config_hash())
+
+
+def _refuse_if(what: str, problems: list[str]) -> None:
+    """One line for the first problem (and how many more) before anything is written."""
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise StaleInputError(f"{what} not written: {problems[0]}{more}")
 
 
 def _report_problems(data_dir: Path, scenario: Scenario) -> list[str]:
@@ -156,10 +161,7 @@ def _cmd_report(args: argparse.Namespace, scenario: Scenario) -> None:
     from analysis.report import write_report
 
     _preflight(args, scenario, scene=False)
-    problems = _report_problems(args.data_dir, scenario)
-    if problems:
-        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
-        raise StaleInputError(f"report not written: {problems[0]}{more}")
+    _refuse_if("report", _report_problems(args.data_dir, scenario))
     for path in write_report(scenario, args.data_dir):
         print(f"report: {path}", file=sys.stderr)
 
@@ -192,9 +194,11 @@ def _cmd_stamp(args: argparse.Namespace, scenario: Scenario) -> None:
         path = stamps / f"{stage}.json"
         if not path.is_file() or path.read_text() != text:
             path.write_text(text)
-        elif stage_path(args.data_dir, stage).is_file() and stage_problem(args.data_dir, stage, scenario):
-            print(f"g2tom: {stage_problem(args.data_dir, stage, scenario)}; make will rebuild it", file=sys.stderr)
-            os.utime(path)
+        elif stage_path(args.data_dir, stage).is_file():
+            problem = stage_problem(args.data_dir, stage, scenario)
+            if problem:
+                print(f"g2tom: {problem}; make will rebuild it", file=sys.stderr)
+                os.utime(path)
 
 
 def _cmd_params(args: argparse.Namespace, scenario: Scenario) -> None:
