@@ -124,6 +124,12 @@ def _stability_blocks(data_dir: Path) -> list[Block]:
                      float(np.nanmax(ds["residual"].values[solved])) if solved.any() else ""])
     blocks.append(_table(["parameter", "values", "converged", "not (refused/failed/unconverged)",
                           "max iterations", "worst residual"], rows))
+    hertz = ds["parameter"].values.astype(str) == "hertz_limit"
+    if hertz.any() and "roughness_parameter" in ds:
+        pairs = ", ".join(f"{r:.3g} at sigma R*/a^2 = {a:.3g}" for r, a in
+                          zip(ds["hertz_ratio"].values[hertz], ds["roughness_parameter"].values[hertz]))
+        blocks.append(Block("p", f"Hertz limit: central pressure over the Hertz one at the same force {pairs} "
+                                 f"(1 in the smooth limit)."))
     notes = [f"{p}={v}: {m}" for p, v, st, m in zip(ds["parameter"].values.astype(str), ds["value"].values.astype(str),
                                                     status, ds["message"].values.astype(str)) if st != "converged"]
     if notes:

@@ -117,6 +117,7 @@ def test_report_sections_show_the_frontier_and_the_stability_map(tmp_path) -> No
     assert "3 parameter sets" in md and "2 converged" in md and "1 refused" in md and "4 open circuits" in md
     assert "| roughness.sigma | 1e-09, 0.001 | 2 | 0 | 12 | 8e-11 |" in md
     assert "oxide.lambda=[200]: oxide.lambda = 200 is out of range" in md
+    assert "Hertz limit" not in md  # no hertz_limit case in this map
 
 
 def test_cube_and_ensemble_sweeps_measure_real_errors(monkeypatch) -> None:
