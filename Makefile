@@ -9,12 +9,14 @@ G2TOM    := $(VENV)/bin/g2tom
 SCENARIO ?= paper
 DATA     ?= data
 SET      ?=
-ARGS     := --config $(SCENARIO) --data-dir $(DATA) $(foreach s,$(SET),--set $(s))
+# SET is split at spaces; `g2tom` glues back a value split inside brackets or quotes, so
+# SET="oxide.xi=[0.3, 0.5] cube.weights=area" works.
+ARGS     := --config $(SCENARIO) --data-dir $(DATA) $(foreach s,$(SET),--set '$(s)')
 SOURCES  := $(shell find pipeline -name '*.py' -o -name '*.toml')
 ANALYSIS := $(shell find analysis -name '*.py')
 STAMPS   := $(DATA)/.stamps
 
-.PHONY: all run test bench figures report contact oxide cube fits surrogate params clean FORCE
+.PHONY: all run test stress bench figures report contact oxide cube fits surrogate params clean FORCE
 all: run
 
 $(VENV)/.installed: pyproject.toml
@@ -24,7 +26,9 @@ $(VENV)/.installed: pyproject.toml
 	touch $@
 
 # The stamps are rewritten only when a stage's parameters change, so make re-runs a stage
-# exactly when its configuration, its inputs or the code changed.
+# exactly when its configuration, its inputs or the code changed. `g2tom stamp` also touches
+# the stamp of a stage file that is unreadable (truncated, damaged) or was built from another
+# configuration (`g2tom fits --set ...`), so make rebuilds it instead of failing on it.
 STAMP_FILES := $(foreach s,contact oxide cube fits surrogate,$(STAMPS)/$(s).json)
 $(STAMP_FILES) &: FORCE | $(VENV)/.installed
 	@$(G2TOM) stamp $(ARGS)
@@ -66,5 +70,11 @@ params: | $(VENV)/.installed
 test: | $(VENV)/.installed
 	$(VENV)/bin/python -m pytest
 
+# Long numerical-stability sweeps (pytest marker `stress`; a fast subset runs in `make test`).
+stress: | $(VENV)/.installed
+	$(VENV)/bin/python -m pytest -m stress tests/test_stability.py
+
+# Also the temporaries (.<name>.*.tmp) an interrupted (SIGKILLed) write leaves behind.
 clean:
 	rm -rf $(DATA)/*.nc $(DATA)/figures $(DATA)/bench $(DATA)/report.* $(DATA)/table3.* $(DATA)/timings.json $(STAMPS)
+	rm -f $(DATA)/.*.tmp

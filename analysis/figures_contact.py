@@ -32,14 +32,14 @@ def _fig4(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
     one = ds.isel(delta=k)
     sigma = rough.sigma
     rn = ds.r.values / np.sqrt(radius * sigma)
-    p_bar = e_star * np.sqrt(sigma * radius)
+    p_bar = e_star * np.sqrt(sigma / radius)  # pressure scale E* sqrt(sigma/R*), Pa
     keep = rn <= 3.5 * max(1.0, float(one.hertz_radius) / np.sqrt(radius * sigma))
     fig, ax = plt.subplots(2, 3, figsize=(13, 7.5), constrained_layout=True)
     title = f"delta/sigma = {float(one.delta_sigma):.2f}, F = {float(one.force):.0f} N"
     a = ax[0, 0]
     a.plot(rn[keep], one.pressure[keep] / p_bar, label="Greenwood–Tripp")
     a.plot(rn[keep], one.hertz_pressure[keep] / p_bar, "--", label="Hertz, same force")
-    a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$p/(E^*\sqrt{\sigma R^*})$", title="(a) pressure")
+    a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$p/(E^*\sqrt{\sigma/R^*})$", title="(a) pressure")
     a.legend()
     a = ax[0, 1]
     a.plot(rn[keep], (one.delta.values + one.profile[keep]) / sigma, "k--", label="initial (rigid)")

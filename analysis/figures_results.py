@@ -15,6 +15,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 from matplotlib.collections import LineCollection
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from pipeline.config import Scenario
 from pipeline.physics import barber
@@ -75,6 +78,9 @@ def _grey(ax: plt.Axes, x: np.ndarray, curves: np.ndarray) -> None:
         if ok.sum() > 1:
             segments.append(np.column_stack([x[ok], row[ok]]))
     ax.add_collection(LineCollection(segments, colors="0.6", alpha=0.12, lw=0.5, zorder=1))
+    if segments:  # a collection does not enter the autoscaled limits by itself: no clipped lines
+        ax.update_datalim(np.concatenate(segments))
+        ax.autoscale_view()
 
 
 def _load_panel(ax: plt.Axes, cube: xr.Dataset, fits: xr.Dataset, lam: float, xis: list[float], normalized: bool) -> None:
@@ -116,9 +122,13 @@ def fig_load(path: Path, cube: xr.Dataset, fits: xr.Dataset, normalized: bool) -
         _load_panel(ax, cube, fits, lam, xis, normalized)
         ax.set_xlabel("F' = 2F / (E* sqrt(R* sigma^3))" if normalized else "force F (N)")
     axes[0, 0].set_ylabel("kappa' = 1/R' = 2 rho* / (R sqrt(R* sigma))" if normalized else "resistance R (ohm)")
-    axes[0, 0].legend(fontsize=8)
-    what = "normalized conductance" if normalized else "resistance"
+    handles, labels = axes[0, 0].get_legend_handles_labels()
     center = fits.attrs["reduction"].replace("_", " ")
+    keys = [(Line2D([], [], color="C0", lw=1.2), f"lines in colour: power-law fit of the {center}"),
+            (Patch(color="0.5", alpha=0.35, lw=0), "16-84 % band over realizations"),
+            (Line2D([], [], color="0.6", lw=0.8), "single realizations")]
+    axes[0, 0].legend(handles + [h for h, _ in keys], labels + [t for _, t in keys], fontsize=7)
+    what = "normalized conductance" if normalized else "resistance"
     fig.suptitle(f"{what}: band 16-84 %, markers {center}, lines its power-law fit (grey: realizations)", fontsize=9)
     return _save(fig, path)
 
@@ -170,9 +180,13 @@ def fig11_barber(path: Path, fits: xr.Dataset) -> Path:
         ax.plot(dense, barber.p_average_sigma(dense, 0.0, p, s_ratio), "k--", lw=1, label=f"Barber <kappa'>_p={p:g}")
         ax.set(xscale="log", yscale="log", xlabel="F' = 2F / (E* sqrt(R* sigma^3))",
                title=f"({letter}) lambda = {lam:g}, s = {s_ratio:g} sigma, p = {p:g}")
+        for axis in (ax.xaxis, ax.yaxis):  # plain labels at 1, 2, 5 x 10^k; none on minor ticks
+            axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+            axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+            axis.set_minor_formatter(NullFormatter())
         ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
     axes[0].set_ylabel("kappa' = 1/R'")
-    axes[0].legend(fontsize=7)
     return _save(fig, path)
 
 

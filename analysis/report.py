@@ -11,6 +11,7 @@ from __future__ import annotations
 import html
 import json
 import re
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,7 +21,7 @@ import xarray as xr
 from scipy.stats import norm
 
 from pipeline import __version__
-from pipeline.config import Scenario, parameter_table
+from pipeline.config import STAGE_INPUTS, Scenario, parameter_table
 from pipeline.stages.surrogate import PARAMETERS, table3_rows
 from pipeline.store import StaleInputError, atomic_path, read_stage
 
@@ -52,6 +53,89 @@ CAPTIONS = {
     "fig10_alpha_gamma": "Fig. 10: fitted alpha and gamma with their SVD surrogate (Eq. 26) and its relative error",
     "fig11_barber": "Fig. 11: G2TOM against the p-average of the oxide-extended Barber bounds (Eq. 10)",
 }
+
+
+#: Benchmarks with a section of their own (not dumped with the other benchmark results).
+OWN_SECTIONS = ("frontier", "stability")
+#: Figures of the frontier benchmark, shown in "How fast, how accurate".
+FRONTIER_FIGURES = {
+    "frontier_contact": "Contact: error of the force and of the real contact area against solve time, per "
+                        "tolerance (labels: radial nodes), and the paper's relaxed fixed point",
+    "frontier_cube": "Cube: error of R, alpha and gamma against cube time per algorithm and crop tolerance, "
+                     "and the spot maps rounded to float32",
+    "frontier_ensemble": "Ensemble: relative half-width of the alpha and gamma intervals against the number of "
+                         "realizations per (xi, lambda), time on the top axis",
+}
+
+
+def _frontier_blocks(data_dir: Path) -> list[Block]:
+    """Section "How fast, how accurate": the frontier plots and a recommended setting per use."""
+    blocks = [Block("h2", "How fast, how accurate")]
+    summary = data_dir / "bench" / "frontier.json"
+    if not summary.is_file():
+        return blocks + [Block("p", "Not available: run `make bench` (or `g2tom bench --only frontier`).")]
+    result = json.loads(summary.read_text())
+    blocks.append(Block("p", "Each setting is timed (median of repeats) and its error measured against a reference "
+                             "in the same run: contact against Newton to 1e-12 on 4x the radial nodes; the cube against "
+                             "the dense gemm sum without cropping; the ensemble as the width of the bootstrap intervals. "
+                             "The machine was shared: read times as ratios within this run."))
+    rows = []
+    for use, r in result.get("recommended", {}).items():
+        numbers = [f"{r[k]:.3g}" for k in ("contact_seconds", "force_error", "area_error", "cube_seconds",
+                                           "resistance_error", "alpha_error", "gamma_error")]
+        rows.append([use, r["contact"], *numbers[:3], r["cube"], *numbers[3:], r["n_realizations"],
+                     f"{r['ensemble_seconds']:.3g}", f"{r['interval_halfwidth']:.3g}",
+                     "yes" if r["targets_met"] else "no"])
+    blocks.append(Block("p", "Recommended setting per use: the fastest measured setting that meets the use's targets "
+                             "(max relative force error, max relative error of R, worst relative interval half-width "
+                             "of alpha and gamma over the (xi, lambda) subset)."))
+    blocks.append(_table(["use", "contact", "time (s)", "force err", "area err", "cube", "time (s)", "R err",
+                          "alpha err", "gamma err", "realizations", "time (s)", "CI half-width", "targets met"], rows))
+    for stem, caption in FRONTIER_FIGURES.items():
+        if (data_dir / "figures" / f"{stem}.png").is_file():
+            blocks.append(Block("img", caption, src=f"figures/{stem}.png"))
+    return blocks
+
+
+def _stability_blocks(data_dir: Path) -> list[Block]:
+    """Section "Stability map": per swept parameter, what converged and how hard it was."""
+    blocks = [Block("h2", "Stability map")]
+    path = data_dir / "bench" / "stability.nc"
+    if not path.is_file():
+        return blocks + [Block("p", "Not available: run `make bench` (or `g2tom bench --only stability`).")]
+    with xr.open_dataset(path, decode_timedelta=False) as ds:
+        ds = ds.load()
+    status = ds["status"].values.astype(str)
+    ran = np.isin(status, ("converged", "unconverged"))
+    blocks.append(Block("p", f"{status.size} parameter sets far beyond the paper's scene ({ds.attrs.get('base', '')}): "
+                             f"{int((status == 'converged').sum())} converged, {int((status == 'unconverged').sum())} "
+                             f"did not, {int((status == 'refused').sum())} refused by validation with a message, "
+                             f"{int((status == 'failed').sum())} failed. Of those solved, "
+                             f"{int(ds['finite_nonnegative'].values[ran].sum())} have no NaN or negative value, "
+                             f"{int(ds['force_monotone'].values[ran].sum())} a force growing with load and "
+                             f"{int(ds['resistance_falls'].values[ran].sum())} a clean resistance falling with load; "
+                             f"{int(ds['open_circuits'].values[ran].sum())} open circuits (+inf) were counted."))
+    rows = []
+    for parameter in dict.fromkeys(ds["parameter"].values.astype(str)):
+        sel = ds["parameter"].values.astype(str) == parameter
+        solved = sel & ran
+        rows.append([parameter, ", ".join(ds["value"].values.astype(str)[sel]),
+                     int((status[sel] == "converged").sum()), int((status[sel] != "converged").sum()),
+                     int(ds["iterations"].values[solved].max()) if solved.any() else "",
+                     float(np.nanmax(ds["residual"].values[solved])) if solved.any() else ""])
+    blocks.append(_table(["parameter", "values", "converged", "not (refused/failed/unconverged)",
+                          "max iterations", "worst residual"], rows))
+    hertz = ds["parameter"].values.astype(str) == "hertz_limit"
+    if hertz.any() and "roughness_parameter" in ds:
+        pairs = ", ".join(f"{r:.3g} at sigma R*/a^2 = {a:.3g}" for r, a in
+                          zip(ds["hertz_ratio"].values[hertz], ds["roughness_parameter"].values[hertz]))
+        blocks.append(Block("p", f"Hertz limit: central pressure over the Hertz one at the same force {pairs} "
+                                 f"(1 in the smooth limit)."))
+    notes = [f"{p}={v}: {m}" for p, v, st, m in zip(ds["parameter"].values.astype(str), ds["value"].values.astype(str),
+                                                    status, ds["message"].values.astype(str)) if st != "converged"]
+    if notes:
+        blocks.append(Block("pre", "\n".join(notes)))
+    return blocks
 
 
 def _figure_order(path: Path) -> tuple[Any, ...]:
@@ -186,15 +270,36 @@ def _json_blocks(title: str, data: Any) -> list[Block]:
     return [Block("p", title), Block("pre", json.dumps(data, indent=1, sort_keys=True))]
 
 
-def _run_blocks(scenario: Scenario, data_dir: Path) -> list[Block]:
+def _timing_blocks(scenario: Scenario, data_dir: Path, report_seconds: float) -> list[Block]:
+    """Wall times of the runs that made the files this report describes, figures and report too.
+
+    ``timings.json`` keeps the last time of every step with the configuration hash it ran
+    with; steps run with another configuration (an earlier or a different run) are left out.
+    """
     blocks = [Block("h2", "Timings")]
-    timings = data_dir / "timings.json"
-    if timings.is_file():
-        t = json.loads(timings.read_text())
-        blocks.append(_table(["stage", "wall time (s)"], [[k, float(v)] for k, v in t.items()]))
-    else:
-        blocks.append(Block("p", "No timings.json (stages were not run through the g2tom command)."))
-    bench = sorted((data_dir / "bench").glob("*.json"))
+    path = data_dir / "timings.json"
+    try:
+        recorded = json.loads(path.read_text()) if path.is_file() else {}
+    except (OSError, ValueError):
+        recorded = {}
+    expected = {stage: scenario.config_hash(stage) for stage in STAGE_INPUTS}
+    expected["figures"] = scenario.config_hash()
+    rows = [[step, float(recorded[step]["seconds"]), recorded[step].get("finished", "")]
+            for step in expected
+            if isinstance(recorded.get(step), dict) and recorded[step].get("config_hash") == expected[step]]
+    rows.append(["report", round(report_seconds, 3), "(this page)"])
+    rows.append(["total", round(sum(r[1] for r in rows), 3), ""])
+    blocks.append(_table(["step", "wall time (s)", "finished (UTC)"], rows))
+    left_out = [step for step in expected if step not in {r[0] for r in rows}]
+    if left_out:
+        blocks.append(Block("p", "No time of this configuration's run for: " + ", ".join(left_out)
+                            + " (run through another configuration, or not through the g2tom command)."))
+    return blocks
+
+
+def _run_blocks(scenario: Scenario, data_dir: Path, started: float) -> list[Block]:
+    blocks = _timing_blocks(scenario, data_dir, time.perf_counter() - started)
+    bench = [p for p in sorted((data_dir / "bench").glob("*.json")) if p.stem not in OWN_SECTIONS]
     if bench:
         blocks.append(Block("h2", "Benchmarks"))
         for path in bench:
@@ -208,8 +313,13 @@ def _run_blocks(scenario: Scenario, data_dir: Path) -> list[Block]:
     return blocks
 
 
-def build_blocks(scenario: Scenario, data_dir: str | Path) -> list[Block]:
-    """The whole report as blocks (figures linked relative to ``data_dir``)."""
+def build_blocks(scenario: Scenario, data_dir: str | Path, started: float | None = None) -> list[Block]:
+    """The whole report as blocks (figures linked relative to ``data_dir``).
+
+    ``started`` (a :func:`time.perf_counter` value) is when the report began, for its own
+    row in the timings table; default: now.
+    """
+    started = time.perf_counter() if started is None else started
     data_dir = Path(data_dir)
     blocks = [
         Block("h1", f"g2tom report: scenario '{scenario.name}'"),
@@ -220,11 +330,13 @@ def build_blocks(scenario: Scenario, data_dir: str | Path) -> list[Block]:
     sur, missing = _load(data_dir, "surrogate", scenario)
     blocks += missing if sur is None else _surrogate_blocks(sur)
     blocks.append(Block("h2", "Figures"))
-    figures = sorted((data_dir / "figures").glob("*.png"), key=_figure_order)
+    figures = sorted((p for p in (data_dir / "figures").glob("*.png") if p.stem not in FRONTIER_FIGURES),
+                     key=_figure_order)
     blocks += [Block("img", CAPTIONS.get(p.stem, p.stem), src=p.relative_to(data_dir).as_posix()) for p in figures]
     if not figures:
         blocks.append(Block("p", "No figures: run `g2tom figures` first."))
-    return blocks + _run_blocks(scenario, data_dir)
+    blocks += _frontier_blocks(data_dir) + _stability_blocks(data_dir)
+    return blocks + _run_blocks(scenario, data_dir, started)
 
 
 def _md_cell(text: str) -> str:
@@ -280,8 +392,9 @@ def to_html(blocks: list[Block], title: str) -> str:
 
 def write_report(scenario: Scenario, data_dir: str | Path) -> list[Path]:
     """Write ``report.md`` and ``report.html`` under ``data_dir`` atomically; returns both paths."""
+    started = time.perf_counter()
     data_dir = Path(data_dir)
-    blocks = build_blocks(scenario, data_dir)
+    blocks = build_blocks(scenario, data_dir, started)
     outputs = {
         data_dir / "report.md": to_markdown(blocks),
         data_dir / "report.html": to_html(blocks, f"g2tom report: {scenario.name}"),

@@ -11,12 +11,14 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import importlib  # noqa: E402
 import json  # noqa: E402
+import re  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
-from typing import TYPE_CHECKING, Callable, Sequence  # noqa: E402
+from typing import TYPE_CHECKING, Callable, NoReturn, Sequence  # noqa: E402
 
+from pipeline import __version__  # noqa: E402
 from pipeline.config import STAGE_INPUTS, ConfigError, Scenario, load_scenario, parameter_table  # noqa: E402
 from pipeline.errors import StaleInputError  # noqa: E402
 
@@ -68,32 +70,49 @@ def _options(args: argparse.Namespace) -> ComputeOptions:
     )
 
 
+def _preflight(args: argparse.Namespace, scenario: Scenario, scene: bool = True) -> None:
+    """Directory, scheduler and cross-stage checks before any work (pipeline.preflight)."""
+    from pipeline.preflight import preflight
+
+    preflight(scenario, args.data_dir, getattr(args, "scheduler", None), scene=scene)
+
+
 def _run_stage(name: str, scenario: Scenario, args: argparse.Namespace) -> None:
     options = _options(args)
     module = importlib.import_module(STAGES[name])
     start = time.perf_counter()
     path = module.run(scenario, args.data_dir, options)
     elapsed = time.perf_counter() - start
-    _record_timing(args.data_dir, name, elapsed)
+    _record_timing(args.data_dir, name, elapsed, scenario.config_hash(name))
     print(f"{name}: wrote {path} in {elapsed:.2f} s", file=sys.stderr)
 
 
-def _record_timing(data_dir: Path, stage: str, seconds: float) -> None:
-    """Merge a stage's wall time into ``<data_dir>/timings.json`` (read by the report)."""
+def _record_timing(data_dir: Path, step: str, seconds: float, config_hash: str) -> None:
+    """Merge a step's wall time into ``<data_dir>/timings.json`` (read by the report).
+
+    Each entry records the configuration hash it was run with, so the report shows only the
+    times of the outputs it describes.
+    """
     from pipeline.store import atomic_path
 
     path = Path(data_dir) / "timings.json"
-    timings = json.loads(path.read_text()) if path.is_file() else {}
-    timings[stage] = round(seconds, 3)
+    try:
+        timings = json.loads(path.read_text()) if path.is_file() else {}
+    except (OSError, ValueError):
+        timings = {}  # a damaged timings file is only a cache of wall times
+    timings[step] = {"seconds": round(seconds, 3), "config_hash": config_hash,
+                     "finished": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps(timings, indent=1, sort_keys=True) + "\n")
 
 
 def _cmd_stage(args: argparse.Namespace, scenario: Scenario) -> None:
+    _preflight(args, scenario)
     _run_stage(args.command, scenario, args)
 
 
 def _cmd_run(args: argparse.Namespace, scenario: Scenario) -> None:
+    _preflight(args, scenario)
     for name in STAGES:
         _run_stage(name, scenario, args)
     _cmd_figures(args, scenario)
@@ -103,13 +122,46 @@ def _cmd_run(args: argparse.Namespace, scenario: Scenario) -> None:
 def _cmd_figures(args: argparse.Namespace, scenario: Scenario) -> None:
     from analysis.figures import write_figures
 
+    from pipeline.store import stage_problem
+
+    _preflight(args, scenario, scene=False)
+    # checked before drawing, so that no figure is replaced by half a set
+    _refuse_if("figures", [p for p in (stage_problem(args.data_dir, s, scenario) for s in STAGES) if p])
+    start = time.perf_counter()
     for path in write_figures(scenario, args.data_dir):
         print(f"figure: {path}", file=sys.stderr)
+    _record_timing(args.data_dir, "figures", time.perf_counter() - start, scenario.config_hash())
+
+
+def _refuse_if(what: str, problems: list[str]) -> None:
+    """One line for the first problem (and how many more) before anything is written."""
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise StaleInputError(f"{what} not written: {problems[0]}{more}")
+
+
+def _report_problems(data_dir: Path, scenario: Scenario) -> list[str]:
+    """Why a report of ``data_dir`` would describe missing, stale or outdated results."""
+    from pipeline.store import stage_path, stage_problem
+
+    problems = [p for p in (stage_problem(data_dir, s, scenario) for s in ("fits", "surrogate")) if p]
+    stages = [stage_path(data_dir, s) for s in STAGES if stage_path(data_dir, s).is_file()]
+    figures = sorted((data_dir / "figures").glob("fig*.png"))  # the study's figures, not the benchmarks'
+    if not figures:
+        problems.append(f"{data_dir / 'figures'} holds no figures: run `g2tom figures` (or `make figures`)")
+    elif stages:
+        newest = max(stages, key=lambda p: p.stat().st_mtime_ns)
+        oldest = min(figures, key=lambda p: p.stat().st_mtime_ns)
+        if oldest.stat().st_mtime_ns < newest.stat().st_mtime_ns:
+            problems.append(f"{oldest} is older than {newest}: run `g2tom figures` (or `make figures`)")
+    return problems
 
 
 def _cmd_report(args: argparse.Namespace, scenario: Scenario) -> None:
     from analysis.report import write_report
 
+    _preflight(args, scenario, scene=False)
+    _refuse_if("report", _report_problems(args.data_dir, scenario))
     for path in write_report(scenario, args.data_dir):
         print(f"report: {path}", file=sys.stderr)
 
@@ -117,11 +169,20 @@ def _cmd_report(args: argparse.Namespace, scenario: Scenario) -> None:
 def _cmd_bench(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.bench import run_benchmarks
 
+    _preflight(args, scenario, scene=False)
     run_benchmarks(scenario, args.data_dir, only=args.only)
 
 
 def _cmd_stamp(args: argparse.Namespace, scenario: Scenario) -> None:
-    """Write ``<data>/.stamps/<stage>.json`` only when its content changes (for make)."""
+    """Write ``<data>/.stamps/<stage>.json`` only when its content changes (for make).
+
+    A stamp is also touched when its stage file exists but is unreadable (a truncated or
+    damaged file) or was built from another configuration (e.g. by ``g2tom fits --set
+    ...``), so that make rebuilds it instead of failing on it forever.
+    """
+    from pipeline.store import stage_path, stage_problem
+
+    _preflight(args, scenario, scene=False)
     stamps = args.data_dir / ".stamps"
     stamps.mkdir(parents=True, exist_ok=True)
     for stage in STAGE_INPUTS:
@@ -133,6 +194,11 @@ def _cmd_stamp(args: argparse.Namespace, scenario: Scenario) -> None:
         path = stamps / f"{stage}.json"
         if not path.is_file() or path.read_text() != text:
             path.write_text(text)
+        elif stage_path(args.data_dir, stage).is_file():
+            problem = stage_problem(args.data_dir, stage, scenario)
+            if problem:
+                print(f"g2tom: {problem}; make will rebuild it", file=sys.stderr)
+                os.utime(path)
 
 
 def _cmd_params(args: argparse.Namespace, scenario: Scenario) -> None:
@@ -143,6 +209,12 @@ def _cmd_params(args: argparse.Namespace, scenario: Scenario) -> None:
 
 def _cmd_predict(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.predict import predict_cli
+    from pipeline.store import stage_path, unreadable
+
+    surrogate = args.surrogate or stage_path(args.data_dir, "surrogate")
+    problem = Path(surrogate).is_file() and unreadable(surrogate, "surrogate")
+    if problem:
+        raise StaleInputError(problem)
 
     predict_cli(args, scenario)
 
@@ -153,12 +225,75 @@ def _cmd_roughness(args: argparse.Namespace, scenario: Scenario) -> None:
     roughness_cli(args)
 
 
+def _version() -> str:
+    from pipeline.store import git_commit
+
+    commit = git_commit()
+    return f"g2tom {__version__}" + (f" (git {commit})" if commit else "")
+
+
+def _rejoin(overrides: Sequence[str]) -> list[str]:
+    """Glue back ``--set`` values that were split at spaces inside brackets or quotes.
+
+    make's ``SET="oxide.xi=[0.3, 0.5]"`` becomes ``--set oxide.xi=[0.3,`` ``--set 0.5]``: a
+    fragment is joined to the next until its brackets balance and its quotes close.
+    """
+    out: list[str] = []
+    pending = ""
+    for item in overrides:
+        pending = f"{pending} {item}" if pending else item
+        text = pending.partition("=")[2]
+        balanced = (text.count("[") <= text.count("]") and text.count('"') % 2 == 0
+                    and text.count("'") % 2 == 0)
+        if balanced:
+            out.append(pending)
+            pending = ""
+    if pending:
+        out.append(pending)
+    return out
+
+
+def _load(args: argparse.Namespace) -> Scenario:
+    """The scenario of ``--config`` and ``--set``; unreadable files become ConfigError."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("default")
+            return load_scenario(args.config, _rejoin(args.overrides))
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"--config {args.config!r} is not UTF-8 text (byte {exc.start}: "
+                          f"{exc.object[exc.start:exc.start + 1]!r}); save it as UTF-8") from None
+    except OSError as exc:
+        raise ConfigError(f"--config {args.config!r} is unreadable ({exc.strerror or exc})") from None
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with its refusals as one ``g2tom: error:`` line (exit status 2)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"g2tom: error: {self.prog}: {message} (see `{self.prog} --help`)\n")
+
+
+_NEGATIVE = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|nan)$", re.IGNORECASE)
+
+
+def _attach_negative_values(argv: Sequence[str]) -> list[str]:
+    """``--opt -1e-6`` as ``--opt=-1e-6``: argparse takes ``-1e-6`` for an option otherwise."""
+    out: list[str] = []
+    for item in argv:
+        if out and out[-1].startswith("--") and "=" not in out[-1] and _NEGATIVE.match(item):
+            out[-1] = f"{out[-1]}={item}"
+        else:
+            out.append(item)
+    return out
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="g2tom",
         description="Electrical contact resistance of rough, partially oxidized sphere-on-flat contacts.",
     )
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser.add_argument("--version", action="version", version=_version())
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     handlers: dict[str, Callable[[argparse.Namespace, Scenario], None]] = {}
 
     def add(name: str, handler: Callable, help_text: str, compute: bool = False) -> argparse.ArgumentParser:
@@ -194,14 +329,19 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line_warning(message, category, filename, lineno, line=None) -> str:  # noqa: ANN001
+    """Warnings as one ``g2tom: warning:`` line, without the source line that raised them."""
+    return f"g2tom: warning: {message}\n"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``g2tom`` console script; returns the exit status."""
     parser = _parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_attach_negative_values(sys.argv[1:] if argv is None else argv))
+    formatwarning = warnings.formatwarning
+    warnings.formatwarning = _one_line_warning
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("default")
-            scenario = load_scenario(args.config, args.overrides)
+        scenario = _load(args)
         args.handler(args, scenario)
     except ConfigError as exc:
         print(f"g2tom: error: {exc}", file=sys.stderr)
@@ -209,6 +349,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except StaleInputError as exc:
         print(f"g2tom: error: {exc}", file=sys.stderr)
         return 1
+    finally:
+        warnings.formatwarning = formatwarning
     return 0
 
 

@@ -485,7 +485,19 @@ def _unknown(name: str) -> ConfigError:
     return ConfigError(f"unknown parameter '{name}'{hint}")
 
 
+#: Largest integer a netCDF attribute (64-bit signed) can record.
+_INT_MAX = 2**63 - 1
+
+
 def _cross_checks(s: Scenario) -> None:
+    for section in SECTIONS:
+        obj = getattr(s, section)
+        for f in dataclasses.fields(obj):
+            value = getattr(obj, f.name)
+            if isinstance(value, int) and not isinstance(value, bool) and abs(value) > _INT_MAX:
+                raise ConfigError(
+                    f"{section}.{_key(f)} = {value!r} is out of range: must be <= 2**63 - 1 = {_INT_MAX} "
+                    f"(stored as a 64-bit integer in every output file)")
     if s.loading.delta_min > s.loading.delta_max:
         raise ConfigError(
             f"loading.delta_min = {s.loading.delta_min!r} is out of range: must be <= "

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +18,10 @@ import xarray as xr
 from pipeline.config import ConfigError
 from pipeline.physics.roughness import RoughnessParameters, roughness_parameters
 
-__all__ = ["read_heightmap", "roughness_cli"]
+__all__ = ["read_heightmap", "roughness_cli", "PLAUSIBLE_SIGMA"]
+
+#: Height standard deviations (m) outside this range are almost surely in the wrong unit.
+PLAUSIBLE_SIGMA = (1e-10, 1e-3)
 
 
 def _netcdf_heights(path: Path) -> np.ndarray:
@@ -43,18 +47,25 @@ def read_heightmap(path: str | Path) -> np.ndarray:
         If the file is missing or cannot be parsed.
     """
     path = Path(path)
+    if path.is_dir():
+        raise ConfigError(f"HEIGHTMAP {str(path)!r} is a directory: give a .npy, netCDF or text file")
     if not path.is_file():
         raise ConfigError(f"HEIGHTMAP {str(path)!r} does not exist")
+    if path.stat().st_size == 0:
+        raise ConfigError(f"HEIGHTMAP {str(path)!r} is empty (0 bytes)")
     try:
-        if path.suffix == ".npy":
-            return np.load(path, allow_pickle=False)
-        if path.suffix in (".nc", ".nc4", ".cdf"):
-            return _netcdf_heights(path)
-        return np.loadtxt(path, ndmin=2)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # loadtxt's "empty input file" and the like
+            if path.suffix == ".npy":
+                return np.load(path, allow_pickle=False)
+            if path.suffix in (".nc", ".nc4", ".cdf"):
+                return _netcdf_heights(path)
+            return np.loadtxt(path, ndmin=2)
     except ConfigError:
         raise
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"HEIGHTMAP {str(path)!r} is unreadable ({exc})") from None
+    except (OSError, ValueError, EOFError, UnicodeDecodeError, UserWarning) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ConfigError(f"HEIGHTMAP {str(path)!r} is unreadable ({reason})") from None
 
 
 def _report(result: RoughnessParameters) -> str:
@@ -87,4 +98,9 @@ def roughness_cli(args: argparse.Namespace) -> None:
         result = roughness_parameters(heights, args.pixel_size)
     except ValueError as exc:
         raise ConfigError(f"HEIGHTMAP {str(args.heightmap)!r}: {exc}") from None
+    low, high = PLAUSIBLE_SIGMA
+    if not low <= result.sigma <= high:
+        warnings.warn(
+            f"HEIGHTMAP {str(args.heightmap)!r}: sigma = {result.sigma:.3g} m is implausible for a "
+            f"surface (expected {low:g}..{high:g} m): are the heights in m?", stacklevel=2)
     print(_report(result))

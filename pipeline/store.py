@@ -8,8 +8,11 @@ previous one.
 
 from __future__ import annotations
 
+import datetime
+import functools
 import json
 import os
+import subprocess
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -22,7 +25,18 @@ from pipeline import __version__
 from pipeline.config import STAGE_UPSTREAM, Scenario
 from pipeline.errors import StaleInputError
 
-__all__ = ["StaleInputError", "stage_path", "provenance", "write_dataset", "read_stage", "atomic_path"]
+__all__ = [
+    "StaleInputError",
+    "stage_path",
+    "provenance",
+    "write_dataset",
+    "read_stage",
+    "atomic_path",
+    "stage_problem",
+    "unreadable",
+    "shaping_parameters",
+    "git_commit",
+]
 
 
 def stage_path(data_dir: str | Path, stage: str) -> Path:
@@ -39,22 +53,50 @@ def _attr_value(value: Any) -> Any:
     return value
 
 
+def shaping_parameters(scenario: Scenario, stage: str) -> dict[str, Any]:
+    """The parameters that shaped a stage's output: its own and those of every upstream stage."""
+    params = dict(scenario.stage_parameters(stage))
+    for upstream in STAGE_UPSTREAM[stage]:
+        params.update(shaping_parameters(scenario, upstream))
+    return dict(sorted(params.items()))
+
+
+@functools.lru_cache(maxsize=1)
+def git_commit() -> str:
+    """The git commit of the package's source tree (with ``-dirty`` if modified), or ''."""
+    root = Path(__file__).resolve().parent.parent
+    try:
+        head = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True,
+                              text=True, timeout=5, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True, timeout=5, check=True).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return ""
+    return head + ("-dirty" if dirty else "")
+
+
 def provenance(scenario: Scenario, stage: str) -> dict[str, Any]:
-    """Attributes every output carries: scenario, every parameter, version, config hashes."""
+    """Attributes every output carries: scenario, the parameters that shaped it, version,
+    git commit, creation time (CF ``history``) and config hashes."""
+    params = shaping_parameters(scenario, stage)
+    commit = git_commit()
+    now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     attrs: dict[str, Any] = {
         "title": f"g2tom {stage} stage",
         "Conventions": "CF-1.10",
+        "history": f"{now} written by g2tom {__version__}" + (f" (git {commit})" if commit else "")
+                   + f", stage {stage}, scenario {scenario.name}",
         "g2tom_version": __version__,
+        "g2tom_commit": commit or "unknown",
         "stage": stage,
         "scenario": scenario.name,
         "scenario_description": scenario.description,
         "config_hash": scenario.config_hash(stage),
-        "scenario_hash": scenario.config_hash(),
-        "parameters": json.dumps(scenario.to_dict(), sort_keys=True),
+        "parameters": json.dumps(params, sort_keys=True),
     }
     for upstream in STAGE_UPSTREAM[stage]:
         attrs[f"config_hash_{upstream}"] = scenario.config_hash(upstream)
-    for key, value in scenario.flat().items():
+    for key, value in params.items():
         attrs[key] = _attr_value(value)
     return attrs
 
@@ -96,23 +138,79 @@ def write_dataset(ds: xr.Dataset, data_dir: str | Path, stage: str, scenario: Sc
     return target
 
 
-def read_stage(data_dir: str | Path, stage: str, scenario: Scenario) -> xr.Dataset:
+def _fix(stage: str) -> str:
+    return f"rebuild it with `g2tom {stage}` (or `make {stage}`)"
+
+
+def stage_problem(data_dir: str | Path, stage: str, scenario: Scenario) -> str | None:
+    """Why a stage's output cannot be used by ``scenario`` (one line), or None if it can.
+
+    Missing, unreadable (truncated, not netCDF) and built from another configuration are
+    told apart; each message names the file and the command that fixes it. Only the
+    attributes are read, so this is cheap.
+    """
+    path = stage_path(data_dir, stage)
+    if not path.is_file():
+        return f"{path} is missing: run `g2tom {stage}` (or `make {stage}`) first"
+    found, problem = _header(path, stage)
+    if problem:
+        return problem
+    expected = scenario.config_hash(stage)
+    if found != expected:
+        return (f"{path} was built from a different configuration (config_hash {found}, "
+                f"scenario '{scenario.name}' needs {expected}): re-run `g2tom {stage}` (or `make {stage}`)")
+    return None
+
+
+def _header(path: Path, stage: str) -> tuple[str | None, str | None]:
+    """A stage file's ``config_hash`` attribute, or why the file cannot be opened."""
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            return ds.attrs.get("config_hash"), None
+    except (OSError, ValueError, RuntimeError) as exc:
+        return None, f"{path} is unreadable ({_reason(exc)}): {_fix(stage)}"
+
+
+def unreadable(path: str | Path, stage: str) -> str | None:
+    """Why an existing stage file cannot be opened (naming the fixing command), or None."""
+    return _header(Path(path), stage)[1]
+
+
+def _reason(exc: BaseException) -> str:
+    """The first line of an exception's message, without the file name netCDF4 appends."""
+    text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    return text.split(": '/")[0].split(": b'")[0]
+
+
+def read_stage(data_dir: str | Path, stage: str, scenario: Scenario, *,
+               allow_unconverged: bool = False) -> xr.Dataset:
     """Load a stage's output into memory, checking it matches ``scenario``.
+
+    A contact file whose solver did not converge at some approach is refused unless
+    ``allow_unconverged`` (later stages must not build on an unconverged contact).
 
     Raises
     ------
     StaleInputError
-        If the file is missing or its ``config_hash`` differs from the scenario's.
+        If the file is missing, unreadable, its ``config_hash`` differs from the
+        scenario's, or it holds an unconverged contact; the message names the file and the
+        command that fixes it.
     """
+    problem = stage_problem(data_dir, stage, scenario)
+    if problem:
+        raise StaleInputError(problem)
     path = stage_path(data_dir, stage)
-    if not path.is_file():
-        raise StaleInputError(f"{path} is missing: run `g2tom {stage}` (or `make {stage}`) first")
-    with xr.open_dataset(path, engine="netcdf4") as ds:
-        found = ds.attrs.get("config_hash")
-        expected = scenario.config_hash(stage)
-        if found != expected:
-            raise StaleInputError(
-                f"{path} was built from a different configuration (config_hash {found}, "
-                f"scenario '{scenario.name}' needs {expected}): re-run `g2tom {stage}`"
-            )
-        return ds.load()
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            ds = ds.load()
+    except (OSError, ValueError, RuntimeError) as exc:  # damaged past its header
+        raise StaleInputError(f"{path} is unreadable ({_reason(exc)}): {_fix(stage)}") from None
+    if stage == "contact" and "converged" in ds and not allow_unconverged and not ds["converged"].values.all():
+        failed = ds["delta_sigma"].values[ds["converged"].values == 0] if "delta_sigma" in ds.coords else []
+        c = scenario.contact
+        raise StaleInputError(
+            f"{path}: the {c.solver} solver did not converge at delta/sigma = "
+            f"{', '.join(f'{v:.3g}' for v in failed)} (contact.max_iterations = {c.max_iterations}, "
+            f"worst residual {float(ds['residual'].max()):.3g}): raise contact.max_iterations or "
+            f"loosen the tolerance, then re-run `g2tom contact`")
+    return ds

@@ -28,3 +28,34 @@ def test_scheduler_address_runs_the_same_stage(tmp_path, small) -> None:
     with xr.open_dataset(tmp_path / "oxide.nc") as ds:
         np.testing.assert_array_equal(ds["psi"].values, expected["psi"].values)
         np.testing.assert_array_equal(ds["threshold"].values, expected["threshold"].values)
+
+
+def test_compute_pins_blas_to_one_thread_for_any_caller() -> None:
+    """A notebook calling a stage gets the CLI's one BLAS thread per dask thread."""
+    import dask
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from pipeline.compute import compute
+
+    def blas_threads() -> list[int]:
+        return [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+
+    with threadpool_limits(limits=2, user_api="blas"):  # as a notebook without the CLI's pins
+        if not blas_threads() or max(blas_threads()) < 2:
+            pytest.skip("this BLAS cannot run two threads")
+        (inside,) = compute(dask.delayed(blas_threads)(), options=ComputeOptions(progress=False))
+        assert inside and set(inside) == {1}
+        assert max(blas_threads()) == 2  # restored for the caller afterwards
+
+
+def test_progress_bar_stays_out_of_logs(monkeypatch, capfd) -> None:
+    """Not a terminal: no progress bar, so no carriage returns in a log."""
+    import dask
+    import time
+
+    from pipeline import compute as compute_module
+
+    monkeypatch.setattr(compute_module, "PROGRESS_AFTER", 0.0)
+    compute_module.compute(dask.delayed(time.sleep)(0.6), options=ComputeOptions(progress=True))
+    out, err = capfd.readouterr()
+    assert "\r" not in out + err and "[#" not in out + err

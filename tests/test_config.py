@@ -155,3 +155,31 @@ def test_eq25_scales_by_hand(paper) -> None:
     assert paper.resistance_scale == pytest.approx(2 * 7.2e-7 / math.sqrt(1e-2 * 20e-6), rel=1e-14)
     e_star = 2.1e11 / (2 * (1 - 0.3**2))
     assert paper.force_scale == pytest.approx(e_star * math.sqrt(1e-2 * (20e-6) ** 3) / 2, rel=1e-14)
+
+
+def test_integers_must_fit_the_64_bit_attributes_they_are_stored_in() -> None:
+    assert load_scenario("paper", {"oxide.seed": 2**63 - 1}).oxide.seed == 2**63 - 1
+    for value in (2**63, 1e30):
+        with pytest.raises(ConfigError, match=r"oxide.seed = \d+ is out of range: must be <= 2\*\*63 - 1"):
+            load_scenario("paper", {"oxide.seed": value})
+
+
+def test_list_split_at_spaces_by_make_is_glued_back(capsys) -> None:
+    from pipeline.cli import _rejoin, main
+
+    assert _rejoin(["oxide.xi=[0.3,", "0.5]", "cube.weights=area"]) == ["oxide.xi=[0.3, 0.5]", "cube.weights=area"]
+    assert _rejoin(["oxide.lambda=[1.0,", "5.0,", "13.0]"]) == ["oxide.lambda=[1.0, 5.0, 13.0]"]
+    assert _rejoin(["fits.reduction='median'"]) == ["fits.reduction='median'"]
+    assert main(["params", "--set", "oxide.xi=[0.3,", "--set", "0.5]", "--set", "cube.weights=area"]) == 0
+    out = capsys.readouterr().out
+    assert "oxide.xi" in out and "[0.3, 0.5]" in out and "area" in out
+
+
+def test_version_names_package_and_commit(capsys) -> None:
+    from pipeline import __version__
+    from pipeline.cli import main
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0
+    assert capsys.readouterr().out.startswith(f"g2tom {__version__}")

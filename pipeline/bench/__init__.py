@@ -2,12 +2,15 @@
 
 Each module ``pipeline.bench.<name>`` exposes ``run(scenario) -> dict`` returning JSON-ready
 figures (medians of repeated timings, errors, ratios to a reference run in the same process).
-:func:`run_benchmarks` prints them and saves ``<data_dir>/bench/<name>.json``.
+:func:`run_benchmarks` prints them and saves ``<data_dir>/bench/<name>.json``. Modules whose
+``run`` also takes ``data_dir`` save labelled data there too: ``frontier`` (the accuracy–time
+frontier, ``bench/frontier.nc`` and its figures) and ``stability`` (``bench/stability.nc``).
 """
 
 from __future__ import annotations
 
 import importlib
+import inspect
 import json
 import os
 import platform
@@ -20,7 +23,7 @@ from pipeline.store import atomic_path
 
 __all__ = ["BENCHMARKS", "run_benchmarks", "summary_lines"]
 
-BENCHMARKS: tuple[str, ...] = ("contact", "oxide", "cube", "predict")
+BENCHMARKS: tuple[str, ...] = ("contact", "oxide", "cube", "predict", "stability", "frontier")
 
 
 def _machine() -> dict[str, Any]:
@@ -72,7 +75,8 @@ def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str]
     written: dict[str, Path] = {}
     for name in names:
         module = importlib.import_module(f"pipeline.bench.{name}")
-        result = {"benchmark": name, "scenario": scenario.name, "machine": _machine(), **module.run(scenario)}
+        extra = {"data_dir": data_dir} if "data_dir" in inspect.signature(module.run).parameters else {}
+        result = {"benchmark": name, "scenario": scenario.name, "machine": _machine(), **module.run(scenario, **extra)}
         text = json.dumps(result, indent=2, sort_keys=False, default=float)
         print(f"== bench {name} ==")
         for line in summary_lines(result):

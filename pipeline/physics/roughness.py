@@ -105,10 +105,15 @@ def roughness_parameters(heights: ArrayLike, pixel_size: float) -> RoughnessPara
     Raises
     ------
     ValueError
-        If the map is not 2-D, too small, not finite or flat (after detrending), or the
-        pixel size is not positive.
+        If the map is complex-valued, not numeric, not 2-D, too small, not finite or flat
+        (after detrending), or the pixel size is not positive.
     """
-    z = np.asarray(heights, dtype=float)
+    raw = np.asarray(heights)
+    if np.iscomplexobj(raw):
+        raise ValueError(f"height map is complex-valued ({raw.dtype}): heights must be real numbers (m)")
+    if raw.dtype.kind not in "biuf":
+        raise ValueError(f"height map holds {raw.dtype} values: heights must be real numbers (m)")
+    z = raw.astype(float)
     if z.ndim != 2:
         raise ValueError(f"height map has shape {z.shape}: must be a 2-D array")
     if min(z.shape) < 3:

@@ -1,0 +1,165 @@
+"""Checks run before the first stage starts, so bad input fails in a second, not after work.
+
+* the data directory exists (or can be made) and is writable;
+* a ``--scheduler`` address is well formed and something answers there quickly;
+* the cross-stage constraints that need physics (config.py is a leaf and checks only what
+  needs no computation): the fit's ``fits.min_force`` must be reached by at least two load
+  steps of the contact stage, and at the heaviest approach at least two cells must touch
+  (otherwise the Holm radius and every resistance are undefined). Both are judged on the
+  contact stage's own output when ``contact.nc`` is current, otherwise on a coarse solve of
+  the same scene (a few hundredths of a second).
+
+Every failure is a :class:`~pipeline.config.ConfigError` naming the parameter, its value and
+what is allowed; the CLI turns it into one line and exit status 2.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import errno
+import os
+import re
+import socket
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from pipeline.config import ConfigError, Scenario
+
+__all__ = ["check_data_dir", "check_scheduler", "check_scene", "scene_forces", "preflight"]
+
+#: Seconds a scheduler has to accept a TCP connection.
+CONNECT_TIMEOUT = 2.0
+#: Radial nodes of the coarse solve used when contact.nc is not current.
+COARSE_NODES = 96
+#: Relative slack on coarse forces before a min_force is refused (the fits stage checks exactly).
+FORCE_SLACK = 0.02
+_SCHEMES = ("tcp", "tls", "inproc", "ucx", "ws", "wss")
+_ADDRESS = re.compile(r"^(?:(?P<scheme>[a-z]+)://)?(?P<host>\[[0-9a-fA-F:]+\]|[A-Za-z0-9_.\-]+)?(?::(?P<port>[^:/]*))?/?$")
+
+
+def check_data_dir(data_dir: str | Path) -> None:
+    """Create ``data_dir`` if needed and prove it writable with a throw-away file.
+
+    Raises
+    ------
+    ConfigError
+        If the directory cannot be made or written, or is a file.
+    """
+    path = Path(data_dir)
+    if path.exists() and not path.is_dir():
+        raise ConfigError(f"--data-dir {str(path)!r} is not a directory")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path, prefix=".g2tom-write-check."):
+            pass
+    except OSError as exc:
+        reason = os.strerror(exc.errno) if exc.errno else str(exc)
+        raise ConfigError(f"--data-dir {str(path)!r} is not writable ({reason}): choose another "
+                          f"directory or fix its permissions") from None
+
+
+def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
+    """Refuse a malformed scheduler address, or one where nothing answers within ``timeout`` s.
+
+    Accepted: ``[scheme://]host:port`` with scheme one of tcp, tls, inproc, ucx, ws, wss and
+    port 1..65535. tcp, tls, ws and wss addresses are probed with a plain TCP connection.
+    """
+    form = "[tcp://]HOST:PORT, e.g. tcp://127.0.0.1:8786"
+    scheme = address.partition("://")[0] if "://" in address else "tcp"
+    if scheme not in _SCHEMES:
+        raise ConfigError(f"--scheduler {address!r}: scheme {scheme!r} is not one of {', '.join(_SCHEMES)}")
+    if scheme == "inproc":  # an in-process scheduler (a test or a notebook): nothing to probe
+        return
+    m = _ADDRESS.match(address.strip())
+    if not m or not m.group("host"):
+        raise ConfigError(f"--scheduler {address!r} is not an address: must be {form}")
+    port_text = m.group("port")
+    if port_text is None or not port_text.isdigit() or not 1 <= int(port_text) <= 65535:
+        raise ConfigError(f"--scheduler {address!r}: port {port_text!r} is out of range: must be an "
+                          f"integer 1..65535 ({form})")
+    if scheme == "ucx":
+        return
+    host = m.group("host").strip("[]")
+    try:
+        with socket.create_connection((host, int(port_text)), timeout=timeout):
+            pass
+    except OSError as exc:
+        if isinstance(exc, socket.timeout):
+            reason = f"no answer within {timeout:g} s"
+        else:
+            reason = os.strerror(exc.errno) if exc.errno and exc.errno in errno.errorcode else str(exc)
+        raise ConfigError(f"--scheduler {address!r}: no dask scheduler reachable at {host}:{port_text} "
+                          f"({reason}); start one with `dask scheduler` or drop --scheduler") from None
+
+
+def scene_forces(scenario: Scenario, data_dir: str | Path | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Force (N) of every approach and how many cells touch at each.
+
+    From the contact stage's output when it is current; otherwise from a coarse solve of
+    the same scene (``COARSE_NODES`` radial nodes, about 0.05 s), where a cell touches when
+    its centre lies inside the outermost node with a nonzero area fraction.
+    """
+    from pipeline.store import stage_path, stage_problem  # xarray only when needed
+
+    if data_dir is not None and stage_problem(data_dir, "contact", scenario) is None:
+        import xarray as xr
+
+        with xr.open_dataset(stage_path(data_dir, "contact"), engine="netcdf4") as ds:
+            force = ds["force"].values
+            touching = np.count_nonzero(ds["spot_radius"].values > 0, axis=(-2, -1))
+        return force, touching
+    from pipeline.physics.grid import cell_centres
+    from pipeline.physics.spots import cell_radii
+    from pipeline.stages import contact
+
+    coarse = dataclasses.replace(
+        scenario, contact=dataclasses.replace(
+            scenario.contact, n_radial=min(scenario.contact.n_radial, COARSE_NODES)))
+    r, sols = contact.solve_scenario(coarse)
+    f = contact.fields(coarse, r, sols)
+    x = cell_centres(scenario.n_cells, scenario.cell_size)
+    r_cells = np.sort(cell_radii(x, x).ravel())
+    edge = np.array([r[np.nonzero(a > 0)[0][-1]] if (a > 0).any() else -1.0 for a in f["area"]])
+    return f["force"], np.searchsorted(r_cells, edge, side="right")
+
+
+def check_scene(scenario: Scenario, data_dir: str | Path | None = None) -> None:
+    """The cross-stage constraints that need the contact solution (see the module docstring).
+
+    Raises
+    ------
+    ConfigError
+        Naming the parameter at fault, its value and the range the scene allows.
+    """
+    force, touching = scene_forces(scenario, data_dir)
+    heaviest = int(np.argmin(scenario.deltas))
+    rough, loading = scenario.roughness, scenario.loading
+    if not np.isfinite(force).all():
+        raise ConfigError(
+            f"roughness.sigma = {rough.sigma!r}, loading.delta_min = {loading.delta_min!r}: the contact "
+            f"solve gives non-finite forces; this scene is outside what the solver handles")
+    if touching[heaviest] < 2:
+        raise ConfigError(
+            f"roughness.sigma = {rough.sigma!r} is out of range for this scene: at the heaviest approach "
+            f"(loading.delta_min = {loading.delta_min!r} sigma) only {int(touching[heaviest])} cell(s) of "
+            f"pitch 1/sqrt(eta) = {scenario.cell_size:.3g} m touch, so the Holm radius and the resistance are "
+            f"undefined; increase roughness.sigma or lower loading.delta_min")
+    reached = int(np.sum(force * (1.0 + FORCE_SLACK) >= scenario.fits.min_force))
+    if reached < 2:
+        top = float(np.sort(force)[-2]) if force.size >= 2 else float(force.max())
+        raise ConfigError(
+            f"fits.min_force = {scenario.fits.min_force:g} is out of range: only {reached} load step(s) "
+            f"reach it (contact forces {force.min():.3g}..{force.max():.3g} N); a fit needs >= 2, so it "
+            f"must be <= {top:.3g} N for this scene")
+
+
+def preflight(scenario: Scenario, data_dir: str | Path, scheduler: str | None = None,
+              scene: bool = True) -> None:
+    """Everything a computing command checks before it starts: directory, scheduler, scene."""
+    check_data_dir(data_dir)
+    if scheduler:
+        check_scheduler(scheduler)
+    if scene:
+        check_scene(scenario, data_dir)
