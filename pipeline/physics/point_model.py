@@ -44,6 +44,7 @@ __all__ = [
     "system_matrix",
     "resistance_dense",
     "resistance",
+    "greenwood_resistance",
 ]
 
 #: Interaction operators ``K * f`` by ``cube.method``: the folded DFT-GEMM or the dense matrix.
@@ -313,7 +314,7 @@ def _solve_block(
         for name in _RECORDS:
             out[name][:, k] = getattr(step, name)
         out["bound"][:, k] = bound
-        previous = step.shielding
+        previous = step.shielding if settings["max_iterations"] else None
     return out
 
 
@@ -375,18 +376,78 @@ def resistance(
         raise ValueError(f"film_resistance = {film_resistance!r} must be >= 0 (ohm m^2) or inf")
     settings = {"rho": rho, "pitch": pitch, "method": method, "film_resistance": film_resistance,
                 "solver_tolerance": solver_tolerance, "max_iterations": max_iterations}
+    return _run(masks, radius, crops, tolerance, settings)
+
+
+def _run(masks: np.ndarray, radius: np.ndarray, crops: np.ndarray, tolerance: float, settings: dict) -> PointResult:
+    """:func:`resistance` after validation (``max_iterations = 0`` stops at Greenwood's start)."""
+    rho = settings["rho"]
     batch = masks.shape[0]
     parts = [_solve_block(block, radius, crops, tolerance, settings) for block in _blocks(masks)]
     out = {
         name: np.concatenate([p[name] for p in parts])[:batch] if parts else np.zeros((0, radius.shape[0]))
         for name in _RECORDS + ("bound", "uncropped")
     }
-    with np.errstate(divide="ignore"):
-        r = np.where(out["total"] > 0, rho / np.where(out["total"] > 0, out["total"], 1.0), np.inf)
-        r_self = np.where(out["t_total"] > 0, rho / np.where(out["t_total"] > 0, out["t_total"], 1.0), np.inf)
-        r_green = np.where(out["greenwood"] > 0, rho / np.where(out["greenwood"] > 0, out["greenwood"], 1.0), np.inf)
+
+    def inverse(conductance: np.ndarray) -> np.ndarray:
+        positive = conductance > 0
+        return np.where(positive, rho / np.where(positive, conductance, 1.0), np.inf)
+
+    r, r_self = inverse(out["total"]), inverse(out["t_total"])
     r_int = np.where(np.isfinite(r), r - r_self, np.inf)
     return PointResult(
         r, r_self, r_int, out["count"].astype(np.int32), out["bound"], int(out["uncropped"].sum()),
-        out["iterations"].astype(np.int32), out["residual"], r_green, int(out["breakdown"].sum()),
+        out["iterations"].astype(np.int32), out["residual"], inverse(out["greenwood"]),
+        int(out["breakdown"].sum()),
     )
+
+
+def greenwood_resistance(
+    masks: np.ndarray,
+    radius: np.ndarray,
+    weights: np.ndarray,
+    pitch: float,
+    rho: float,
+    crops: np.ndarray,
+    tolerance: float,
+    method: str = "auto",
+    *,
+    film_resistance: float = np.inf,
+) -> ChunkResult:
+    """Greenwood's closed form generalized to films: the Rayleigh quotient at ``t_i = 1 / M_ii``.
+
+    ``R = rho* / sum t + rho* sum_{i != j} t_i t_j / d_ij / (pi (sum t)^2)``: Greenwood's Eqs. 11-13
+    with every spot's own conductance ``t_i`` (``2 a_i`` when clean, ``a_i`` and film in series
+    when oxidized) as its weight; equal to :func:`pipeline.physics.constriction.resistance` with
+    radius weights for an insulating film. Evaluated on the whole window (``crops`` and
+    ``tolerance`` are accepted for the calling convention and must not crop).
+
+    Parameters
+    ----------
+    masks, radius, weights, pitch, rho, method, film_resistance
+        As for :func:`resistance`.
+    crops
+        Must be the whole window (``n`` for every load step).
+    tolerance
+        Unused by the whole-window evaluation; kept for the calling convention.
+
+    Returns
+    -------
+    ChunkResult
+        ``R``, ``R_self = rho* / sum t`` and ``R_int``, shape (batch, n_delta); no crop bound.
+    """
+    n = masks.shape[-1]
+    if method not in OPERATORS:
+        raise ValueError(f"method = {method!r} is not allowed: must be one of {', '.join(OPERATORS)}")
+    if not np.all(np.asarray(crops) == n):
+        raise ValueError("greenwood_resistance evaluates the whole window: crops must all be n")
+    if weights is not radius and not np.array_equal(weights, radius):
+        raise ValueError("Greenwood's form with films takes the spot radii as weights")
+    if not film_resistance >= 0:
+        raise ValueError(f"film_resistance = {film_resistance!r} must be >= 0 (ohm m^2) or inf")
+    settings = {"rho": rho, "pitch": pitch, "method": method, "film_resistance": film_resistance,
+                "solver_tolerance": 1.0, "max_iterations": 0}
+    res = _run(masks, radius, crops, tolerance, settings)
+    r_self = res.resistance_self
+    r_int = np.where(np.isfinite(res.resistance_greenwood), res.resistance_greenwood - r_self, np.inf)
+    return ChunkResult(res.resistance_greenwood, r_self, r_int, res.n_conducting, res.crop_bound, 0)
