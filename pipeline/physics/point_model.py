@@ -394,7 +394,7 @@ def _run(masks: np.ndarray, radius: np.ndarray, crops: np.ndarray, tolerance: fl
         return np.where(positive, rho / np.where(positive, conductance, 1.0), np.inf)
 
     r, r_self = inverse(out["total"]), inverse(out["t_total"])
-    r_int = np.where(np.isfinite(r), r - r_self, np.inf)
+    r_int = np.subtract(r, r_self, out=np.full_like(r, np.inf), where=np.isfinite(r))
     return PointResult(
         r, r_self, r_int, out["count"].astype(np.int32), out["bound"], int(out["uncropped"].sum()),
         out["iterations"].astype(np.int32), out["residual"], inverse(out["greenwood"]),
@@ -449,5 +449,6 @@ def greenwood_resistance(
                 "solver_tolerance": 1.0, "max_iterations": 0}
     res = _run(masks, radius, crops, tolerance, settings)
     r_self = res.resistance_self
-    r_int = np.where(np.isfinite(res.resistance_greenwood), res.resistance_greenwood - r_self, np.inf)
+    r_int = np.subtract(res.resistance_greenwood, r_self, out=np.full_like(r_self, np.inf),
+                        where=np.isfinite(res.resistance_greenwood))
     return ChunkResult(res.resistance_greenwood, r_self, r_int, res.n_conducting, res.crop_bound, 0)
