@@ -47,7 +47,7 @@ cube: $(DATA)/cube.nc
 fits: $(DATA)/fits.nc
 surrogate: $(DATA)/surrogate.nc
 
-$(DATA)/figures/.written: $(DATA)/surrogate.nc $(ANALYSIS) $(SOURCES) | $(VENV)/.installed
+$(DATA)/figures/.written: $(DATA)/surrogate.nc $(ANALYSIS) $(SOURCES) $(wildcard $(DATA)/compare/*/fits.nc) | $(VENV)/.installed
 	$(G2TOM) figures $(ARGS)
 	touch $@
 $(DATA)/report.md: $(DATA)/figures/.written $(wildcard $(DATA)/bench/*.json) | $(VENV)/.installed

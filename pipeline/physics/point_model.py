@@ -244,15 +244,15 @@ def _solve_step(
         cp = np.divide(g11 * r2 - g12 * r1, det, out=np.zeros_like(st), where=ok)
         x = ct[:, None, None] * t + cp[:, None, None] * p0
         r = b - ct[:, None, None] * mt - cp[:, None, None] * mp0
-    weight = b / diag  # residuals weighted by each spot's own conductance t (the Jacobi norm)
-    norm_b = np.sqrt(_dot(b, weight))
-    safe_b = np.where(has, norm_b, 1.0)
+    # Residuals in the Jacobi norm ||r||_{D^-1} = sqrt(r . r / M_ii), i.e. weighted by each spot's own
+    # conductance t: ||r|| / ||1|| = sqrt(r . z / sum t), with z = D^-1 r the preconditioned residual.
+    safe_b = np.where(has, np.sqrt(st), 1.0)
     z = r / diag
     p = z.copy()
     rz = _dot(r, z)
     iterations = np.zeros(masks.shape[0], np.int32)
     breakdown = np.zeros(masks.shape[0], bool)
-    residual = np.sqrt(_dot(r, r * weight)) / safe_b
+    residual = np.sqrt(np.maximum(rz, 0.0)) / safe_b
     done = ~has | (residual <= settings["solver_tolerance"])
     for _ in range(settings["max_iterations"]):
         if done.all():
@@ -272,7 +272,7 @@ def _solve_step(
         p += z
         rz = np.where(done, rz, rz_new)
         iterations += ~done
-        residual = np.where(done, residual, np.sqrt(_dot(r, r * weight)) / safe_b)
+        residual = np.where(done, residual, np.sqrt(np.maximum(rz_new, 0.0)) / safe_b)
         done |= residual <= settings["solver_tolerance"]
     shielding = np.zeros(masks.shape)
     shielding[:, c, c] = x * diag * b
