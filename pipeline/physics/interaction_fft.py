@@ -43,7 +43,9 @@ __all__ = [
     "interaction_dft_gemm",
     "interaction_folded",
     "interaction_apply",
+    "interaction_apply_columns",
     "interaction_apply_dense",
+    "interaction_apply_dense_columns",
     "scratch",
 ]
 
@@ -381,13 +383,45 @@ def _coupled_apply(rows: np.ndarray, coupling: np.ndarray, halves: np.ndarray, s
     return out
 
 
-def interaction_apply(u: np.ndarray, pitch: float) -> np.ndarray:
+def interaction_apply_columns(columns: np.ndarray, pitch: float) -> np.ndarray:
     """The interaction operator applied, ``(K * u)_i = sum_{j != i} u_j / d_ij``, by the folded DFT-GEMM.
 
     The same operator whose quadratic form :func:`interaction_folded` contracts: each mirror-parity
     quarter of ``u`` is transformed along ``x``, coupled along ``y`` by the cached ``a_e``/``a_o``
     and transformed back by the transpose, then the quarters are unfolded. The work is about
-    1.5 times that of the contraction (one more GEMM of the size of the forward transform).
+    1.6 times that of the contraction (one more GEMM of the size of the forward transform).
+    Maps are laid out (x, y, map), the layout the GEMMs consume, so iterative solvers that keep
+    their vectors in it never transpose.
+
+    Parameters
+    ----------
+    columns
+        Weights, shape (n, n, batch) as (x, y, map).
+    pitch
+        Cell pitch ``h``, in m.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``K * u``, a new C-contiguous array of shape (n, n, batch) as (x, y, map), in units of ``u / m``.
+    """
+    if columns.ndim != 3 or columns.shape[0] != columns.shape[1]:
+        raise ValueError(f"weights must have shape (n, n, batch), got {columns.shape}")
+    cos_e, sin_o, a_e, a_o = _folded_operators(columns.shape[0])
+    x_even, x_odd = _fold(columns, axis=0, slot="x")
+    halves = []
+    for rows, x_half, part in ((cos_e, x_even, "e"), (sin_o, x_odd, "o")):
+        y_even, y_odd = _fold(x_half, axis=1, slot="y")
+        back_e = _coupled_apply(rows, a_e, y_even, "back_e")
+        back_o = _coupled_apply(rows, a_o, y_odd, "back_o")
+        halves.append(_unfold(back_e, back_o, axis=1, out=scratch(f"unfold_{part}", x_half.shape)))
+    out = _unfold(halves[0], halves[1], axis=0, out=np.empty(columns.shape))
+    out /= pitch
+    return out
+
+
+def interaction_apply(u: np.ndarray, pitch: float) -> np.ndarray:
+    """:func:`interaction_apply_columns` for maps laid out (map, y, x).
 
     Parameters
     ----------
@@ -401,24 +435,8 @@ def interaction_apply(u: np.ndarray, pitch: float) -> np.ndarray:
     numpy.ndarray
         ``K * u`` of shape (batch, n, n) (a new array), in units of ``u / m``.
     """
-    n = _check_blocks(u)
-    cos_e, sin_o, a_e, a_o = _folded_operators(n)
-    columns = np.ascontiguousarray(u.transpose(2, 1, 0))  # (x, y, batch)
-    x_even, x_odd = _fold(columns, axis=0, slot="x")
-    out = np.empty_like(columns)
-    for rows, x_half, part in ((cos_e, x_even, "e"), (sin_o, x_odd, "o")):
-        y_even, y_odd = _fold(x_half, axis=1, slot="y")
-        back_e = _coupled_apply(rows, a_e, y_even, "back_e")
-        back_o = _coupled_apply(rows, a_o, y_odd, "back_o")
-        half = scratch(f"unfold_{part}", x_half.shape)
-        _unfold(back_e, back_o, axis=1, out=half)
-        if part == "e":
-            x_back_e = np.copy(half)
-        else:
-            x_back_o = half
-    _unfold(x_back_e, x_back_o, axis=0, out=out)
-    out /= pitch
-    return out.transpose(2, 1, 0)
+    _check_blocks(u)
+    return interaction_apply_columns(np.ascontiguousarray(u.transpose(2, 1, 0)), pitch).transpose(2, 1, 0)
 
 
 def interaction_apply_dense(u: np.ndarray, pitch: float) -> np.ndarray:
@@ -439,3 +457,10 @@ def interaction_apply_dense(u: np.ndarray, pitch: float) -> np.ndarray:
     n = _check_blocks(u)
     flat = u.reshape(u.shape[0], n * n)
     return (flat @ _dense_kernel(n)).reshape(u.shape) / pitch
+
+
+def interaction_apply_dense_columns(columns: np.ndarray, pitch: float) -> np.ndarray:
+    """:func:`interaction_apply_dense` for maps laid out (x, y, map) (the ``1/d`` matrix is symmetric
+    under exchanging x and y, so the same matrix serves both layouts)."""
+    n = columns.shape[0]
+    return (_dense_kernel(n) @ columns.reshape(n * n, -1)).reshape(columns.shape) / pitch

@@ -35,7 +35,7 @@ from typing import Callable
 import numpy as np
 
 from pipeline.physics.constriction import BLOCK, ChunkResult, _blocks, crop_slice
-from pipeline.physics.interaction_fft import interaction_apply, interaction_apply_dense
+from pipeline.physics.interaction_fft import interaction_apply_columns, interaction_apply_dense_columns
 
 __all__ = [
     "OPERATORS",
@@ -49,10 +49,10 @@ __all__ = [
 
 #: Interaction operators ``K * f`` by ``cube.method``: the folded DFT-GEMM or the dense matrix.
 OPERATORS: dict[str, Callable[[np.ndarray, float], np.ndarray]] = {
-    "auto": interaction_apply,
-    "folded": interaction_apply,
-    "gemm": interaction_apply_dense,
-    "direct": interaction_apply_dense,
+    "auto": interaction_apply_columns,
+    "folded": interaction_apply_columns,
+    "gemm": interaction_apply_dense_columns,
+    "direct": interaction_apply_dense_columns,
 }
 
 
@@ -176,9 +176,9 @@ def resistance_dense(
 
 @dataclass
 class _Solve:
-    """One batched solve at one load step: full-window currents and per-map records."""
+    """One batched solve at one load step; maps on the last axis of the (x, y, map) layout."""
 
-    shielding: np.ndarray  # f / t on the whole window (batch, n, n), 0 where no current
+    shielding: np.ndarray  # f / t on the whole window (n, n, batch), 0 where no current
     total: np.ndarray  # sum f, m
     greenwood: np.ndarray  # Rayleigh quotient (sum t)^2 / t^T M t, m
     outside: np.ndarray  # sum of t over the spots outside the crop, m
@@ -190,11 +190,12 @@ class _Solve:
 
 
 def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return np.einsum("bij,bij->b", u, v)
+    """Per-map inner products of (x, y, map) arrays."""
+    return np.einsum("xyb,xyb->b", u, v)
 
 
 def _solve_step(
-    masks: np.ndarray,
+    columns: np.ndarray,
     radius: np.ndarray,
     size: int,
     previous: np.ndarray | None,
@@ -202,56 +203,60 @@ def _solve_step(
 ) -> _Solve:
     """Solve ``M f = 1`` for every mask at one load step on the centred ``size``-cell crop.
 
-    Greenwood's trial vector ``t`` and ``t * previous`` (``previous``: the shielding factors
-    ``f / t`` of the neighbouring load step on the whole window, or None) span the start: the Galerkin combination minimizing the energy norm of
-    the error over that span, then Jacobi-preconditioned CG until each map's relative residual
-    is below ``settings["solver_tolerance"]`` (maps that converge are frozen, so every map's
-    result is independent of its neighbours in the batch).
+    ``columns`` holds the oxide-free cells laid out (x, y, map), the layout the interaction
+    operator works in, so no vector of the iteration is ever transposed. Greenwood's trial
+    vector ``t`` and ``t * previous`` (``previous``: the shielding factors ``f / t`` of the
+    neighbouring load step on the whole window, same layout, or None) span the start: the
+    Galerkin combination minimizing the energy norm of the error over that span. Then
+    Jacobi-preconditioned CG runs until each map's relative residual is below
+    ``settings["solver_tolerance"]``; maps that converge are frozen, so every map's result is
+    independent of its neighbours in the batch.
     """
-    n = masks.shape[-1]
+    n = columns.shape[0]
     rho, film, pitch = settings["rho"], settings["film_resistance"], settings["pitch"]
     apply = OPERATORS[settings["method"]]
     c = crop_slice(n, size)
-    active_full, diag_full = _spot_states(masks, radius[None], rho, film)
+    active_full, diag_full = _spot_states(columns, radius.T[:, :, None], rho, film)
     t_full = np.where(active_full, 1.0 / diag_full, 0.0)
-    active, diag = active_full[:, c, c], diag_full[:, c, c]
+    active, diag = active_full[c, c], np.ascontiguousarray(diag_full[c, c])
     b = active.astype(np.float64)
 
     def operator(v: np.ndarray) -> np.ndarray:
         out = apply(v, pitch)
-        out /= np.pi
+        out *= 1.0 / np.pi
         out += diag * v
         out *= b
         return out
 
-    t = t_full[:, c, c]
+    t = np.ascontiguousarray(t_full[c, c])
     mt = operator(t)
-    tmt, st = _dot(t, mt), t.sum(axis=(1, 2))
+    tmt, st = _dot(t, mt), t.sum(axis=(0, 1))
     has = st > 0
     greenwood = np.divide(st**2, tmt, out=np.zeros_like(st), where=has)
-    # Galerkin start on span{t, previous}; falls back to span{t} where the 2x2 system is singular.
-    coef_t = np.divide(st, tmt, out=np.zeros_like(st), where=has)
-    x = coef_t[:, None, None] * t
-    r = b - coef_t[:, None, None] * mt
+    # Galerkin start on span{t, t * previous}; span{t} alone where the 2x2 system is singular.
+    coef = np.divide(st, tmt, out=np.zeros_like(st), where=has)
+    x = coef * t
+    r = b - coef * mt
     if previous is not None:
-        p0 = t * previous[:, c, c]
+        p0 = t * previous[c, c]
         mp0 = operator(p0)
         g11, g12, g22 = tmt, _dot(t, mp0), _dot(p0, mp0)
-        r1, r2 = st, p0.sum(axis=(1, 2))
+        r1, r2 = st, p0.sum(axis=(0, 1))
         det = g11 * g22 - g12**2
         ok = has & (det > 1e-12 * g11 * g22)
-        ct = np.divide(g22 * r1 - g12 * r2, det, out=coef_t.copy(), where=ok)
+        ct = np.divide(g22 * r1 - g12 * r2, det, out=coef.copy(), where=ok)
         cp = np.divide(g11 * r2 - g12 * r1, det, out=np.zeros_like(st), where=ok)
-        x = ct[:, None, None] * t + cp[:, None, None] * p0
-        r = b - ct[:, None, None] * mt - cp[:, None, None] * mp0
+        x = ct * t + cp * p0
+        r = b - ct * mt - cp * mp0
     # Residuals in the Jacobi norm ||r||_{D^-1} = sqrt(r . r / M_ii), i.e. weighted by each spot's own
     # conductance t: ||r|| / ||1|| = sqrt(r . z / sum t), with z = D^-1 r the preconditioned residual.
     safe_b = np.where(has, np.sqrt(st), 1.0)
     z = r / diag
     p = z.copy()
     rz = _dot(r, z)
-    iterations = np.zeros(masks.shape[0], np.int32)
-    breakdown = np.zeros(masks.shape[0], bool)
+    batch = columns.shape[-1]
+    iterations = np.zeros(batch, np.int32)
+    breakdown = np.zeros(batch, bool)
     residual = np.sqrt(np.maximum(rz, 0.0)) / safe_b
     done = ~has | (residual <= settings["solver_tolerance"])
     for _ in range(settings["max_iterations"]):
@@ -263,22 +268,23 @@ def _solve_step(
         breakdown |= broken
         done |= broken
         alpha = np.divide(rz, pq, out=np.zeros_like(rz), where=~done)
-        x += alpha[:, None, None] * p
-        r -= alpha[:, None, None] * q
-        z = np.divide(r, diag, out=z)
+        x += alpha * p
+        q *= alpha
+        r -= q
+        np.divide(r, diag, out=z)
         rz_new = _dot(r, z)
         beta = np.divide(rz_new, rz, out=np.zeros_like(rz), where=~done)
-        p *= beta[:, None, None]
+        p *= beta
         p += z
         rz = np.where(done, rz, rz_new)
         iterations += ~done
         residual = np.where(done, residual, np.sqrt(np.maximum(rz_new, 0.0)) / safe_b)
         done |= residual <= settings["solver_tolerance"]
-    shielding = np.zeros(masks.shape)
-    shielding[:, c, c] = x * diag * b
-    t_total = t_full.sum(axis=(1, 2))
-    count = active_full.sum(axis=(1, 2))
-    return _Solve(shielding, x.sum(axis=(1, 2)), greenwood, t_total - st, t_total, count,
+    shielding = np.zeros(columns.shape)
+    shielding[c, c] = x * diag * b
+    t_total = t_full.sum(axis=(0, 1))
+    count = active_full.sum(axis=(0, 1))
+    return _Solve(shielding, x.sum(axis=(0, 1)), greenwood, t_total - st, t_total, count,
                   iterations, residual, breakdown)
 
 
@@ -294,20 +300,22 @@ def _solve_block(
     gathered into one padded block of the same size (so results never depend on the batch).
     """
     n = block.shape[-1]
+    columns = np.ascontiguousarray(block.transpose(2, 1, 0))  # (x, y, map)
     out = {name: np.zeros((block.shape[0], radius.shape[0])) for name in _RECORDS + ("bound", "uncropped")}
     previous = None
     for k, a in enumerate(radius):
-        step = _solve_step(block, a, int(crops[k]), previous, settings)
+        step = _solve_step(columns, a, int(crops[k]), previous, settings)
         bound = np.divide(step.outside, step.total, out=np.zeros_like(step.total), where=step.total > 0)
         rows = np.flatnonzero(bound > tolerance)
         for start in range(0, rows.size, BLOCK):
             chosen = rows[start : start + BLOCK]
-            again = np.zeros_like(block)
-            again[: chosen.size] = block[chosen]
-            warm = np.zeros(block.shape)
-            warm[: chosen.size] = step.shielding[chosen]
+            again = np.zeros_like(columns)
+            again[..., : chosen.size] = columns[..., chosen]
+            warm = np.zeros(columns.shape)
+            warm[..., : chosen.size] = step.shielding[..., chosen]
             whole = _solve_step(again, a, n, warm, settings)
-            for name in ("shielding",) + _RECORDS:
+            step.shielding[..., chosen] = whole.shielding[..., : chosen.size]
+            for name in _RECORDS:
                 getattr(step, name)[chosen] = getattr(whole, name)[: chosen.size]
             bound[chosen] = 0.0
             out["uncropped"][chosen, k] = 1.0
