@@ -59,7 +59,7 @@ run: report
 
 # Greenwood's closed form against the exact point-interaction model on one modest ensemble
 # (both under $(DATA)/compare/<model>); `make report` includes the comparison when present.
-COMPARE_N ?= 50
+COMPARE_N ?= 30
 compare: | $(VENV)/.installed
 	for m in greenwood point; do for s in contact oxide cube fits surrogate; do \
 	  $(G2TOM) $$s --config $(SCENARIO) --data-dir $(DATA)/compare/$$m $(foreach s,$(SET),--set $(s)) \

@@ -56,6 +56,10 @@ OPERATORS: dict[str, Callable[[np.ndarray, float], np.ndarray]] = {
 }
 
 
+#: Maps per block of entries solved again on the whole window (see :func:`_solve_block`).
+REDO_BLOCK = 8
+
+
 @dataclass
 class PointResult(ChunkResult):
     """:class:`ChunkResult` of the point model plus the solver's record, shape (batch, n_delta).
@@ -297,7 +301,8 @@ def _solve_block(
     """Every load step of one block of :data:`BLOCK` masks, each warm-started from the previous one.
 
     Entries whose cropping bound exceeds ``tolerance`` are solved again on the whole window,
-    gathered into one padded block of the same size (so results never depend on the batch).
+    gathered into padded blocks of exactly :data:`REDO_BLOCK` maps (a fixed shape, so results
+    never depend on the batch; small, because such entries are rare and scattered).
     """
     n = block.shape[-1]
     columns = np.ascontiguousarray(block.transpose(2, 1, 0))  # (x, y, map)
@@ -307,11 +312,11 @@ def _solve_block(
         step = _solve_step(columns, a, int(crops[k]), previous, settings)
         bound = np.divide(step.outside, step.total, out=np.zeros_like(step.total), where=step.total > 0)
         rows = np.flatnonzero(bound > tolerance)
-        for start in range(0, rows.size, BLOCK):
-            chosen = rows[start : start + BLOCK]
-            again = np.zeros_like(columns)
+        for start in range(0, rows.size, REDO_BLOCK):
+            chosen = rows[start : start + REDO_BLOCK]
+            again = np.zeros(columns.shape[:2] + (REDO_BLOCK,), dtype=bool)
             again[..., : chosen.size] = columns[..., chosen]
-            warm = np.zeros(columns.shape)
+            warm = np.zeros(again.shape)
             warm[..., : chosen.size] = step.shielding[..., chosen]
             whole = _solve_step(again, a, n, warm, settings)
             step.shielding[..., chosen] = whole.shielding[..., : chosen.size]
