@@ -16,7 +16,7 @@ SOURCES  := $(shell find pipeline -name '*.py' -o -name '*.toml')
 ANALYSIS := $(shell find analysis -name '*.py')
 STAMPS   := $(DATA)/.stamps
 
-.PHONY: all run test stress bench figures report contact oxide cube fits surrogate params clean FORCE
+.PHONY: all run test stress bench compare figures report contact oxide cube fits surrogate params clean FORCE
 all: run
 
 $(VENV)/.installed: pyproject.toml
@@ -51,7 +51,7 @@ cube: $(DATA)/cube.nc
 fits: $(DATA)/fits.nc
 surrogate: $(DATA)/surrogate.nc
 
-$(DATA)/figures/.written: $(DATA)/surrogate.nc $(ANALYSIS) $(SOURCES) | $(VENV)/.installed
+$(DATA)/figures/.written: $(DATA)/surrogate.nc $(ANALYSIS) $(SOURCES) $(wildcard $(DATA)/compare/*/fits.nc) | $(VENV)/.installed
 	$(G2TOM) figures $(ARGS)
 	touch $@
 $(DATA)/report.md: $(DATA)/figures/.written $(wildcard $(DATA)/bench/*.json) | $(VENV)/.installed
@@ -60,6 +60,14 @@ $(DATA)/report.md: $(DATA)/figures/.written $(wildcard $(DATA)/bench/*.json) | $
 figures: $(DATA)/figures/.written
 report: $(DATA)/report.md
 run: report
+
+# Greenwood's closed form against the exact point-interaction model on one modest ensemble
+# (both under $(DATA)/compare/<model>); `make report` includes the comparison when present.
+COMPARE_N ?= 30
+compare: | $(VENV)/.installed
+	for m in greenwood point; do for s in contact oxide cube fits surrogate; do \
+	  $(G2TOM) $$s --config $(SCENARIO) --data-dir $(DATA)/compare/$$m $(foreach s,$(SET),--set $(s)) \
+	    --set oxide.n_realizations=$(COMPARE_N) --set cube.model=$$m || exit 1; done; done
 
 bench: | $(VENV)/.installed
 	$(G2TOM) bench $(ARGS)

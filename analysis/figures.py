@@ -22,6 +22,7 @@ FAMILIES: tuple[str, ...] = (
     "analysis.figures_contact",
     "analysis.figures_oxide",
     "analysis.figures_results",
+    "analysis.figures_point",
 )
 
 

@@ -52,6 +52,8 @@ CAPTIONS = {
     "fig9_conductance": "Fig. 9: normalized conductance kappa' = 1/R' against F'",
     "fig10_alpha_gamma": "Fig. 10: fitted alpha and gamma with their SVD surrogate (Eq. 26) and its relative error",
     "fig11_barber": "Fig. 11: G2TOM against the p-average of the oxide-extended Barber bounds (Eq. 10)",
+    "point_alpha_gamma": "Point-interaction model against Greenwood's closed form: alpha ratio and gamma shift",
+    "point_film": "Resistance against the oxide film's specific resistance r_f: clean to insulating",
 }
 
 
@@ -261,6 +263,37 @@ def _surrogate_blocks(sur: xr.Dataset) -> list[Block]:
     return blocks
 
 
+def _point_blocks(data_dir: Path) -> list[Block]:
+    """alpha and gamma of both models on ``make compare``'s shared ensemble, and their ratio."""
+    from analysis.figures_point import COMPARE, load_comparison
+
+    try:
+        fits = load_comparison(data_dir)
+    except ValueError as exc:
+        return [Block("h2", "Greenwood's closed form against the point-interaction model"), Block("p", f"Not available: {exc}")]
+    if fits is None:
+        return []
+    g, p = fits["greenwood"], fits["point"]
+    blocks = [
+        Block("h2", "Greenwood's closed form against the point-interaction model"),
+        Block("p", f"Both models on one ensemble of {g.attrs['oxide.n_realizations']} realizations "
+                   f"(`make compare`, data under {COMPARE}/greenwood and {COMPARE}/point). Greenwood's form is "
+                   "the Rayleigh quotient of the exact point-interaction system, so its resistance is an upper "
+                   "bound: alpha_point / alpha_greenwood < 1 where gamma is unchanged."),
+    ]
+    rows = [["clean", "", float(g["alpha_clean"]), float(p["alpha_clean"]),
+             float(p["alpha_clean"] / g["alpha_clean"]), float(g["gamma_clean"]), float(p["gamma_clean"]),
+             float(p["gamma_clean"] - g["gamma_clean"])]]
+    for xi in g["xi"].values:
+        for lam in g["lambda"].values:
+            a_g, a_p = float(g["alpha"].sel(xi=xi, **{"lambda": lam})), float(p["alpha"].sel(xi=xi, **{"lambda": lam}))
+            c_g, c_p = float(g["gamma"].sel(xi=xi, **{"lambda": lam})), float(p["gamma"].sel(xi=xi, **{"lambda": lam}))
+            rows.append([float(xi), float(lam), a_g, a_p, a_p / a_g, c_g, c_p, c_p - c_g])
+    blocks.append(_table(["xi", "lambda", "alpha G", "alpha point", "ratio", "gamma G", "gamma point",
+                          "gamma difference"], rows))
+    return blocks
+
+
 def _json_blocks(title: str, data: Any) -> list[Block]:
     if isinstance(data, dict) and all(not isinstance(v, (dict, list)) for v in data.values()):
         return [Block("p", title), _table(["key", "value"], [[k, v] for k, v in data.items()])]
@@ -329,6 +362,7 @@ def build_blocks(scenario: Scenario, data_dir: str | Path, started: float | None
     blocks += missing if fits is None else _fit_blocks(fits, scenario)
     sur, missing = _load(data_dir, "surrogate", scenario)
     blocks += missing if sur is None else _surrogate_blocks(sur)
+    blocks += _point_blocks(data_dir)
     blocks.append(Block("h2", "Figures"))
     figures = sorted((p for p in (data_dir / "figures").glob("*.png") if p.stem not in FRONTIER_FIGURES),
                      key=_figure_order)

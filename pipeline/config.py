@@ -177,6 +177,17 @@ class Oxide:
         choices=("theoretical", "empirical"),
     )
     chunk: int = _param(50, "1", "realizations per dask chunk", ge=1)
+    film: str = _param(
+        "insulating",
+        "1",
+        "oxide film on a spot: insulating (the spot carries no current) or resistive "
+        "(the film's specific resistance oxide.film_resistance in series with the spot)",
+        choices=("insulating", "resistive"),
+    )
+    film_resistance: float = _param(
+        1e-11, "ohm m2", "specific resistance r_f of a resistive oxide film (used when oxide.film = resistive)",
+        ge=0,
+    )
 
 
 @dataclass(frozen=True)
@@ -202,6 +213,17 @@ class Cube:
         choices=("auto", "folded", "dft_gemm", "fft", "gemm", "direct"),
     )
     chunk: int = _param(25, "1", "realizations per dask chunk", ge=1)
+    model: str = _param(
+        "greenwood",
+        "1",
+        "resistance model: greenwood (closed form, Eqs. 11-13) or point (the exact "
+        "point-interaction solve, by preconditioned conjugate gradients)",
+        choices=("greenwood", "point"),
+    )
+    solver_tolerance: float = _param(
+        1e-10, "1", "point model: relative residual (Jacobi norm) at which the solver stops", gt=0, lt=1
+    )
+    max_iterations: int = _param(100, "1", "point model: conjugate-gradient iterations per solve at most", ge=1)
 
 
 @dataclass(frozen=True)
@@ -279,7 +301,7 @@ SECTIONS: dict[str, type] = {
 STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "contact": ("material", "roughness", "indenter", "loading", "contact"),
     "oxide": ("roughness.eta", "indenter.radius", "contact.window", "oxide"),
-    "cube": ("material.rho", "cube"),
+    "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance"),
     "fits": ("fits",),
     "surrogate": (
         "surrogate.method",
@@ -296,6 +318,10 @@ STAGE_INPUTS: dict[str, tuple[str, ...]] = {
         "surrogate.weight_floor",
         "surrogate.cv_tolerance",
     ),
+}
+#: Parameters left out of a stage's inputs although STAGE_INPUTS names their section.
+STAGE_EXCLUDED: dict[str, tuple[str, ...]] = {
+    "oxide": ("oxide.film", "oxide.film_resistance"),
 }
 STAGE_UPSTREAM: dict[str, tuple[str, ...]] = {
     "contact": (),
@@ -376,10 +402,11 @@ class Scenario:
         """The parameters ``stage`` depends on directly, as ``{"section.key": value}``."""
         flat = self.flat()
         wanted = STAGE_INPUTS[stage]
+        excluded = STAGE_EXCLUDED.get(stage, ())
         return {
             k: v
             for k, v in flat.items()
-            if any(k == w or k.startswith(w + ".") for w in wanted)
+            if any(k == w or k.startswith(w + ".") for w in wanted) and k not in excluded
         }
 
     def config_hash(self, stage: str | None = None) -> str:
@@ -489,7 +516,24 @@ def _unknown(name: str) -> ConfigError:
 _INT_MAX = 2**63 - 1
 
 
+def _check_point_model(s: Scenario) -> None:
+    """The point model and resistive films need radius weights; the point model, an operator it can apply."""
+    if s.cube.model == "point" and s.cube.method not in ("auto", "folded", "gemm", "direct"):
+        raise ConfigError(
+            f"cube.method = {s.cube.method!r} is not allowed with cube.model = 'point': must be one of "
+            "'auto', 'folded', 'gemm', 'direct'"
+        )
+    needs_radius = "cube.model = 'point'" if s.cube.model == "point" else (
+        "oxide.film = 'resistive'" if s.oxide.film == "resistive" else None)
+    if needs_radius and s.cube.weights != "radius":
+        raise ConfigError(
+            f"cube.weights = {s.cube.weights!r} is not allowed with {needs_radius}: must be 'radius' "
+            "(only radius weights make Greenwood's form the Rayleigh quotient of the point model)"
+        )
+
+
 def _cross_checks(s: Scenario) -> None:
+    _check_point_model(s)
     for section in SECTIONS:
         obj = getattr(s, section)
         for f in dataclasses.fields(obj):

@@ -4,12 +4,15 @@ Reads the discrete spots of ``contact.nc`` and the oxide fields of ``oxide.nc``.
 conducts where its cell's ``psi < threshold`` (the stored float32 values); its resistance at
 every load step follows Greenwood's Eqs. 11-15 (:mod:`pipeline.physics.constriction`), with
 interaction weights ``cube.weights`` (spot radii, Eq. 13, or cell contact areas as in the
-published code). The work is split over realization chunks of ``cube.chunk`` fields, each a
+published code). With ``cube.model = "point"`` the exact point-interaction solve
+(:mod:`pipeline.physics.point_model`) replaces the closed form, and ``oxide.film = "resistive"``
+lets oxidized spots conduct through their film. The work is split over realization chunks of ``cube.chunk`` fields, each a
 dask task; every entry's result is bit-identical whatever the chunk size or scheduler.
 """
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 from typing import Any
 
@@ -20,11 +23,30 @@ import xarray as xr
 from pipeline import store
 from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
-from pipeline.physics import constriction
+from pipeline.physics import constriction, point_model
 
 __all__ = ["build", "run", "spot_maps"]
 
 _TERMS = ("resistance", "resistance_self", "resistance_interaction", "n_conducting", "crop_bound")
+_SOLVER_TERMS = ("iterations", "residual")
+_LONG_NAMES = {
+    "greenwood": "Greenwood constriction resistance R = R_self + R_int",
+    "point": "point-interaction constriction resistance R = rho* / sum f (exact solve of M f = 1)",
+}
+
+
+def _model(settings: dict[str, Any]) -> Any:
+    """The resistance function of ``settings["model"]`` with the calling convention of
+    :func:`constriction.resistance`: the point solve, Greenwood with films, or Greenwood."""
+    film = settings["film_resistance"]
+    if settings["model"] == "point":
+        return functools.partial(
+            point_model.resistance, film_resistance=film,
+            solver_tolerance=settings["solver_tolerance"], max_iterations=settings["max_iterations"],
+        )
+    if np.isfinite(film):
+        return functools.partial(point_model.greenwood_resistance, film_resistance=film)
+    return constriction.resistance
 
 
 def spot_maps(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, np.ndarray, float]:
@@ -95,13 +117,13 @@ def _chunk(
     n_xi, n_lam, n_real = threshold.shape
     n = psi.shape[-1]
     masks = psi[None] < threshold[..., None, None]
-    res = constriction.resistance(
+    res = _model(settings)(
         masks.reshape(-1, n, n), radius, weights, settings["pitch"], settings["rho"],
         settings["crops"], settings["tolerance"], settings["method"],
     )
     out: dict[str, Any] = {
         name: getattr(res, name).reshape(n_xi, n_lam, n_real, -1).transpose(0, 1, 3, 2)
-        for name in _TERMS
+        for name in _TERMS + _SOLVER_TERMS if hasattr(res, name)
     }
     out["n_uncropped"] = res.n_uncropped
     return out
@@ -123,7 +145,8 @@ def _compute(
     ]
     pieces = compute(*tasks, options=options)
     out: dict[str, Any] = {
-        name: np.concatenate([p[name] for p in pieces], axis=-1) for name in _TERMS
+        name: np.concatenate([p[name] for p in pieces], axis=-1)
+        for name in _TERMS + _SOLVER_TERMS if name in pieces[0]
     }
     out["n_uncropped"] = int(sum(p["n_uncropped"] for p in pieces))
     return out
@@ -132,7 +155,7 @@ def _compute(
 def _clean(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any]) -> constriction.ChunkResult:
     """Every spot conducting, on the whole window (exact)."""
     n = radius.shape[-1]
-    return constriction.resistance(
+    return _model(settings)(
         np.ones((1, n, n), dtype=bool), radius, weights, settings["pitch"], settings["rho"],
         np.full(radius.shape[0], n), 0.0, settings["method"],
     )
@@ -180,7 +203,7 @@ def _dataset(
     is_open = np.isinf(out["resistance"])
     data_vars = {
         "resistance": (dims, out["resistance"], _attrs(
-            "ohm", "Greenwood constriction resistance R = R_self + R_int",
+            "ohm", _LONG_NAMES[scenario.cube.model],
             comment="+inf: open circuit (no conducting spot)")),
         "resistance_self": (dims, out["resistance_self"],
                             _attrs("ohm", "self term rho* / (2 sum phi a)")),
@@ -199,6 +222,11 @@ def _dataset(
         "crop_cells": ("delta", np.asarray(settings["crops"], np.int32), _attrs(
             "1", "side of the centred square of cells kept at each approach")),
     }
+    if "iterations" in out:
+        data_vars["iterations"] = (dims, out["iterations"].astype(np.int32), _attrs(
+            "1", "conjugate-gradient iterations of the point-model solve"))
+        data_vars["residual"] = (dims, out["residual"], _attrs(
+            "1", "final relative residual of the point-model solve (Jacobi norm)"))
     attrs = {
         "interaction_weights": scenario.cube.weights,
         "method": settings["method_used"],
@@ -209,7 +237,15 @@ def _dataset(
         "n_uncropped": out["n_uncropped"],
         "n_open_total": int(is_open.sum()),
         "conducting_rule": "a spot conducts where spot_radius > 0 and psi < threshold (float32)",
+        "model": scenario.cube.model,
+        "film": scenario.oxide.film,
     }
+    if scenario.oxide.film == "resistive":
+        attrs["film_resistance"] = scenario.oxide.film_resistance
+        attrs["conducting_rule"] = "every spot conducts; where psi >= threshold through the film"
+    if "iterations" in out:
+        attrs["solver_tolerance"] = scenario.cube.solver_tolerance
+        attrs["n_not_converged"] = int((out["residual"] > scenario.cube.solver_tolerance).sum())
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 
@@ -241,10 +277,16 @@ def build(
     _check_grids(contact, oxide)
     radius, weights, pitch = spot_maps(scenario, contact)
     cube = scenario.cube
+    film = scenario.oxide.film_resistance if scenario.oxide.film == "resistive" else np.inf
+    whole_window = cube.model == "greenwood" and np.isfinite(film)
     settings = {
         "pitch": pitch,
         "rho": scenario.material.rho,
-        "crops": constriction.choose_crops(radius, weights, pitch, cube.crop_tolerance),
+        "model": cube.model,
+        "film_resistance": film,
+        "solver_tolerance": cube.solver_tolerance,
+        "max_iterations": cube.max_iterations,
+        "crops": constriction.choose_crops(radius, weights, pitch, 0.0 if whole_window else cube.crop_tolerance),
         "tolerance": cube.crop_tolerance,
         "method": cube.method,
         "method_used": constriction.AUTO_METHOD if cube.method == "auto" else cube.method,

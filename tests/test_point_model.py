@@ -1,0 +1,242 @@
+"""The point-interaction model: closed cases, the dense reference, the Rayleigh bound, films, the stage."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from pipeline import cli
+from pipeline.compute import ComputeOptions
+from pipeline.config import ConfigError, load_scenario
+from pipeline.physics import constriction, point_model
+from pipeline.physics.interaction_fft import interaction_apply, interaction_apply_dense, interaction_folded
+from pipeline.stages import cube
+from tests.test_cube_stage import N, N_REAL, _contact, _oxide
+
+RHO = 7.2e-7  # ohm m
+PITCH = 7.07e-5  # m
+OPTIONS = ComputeOptions(progress=False)
+
+
+def _whole(radius: np.ndarray) -> np.ndarray:
+    return np.full(radius.shape[0], radius.shape[-1])
+
+
+def _random_case(seed: int, n: int = 9, n_delta: int = 3, batch: int = 6):
+    rng = np.random.default_rng(seed)
+    radius = rng.uniform(0.0, 0.3 * PITCH, (n_delta, n, n)) * (rng.random((n_delta, n, n)) > 0.3)
+    masks = rng.random((batch, n, n)) > rng.uniform(0.1, 0.9)
+    return masks, radius
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 8, 13])
+def test_apply_matches_dense_matrix_and_contraction(n):
+    u = np.random.default_rng(n).random((4, n, n))
+    applied = interaction_apply(u, PITCH)
+    np.testing.assert_allclose(applied, interaction_apply_dense(u, PITCH), rtol=1e-13, atol=1e-13 * applied.max(initial=1))
+    q = np.einsum("bij,bij->b", u, applied)
+    np.testing.assert_allclose(q, interaction_folded(u, PITCH), rtol=1e-13, atol=1e-30)
+
+
+def test_one_spot_conducts_2a_over_rho():
+    radius = np.zeros((1, 5, 5))
+    radius[0, 1, 3] = 4e-6
+    res = point_model.resistance(np.ones((1, 5, 5), bool), radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    assert res.resistance[0, 0] == pytest.approx(RHO / (2 * 4e-6), rel=1e-14)
+    assert res.resistance_greenwood[0, 0] == pytest.approx(RHO / (2 * 4e-6), rel=1e-14)
+
+
+def test_two_spots_match_the_2x2_solve_by_hand():
+    a1, a2, d = 5e-6, 2e-6, np.hypot(2, 1) * PITCH
+    radius = np.zeros((1, 3, 3))
+    radius[0, 0, 0], radius[0, 1, 2] = a1, a2
+    m12 = 1.0 / (np.pi * d)
+    m11, m22 = 1.0 / (2 * a1), 1.0 / (2 * a2)
+    det = m11 * m22 - m12**2
+    total = (m22 - m12 + m11 - m12) / det  # sum of M^-1 [1, 1]
+    res = point_model.resistance(np.ones((1, 3, 3), bool), radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    assert res.resistance[0, 0] == pytest.approx(RHO / total, rel=1e-12)
+    greenwood = constriction.resistance(np.ones((1, 3, 3), bool), radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    assert greenwood.resistance[0, 0] > res.resistance[0, 0] * (1 + 1e-6)  # strictly above for two spots
+
+
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("film", [np.inf, 0.0, 3e-11])
+def test_matches_dense_cholesky_solve(seed, film):
+    masks, radius = _random_case(seed)
+    res = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, film_resistance=film)
+    dense, greenwood = point_model.resistance_dense(masks, radius, PITCH, RHO, film)
+    assert np.array_equal(np.isinf(res.resistance), np.isinf(dense))
+    finite = np.isfinite(dense)
+    assert np.max(np.abs(res.resistance[finite] / dense[finite] - 1), initial=0) <= 1e-9
+    np.testing.assert_allclose(res.resistance_greenwood[finite], greenwood[finite], rtol=1e-12)
+    assert np.all(res.residual <= 1e-10) and res.n_breakdown == 0
+
+
+def test_dense_operator_gives_the_same_solution():
+    masks, radius = _random_case(7)
+    fast = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    dense = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, "gemm")
+    np.testing.assert_allclose(fast.resistance, dense.resistance, rtol=1e-10)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 10), oxide=st.floats(0.0, 0.95))
+def test_greenwood_never_below_the_point_resistance(seed, n, oxide):
+    rng = np.random.default_rng(seed)
+    radius = rng.uniform(0.0, 0.45 * PITCH, (2, n, n)) * (rng.random((2, n, n)) > 0.2)
+    masks = rng.random((3, n, n)) >= oxide
+    whole = _whole(radius)
+    point = point_model.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0).resistance
+    greenwood = constriction.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0).resistance
+    assert np.array_equal(np.isinf(point), np.isinf(greenwood))
+    finite = np.isfinite(point)
+    assert np.all(greenwood[finite] >= point[finite] * (1 - 1e-12))
+
+
+def test_film_limits_clean_and_insulating():
+    masks, radius = _random_case(11)
+    whole = _whole(radius)
+
+    def r(mask, film):
+        return point_model.resistance(mask, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=film).resistance
+
+    clean = r(np.ones_like(masks), np.inf)
+    np.testing.assert_allclose(r(masks, 0.0), clean, rtol=1e-9)
+    insulating = r(masks, np.inf)
+    finite = np.isfinite(insulating)
+    films = [1e-12, 1e-10, 1e-8, 1e-4]
+    values = [r(masks, f) for f in films]
+    for low, high in zip(values, values[1:]):
+        assert np.all(high >= low * (1 - 1e-10))  # R grows with the film's resistance
+    assert np.all(values[0] >= clean * (1 - 1e-10)) and np.all(values[-1][finite] <= insulating[finite] * (1 + 1e-10))
+    assert np.max(np.abs(values[-1][finite] / insulating[finite] - 1)) <= 1e-5
+    assert np.all(values[-1][~finite] > 1e3 * clean[~finite])  # the open circuits become huge, finite
+
+
+def test_greenwood_with_films_is_the_rayleigh_quotient_and_reduces_to_eq13():
+    masks, radius = _random_case(5)
+    whole = _whole(radius)
+    plain = constriction.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0)
+    same = point_model.greenwood_resistance(masks, radius, radius, PITCH, RHO, whole, 0.0)
+    np.testing.assert_allclose(same.resistance, plain.resistance, rtol=1e-12)
+    np.testing.assert_allclose(same.resistance_self, plain.resistance_self, rtol=1e-12)
+    film = point_model.greenwood_resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=2e-11)
+    exact = point_model.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=2e-11)
+    _, dense_greenwood = point_model.resistance_dense(masks, radius, PITCH, RHO, 2e-11)
+    np.testing.assert_allclose(film.resistance, dense_greenwood, rtol=1e-12)
+    assert np.all(film.resistance >= exact.resistance * (1 - 1e-12))
+
+
+def test_cropping_bound_holds():
+    contact = _contact(n=15, n_delta=5)
+    radius = contact["spot_radius"].values
+    masks = np.random.default_rng(2).random((8, 15, 15)) > 0.4
+    crops = constriction.choose_crops(radius, radius, PITCH, 1e-3)
+    assert crops.min() < 15
+    cropped = point_model.resistance(masks, radius, radius, PITCH, RHO, crops, 1e-3)
+    whole = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    finite = np.isfinite(whole.resistance)
+    error = np.abs(cropped.resistance[finite] / whole.resistance[finite] - 1)
+    assert np.all(error <= cropped.crop_bound[finite] + 1e-9) and np.all(cropped.crop_bound <= 1e-3)
+    assert np.all(cropped.resistance[finite] >= whole.resistance[finite] * (1 - 1e-9))  # cropping lowers kappa
+
+
+def test_iteration_cap_is_recorded_not_hidden():
+    masks, radius = _random_case(3, n=11)
+    res = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, max_iterations=1)
+    assert np.all(res.iterations <= 1) and np.any(res.residual > 1e-10)
+
+
+@pytest.mark.parametrize("kwargs", [{"solver_tolerance": 0.0}, {"max_iterations": 0}, {"film_resistance": -1.0},
+                                    {"film_resistance": np.nan}])
+def test_physics_rejects_bad_settings(kwargs):
+    masks, radius = _random_case(0)
+    with pytest.raises(ValueError):
+        point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, **kwargs)
+
+
+@pytest.fixture(scope="module")
+def inputs():
+    return _contact(), _oxide()
+
+
+def _scenario(**overrides):
+    return load_scenario("paper", overrides)
+
+
+def test_stage_point_model_matches_dense_and_records_the_solver(inputs):
+    ds = cube.build(_scenario(**{"cube.model": "point", "cube.chunk": 3}), *inputs, OPTIONS)
+    assert ds.attrs["model"] == "point" and ds.attrs["n_not_converged"] == 0
+    for name in ("iterations", "residual"):
+        assert ds[name].dims == ("xi", "lambda", "delta", "realization") and "units" in ds[name].attrs
+    assert ds["iterations"].values.max() <= 30 and ds["residual"].values.max() <= 1e-10
+    contact, oxide = inputs
+    psi = oxide["psi"].transpose("lambda", "realization", "y", "x").values
+    thr = oxide["threshold"].transpose("xi", "lambda", "realization").values
+    masks = psi[None, :, :2] < thr[:, :, :2, None, None]
+    radius = contact["spot_radius"].values
+    dense, _ = point_model.resistance_dense(masks.reshape(-1, N, N), radius, PITCH, RHO)
+    got = ds["resistance"].values[:, :, :, :2].transpose(0, 1, 3, 2).reshape(dense.shape)
+    finite = np.isfinite(dense)
+    assert np.array_equal(finite, np.isfinite(got))
+    assert np.max(np.abs(got[finite] / dense[finite] - 1)) <= 1e-6  # the crop tolerance
+    greenwood = cube.build(_scenario(), *inputs, OPTIONS)["resistance"].values
+    assert np.all(greenwood[np.isfinite(greenwood)] >= ds["resistance"].values[np.isfinite(greenwood)] * (1 - 1e-6))
+
+
+def test_stage_point_model_invariant_under_chunking_and_scheduler(inputs):
+    base = cube.build(_scenario(**{"cube.model": "point", "cube.chunk": 3}), *inputs, OPTIONS)
+    for chunk, workers in ((1, 1), (N_REAL, None), (4, 2)):  # one thread, threads, local cluster
+        options = ComputeOptions(progress=False, workers=workers)
+        other = cube.build(_scenario(**{"cube.model": "point", "cube.chunk": chunk}), *inputs, options)
+        for name in ("resistance", "iterations", "residual", "n_conducting"):
+            np.testing.assert_array_equal(other[name].values, base[name].values)
+
+
+def test_stage_resistive_film_both_models(inputs):
+    film = {"oxide.film": "resistive", "oxide.film_resistance": 1e-11}
+    point = cube.build(_scenario(**film, **{"cube.model": "point"}), *inputs, OPTIONS)
+    greenwood = cube.build(_scenario(**film), *inputs, OPTIONS)
+    assert point.attrs["n_open_total"] == 0 and np.all(point["n_conducting"].values == N * N)
+    assert np.all(greenwood["resistance"].values >= point["resistance"].values * (1 - 1e-9))
+    insulating = cube.build(_scenario(**{"cube.model": "point"}), *inputs, OPTIONS)["resistance"].values
+    assert np.all(point["resistance"].values <= insulating * (1 + 1e-6))
+
+
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        ("cube.solver_tolerance=0", "cube.solver_tolerance = 0"),
+        ("cube.solver_tolerance=-1e-10", "cube.solver_tolerance"),
+        ("cube.max_iterations=0", "cube.max_iterations = 0"),
+        ("oxide.film_resistance=-1e-11", "oxide.film_resistance = -1e-11"),
+        ("oxide.film_resistance=inf", "oxide.film_resistance = inf"),
+        ("oxide.film_resistance=nan", "oxide.film_resistance = nan"),
+        ("oxide.film=leaky", "oxide.film = 'leaky'"),
+        ("cube.model=exact", "cube.model = 'exact'"),
+    ],
+)
+def test_bad_settings_are_config_errors(override, message):
+    with pytest.raises(ConfigError, match=message.replace(".", r"\.").replace("(", r"\(")):
+        load_scenario("paper", [override])
+
+
+def test_point_model_needs_radius_weights_and_an_applicable_operator():
+    with pytest.raises(ConfigError, match="cube.weights = 'area'"):
+        load_scenario("published", ["cube.model=point"])
+    with pytest.raises(ConfigError, match="cube.method = 'fft'"):
+        load_scenario("paper", ["cube.model=point", "cube.method=fft"])
+
+
+def test_cli_exits_2_on_bad_solver_settings(tmp_path, capsys):
+    assert cli.main(["cube", "--set", "cube.max_iterations=0", "--data-dir", str(tmp_path), "--no-progress"]) == 2
+    assert "cube.max_iterations = 0" in capsys.readouterr().err
+
+
+def test_film_does_not_touch_the_oxide_stage_hash(paper):
+    resistive = load_scenario("paper", {"oxide.film": "resistive"})
+    assert resistive.config_hash("oxide") == paper.config_hash("oxide")
+    assert resistive.config_hash("cube") != paper.config_hash("cube")
