@@ -182,10 +182,11 @@ def _culprit(scenario: Scenario, measure: Callable[[Scenario], float]) -> tuple[
 def _refuse(scenario: Scenario, what: str, needed: float, limit: float, unit: str,
             measure: Callable[[Scenario], float]) -> ConfigError:
     key, value, factor = _culprit(scenario, measure)
+    value = f"{value:g}" if isinstance(value, float) else repr(value)
     fmt = (lambda v: f"{v / 2**30:.3g} GiB") if unit == "bytes" else (lambda v: f"{v / 3600:.3g} h")
     if key:
         return ConfigError(
-            f"{key} = {value!r} is out of range for this machine: the {what} would need about "
+            f"{key} = {value} is out of range for this machine: the {what} would need about "
             f"{fmt(needed)}, more than the {fmt(limit)} available ({factor:.3g} x the paper's value "
             f"{load_scenario('paper').flat()[key]!r}); lower it (see `g2tom plan`)"
         )
