@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import sys
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -30,11 +31,13 @@ MAX_SECONDS = 7 * 24 * 3600.0
 _FOLDED_S = 2.5e-10   # per n^3 of one folded map
 _FFT_S = 1.6e-9       # per P^2 log2 P of one FFT map
 _MAP_S = 2.0e-9       # per cell of one map (masking, sums), any path
-_LU_S = 1.0e-9        # per n_radial^3 of one Newton factorization
+_LU_S = 5.0e-11       # per n_radial^3 and approach (Newton factorizations and solves)
 _MODE_S = 4.0e-8      # per mode and realization of the oxide coefficients
 _CELL_FFT_S = 5.0e-9  # per n^2 log2 n of one oxide field
 #: Commands that need no resolved domains nor resource checks.
 _NO_DOMAINS = ("params", "predict", "roughness")
+#: Stages whose estimate is printed when they are expected to take longer than this (s).
+ANNOUNCE_AFTER = 10.0
 
 
 @dataclass(frozen=True)
@@ -112,7 +115,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     n_delta, n_r = scenario.loading.n_delta, scenario.contact.n_radial
     # contact: influence matrix and its Newton copies; spot maps over delta; the resolve grid.
     contact_mem = 8.0 * (7 * n_r * n_r + 10 * n_delta * cells + 8 * 4 * cells)
-    contact_s = _LU_S * n_r**3 * (1 + n_delta) + 2e-7 * n_r * n_r * 8
+    contact_s = _LU_S * n_r**3 * (1 + n_delta) + 4e-7 * n_r * n_r + 1e-7 * n_delta * cells
     # oxide: psi (float32) held whole and copied once for the file; per task the complex
     # spectra of its fields; the band's lattice and coefficients.
     psi = 4.0 * n_lam * n_real * cells
@@ -250,7 +253,10 @@ def prepare(command: str, scenario: Scenario, workers: int | None = None) -> Sce
 
     check_resources(scenario, workers)
     resolved = resolve(scenario)
-    check_resources(resolved, workers)
+    for e in check_resources(resolved, workers):
+        if e.seconds > ANNOUNCE_AFTER and command in (e.stage, "run"):
+            print(f"plan: {e.stage} estimated at ~{e.seconds:.3g} s and ~{e.peak_bytes / 2**20:.0f} MiB peak "
+                  f"(`g2tom plan` for all stages)", file=sys.stderr)
     return resolved
 
 
