@@ -120,11 +120,12 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     # spectra of its fields; the band's lattice and coefficients.
     psi = 4.0 * n_lam * n_real * cells
     modes = _max_modes(scenario, n)
-    task_ox = n_lam * min(ox.chunk, n_real) * cells * (16 + 8 + 4) + 64.0 * modes
+    task_ox = min(ox.chunk, n_real) * cells * (4.0 * n_lam + 24.0) + 64.0 * modes
     oxide_mem = 2.0 * psi + t * task_ox + 48.0 * modes
     oxide_s = n_lam * n_real * (_MODE_S * modes + _CELL_FFT_S * cells * math.log2(max(n, 2))) / t
     # cube: psi read whole, per task the masks and one block of work, the cached operators,
-    # the results (five float64 terms, concatenated once).
+    # the results (five float64 terms, concatenated once). Measured on the 583^2 scene
+    # (2 xi x 2 lambda x 50): contact 767 MiB, oxide 953 MiB, cube 1215 MiB peak RSS.
     results = 8.0 * 5 * n_xi * n_lam * n_delta * n_real
     block = block_size(n)
     task_cube = n_xi * n_lam * min(scenario.cube.chunk, n_real) * cells * 1.0 + block * (
@@ -134,7 +135,9 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     else:
         p = padded_length(n)
         operators = n_delta * 4.0 * p * p
-    cube_mem = psi + t * task_cube + operators + 2.0 * results
+    # contact's spot maps: read (radius, area) and as float64 maps, and three per-task copies
+    spot_maps = 8.0 * n_delta * cells
+    cube_mem = psi + t * (task_cube + 3 * spot_maps) + 4 * spot_maps + operators + 2.0 * results
     cube_s = n_xi * n_lam * n_real * n_delta * _per_map_seconds(n) / t
     # fits: the cube's terms, the bootstrap's resample counts and means.
     boot = scenario.fits.n_bootstrap

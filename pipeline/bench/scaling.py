@@ -46,13 +46,10 @@ N_MASKS = 16
 RATIO_REALIZATIONS = 25
 
 
-def _median_time(func: Any, *args: Any) -> float:
-    times = []
-    for _ in range(REPEATS):
-        start = time.perf_counter()
-        func(*args)
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
+def _timed(func: Any, *args: Any) -> float:
+    start = time.perf_counter()
+    func(*args)
+    return time.perf_counter() - start
 
 
 def _scene(eta: float) -> Scenario:
@@ -60,83 +57,95 @@ def _scene(eta: float) -> Scenario:
                                            "oxide.n_realizations": N_MASKS // 2, "oxide.chunk": N_MASKS}))
 
 
-def _per_map(n: int) -> dict[str, float]:
-    """Seconds per map of each spectral path on an n-wide block (one block of maps)."""
-    rng = np.random.default_rng(n)
-    u = rng.random((constriction.block_size(n), n, n))
-    out = {}
-    for name in ("folded", "fft"):
-        constriction.interaction_sum(u[:1], 1.0, name)  # operators built outside the timing
-        out[name] = _median_time(constriction.interaction_sum, u, 1.0, name) / u.shape[0]
-    return out
-
-
-def _simulation(s: Scenario) -> dict[str, Any]:
-    """Time per simulation of the cube kernel on the scene's real masks and crops."""
+def _kernel_inputs(s: Scenario) -> tuple:
+    """The cube kernel's arguments on the scene's real masks (tiled to whole blocks) and crops."""
     quiet = ComputeOptions(progress=False)
     contact, oxide = contact_stage.build(s), oxide_stage.build(s, quiet)
     radius, weights, pitch = cube.spot_maps(s, contact)
     psi = oxide["psi"].transpose("lambda", "realization", "y", "x").values
     thr = oxide["threshold"].transpose("xi", "lambda", "realization").values
     masks = (psi[None] < thr[..., None, None]).reshape(-1, s.n_cells, s.n_cells)
+    block = constriction.block_size(s.n_cells)
+    count = block * math.ceil(masks.shape[0] / block)  # no padded (wasted) maps in the timing
+    masks = masks[np.arange(count) % masks.shape[0]]
     crops = constriction.choose_crops(radius, weights, pitch, s.cube.crop_tolerance)
-    args = (masks, radius, weights, pitch, s.material.rho, crops, s.cube.crop_tolerance)
-    constriction.resistance(*args)
-    seconds = _median_time(constriction.resistance, *args)
-    return {"seconds_per_simulation": seconds / (masks.shape[0] * radius.shape[0]),
-            "crop_cells_max": int(crops.max()), "crop_cells_min": int(crops.min())}
+    return masks, radius, weights, pitch, s.material.rho, crops, s.cube.crop_tolerance
+
+
+def _interleaved(jobs: dict[str, tuple]) -> dict[str, float]:
+    """Median wall time of each ``(func, *args)`` job, the jobs run in turn :data:`REPEATS` times
+    (so a change of the shared machine's load affects all of them alike)."""
+    for func, *args in jobs.values():
+        func(*args)  # warm-up: operators and scratch built outside the timing
+    times: dict[str, list[float]] = {name: [] for name in jobs}
+    for _ in range(REPEATS):
+        for name, (func, *args) in jobs.items():
+            times[name].append(_timed(func, *args))
+    return {name: statistics.median(t) for name, t in times.items()}
 
 
 def _default_ratio() -> dict[str, Any]:
-    """Cube time of the paper's scene (auto window) against today's 0.4 R* window, one run."""
+    """Cube time of the paper's scene (auto window) against today's 0.4 R* window, interleaved."""
     quiet = ComputeOptions(progress=False)
     sets = {"oxide.n_realizations": RATIO_REALIZATIONS}
     scenes = {"auto": resolve(load_scenario("paper", sets)),
               "window_0.4": resolve(load_scenario("paper", {**sets, "contact.window": 0.4, "contact.r_max": 0.3}))}
+    jobs = {name: (cube.build, s, contact_stage.build(s), oxide_stage.build(s, quiet), quiet)
+            for name, s in scenes.items()}
+    seconds = _interleaved(jobs)
     out: dict[str, Any] = {}
     for name, s in scenes.items():
-        contact, oxide = contact_stage.build(s), oxide_stage.build(s, quiet)
-        cube.build(s, contact, oxide, quiet)
-        out[f"cube_seconds_{name}"] = _median_time(cube.build, s, contact, oxide, quiet)
+        out[f"cube_seconds_{name}"] = seconds[name]
         out[f"n_cells_{name}"] = s.n_cells
-    out["ratio_auto_to_window_0.4"] = out["cube_seconds_auto"] / out["cube_seconds_window_0.4"]
+    out["ratio_auto_to_window_0.4"] = seconds["auto"] / seconds["window_0.4"]
     return out
 
 
 def run(scenario: Scenario) -> dict[str, Any]:
     """The scaling table (the scenario's own settings are not used: the table is fixed)."""
-    rows = []
-    for eta in ETAS:
-        s = _scene(eta)
+    scenes = [_scene(eta) for eta in ETAS]
+    rng = np.random.default_rng(0)
+    jobs: dict[str, tuple] = {}
+    inputs = {}
+    for s in scenes:
         n = s.n_cells
-        paper_study = resolve(load_scenario("paper", {"roughness.eta": eta}))
-        estimates = {e.stage: e for e in plan.estimate(paper_study)}
-        row = {
+        u = rng.random((constriction.block_size(n), n, n))
+        for name in ("folded", "fft"):
+            jobs[f"{n}_{name}"] = (constriction.interaction_sum, u, 1.0, name)
+        inputs[n] = _kernel_inputs(s)
+        jobs[f"{n}_simulation"] = (constriction.resistance, *inputs[n])
+    seconds = _interleaved(jobs)
+    rows = []
+    for s, eta in zip(scenes, ETAS):
+        n = s.n_cells
+        masks, radius, *_, crops, _tol = inputs[n]
+        block = constriction.block_size(n)
+        estimates = {e.stage: e for e in plan.estimate(resolve(load_scenario("paper", {"roughness.eta": eta})))}
+        rows.append({
             "eta": eta,
             "L": n,
             "auto_method": constriction.auto_method(n),
-            "block_size": constriction.block_size(n),
-            "per_map_seconds": _per_map(n),
-            **_simulation(s),
+            "block_size": block,
+            "per_map_seconds": {name: seconds[f"{n}_{name}"] / block for name in ("folded", "fft")},
+            "seconds_per_simulation": seconds[f"{n}_simulation"] / (masks.shape[0] * radius.shape[0]),
+            "crop_cells_max": int(crops.max()),
+            "crop_cells_min": int(crops.min()),
             "paper_study_estimate": {
                 "cube_seconds": estimates["cube"].seconds,
                 "cube_peak_mib": estimates["cube"].peak_bytes / 2**20,
                 "oxide_peak_mib": estimates["oxide"].peak_bytes / 2**20,
             },
-        }
-        rows.append(row)
+        })
     ref = next(r for r in rows if r["L"] >= 100)
     for r in rows:
-        model = (r["L"] ** 2 * math.log(r["L"])) / (ref["L"] ** 2 * math.log(ref["L"]))
         r["growth_vs_L113"] = r["seconds_per_simulation"] / ref["seconds_per_simulation"]
-        r["L2logL_growth_vs_L113"] = model
+        r["L2logL_growth_vs_L113"] = (r["L"] ** 2 * math.log(r["L"])) / (ref["L"] ** 2 * math.log(ref["L"]))
         r["L3_growth_vs_L113"] = (r["L"] / ref["L"]) ** 3
-    largest = rows[-1]
     return {
-        "machine_note": "2 shared cores; per-map and per-simulation times are one thread",
+        "machine_note": "2 shared cores; one thread; sizes and paths timed in turn, medians",
         "fft_from_cells": constriction.FFT_FROM,
         "work_bytes_per_thread": constriction.WORK_BYTES,
-        "padded_length_largest": fft.padded_length(largest["L"]),
+        "padded_length_largest": fft.padded_length(rows[-1]["L"]),
         "table": rows,
         "default_scene": _default_ratio(),
     }
