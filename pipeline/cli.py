@@ -207,7 +207,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         with warnings.catch_warnings():
             warnings.simplefilter("default")
             scenario = load_scenario(args.config, args.overrides)
-        scenario = prepare(args.command, scenario, getattr(args, "workers", None))
+            scenario = prepare(args.command, scenario, getattr(args, "workers", None))
         args.handler(args, scenario)
     except ConfigError as exc:
         print(f"g2tom: error: {exc}", file=sys.stderr)
