@@ -29,7 +29,7 @@ BASE_BYTES = 150 * 2**20
 MAX_SECONDS = 7 * 24 * 3600.0
 #: Seconds per flop-like unit of the models below (measured on the reference machine, one thread).
 _FOLDED_S = 2.5e-10   # per n^3 of one folded map
-_FFT_S = 1.6e-9       # per P^2 log2 P of one FFT map
+_FFT_S = 2.5e-9       # per P^2 log2 P of one FFT map
 _MAP_S = 2.0e-9       # per cell of one map (masking, sums), any path
 _LU_S = 5.0e-11       # per n_radial^3 and approach (Newton factorizations and solves)
 _MODE_S = 4.0e-8      # per mode and realization of the oxide coefficients

@@ -58,12 +58,15 @@ __all__ = [
 BLOCK = 128
 #: Work memory of one block of maps, per thread (bytes): bounds the peak whatever the size.
 WORK_BYTES = 128 * 2**20
-#: Cells per side from which ``auto`` takes the FFT path. Measured on this 2-core machine
-#: (``make bench``, ``scaling``, one thread, per map): folded / fft = 0.09 / 0.28 ms at 57,
-#: 0.48 / 0.53 ms at 113, 2.6 / 3.0 ms at 227, 8.0 / 6.7 ms at 321, 17.9 / 13.2 ms at 453:
-#: the time crossover is near 280 cells. The folded path also caches ~4 n^3 bytes of
-#: operators per crop size (20 load steps, 20 sizes), so it stops where that reaches 64 MiB.
-FFT_FROM = 257
+#: Cells per side from which ``auto`` takes the FFT path. Measured on this shared 2-core
+#: machine, one thread, per map (folded / fft): quiet, 0.09 / 0.28 ms at 57, 0.48 / 0.53 ms
+#: at 113, 0.74 / 1.20 ms at 161, 2.6 / 3.0 ms at 227, 8.0 / 6.7 ms at 321; under load (``make
+#: bench``, ``scaling``, paths timed in turn) 0.98 / 2.6 ms at 113 but 43 / 7.1 ms at 229:
+#: the folded path's operators (~4 n^3 bytes per crop size, one size per load step) stop
+#: fitting in cache and memory bandwidth. From 161 cells the FFT path is taken: at most
+#: 15 % slower on a quiet machine, far faster under load, and the cached operators stay
+#: below 16 MiB per size.
+FFT_FROM = 161
 
 
 def interaction_direct(u: np.ndarray, pitch: float) -> np.ndarray:

@@ -277,7 +277,7 @@ def _fold(c: np.ndarray, axis: int, slot: str) -> tuple[np.ndarray, np.ndarray]:
     return even, odd_half
 
 
-@lru_cache(maxsize=32)
+@lru_cache(maxsize=64)
 def _folded_operators(n_cells: int) -> tuple[np.ndarray, ...]:
     """DFT rows for the even/odd ``x`` halves and the ``y`` coupling of the even/odd ``y`` halves.
 
