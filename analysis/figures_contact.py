@@ -1,4 +1,9 @@
-"""Figures of stage 1: the Greenwood–Tripp solution (paper Fig. 4) and its spots (Fig. 5)."""
+"""Figures of stage 1: the Greenwood–Tripp solution (paper Fig. 4) and its spots (Fig. 5).
+
+The Hertz references exist for the sphere only: other indenters draw the Greenwood–Tripp
+curves alone and say so. The spot maps are rasters (one pixel per cell), so they cost the
+same for 57^2 or 10^6 cells.
+"""
 
 from __future__ import annotations
 
@@ -7,7 +12,6 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
-from matplotlib.collections import EllipseCollection
 
 from pipeline.config import Scenario
 from pipeline.physics.asperity import area_fraction
@@ -33,72 +37,88 @@ def _fig4(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
     sigma = rough.sigma
     rn = ds.r.values / np.sqrt(radius * sigma)
     p_bar = e_star * np.sqrt(sigma / radius)  # pressure scale E* sqrt(sigma/R*), Pa
-    keep = rn <= 3.5 * max(1.0, float(one.hertz_radius) / np.sqrt(radius * sigma))
+    sphere = scenario.indenter.shape == "sphere"
+    extent = float(one.hertz_radius) if sphere else _contact_radius(one)
+    keep = rn <= 3.5 * max(1.0, extent / np.sqrt(radius * sigma))
     fig, ax = plt.subplots(2, 3, figsize=(13, 7.5), constrained_layout=True)
     title = f"delta/sigma = {float(one.delta_sigma):.2f}, F = {float(one.force):.0f} N"
     a = ax[0, 0]
     a.plot(rn[keep], one.pressure[keep] / p_bar, label="Greenwood–Tripp")
-    a.plot(rn[keep], one.hertz_pressure[keep] / p_bar, "--", label="Hertz, same force")
+    if sphere:
+        a.plot(rn[keep], one.hertz_pressure[keep] / p_bar, "--", label="Hertz, same force")
     a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$p/(E^*\sqrt{\sigma/R^*})$", title="(a) pressure")
     a.legend()
     a = ax[0, 1]
     a.plot(rn[keep], (one.delta.values + one.profile[keep]) / sigma, "k--", label="initial (rigid)")
     a.plot(rn[keep], one.separation[keep] / sigma, label="Greenwood–Tripp")
-    a.plot(rn[keep], one.hertz_separation[keep] / sigma, ":", label="Hertz")
+    if sphere:
+        a.plot(rn[keep], one.hertz_separation[keep] / sigma, ":", label="Hertz")
     a.axhline(0, color="0.6", lw=0.8)
     a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"gap above mean plane / $\sigma$",
           title="(b) configuration")
     a.legend()
     a = ax[0, 2]
     a.plot(rn[keep], one.displacement[keep] / sigma, label="Greenwood–Tripp")
-    a.plot(rn[keep], one.hertz_displacement[keep] / sigma, "--", label="Hertz")
+    if sphere:
+        a.plot(rn[keep], one.hertz_displacement[keep] / sigma, "--", label="Hertz")
     a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$u/\sigma$", title="(c) displacement")
     a.legend()
     a = ax[1, 0]
     a.plot(rn[keep], one.area_fraction[keep], label=r"$A^*$")
-    a.axvline(float(one.hertz_radius) / np.sqrt(radius * sigma), color="C1", ls="--", label="Hertz radius")
+    if sphere:
+        a.axvline(float(one.hertz_radius) / np.sqrt(radius * sigma), color="C1", ls="--", label="Hertz radius")
     a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$A^*$", title="(d) area fraction")
     a.legend()
     a = ax[1, 1]
     rigid = area_fraction(one.delta.values + one.profile.values, sigma, rough.eta, rough.beta)
     a.semilogy(rn, one.area_fraction, label=r"$A^*$")
-    a.semilogy(rn, rigid, "--", label="Eq. 22 (rigid, with the 1/2)")
+    a.semilogy(rn, rigid, "--", label="Eq. 22 (rigid, with the 1/2)" if sphere else f"rigid {scenario.indenter.shape}")
     a.set_ylim(1e-30, 1.0)
     a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$A^*$", title="(e) area fraction, semi-log")
     a.legend()
     a = ax[1, 2]
     d = ds.delta_sigma.values
     a.semilogy(d, ds.force, "o-", label="Greenwood–Tripp")
-    hertz = hertz_force(-ds.delta.values, radius, e_star)
-    a.semilogy(d[hertz > 0], hertz[hertz > 0], "s--", label="Hertz, same interpenetration")
+    if sphere:
+        hertz = hertz_force(-ds.delta.values, radius, e_star)
+        a.semilogy(d[hertz > 0], hertz[hertz > 0], "s--", label="Hertz, same interpenetration")
     a.invert_xaxis()
     a.set(xlabel=r"$\delta/\sigma$", ylabel="force, N", title="(f) force")
     a.legend()
-    fig.suptitle(f"Greenwood–Tripp contact ({scenario.name}): {title}")
+    note = "" if sphere else f" — {scenario.indenter.shape}: Hertz and Eq. 22 apply to the sphere only, not drawn"
+    fig.suptitle(f"Greenwood–Tripp contact ({scenario.name}): {title}{note}")
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
 
 
+def _contact_radius(one: xr.Dataset) -> float:
+    """Radius (m) inside which the pressure exceeds 1 % of its peak (the contact's extent)."""
+    p = one.pressure.values
+    inside = np.flatnonzero(p >= 0.01 * p.max()) if p.max() > 0 else np.array([0])
+    return float(one.r.values[inside[-1]])
+
+
 def _fig5(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
     x_mm = ds.x.values * 1e3
-    xx, yy = np.meshgrid(x_mm, ds.y.values * 1e3)
-    offsets = np.column_stack([xx.ravel(), yy.ravel()])
+    half = 0.5 * (x_mm[1] - x_mm[0]) if x_mm.size > 1 else 0.5
+    extent = (x_mm[0] - half, x_mm[-1] + half, x_mm[0] - half, x_mm[-1] + half)
+    ratio_max = float(ds.spot_radius.max()) / scenario.cell_size
     fig, axes = plt.subplots(1, 4, figsize=(16, 4.4), constrained_layout=True)
     for ax, target in zip(axes, FIG5_DELTAS):
         one = ds.isel(delta=_nearest(ds, target))
-        diam = 2e3 * one.spot_radius.values.ravel()
-        ax.add_collection(EllipseCollection(diam, diam, np.zeros_like(diam), units="x",
-                                            offsets=offsets, offset_transform=ax.transData,
-                                            facecolors="k", edgecolors="none"))
+        image = ax.imshow(one.spot_radius.transpose("y", "x").values / scenario.cell_size, origin="lower",
+                          extent=extent, cmap="Greys", vmin=0.0, vmax=ratio_max, interpolation="nearest")
         for value, style, label in ((one.hertz_radius, "C0", "Hertz"), (one.holm_radius, "C3", "Holm–Greenwood")):
             if np.isfinite(value):
                 ax.add_patch(plt.Circle((0, 0), 1e3 * float(value), fill=False, color=style, lw=1.5, label=label))
-        ax.set(xlim=(x_mm[0], x_mm[-1]), ylim=(x_mm[0], x_mm[-1]), aspect="equal", xlabel="x, mm",
+        ax.set(xlim=extent[:2], ylim=extent[2:], aspect="equal", xlabel="x, mm",
                title=f"delta/sigma = {float(one.delta_sigma):.2f}, F = {float(one.force):.0f} N")
     axes[0].set_ylabel("y, mm")
     axes[0].legend(loc="upper right", fontsize=8)
-    fig.suptitle(f"Contact spots, one per cell of side 1/sqrt(eta) ({scenario.name})")
+    fig.colorbar(image, ax=axes, shrink=0.8, label=r"spot radius $a_i\,\sqrt{\eta}$")
+    hertz = "" if scenario.indenter.shape == "sphere" else " (Hertz: sphere only)"
+    fig.suptitle(f"Contact spots, one per cell of side 1/sqrt(eta), radius as grey level ({scenario.name}){hertz}")
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Callable, NoReturn, Sequence  # noqa: E402
 from pipeline import __version__  # noqa: E402
 from pipeline.config import STAGE_INPUTS, ConfigError, Scenario, load_scenario, parameter_table  # noqa: E402
 from pipeline.errors import StaleInputError  # noqa: E402
+from pipeline.plan import prepare  # noqa: E402
 
 if TYPE_CHECKING:
     from pipeline.compute import ComputeOptions
@@ -207,6 +208,12 @@ def _cmd_params(args: argparse.Namespace, scenario: Scenario) -> None:
         print(f"{key:32s} {flat[key]!s:>24}  [{unit}]  {allowed}: {doc}")
 
 
+def _cmd_plan(args: argparse.Namespace, scenario: Scenario) -> None:
+    from pipeline.plan import format_plan
+
+    print("\n".join(format_plan(scenario, getattr(args, "workers", None))))
+
+
 def _cmd_predict(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.predict import predict_cli
     from pipeline.store import stage_path, unreadable
@@ -313,6 +320,8 @@ def _parser() -> argparse.ArgumentParser:
     bench = add("bench", _cmd_bench, "benchmarks: run time against error, printed and saved")
     bench.add_argument("--only", action="append", default=None, help="run only this benchmark")
     add("stamp", _cmd_stamp, "update per-stage configuration stamps (used by make)")
+    add("plan", _cmd_plan, "estimate each stage's peak memory and run time; refuse what cannot fit",
+        compute=True)
     add("params", _cmd_params, "list every parameter with its value, unit and range")
     predict = add("predict", _cmd_predict, "predict R_el with the surrogate (Eq. 27)")
     predict.add_argument("--force", default=None, help="normal force F, N: a number or a comma-separated list")
@@ -342,6 +351,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning
     try:
         scenario = _load(args)
+        if getattr(args, "workers", None) is not None:
+            _options(args)  # --workers is checked before the plan is announced
+        with warnings.catch_warnings():
+            warnings.simplefilter("default")
+            scenario = prepare(args.command, scenario, getattr(args, "workers", None))
         args.handler(args, scenario)
     except ConfigError as exc:
         print(f"g2tom: error: {exc}", file=sys.stderr)

@@ -24,13 +24,20 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 __all__ = [
+    "AUTO",
     "ConfigError",
+    "check_domains",
     "Scenario",
     "load_scenario",
     "bundled_scenarios",
     "parameter_table",
     "STAGE_INPUTS",
 ]
+
+
+#: The value of ``contact.r_max`` and ``contact.window`` resolved from the solution
+#: (:func:`pipeline.domains.resolve`) before any stage runs.
+AUTO = "auto"
 
 
 class ConfigError(ValueError):
@@ -48,9 +55,12 @@ def _spec(
     choices: tuple[str, ...] | None = None,
     key: str | None = None,
     each: bool = False,
+    auto: bool = False,
 ) -> dict[str, Any]:
-    """Field metadata: unit, description and allowed range (``each`` applies it per element)."""
+    """Field metadata: unit, description and allowed range (``each`` applies it per element;
+    ``auto`` also accepts the word ``"auto"``, resolved from the solution before any stage runs)."""
     return {
+        "auto": auto,
         "unit": unit,
         "doc": doc,
         "gt": gt,
@@ -124,7 +134,10 @@ class Contact:
         "newton", "1", "Greenwood–Tripp solver", choices=("newton", "fixed_point")
     )
     n_radial: int = _param(720, "1", "number of radial nodes", ge=8)
-    r_max: float = _param(0.3, "R*", "outer radius of the radial domain, in units of R*", gt=0)
+    r_max: float | str = _param(
+        "auto", "R*", "outer radius of the radial domain, in units of R*, or auto: until the "
+        "pressure is negligible and beyond the spot window's corners", gt=0, auto=True,
+    )
     radial_grid: str = _param(
         "graded",
         "1",
@@ -145,7 +158,10 @@ class Contact:
         "or interpolate A* linearly (the published study)",
         choices=("separation", "area_fraction"),
     )
-    window: float = _param(0.4, "R*", "side of the square spot window, in units of R*", gt=0)
+    window: float | str = _param(
+        "auto", "R*", "side of the square spot window, in units of R*, or auto: every cell whose "
+        "spot can change R by more than cube.crop_tolerance at the heaviest load", gt=0, auto=True,
+    )
 
 
 @dataclass(frozen=True)
@@ -380,6 +396,10 @@ class Scenario:
     @property
     def n_cells(self) -> int:
         """Cells along one side of the window: the odd number closest to window/cell size."""
+        if self.contact.window == AUTO:
+            raise ConfigError(
+                "contact.window = 'auto' is not resolved yet: call pipeline.domains.resolve(scenario)"
+            )
         n = self.contact.window * self.indenter.radius / self.cell_size
         k = int(round((n - 1.0) / 2.0))
         return 2 * max(k, 0) + 1
@@ -439,7 +459,8 @@ def _fmt_range(meta: Mapping[str, Any]) -> str:
         parts.append(f"< {meta['lt']:g}")
     if meta["le"] is not None:
         parts.append(f"<= {meta['le']:g}")
-    return " and ".join(parts) if parts else "any finite value"
+    text = " and ".join(parts) if parts else "any finite value"
+    return f"{text}, or 'auto'" if meta.get("auto") else text
 
 
 def _check_scalar(name: str, value: Any, kind: type, meta: Mapping[str, Any]) -> Any:
@@ -473,6 +494,8 @@ def _check_scalar(name: str, value: Any, kind: type, meta: Mapping[str, Any]) ->
 
 def _element_kind(f: dataclasses.Field) -> tuple[type, bool]:
     ann = str(f.type)
+    if f.metadata.get("auto"):
+        ann = ann.split("|")[0].strip()  # "float | str": a number, or the word "auto"
     if ann.startswith("list"):
         return (float if "float" in ann else int if "int" in ann else str), True
     return {"float": float, "int": int, "str": str}[ann], False
@@ -480,6 +503,8 @@ def _element_kind(f: dataclasses.Field) -> tuple[type, bool]:
 
 def _check_field(section: str, f: dataclasses.Field, value: Any) -> Any:
     name = f"{section}.{_key(f)}"
+    if f.metadata.get("auto") and value == AUTO:
+        return AUTO
     kind, is_list = _element_kind(f)
     if not is_list:
         return _check_scalar(name, value, kind, f.metadata)
@@ -552,6 +577,19 @@ def _cross_checks(s: Scenario) -> None:
             f"loading.delta_min = {s.loading.delta_min!r} must differ from loading.delta_max = "
             f"{s.loading.delta_max!r} when loading.n_delta = {s.loading.n_delta} > 1 (sigma)"
         )
+    if AUTO not in (s.contact.window, s.contact.r_max):
+        check_domains(s)
+
+
+def check_domains(s: Scenario) -> None:
+    """Cross-checks of the spot window, the radial domain and the oxide band once both are numbers.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``contact.window`` (or ``oxide.lambda``) when the window's corners leave the
+        radial domain, the window holds fewer than 3 cells, or the band holds no mode.
+    """
     window = s.contact.window * s.indenter.radius
     r_max = s.contact.r_max * s.indenter.radius
     corner = math.sqrt(2.0) * (s.n_cells - 1) / 2.0 * s.cell_size  # radius of the corner cell centres

@@ -12,6 +12,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import pytest  # noqa: E402
 
 from pipeline.config import Scenario, load_scenario  # noqa: E402
+from pipeline.domains import resolve  # noqa: E402
 
 SMALL_OVERRIDES = {
     "loading.n_delta": 6,
@@ -28,10 +29,10 @@ SMALL_OVERRIDES = {
 @pytest.fixture(scope="session")
 def paper() -> Scenario:
     """The default scenario, unchanged."""
-    return load_scenario("paper")
+    return resolve(load_scenario("paper"))
 
 
 @pytest.fixture(scope="session")
 def small() -> Scenario:
     """The paper scenario shrunk to a few approaches, fractions, lengths and realizations."""
-    return load_scenario("paper", SMALL_OVERRIDES)
+    return resolve(load_scenario("paper", SMALL_OVERRIDES))

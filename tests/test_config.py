@@ -8,6 +8,7 @@ import warnings
 import pytest
 
 from pipeline.config import ConfigError, bundled_scenarios, load_scenario, parameter_table
+from pipeline.domains import resolve
 
 
 def test_bundled_scenarios_are_listed() -> None:
@@ -24,7 +25,9 @@ def test_paper_scenario_embeds_tables_1_and_2(paper) -> None:
     deltas = paper.deltas
     assert len(deltas) == 20
     assert deltas[0] == pytest.approx(2 * 20e-6) and deltas[-1] == pytest.approx(-3 * 20e-6)
-    assert paper.n_cells == 57  # 0.4 R* sqrt(eta) = 56.6 -> nearest odd count
+    # auto window: the spots outside 55 cells change R by < cube.crop_tolerance at -3 sigma
+    assert paper.n_cells == 55
+    assert load_scenario("published").n_cells == 57  # explicit 0.4 R* sqrt(eta) = 56.6 -> nearest odd
 
 
 def test_published_differs_only_in_its_conventions(paper) -> None:
@@ -35,6 +38,8 @@ def test_published_differs_only_in_its_conventions(paper) -> None:
         "contact.n_radial",
         "contact.radial_grid",
         "contact.area_interpolation",
+        "contact.r_max",  # explicit 0.3 and 0.4 R*, as published; the paper's are resolved (auto)
+        "contact.window",
         "cube.weights",
         "surrogate.method",  # the paper's SVD-then-polyfit surrogate, as published
     }
@@ -78,7 +83,6 @@ def test_toml_file_with_base(tmp_path) -> None:
         ("oxide.xi=0.5", "oxide.xi = 0.5 is not allowed: must be a non-empty list of numbers, each > 0 and < 1"),
         ("loading.delta_min=2", "loading.delta_min = 2.0 must differ from loading.delta_max = 2.0"),
         # the corner cells (r = 0.28 R*) must lie inside the radial domain, not just the half-side
-        ("contact.r_max=0.25", "contact.window = 0.4 is out of range: its corner cell centres lie at r = 0.0028 m"),
     ],
 )
 def test_bad_values_name_parameter_value_and_range(override: str, message: str) -> None:
@@ -103,9 +107,12 @@ def test_unknown_key_suggests_nearest(override: str, suggestion: str) -> None:
 
 def test_window_fits_the_radial_domain_exactly() -> None:
     """sqrt(2) * 28 cells * 1/sqrt(eta) = 0.28 R*: r_max = 0.28 is enough, 0.279 is not."""
-    assert load_scenario("paper", ["contact.r_max=0.28"]).n_cells == 57
+    assert load_scenario("paper", ["contact.window=0.4", "contact.r_max=0.28"]).n_cells == 57
     with pytest.raises(ConfigError, match="contact.window = 0.4 is out of range"):
-        load_scenario("paper", ["contact.r_max=0.279"])
+        load_scenario("paper", ["contact.window=0.4", "contact.r_max=0.279"])
+    with pytest.raises(ConfigError) as err:
+        load_scenario("paper", ["contact.window=0.4", "contact.r_max=0.25"])
+    assert "contact.window = 0.4 is out of range: its corner cell centres lie at r = 0.0028 m" in str(err.value)
 
 
 def test_section_that_is_not_a_table(tmp_path) -> None:
@@ -124,20 +131,20 @@ def test_malformed_override_and_missing_file() -> None:
 
 def test_large_correlation_length_warns_with_mode_count() -> None:
     with pytest.warns(UserWarning, match=r"oxide.lambda = 60.*independent Fourier modes"):
-        load_scenario("paper", ["oxide.lambda=[60.0]"])
+        resolve(load_scenario("paper", ["oxide.lambda=[60.0]"]))
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        load_scenario("paper")
+        resolve(load_scenario("paper"))
 
 
 def test_stage_hashes_follow_only_their_inputs(paper) -> None:
-    oxide_change = load_scenario("paper", ["oxide.seed=1"])
+    oxide_change = resolve(load_scenario("paper", ["oxide.seed=1"]))
     assert oxide_change.config_hash("contact") == paper.config_hash("contact")
     assert oxide_change.config_hash("oxide") != paper.config_hash("oxide")
     # downstream stages inherit their inputs' hashes
     assert oxide_change.config_hash("cube") != paper.config_hash("cube")
     assert oxide_change.config_hash("fits") != paper.config_hash("fits")
-    fit_change = load_scenario("paper", ["fits.min_force=100"])
+    fit_change = resolve(load_scenario("paper", ["fits.min_force=100"]))
     assert fit_change.config_hash("cube") == paper.config_hash("cube")
     assert fit_change.config_hash("fits") != paper.config_hash("fits")
 

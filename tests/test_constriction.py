@@ -226,3 +226,46 @@ def test_padded_length_avoids_wrap():
 def test_unknown_method_is_rejected():
     with pytest.raises(ValueError, match="method"):
         cn.interaction_sum(np.zeros((1, 3, 3)), PITCH, "magic")
+
+
+def test_auto_method_follows_the_measured_crossover():
+    assert cn.auto_method(cn.FFT_FROM - 1) == "folded" and cn.auto_method(cn.FFT_FROM) == "fft"
+    # blocks stay within the work budget at every size and keep the paper's 128 on small windows
+    assert cn.block_size(57) == cn.BLOCK
+    for n in (57, 229, 583, 1201):
+        assert cn.block_size(n) * cn.work_bytes_per_map(n) <= max(cn.WORK_BYTES, cn.work_bytes_per_map(n))
+
+
+@pytest.mark.parametrize("n", [cn.FFT_FROM - 2, cn.FFT_FROM])
+def test_algorithm_choice_changes_nothing_beyond_1e_12(n):
+    """Either side of the crossover, auto, folded and fft agree to 1e-12 (relative) per map and in R."""
+    rng = np.random.default_rng(n)
+    x = (np.arange(n) - n // 2) / (n // 2)
+    radius = 1e-5 * np.exp(-4.0 * (x[None, :] ** 2 + x[:, None] ** 2))[None]
+    masks = rng.random((3, n, n)) < 0.6
+    u = masks * radius
+    sums = {m: cn.interaction_sum(u, 2e-5, m) for m in ("auto", "folded", "fft")}
+    for m in ("folded", "fft"):
+        np.testing.assert_allclose(sums[m], sums["auto"], rtol=1e-12, atol=0)
+    whole = np.full(1, n)
+    r = {m: cn.resistance(masks, radius, radius, 2e-5, 7.2e-7, whole, 0.0, m).resistance
+         for m in ("auto", "folded", "fft")}
+    for m in ("folded", "fft"):
+        np.testing.assert_allclose(r[m], r["auto"], rtol=1e-12, atol=0)
+
+
+def test_truncation_bounds_match_choose_crops():
+    rng = np.random.default_rng(3)
+    n = 21
+    x = np.arange(n) - n // 2
+    a = 1e-5 * np.exp(-0.05 * (x[None, :] ** 2 + x[:, None] ** 2)) * rng.random((n, n))
+    bounds = cn.truncation_bounds(a, a, 1e-4, 1.0)
+    for tol in (1e-1, 1e-3, 1e-6):
+        size = cn.choose_crops(a[None], a[None], 1e-4, tol)[0]
+        k = int(np.flatnonzero(bounds <= tol)[0])
+        assert size == 2 * k + 1
+    # by hand: the square of side 2k+1 drops the weight outside it
+    k = 4
+    inner = a[n // 2 - k : n // 2 + k + 1, n // 2 - k : n // 2 + k + 1].sum()
+    assert bounds[k] == pytest.approx(4.0 * (a.sum() - inner) / (np.pi * 1e-4), rel=1e-12)
+    assert bounds[-1] == 0.0

@@ -103,16 +103,17 @@ def test_window_corner_outside_radial_domain(tmp_path, capsys):
     target = tmp_path / "contact.nc"
     target.write_text("previous")
     code = main(["contact", "--set", "contact.r_max=0.25", "--set", "contact.n_radial=40",
-                 "--set", "loading.n_delta=1", "--data-dir", str(tmp_path), "--no-progress"])
+                 "--data-dir", str(tmp_path), "--no-progress"])
     assert code == 2
-    assert "contact.window = 0.4 is out of range: its corner cell centres" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "contact.r_max = 0.25 truncates the contact" in err and "need r_max >= 0.2842 (R*)" in err
     assert target.read_text() == "previous"
 
 
 def test_window_check_of_the_stage_itself(small):
-    """A scenario built around the validation still gets a ConfigError naming the window."""
+    """A scenario built around the validation still gets a ConfigError naming the radial domain."""
     sc = dataclasses.replace(small, contact=dataclasses.replace(small.contact, r_max=0.25))
-    with pytest.raises(ConfigError, match="contact.window = 0.4: cell radius .* is out of range"):
+    with pytest.raises(ConfigError, match="contact.r_max = 0.25 truncates the contact"):
         contact.build(sc)
 
 
@@ -128,7 +129,8 @@ def test_window_check_of_the_stage_itself(small):
         ("contact.solver=gauss", "contact.solver = 'gauss' is not allowed: must be one of 'newton', 'fixed_point'"),
         ("contact.radial_grid=log", "contact.radial_grid = 'log' is not allowed"),
         ("contact.relaxation=1.5", "contact.relaxation = 1.5 is out of range: must be > 0 and <= 1"),
-        ("contact.window=0.7", "contact.window = 0.7 is out of range"),
+        ("contact.window=0.1", "contact.window = 0.1 truncates the contact: the spots outside it can "
+         "change R by up to 99.2 > cube.crop_tolerance = 1e-06; it must be >= 0.389 (R*, 55 cells)"),
         ("indenter.shape=torus", "indenter.shape = 'torus' is not allowed"),
         ("contact.tolerance=nan", "contact.tolerance = nan is not finite"),
         ("contact.nradial=40", "unknown parameter 'contact.nradial'; did you mean 'contact.n_radial'?"),

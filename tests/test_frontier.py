@@ -7,6 +7,7 @@ import pytest
 import xarray as xr
 
 from pipeline.bench import frontier
+from pipeline.domains import resolve
 from pipeline.config import load_scenario
 
 
@@ -127,7 +128,7 @@ def test_cube_and_ensemble_sweeps_measure_real_errors(monkeypatch) -> None:
     monkeypatch.setattr(frontier, "REPEATS", 1)
     monkeypatch.setattr(frontier, "ENSEMBLE_REALIZATIONS", 24)
     monkeypatch.setattr(frontier, "ENSEMBLE_COUNTS", (6, 24, 400))
-    scenario = load_scenario("paper", {"contact.n_radial": 160, "loading.n_delta": 6})
+    scenario = resolve(load_scenario("paper", {"contact.n_radial": 160, "loading.n_delta": 6}))
     rows = {(r["crop_tolerance"], r["precision"]): r for r in frontier.cube_frontier(scenario)}
     assert rows[0.0, "float64"]["resistance_error"] < 1e-12  # exact algorithm against the dense sum
     assert 1e-8 < rows[1e-2, "float64"]["resistance_error"] <= 1e-2  # cropping error within its tolerance

@@ -15,6 +15,7 @@ from pipeline import cli, store
 from pipeline.bench import oxide as bench_oxide
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario, load_scenario
+from pipeline.domains import resolve
 from pipeline.physics import oxide_field
 from pipeline.physics.grid import cell_centres
 from pipeline.stages import oxide
@@ -153,14 +154,14 @@ def test_cli_rejects_bad_oxide_parameters(
 def test_window_smaller_than_correlation_length_warns_with_mode_count() -> None:
     lam = 60.0  # l_O = 60 cells > the 57-cell window
     with pytest.warns(UserWarning, match=r"oxide.lambda = 60.*only (\d+) independent Fourier modes") as record:
-        scenario = load_scenario("paper", {"oxide.lambda": [5.0, lam]})
+        scenario = resolve(load_scenario("paper", {"oxide.lambda": [5.0, lam]}))
     modes = oxide_field.band(scenario.n_cells, scenario.cell_size, lam, 3.0, 0.5)
     assert f"only {modes.size} independent" in str(record[0].message)
 
 
 def test_window_without_modes_is_an_error() -> None:
     with pytest.raises(ConfigError, match="oxide.lambda"):
-        load_scenario("paper", {"oxide.lambda": [500.0]})
+        resolve(load_scenario("paper", {"oxide.lambda": [500.0]}))
 
 
 def test_figure_is_written(small: Scenario, tmp_path: Path) -> None:

@@ -12,16 +12,17 @@ import pytest
 from pipeline.bench import stability
 from pipeline.compute import ComputeOptions
 from pipeline.config import load_scenario
+from pipeline.domains import resolve
 from pipeline.stages import contact, cube, fits, oxide
 
 FAST = {"contact.n_radial": 240, "loading.n_delta": 8}
 
 EXTREMES = {
-    "tiny roughness": {"roughness.sigma": 1e-7},
+    "tiny roughness": {"roughness.sigma": 1e-7, "oxide.lambda": [1.0]},  # a 3-cell window
     "deep and light loads": {"loading.delta_min": -12.0, "loading.delta_max": 6.0},
     "soft material": {"material.E": 1e8},
     "auxetic": {"material.nu": -0.9},
-    "dense stiff asperities": {"roughness.eta": 1e10, "roughness.beta": 1e-4, "contact.window": 0.1},
+    "dense stiff asperities": {"roughness.eta": 1e10, "roughness.beta": 1e-4},
     "blunt cone": {"indenter.shape": "cone", "indenter.cone_angle": 0.02},
     "flat punch": {"indenter.shape": "flat_punch", "indenter.punch_radius": 5e-4, "indenter.edge_radius": 5e-3},
 }
@@ -46,10 +47,10 @@ def test_contact_converges_and_stays_physical(overrides) -> None:
 
 
 def test_nearly_full_oxide_gives_counted_open_circuits_and_finite_fits() -> None:
-    scenario = load_scenario("paper", {
+    scenario = resolve(load_scenario("paper", {
         **FAST, "oxide.xi": [0.5, 0.99], "oxide.lambda": [23.0], "oxide.n_realizations": 40,
         "fits.n_bootstrap": 20,
-    })
+    }))
     quiet = ComputeOptions(progress=False)
     result = cube.build(scenario, contact.build(scenario), oxide.build(scenario, quiet), quiet)
     r = result["resistance"]

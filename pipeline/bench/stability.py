@@ -62,7 +62,7 @@ CASES: list[Case] = [
       for hi, lo in ((10.0, 0.0), (0.0, -10.0), (10.0, -10.0))],
     *_sweep("material.rho", [float(v) for v in np.logspace(-12, 0, 5)]),
     *_sweep("indenter.shape", ["sphere", "cone", "flat_punch"],
-            {"indenter.cone_angle": 0.02, "indenter.punch_radius": 5e-4, "indenter.edge_radius": 5e-3}),
+            {"indenter.cone_angle": 0.1, "indenter.punch_radius": 5e-4, "indenter.edge_radius": 5e-3}),
     *[Case("hertz_limit", f"delta/sigma={d:g}", {"roughness.sigma": 1e-6, "loading.delta_max": 0.0,
                                                  "loading.delta_min": d}) for d in (-30.0, -100.0, -300.0)],
     *_sweep("oxide.xi", [[1e-6, 0.5, 1 - 1e-6]]),
@@ -101,8 +101,10 @@ def evaluate(case: Case) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
                               "seconds": 0.0, "finite_nonnegative": False, "force_monotone": False,
                               "resistance_falls": False, "hertz_ratio": math.nan, "roughness_parameter": math.nan,
                               "open_circuits": 0}
+    from pipeline.domains import resolve
+
     try:
-        scenario = load_scenario("paper", {**FAST, **case.overrides})
+        scenario = resolve(load_scenario("paper", {**FAST, **case.overrides}))
     except ConfigError as exc:
         record["message"] = str(exc)
         return record, {}

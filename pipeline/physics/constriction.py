@@ -27,6 +27,7 @@ from typing import Callable, Iterator
 import numpy as np
 
 from pipeline.physics.interaction_fft import (
+    padded_length,
     interaction_dft_gemm,
     interaction_fft,
     interaction_folded,
@@ -43,13 +44,29 @@ __all__ = [
     "crop_slice",
     "choose_crops",
     "crop_error_bound",
+    "truncation_bounds",
     "ChunkResult",
     "resistance",
+    "auto_method",
+    "block_size",
+    "work_bytes_per_map",
 ]
 
-#: Maps per fixed-size block; every block has exactly this many columns (the last one is
-#: padded), so each map's result is bit-identical whatever the batch it arrives in.
+#: Most maps per block. A block's size depends only on the window side (:func:`block_size`)
+#: and every block has exactly that many columns (the last one is padded), so each map's
+#: result is bit-identical whatever the batch it arrives in.
 BLOCK = 128
+#: Work memory of one block of maps, per thread (bytes): bounds the peak whatever the size.
+WORK_BYTES = 128 * 2**20
+#: Cells per side from which ``auto`` takes the FFT path. Measured on this shared 2-core
+#: machine, one thread, per map (folded / fft): quiet, 0.09 / 0.28 ms at 57, 0.48 / 0.53 ms
+#: at 113, 0.74 / 1.20 ms at 161, 2.6 / 3.0 ms at 227, 8.0 / 6.7 ms at 321; under load (``make
+#: bench``, ``scaling``, paths timed in turn) 0.98 / 2.6 ms at 113 but 43 / 7.1 ms at 229:
+#: the folded path's operators (~4 n^3 bytes per crop size, one size per load step) stop
+#: fitting in cache and memory bandwidth. From 161 cells the FFT path is taken: at most
+#: 15 % slower on a quiet machine, far faster under load, and the cached operators stay
+#: below 16 MiB per size.
+FFT_FROM = 161
 
 
 def interaction_direct(u: np.ndarray, pitch: float) -> np.ndarray:
@@ -103,8 +120,31 @@ METHODS: dict[str, Callable[[np.ndarray, float], np.ndarray]] = {
 }
 #: Safety factor on the oxide-free ratio sum(a)/sum(w) when sizing crops for non-radius weights.
 CROP_MARGIN = 10.0
-#: What ``method = "auto"`` runs: the fastest exact algorithm measured by ``make bench``.
-AUTO_METHOD = "folded"
+#: What ``method = "auto"`` runs (see :func:`auto_method`).
+AUTO_METHOD = f"folded below {FFT_FROM} cells per side, fft from {FFT_FROM}"
+
+
+def auto_method(n_cells: int) -> str:
+    """The interaction algorithm ``auto`` runs on an ``n_cells``-wide block (:data:`FFT_FROM`)."""
+    return "folded" if n_cells < FFT_FROM else "fft"
+
+
+def work_bytes_per_map(n_cells: int) -> int:
+    """Estimated work memory (bytes) of one map of an ``n_cells``-wide window in a block.
+
+    The folded path holds about six float64 copies of the map (mask, weights, folded halves,
+    spectra, couplings); the FFT path a complex half spectrum and two real ones of the padded
+    ``P x P`` grid, ``P ~ 2 n``.
+    """
+    if auto_method(n_cells) == "folded":
+        return 48 * n_cells * n_cells
+    length = int(padded_length(n_cells))
+    return 32 * length * length + 32 * n_cells * n_cells
+
+
+def block_size(n_cells: int) -> int:
+    """Maps per block for an ``n_cells``-wide window: at most :data:`BLOCK`, within :data:`WORK_BYTES`."""
+    return int(min(BLOCK, max(1, WORK_BYTES // work_bytes_per_map(n_cells))))
 
 
 def interaction_sum(u: np.ndarray, pitch: float, method: str = "auto") -> np.ndarray:
@@ -124,7 +164,7 @@ def interaction_sum(u: np.ndarray, pitch: float, method: str = "auto") -> np.nda
     numpy.ndarray
         Shape (batch,), in units of ``u**2 / m``, never negative.
     """
-    name = AUTO_METHOD if method == "auto" else method
+    name = auto_method(u.shape[-1]) if method == "auto" else method
     if name not in METHODS:
         raise ValueError(f"method = {method!r} is not allowed: must be auto or one of {', '.join(METHODS)}")
     return np.maximum(METHODS[name](u, pitch), 0.0)
@@ -222,6 +262,42 @@ def choose_crops(radius: np.ndarray, weights: np.ndarray, pitch: float, toleranc
     return sizes
 
 
+def truncation_bounds(radius: np.ndarray, weights: np.ndarray, pitch: float, margin: float) -> np.ndarray:
+    """Bound on the relative change of ``R`` from keeping only a centred square of each odd size.
+
+    The bound of :func:`choose_crops`, ``4 eps margin s_a / (pi s_w h)`` with ``eps`` the
+    weight outside the square, for every odd square side at once: the weights are summed over
+    the square rings of equal Chebyshev distance from the centre cell.
+
+    Parameters
+    ----------
+    radius, weights
+        Spot radii (m) and interaction weights of one map, shape (n, n), ``n`` odd.
+    pitch
+        Cell pitch, in m.
+    margin
+        Safety factor on ``s_a / s_w`` (1 for radius weights, :data:`CROP_MARGIN` otherwise).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ((n + 1) // 2,): entry ``k`` bounds the square of side ``2 k + 1``; 0 for an
+        empty map.
+    """
+    n = radius.shape[-1]
+    if n % 2 == 0 or radius.shape != (n, n):
+        raise ValueError(f"the map must be square with an odd side, got {radius.shape}")
+    offset = np.abs(np.arange(n) - n // 2)
+    ring = np.maximum(offset[:, None], offset[None, :])
+    inside = np.cumsum(np.bincount(ring.ravel(), weights=weights.ravel(), minlength=n // 2 + 1))
+    total = inside[-1]
+    if not total > 0:
+        return np.zeros(n // 2 + 1)
+    outside = np.maximum(total - inside, 0.0)
+    outside[-1] = 0.0
+    return 4.0 * outside * margin * radius.sum() / (total * np.pi * pitch)
+
+
 def crop_error_bound(
     radius_sum: np.ndarray,
     weight_sum: np.ndarray,
@@ -288,12 +364,12 @@ class ChunkResult:
     n_uncropped: int
 
 
-def _blocks(masks: np.ndarray) -> Iterator[np.ndarray]:
-    """Blocks of exactly :data:`BLOCK` of the (batch, n, n) masks, the last padded with False."""
-    for start in range(0, masks.shape[0], BLOCK):
-        block = masks[start : start + BLOCK]
-        if block.shape[0] < BLOCK:
-            pad = np.zeros((BLOCK - block.shape[0],) + masks.shape[1:], dtype=bool)
+def _blocks(masks: np.ndarray, size: int) -> Iterator[np.ndarray]:
+    """Blocks of exactly ``size`` of the (batch, n, n) masks, the last padded with False."""
+    for start in range(0, masks.shape[0], size):
+        block = masks[start : start + size]
+        if block.shape[0] < size:
+            pad = np.zeros((size - block.shape[0],) + masks.shape[1:], dtype=bool)
             block = np.concatenate([block, pad])
         yield block
 
@@ -301,7 +377,7 @@ def _blocks(masks: np.ndarray) -> Iterator[np.ndarray]:
 def _block_pair_sums(
     masks: np.ndarray, weights: np.ndarray, crops: np.ndarray, pitch: float, method: str
 ) -> np.ndarray:
-    """Cropped interaction sums of one block, shape (BLOCK, n_delta).
+    """Cropped interaction sums of one block, shape (block, n_delta).
 
     The weight maps are laid out (x, y, map) in memory, the layout the ``*_gemm`` transforms
     consume, and passed on as (map, y, x) views of it.
@@ -323,11 +399,12 @@ def _recompute_uncropped(
     pitch: float, method: str,
 ) -> None:
     """Overwrite ``pair_sum[b, k]`` for the flagged entries with whole-window sums, in place."""
+    size = block_size(masks.shape[-1])
     for k in np.flatnonzero(redo.any(axis=0)):
         rows = np.flatnonzero(redo[:, k])
-        for start in range(0, rows.size, BLOCK):
-            chosen = rows[start : start + BLOCK]
-            block = np.zeros((BLOCK,) + masks.shape[1:], dtype=bool)
+        for start in range(0, rows.size, size):
+            chosen = rows[start : start + size]
+            block = np.zeros((size,) + masks.shape[1:], dtype=bool)
             block[: chosen.size] = masks[chosen]
             pair_sum[chosen, k] = interaction_sum(block * weights[k], pitch, method)[: chosen.size]
 
@@ -379,9 +456,10 @@ def resistance(
         outside[k, c, c] = 0.0
     w_out = (weights * outside).reshape(n_delta, n * n)
     parts: list[np.ndarray] = []
-    for block in _blocks(masks):
-        m = scratch("masks", (BLOCK, n * n))
-        np.copyto(m, block.reshape(BLOCK, n * n))
+    size = block_size(n)
+    for block in _blocks(masks, size):
+        m = scratch("masks", (size, n * n))
+        np.copyto(m, block.reshape(size, n * n))
         sums = np.stack([m @ spots.T, m @ a_flat.T, m @ w_flat.T, m @ w_out.T])
         pair = _block_pair_sums(block, weights, crops, pitch, method)
         parts.append(np.concatenate([sums, pair[None]]))

@@ -294,7 +294,7 @@ def _folded_operators(n_cells: int) -> tuple[np.ndarray, ...]:
     g_e, g_o = _fold_matrices(n_cells)
     f = np.arange(length // 2 + 1)
     phase = 2.0 * np.pi * np.outer(f, np.arange(n_cells) - (n_cells - 1) / 2.0) / length
-    stack = _toeplitz_stack(n_cells, length)
+    stack = _toeplitz_stack.__wrapped__(n_cells, length)  # not cached: 2 n^3 floats
     out = (
         np.cos(phase) @ g_e,
         -np.sin(phase) @ g_o,

@@ -34,7 +34,7 @@ from typing import Callable
 
 import numpy as np
 
-from pipeline.physics.constriction import BLOCK, ChunkResult, _blocks, crop_slice
+from pipeline.physics.constriction import ChunkResult, _blocks, block_size, crop_slice
 from pipeline.physics.interaction_fft import interaction_apply_columns, interaction_apply_dense_columns
 
 __all__ = [
@@ -298,7 +298,7 @@ _RECORDS = ("total", "greenwood", "t_total", "count", "iterations", "residual", 
 def _solve_block(
     block: np.ndarray, radius: np.ndarray, crops: np.ndarray, tolerance: float, settings: dict
 ) -> dict[str, np.ndarray]:
-    """Every load step of one block of :data:`BLOCK` masks, each warm-started from the previous one.
+    """Every load step of one block of :func:`~pipeline.physics.constriction.block_size` masks, each warm-started from the previous one.
 
     Entries whose cropping bound exceeds ``tolerance`` are solved again on the whole window,
     gathered into padded blocks of exactly :data:`REDO_BLOCK` maps (a fixed shape, so results
@@ -396,7 +396,7 @@ def _run(masks: np.ndarray, radius: np.ndarray, crops: np.ndarray, tolerance: fl
     """:func:`resistance` after validation (``max_iterations = 0`` stops at Greenwood's start)."""
     rho = settings["rho"]
     batch = masks.shape[0]
-    parts = [_solve_block(block, radius, crops, tolerance, settings) for block in _blocks(masks)]
+    parts = [_solve_block(block, radius, crops, tolerance, settings) for block in _blocks(masks, block_size(masks.shape[-1]))]
     out = {
         name: np.concatenate([p[name] for p in parts])[:batch] if parts else np.zeros((0, radius.shape[0]))
         for name in _RECORDS + ("bound", "uncropped")

@@ -13,7 +13,8 @@ import numpy as np
 import xarray as xr
 
 from pipeline.compute import ComputeOptions
-from pipeline.config import ConfigError, Scenario
+from pipeline.config import AUTO, ConfigError, Scenario
+from pipeline.domains import resolve
 from pipeline.physics import greenwood_tripp as gt
 from pipeline.physics import hertz, spots
 from pipeline.physics.asperity import area_fraction, asperity_pressure
@@ -69,6 +70,8 @@ def solve_scenario(
 
     ``solver``, ``n_radial`` and ``tolerance`` override the scenario (used by the benchmark).
     """
+    if scenario.contact.r_max == AUTO:
+        scenario = resolve(scenario)
     c = scenario.contact
     r = radial_grid(scenario, n_radial)
     matrix = gt.influence_matrix(r, scenario.material.E_star)
@@ -145,8 +148,10 @@ def build(scenario: Scenario) -> xr.Dataset:
         pressure, displacement, separation, area_fraction, hertz_pressure,
         hertz_displacement, hertz_separation; over delta: force, force_normalized,
         hertz_radius, holm_radius, roughness_parameter, iterations, residual, converged;
-        over (delta, y, x): spot_area, spot_radius; over r: profile.
+        over (delta, y, x): spot_area, spot_radius; over r: profile. ``auto`` domains are
+        resolved first (:func:`pipeline.domains.resolve`).
     """
+    scenario = resolve(scenario)
     r, sols = solve_scenario(scenario)
     failed = [d / scenario.roughness.sigma for d, s in zip(scenario.deltas, sols) if not s.converged]
     if failed:

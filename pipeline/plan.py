@@ -1,0 +1,282 @@
+"""Resources known before work: peak memory and run time of each stage, from the parameters.
+
+:func:`estimate` models each stage's largest arrays (the stored results and the work arrays
+of its concurrently running tasks) and its run time (flop-count models with constants
+measured on the 2-core reference machine; ``make bench`` measures the real ones).
+:func:`check_resources` refuses, with :class:`~pipeline.config.ConfigError` naming the
+parameter, a run whose estimate exceeds the machine's memory or :data:`MAX_SECONDS`.
+:func:`prepare` is what the CLI runs before any stage: the checks, then the resolution of
+``auto`` domains (:func:`pipeline.domains.resolve`), then the checks on the resolved cell count.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import sys
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from pipeline.config import AUTO, ConfigError, Scenario, load_scenario
+
+__all__ = ["StageEstimate", "estimate", "check_resources", "prepare", "format_plan",
+           "available_memory", "MAX_SECONDS", "BASE_BYTES"]
+
+#: Resident memory of a process that imported numpy, scipy, xarray, dask and netCDF4 (measured).
+BASE_BYTES = 150 * 2**20
+#: Longest estimated run time accepted (s): beyond it a run is refused before work.
+MAX_SECONDS = 7 * 24 * 3600.0
+#: Seconds per flop-like unit of the models below (measured on the reference machine, one thread).
+_FOLDED_S = 2.5e-10   # per n^3 of one folded map
+_FFT_S = 2.5e-9       # per P^2 log2 P of one FFT map
+_MAP_S = 2.0e-9       # per cell of one map (masking, sums), any path
+_LU_S = 5.0e-11       # per n_radial^3 and approach (Newton factorizations and solves)
+_MODE_S = 4.0e-8      # per mode and realization of the oxide coefficients
+_CELL_FFT_S = 5.0e-9  # per n^2 log2 n of one oxide field
+#: Commands that need no resolved domains nor resource checks.
+_NO_DOMAINS = ("params", "predict", "roughness")
+#: Stages whose estimate is printed when they are expected to take longer than this (s).
+ANNOUNCE_AFTER = 10.0
+
+
+@dataclass(frozen=True)
+class StageEstimate:
+    """Estimated peak resident memory (bytes) and wall time (s) of one stage."""
+
+    stage: str
+    peak_bytes: float
+    seconds: float
+
+
+def available_memory() -> float:
+    """Memory this machine can give a run, in bytes (``MemAvailable``, else physical memory)."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+
+
+def _cells(scenario: Scenario) -> int:
+    """Cells per window side: the resolved count, or a cheap estimate while ``auto``."""
+    if scenario.contact.window != AUTO:
+        return scenario.n_cells
+    from pipeline.domains import estimate_cells
+
+    return estimate_cells(scenario)
+
+
+def _max_modes(scenario: Scenario, n: int) -> float:
+    """Lattice wave vectors of the largest oxide band (half plane, k1 = n / (2 lambda))."""
+    k1 = n / (2.0 * min(scenario.oxide.lambda_))
+    return 0.5 * math.pi * k1 * k1 * (scenario.oxide.ks_ratio**2 - 1.0) + 4.0 * k1 * scenario.oxide.ks_ratio
+
+
+def _per_map_seconds(n: int) -> float:
+    from pipeline.physics.constriction import auto_method
+    from pipeline.physics.interaction_fft import padded_length
+
+    if auto_method(n) == "folded":
+        return _FOLDED_S * n**3 + _MAP_S * n * n
+    p = padded_length(n)
+    return _FFT_S * p * p * math.log2(p) + _MAP_S * n * n
+
+
+def _threads(workers: int | None) -> int:
+    return max(1, workers or os.cpu_count() or 1)
+
+
+def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstimate]:
+    """Peak memory and run time of every stage of ``scenario``.
+
+    Parameters
+    ----------
+    scenario
+        Resolved or not (``auto`` windows are estimated from the rigid gap).
+    workers
+        Concurrent tasks (default: the core count).
+
+    Returns
+    -------
+    list of StageEstimate
+        contact, oxide, cube, fits, surrogate, in order.
+    """
+    from pipeline.physics.constriction import FFT_FROM, block_size, work_bytes_per_map
+    from pipeline.physics.interaction_fft import padded_length
+
+    n = _cells(scenario)
+    cells = float(n) * n
+    ox, t = scenario.oxide, _threads(workers)
+    n_xi, n_lam, n_real = len(ox.xi), len(ox.lambda_), ox.n_realizations
+    n_delta, n_r = scenario.loading.n_delta, scenario.contact.n_radial
+    # contact: influence matrix and its Newton copies; spot maps over delta; the resolve grid.
+    contact_mem = 8.0 * (7 * n_r * n_r + 10 * n_delta * cells + 8 * 4 * cells)
+    contact_s = _LU_S * n_r**3 * (1 + n_delta) + 4e-7 * n_r * n_r + 1e-7 * n_delta * cells
+    # oxide: psi (float32) held whole and copied once for the file; per task the complex
+    # spectra of its fields; the band's lattice and coefficients.
+    psi = 4.0 * n_lam * n_real * cells
+    modes = _max_modes(scenario, n)
+    task_ox = min(ox.chunk, n_real) * cells * (4.0 * n_lam + 24.0) + 64.0 * modes
+    oxide_mem = 2.0 * psi + t * task_ox + 48.0 * modes
+    oxide_s = n_lam * n_real * (_MODE_S * modes + _CELL_FFT_S * cells * math.log2(max(n, 2))) / t
+    # cube: psi read whole, per task the masks and one block of work, the cached operators,
+    # the results (five float64 terms, concatenated once). Measured on the 583^2 scene
+    # (2 xi x 2 lambda x 50): contact 767 MiB, oxide 953 MiB, cube 1215 MiB peak RSS.
+    results = 8.0 * 5 * n_xi * n_lam * n_delta * n_real
+    block = block_size(n)
+    task_cube = n_xi * n_lam * min(scenario.cube.chunk, n_real) * cells * 1.0 + block * (
+        work_bytes_per_map(n) + 9.0 * cells)
+    if n < FFT_FROM:
+        operators = min(n_delta, 32) * 4.0 * n**3
+    else:
+        p = padded_length(n)
+        operators = n_delta * 4.0 * p * p
+    # contact's spot maps: read (radius, area) and as float64 maps, and three per-task copies
+    spot_maps = 8.0 * n_delta * cells
+    cube_mem = psi + t * (task_cube + 3 * spot_maps) + 4 * spot_maps + operators + 2.0 * results
+    cube_s = n_xi * n_lam * n_real * n_delta * _per_map_seconds(n) / t
+    # fits: the cube's terms, the bootstrap's resample counts and means.
+    boot = scenario.fits.n_bootstrap
+    fits_mem = 3.0 * results + 8.0 * boot * (n_real + 3 * n_xi * n_lam * n_delta)
+    fits_s = 1e-8 * n_xi * n_lam * n_delta * n_real * boot / 50
+    surrogate_mem = 8.0 * 64 * n_xi * n_lam
+    return [
+        StageEstimate("contact", BASE_BYTES + contact_mem, contact_s),
+        StageEstimate("oxide", BASE_BYTES + oxide_mem, oxide_s),
+        StageEstimate("cube", BASE_BYTES + cube_mem, cube_s),
+        StageEstimate("fits", BASE_BYTES + fits_mem, fits_s),
+        StageEstimate("surrogate", BASE_BYTES + surrogate_mem, 0.1),
+    ]
+
+
+#: Parameters whose values drive memory or time, in the order they are blamed.
+_DRIVERS: tuple[str, ...] = (
+    "roughness.eta", "contact.window", "oxide.lambda", "oxide.ks_ratio", "oxide.n_realizations",
+    "oxide.xi", "loading.n_delta", "contact.n_radial", "oxide.chunk", "cube.chunk",
+    "fits.n_bootstrap", "indenter.radius", "indenter.shape", "roughness.sigma",
+)
+
+
+def _with(scenario: Scenario, key: str, value: Any) -> Scenario:
+    section, _, name = key.partition(".")
+    attr = "lambda_" if name == "lambda" else name
+    return dataclasses.replace(scenario, **{section: dataclasses.replace(getattr(scenario, section), **{attr: value})})
+
+
+def _culprit(scenario: Scenario, measure: Callable[[Scenario], float]) -> tuple[str, Any, float]:
+    """The parameter whose change from the paper's value grows ``measure`` the most."""
+    reference = load_scenario("paper")
+    current = measure(scenario)
+    best: tuple[str, Any, float] = ("", None, 1.0)
+    flat, ref_flat = scenario.flat(), reference.flat()
+    for key in _DRIVERS:
+        if flat[key] == ref_flat[key]:
+            continue
+        try:
+            factor = current / measure(_with(scenario, key, ref_flat[key]))
+        except (ConfigError, ValueError, ZeroDivisionError, OverflowError):
+            continue
+        if factor > best[2]:
+            best = (key, flat[key], factor)
+    return best
+
+
+def _refuse(scenario: Scenario, what: str, needed: float, limit: float, unit: str,
+            measure: Callable[[Scenario], float]) -> ConfigError:
+    key, value, factor = _culprit(scenario, measure)
+    value = f"{value:g}" if isinstance(value, float) else repr(value)
+    fmt = (lambda v: f"{v / 2**30:.3g} GiB") if unit == "bytes" else (lambda v: f"{v / 3600:.3g} h")
+    if key:
+        return ConfigError(
+            f"{key} = {value} is out of range for this machine: the {what} would need about "
+            f"{fmt(needed)}, more than the {fmt(limit)} available ({factor:.3g} x the paper's value "
+            f"{load_scenario('paper').flat()[key]!r}); lower it (see `g2tom plan`)"
+        )
+    return ConfigError(f"the {what} would need about {fmt(needed)}, more than the {fmt(limit)} available "
+                       f"(see `g2tom plan`)")
+
+
+def _stage_measure(stage: str, field: str, workers: int | None) -> Callable[[Scenario], float]:
+    def measure(s: Scenario) -> float:
+        return next(getattr(e, field) for e in estimate(s, workers) if e.stage == stage)
+    return measure
+
+
+def check_resources(scenario: Scenario, workers: int | None = None, memory: float | None = None) -> list[StageEstimate]:
+    """Refuse a run that cannot fit in memory (or would run longer than :data:`MAX_SECONDS`).
+
+    Parameters
+    ----------
+    scenario
+        Resolved or not.
+    workers
+        Concurrent tasks (default: the core count).
+    memory
+        Bytes available (default: :func:`available_memory`).
+
+    Returns
+    -------
+    list of StageEstimate
+        The estimates, when the run fits.
+
+    Raises
+    ------
+    ConfigError
+        Naming the parameter that drives the excess, its value and the estimate.
+    """
+    from pipeline.domains import check_cell_count
+
+    check_cell_count(scenario, memory or available_memory())
+    limit = memory or available_memory()
+    estimates = estimate(scenario, workers)
+    for e in estimates:
+        if not e.peak_bytes <= limit:
+            raise _refuse(scenario, f"{e.stage} stage", e.peak_bytes, limit, "bytes",
+                          _stage_measure(e.stage, "peak_bytes", workers))
+    total = sum(e.seconds for e in estimates)
+    if not total <= MAX_SECONDS:
+        worst = max(estimates, key=lambda e: e.seconds)
+        raise _refuse(scenario, f"{worst.stage} stage's run time", worst.seconds, MAX_SECONDS, "seconds",
+                      _stage_measure(worst.stage, "seconds", workers))
+    return estimates
+
+
+def prepare(command: str, scenario: Scenario, workers: int | None = None) -> Scenario:
+    """What the CLI runs before any work: resource checks and the resolution of ``auto`` domains.
+
+    Returns ``scenario`` unchanged for commands that need neither (params, predict, roughness).
+    """
+    if command in _NO_DOMAINS:
+        return scenario
+    from pipeline.domains import resolve
+
+    check_resources(scenario, workers)
+    resolved = resolve(scenario)
+    for e in check_resources(resolved, workers):
+        if e.seconds > ANNOUNCE_AFTER and command in (e.stage, "run"):
+            print(f"plan: {e.stage} estimated at ~{e.seconds:.3g} s and ~{e.peak_bytes / 2**20:.0f} MiB peak "
+                  f"(`g2tom plan` for all stages)", file=sys.stderr)
+    return resolved
+
+
+def format_plan(scenario: Scenario, workers: int | None = None) -> list[str]:
+    """Lines of ``g2tom plan``: the resolved domains and each stage's estimate."""
+    n = scenario.n_cells
+    lines = [
+        f"scenario {scenario.name}: {n} x {n} cells of {scenario.cell_size * 1e6:.4g} um, "
+        f"window {scenario.contact.window:.4g} R*, r_max {scenario.contact.r_max:.4g} R*",
+        f"{len(scenario.oxide.xi)} xi x {len(scenario.oxide.lambda_)} lambda x {scenario.loading.n_delta} "
+        f"delta x {scenario.oxide.n_realizations} realizations, {_threads(workers)} workers, "
+        f"{available_memory() / 2**30:.3g} GiB available",
+        f"{'stage':10s} {'peak memory':>14s} {'time':>12s}",
+    ]
+    total = 0.0
+    for e in estimate(scenario, workers):
+        total += e.seconds
+        lines.append(f"{e.stage:10s} {e.peak_bytes / 2**20:11.0f} MiB {e.seconds:10.3g} s")
+    lines.append(f"{'total':10s} {'':>14s} {total:10.3g} s (model constants measured on a 2-core machine)")
+    return lines

@@ -1,0 +1,85 @@
+"""Resources known before work: estimates, refusals naming the parameter, `g2tom plan`."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from pipeline import plan
+from pipeline.cli import main
+from pipeline.config import ConfigError, load_scenario
+from pipeline.domains import resolve
+
+MEMORY = 16.0 * 2**30  # a fixed machine, so the refusals do not depend on the one running the test
+
+
+@pytest.mark.parametrize(
+    ("overrides", "parameter"),
+    [
+        ({"oxide.ks_ratio": 1000}, "oxide.ks_ratio = 1000 "),
+        ({"oxide.lambda": [1e-6]}, "oxide.lambda = [1e-06]"),
+        ({"oxide.n_realizations": 1_000_000}, "oxide.n_realizations = 1000000"),
+        ({"roughness.eta": 1e14}, "roughness.eta = 1e+14"),
+        ({"roughness.eta": 1e11}, "roughness.eta = 1e+11"),
+        ({"contact.n_radial": 100_000}, "contact.n_radial = 100000"),
+        ({"oxide.xi": [i / 1000 for i in range(1, 1000)], "oxide.n_realizations": 20_000}, "oxide."),
+    ],
+)
+def test_exhausting_parameters_are_refused_naming_them(overrides, parameter):
+    with pytest.raises(ConfigError) as err:
+        plan.check_resources(load_scenario("paper", overrides), memory=MEMORY)
+    assert str(err.value).startswith(parameter), str(err.value)
+
+
+def test_refused_before_work_by_the_cli(tmp_path, capsys):
+    code = main(["cube", "--set", "oxide.n_realizations=1000000", "--data-dir", str(tmp_path), "--no-progress"])
+    assert code == 2
+    assert "oxide.n_realizations = 1000000 is out of range for this machine" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
+
+
+def test_paper_scene_fits_and_plan_prints_every_stage(capsys):
+    estimates = plan.check_resources(resolve(load_scenario("paper")), memory=MEMORY)
+    assert [e.stage for e in estimates] == ["contact", "oxide", "cube", "fits", "surrogate"]
+    assert main(["plan"]) == 0
+    out = capsys.readouterr().out
+    assert "55 x 55 cells" in out
+    for stage in ("contact", "oxide", "cube", "fits", "surrogate"):
+        assert f"\n{stage}" in out
+
+
+def test_estimates_grow_with_the_cell_count():
+    small = plan.estimate(resolve(load_scenario("paper")))
+    large = plan.estimate(resolve(load_scenario("paper", {"roughness.eta": 3.2e9})))
+    for a, b in zip(small, large):
+        if a.stage in ("oxide", "cube"):
+            assert b.peak_bytes > 5 * (a.peak_bytes - plan.BASE_BYTES)
+            assert b.seconds > 10 * a.seconds
+
+
+# VmHWM, the peak RSS of this process image (ru_maxrss would carry the forking parent's peak).
+_RSS = """
+import sys
+from pipeline.cli import main
+code = main(sys.argv[1:])
+with open("/proc/self/status") as fh:
+    print(next(int(line.split()[1]) * 1024 for line in fh if line.startswith("VmHWM:")))
+sys.exit(code)
+"""
+
+
+@pytest.mark.parametrize("eta", [2e8, 8e8, pytest.param(3.2e9, marks=pytest.mark.stress)])
+def test_memory_estimate_within_a_factor_2_of_measured_peak(tmp_path, eta):
+    sets = {"roughness.eta": eta, "oxide.xi": [0.3, 0.7], "oxide.lambda": [3.0, 9.0],
+            "oxide.n_realizations": 20, "oxide.chunk": 10, "cube.chunk": 10, "loading.n_delta": 8,
+            "contact.n_radial": 240}
+    args = [a for k, v in sets.items() for a in ("--set", f"{k}={v}")] + ["--data-dir", str(tmp_path), "--no-progress"]
+    estimates = {e.stage: e.peak_bytes for e in plan.estimate(resolve(load_scenario("paper", sets)))}
+    for stage in ("contact", "oxide", "cube"):
+        run = subprocess.run([sys.executable, "-c", _RSS, stage, *args], capture_output=True, text=True, check=True)
+        measured = float(run.stdout.split()[-1])
+        ratio = estimates[stage] / measured
+        print(f"eta {eta:g} {stage}: estimate {estimates[stage] / 2**20:.0f} MiB, measured {measured / 2**20:.0f} MiB")
+        assert 0.5 <= ratio <= 2.0, (stage, estimates[stage] / 2**20, measured / 2**20)
