@@ -20,7 +20,8 @@ import xarray as xr
 from pipeline import store
 from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
-from pipeline.physics import constriction
+from pipeline.physics import constriction, ensemble
+from pipeline.stages.oxide import FieldSource
 
 __all__ = ["build", "run", "spot_maps"]
 
@@ -66,6 +67,14 @@ def _check_grids(contact: xr.Dataset, oxide: xr.Dataset) -> None:
         raise ValueError("contact.nc: the cell grid must be square (x and y identical)")
 
 
+def _resistance(masks: np.ndarray, radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any]) -> constriction.ChunkResult:
+    """Greenwood terms of a batch of conducting masks (batch, y, x) at every load step."""
+    return constriction.resistance(
+        masks, radius, weights, settings["pitch"], settings["rho"],
+        settings["crops"], settings["tolerance"], settings["method"],
+    )
+
+
 def _chunk(
     psi: np.ndarray,
     threshold: np.ndarray,
@@ -95,10 +104,7 @@ def _chunk(
     n_xi, n_lam, n_real = threshold.shape
     n = psi.shape[-1]
     masks = psi[None] < threshold[..., None, None]
-    res = constriction.resistance(
-        masks.reshape(-1, n, n), radius, weights, settings["pitch"], settings["rho"],
-        settings["crops"], settings["tolerance"], settings["method"],
-    )
+    res = _resistance(masks.reshape(-1, n, n), radius, weights, settings)
     out: dict[str, Any] = {
         name: getattr(res, name).reshape(n_xi, n_lam, n_real, -1).transpose(0, 1, 3, 2)
         for name in _TERMS
@@ -107,25 +113,135 @@ def _chunk(
     return out
 
 
-def _compute(
-    oxide: xr.Dataset, radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
-    chunk: int, options: ComputeOptions,
+def _field_chunk(
+    source: FieldSource, index: int, realizations: np.ndarray, radius: np.ndarray,
+    weights: np.ndarray, settings: dict[str, Any],
 ) -> dict[str, Any]:
-    """Run :func:`_chunk` over realization chunks with dask and join the pieces."""
-    psi = oxide["psi"].transpose("lambda", "realization", "y", "x").values
-    threshold = oxide["threshold"].transpose("xi", "lambda", "realization").values
+    """Regenerate the fields of ``realizations`` at lambda number ``index`` and run :func:`_chunk`.
+
+    Returns the terms shaped (xi, delta, realization).
+    """
+    psi, threshold = source.fields(index, realizations)
+    out = _chunk(psi[None], threshold[:, None], radius, weights, settings)
+    return {k: (v[:, 0] if k in _TERMS else v) for k, v in out.items()}
+
+
+def _rule(scenario: Scenario, force: np.ndarray, force_normalized: np.ndarray) -> dict[str, Any]:
+    """The stopping rule's weights on the steps fitted by the fits stage, and its limits."""
+    steps = np.flatnonzero(force >= scenario.fits.min_force)
+    c_alpha = c_gamma = np.zeros(0)
+    if steps.size >= 2:
+        c_alpha, c_gamma = ensemble.fit_weights(np.log(force_normalized[steps]))
+    return {"steps": steps, "c_alpha": c_alpha, "c_gamma": c_gamma,
+            "z": ensemble.z_value(scenario.fits.confidence)}
+
+
+def half_widths(resistance: np.ndarray, rule: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """Fast-rule half-widths of alpha (relative) and gamma (absolute) for every prefix n.
+
+    Parameters
+    ----------
+    resistance
+        R in ohm, shape (xi, delta, realization) of one lambda.
+    rule
+        From :func:`_rule`.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Each (xi, realization): entry n - 1 is the half-width with the first n realizations.
+    """
+    if rule["steps"].size < 2:
+        nan = np.full((resistance.shape[0], resistance.shape[-1]), np.nan)
+        return nan, nan
+    with np.errstate(divide="ignore"):
+        log_r = np.log(resistance[:, rule["steps"], :])
+    alpha = np.sinh(ensemble.prefix_half_width(ensemble.statistic(log_r, rule["c_alpha"]), rule["z"]))
+    gamma = ensemble.prefix_half_width(ensemble.statistic(log_r, rule["c_gamma"]), rule["z"])
+    return alpha, gamma
+
+
+def _decide(scenario: Scenario, resistance: np.ndarray, rule: dict[str, Any]) -> int | None:
+    """Realizations one lambda keeps once ``resistance`` (xi, delta, r) is known, or None for more."""
+    ox = scenario.oxide
+    computed = resistance.shape[-1]
+    if ox.ensemble == "fixed":
+        return ox.n_realizations
+    alpha, _ = half_widths(resistance, rule)
+    stop = ensemble.stop_count(np.nan_to_num(alpha, nan=np.inf), ox.target_half_width, ox.min_realizations)
+    if stop is not None:
+        return stop
+    return ox.max_realizations if computed >= ox.max_realizations else None
+
+
+def _compute(
+    scenario: Scenario, source: FieldSource, radius: np.ndarray, weights: np.ndarray,
+    settings: dict[str, Any], rule: dict[str, Any], options: ComputeOptions,
+) -> tuple[list[dict[str, np.ndarray]], int]:
+    """Rounds of dask tasks over (lambda, realization chunk) until every lambda has its count.
+
+    Round one computes the first batch of every lambda (the fixed count, or
+    ``oxide.min_realizations``); each further round adds ``oxide.batch`` realizations (at most up
+    to the cap) to every lambda whose count is not decided. Realization r of a lambda always gets
+    the same field, and a lambda's count is the first prefix meeting the target, so neither the
+    batch, the chunk size nor the workers change any result.
+
+    Returns
+    -------
+    tuple
+        Per lambda the terms (xi, delta, realization) of its kept realizations, and the number of
+        entries recomputed uncropped.
+    """
+    ox = scenario.oxide
+    n_lam = len(source.lambdas)
+    first = ox.n_realizations if ox.ensemble == "fixed" else ox.min_realizations
+    pieces: list[list[dict[str, Any]]] = [[] for _ in range(n_lam)]
+    done = np.zeros(n_lam, int)
+    want = np.full(n_lam, first)
+    kept: list[int | None] = [None] * n_lam
     shared = dask.delayed(radius), dask.delayed(weights), dask.delayed(settings)
-    tasks = [
-        dask.delayed(_chunk, pure=True)(
-            psi[:, start : start + chunk], threshold[:, :, start : start + chunk], *shared
-        )
-        for start in range(0, psi.shape[1], chunk)
-    ]
-    pieces = compute(*tasks, options=options)
-    out: dict[str, Any] = {
-        name: np.concatenate([p[name] for p in pieces], axis=-1) for name in _TERMS
-    }
-    out["n_uncropped"] = int(sum(p["n_uncropped"] for p in pieces))
+    chunk = scenario.cube.chunk
+    while any(k is None for k in kept):
+        tasks, owner = [], []
+        for a in range(n_lam):
+            if kept[a] is not None:
+                continue
+            for start in range(done[a], want[a], chunk):
+                block = np.arange(start, min(start + chunk, want[a]))
+                tasks.append(dask.delayed(_field_chunk, pure=True)(source, a, block, *shared))
+                owner.append(a)
+        for a, piece in zip(owner, compute(*tasks, options=options)):
+            pieces[a].append(piece)
+        for a in range(n_lam):
+            if kept[a] is None:
+                done[a] = want[a]
+                resistance = np.concatenate([p["resistance"] for p in pieces[a]], axis=-1)
+                kept[a] = _decide(scenario, resistance, rule)
+                want[a] = min(done[a] + ox.batch, ox.max_realizations)
+    out = []
+    for a in range(n_lam):
+        out.append({
+            name: np.concatenate([p[name] for p in pieces[a]], axis=-1)[..., : kept[a]] for name in _TERMS
+        })
+    uncropped = int(sum(p["n_uncropped"] for per in pieces for p in per))
+    return out, uncropped
+
+
+def _padded(per_lambda: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """Stack the lambdas' terms into (xi, lambda, delta, realization), padded beyond each count.
+
+    Floats are padded with NaN, ``n_conducting`` with -1.
+    """
+    n_max = max(p["resistance"].shape[-1] for p in per_lambda)
+    out = {}
+    for name in _TERMS:
+        first = per_lambda[0][name]
+        fill = -1 if name == "n_conducting" else np.nan
+        shape = first.shape[:1] + (len(per_lambda),) + first.shape[1:2] + (n_max,)
+        array = np.full(shape, fill, dtype=first.dtype)
+        for a, p in enumerate(per_lambda):
+            array[:, a, :, : p[name].shape[-1]] = p[name]
+        out[name] = array
     return out
 
 
@@ -139,15 +255,17 @@ def _clean(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any]) ->
 
 
 def _measured_crop_error(
-    oxide: xr.Dataset, radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
+    source: FieldSource, radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
     cropped: np.ndarray,
 ) -> float:
     """Largest relative change of ``R`` from cropping, over the first realization's entries."""
     n = radius.shape[-1]
     whole = dict(settings, crops=np.full(radius.shape[0], n), tolerance=0.0)
-    psi = oxide["psi"].transpose("lambda", "realization", "y", "x").values[:, :1]
-    threshold = oxide["threshold"].transpose("xi", "lambda", "realization").values[:, :, :1]
-    exact = _chunk(psi, threshold, radius, weights, whole)["resistance"]
+    first = np.arange(1)
+    exact = np.stack(
+        [_field_chunk(source, a, first, radius, weights, whole)["resistance"] for a in range(len(source.lambdas))],
+        axis=1,
+    )
     finite = np.isfinite(exact)
     if not finite.any():
         return 0.0
@@ -162,34 +280,48 @@ def _attrs(units: str, long_name: str, **extra: Any) -> dict[str, Any]:
 def _dataset(
     scenario: Scenario, contact: xr.Dataset, oxide: xr.Dataset, out: dict[str, Any],
     clean: constriction.ChunkResult, settings: dict[str, Any], measured: float,
+    counts: np.ndarray, widths: tuple[np.ndarray, np.ndarray],
 ) -> xr.Dataset:
     """Wrap the computed arrays with coordinates and CF attributes."""
     dims = ("xi", "lambda", "delta", "realization")
     w_unit = "m" if scenario.cube.weights == "radius" else "m2"
+    ox = scenario.oxide
     coords = {
         "xi": ("xi", oxide["xi"].values, _attrs("1", "nominal oxide fraction")),
         "lambda": ("lambda", oxide["lambda"].values,
                    _attrs("1", "normalized oxide correlation length l_O sqrt(eta)")),
         "delta": ("delta", contact["delta"].values, _attrs("m", "approach delta of the sphere tip")),
-        "realization": ("realization", oxide["realization"].values,
+        "realization": ("realization", np.arange(out["resistance"].shape[-1]),
                         _attrs("1", "realization index of the random field")),
         "force": ("delta", contact["force"].values, _attrs("N", "normal force")),
         "force_normalized": ("delta", contact["force_normalized"].values,
                              _attrs("1", "normalized force F' = 2F / (E* sqrt(R* sigma^3))")),
     }
-    is_open = np.isinf(out["resistance"])
+    is_open = np.isposinf(out["resistance"])
+    padding = "NaN beyond n_realizations(lambda)"
+    grid = ("xi", "lambda")
     data_vars = {
         "resistance": (dims, out["resistance"], _attrs(
             "ohm", "Greenwood constriction resistance R = R_self + R_int",
-            comment="+inf: open circuit (no conducting spot)")),
+            comment=f"+inf: open circuit (no conducting spot); {padding}")),
         "resistance_self": (dims, out["resistance_self"],
-                            _attrs("ohm", "self term rho* / (2 sum phi a)")),
+                            _attrs("ohm", "self term rho* / (2 sum phi a)", comment=padding)),
         "resistance_interaction": (dims, out["resistance_interaction"], _attrs(
-            "ohm", f"interaction term rho* sum phi phi w w / d / (pi (sum phi w)^2), w in {w_unit}")),
+            "ohm", f"interaction term rho* sum phi phi w w / d / (pi (sum phi w)^2), w in {w_unit}",
+            comment=padding)),
         "n_conducting": (dims, out["n_conducting"].astype(np.int32),
-                         _attrs("1", "number of conducting spots")),
+                         _attrs("1", "number of conducting spots", comment="-1 beyond n_realizations(lambda)")),
         "n_open": (("xi", "lambda", "delta"), is_open.sum(axis=-1).astype(np.int32),
                    _attrs("1", "number of open-circuit realizations (R = +inf)")),
+        "n_realizations": ("lambda", counts.astype(np.int32), _attrs(
+            "1", "realizations computed at this lambda (the leading entries of realization)",
+            ensemble=ox.ensemble)),
+        "rule_alpha_half_width": (grid, widths[0], _attrs(
+            "1", "fast-rule relative half-width of alpha at n_realizations",
+            method="sinh(z std(t_r) / sqrt(n)), t_r = least-squares log-alpha weights . log R_r")),
+        "rule_gamma_half_width": (grid, widths[1], _attrs(
+            "1", "fast-rule absolute half-width of gamma at n_realizations",
+            method="z std(t_r) / sqrt(n), t_r = least-squares slope weights . log R_r")),
         "resistance_clean": ("delta", clean.resistance[0],
                              _attrs("ohm", "resistance of the oxide-free surface")),
         "resistance_clean_self": ("delta", clean.resistance_self[0],
@@ -203,14 +335,30 @@ def _dataset(
         "interaction_weights": scenario.cube.weights,
         "method": settings["method_used"],
         "crop_tolerance": settings["tolerance"],
-        "crop_error_bound": float(out["crop_bound"].max(initial=0.0)),
+        "crop_error_bound": float(np.nanmax(out["crop_bound"], initial=0.0)),
         "crop_error_measured": measured,
         "crop_error_measured_on": "all entries of the first realization, against the whole window",
         "n_uncropped": out["n_uncropped"],
         "n_open_total": int(is_open.sum()),
         "conducting_rule": "a spot conducts where spot_radius > 0 and psi < threshold (float32)",
+        "fields": "regenerated in every task from SeedSequence(oxide.seed, spawn_key=(round(lambda * 1e6), realization))",
+        "ensemble": ox.ensemble,
     }
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    if ox.ensemble == "adaptive":
+        attrs.update({
+            "target_half_width": ox.target_half_width,
+            "min_realizations": ox.min_realizations,
+            "max_realizations": ox.max_realizations,
+            "stopping_rule": (
+                "per lambda, the smallest n >= min_realizations at which every xi's fast-rule "
+                "alpha half-width is <= target_half_width, else max_realizations"
+            ),
+        })
+    ds = xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    if ox.ensemble == "adaptive":  # the padding compresses to almost nothing
+        for name in ("resistance", "resistance_self", "resistance_interaction", "n_conducting"):
+            ds[name].encoding.update(zlib=True, complevel=1)
+    return ds
 
 
 def build(
@@ -218,27 +366,36 @@ def build(
     contact: xr.Dataset,
     oxide: xr.Dataset,
     options: ComputeOptions = ComputeOptions(progress=False),
+    source: Any = None,
 ) -> xr.Dataset:
     """Compute the resistance cube of ``scenario`` from in-memory contact and oxide datasets.
 
     Parameters
     ----------
     scenario
-        The validated scenario (sections ``material`` for rho*, ``cube``).
+        The validated scenario (sections ``material`` for rho*, ``cube``, ``oxide`` for the
+        ensemble, ``fits.min_force`` and ``fits.confidence`` for the stopping rule).
     contact
         ``spot_radius`` and ``spot_area`` (delta, y, x), ``force``, ``force_normalized``.
     oxide
-        ``psi`` (lambda, realization, y, x) and ``threshold`` (xi, lambda, realization).
+        The oxide stage's record: coordinates ``xi``, ``lambda``, ``y``, ``x``.
     options
         Where dask runs (see :func:`pipeline.compute.compute`).
+    source
+        Where the fields come from: anything with ``fields(lambda_index, realizations) ->
+        (psi (r, y, x) float32, threshold (xi, r) float32)`` and ``lambdas``; default
+        :class:`pipeline.stages.oxide.FieldSource` of ``scenario`` (fields regenerated from
+        their seeds inside each task, never shipped in the task graph).
 
     Returns
     -------
     xarray.Dataset
         ``resistance``, its two terms and ``n_conducting`` (xi, lambda, delta, realization),
-        ``n_open`` (xi, lambda, delta), the clean-surface terms and ``crop_cells`` (delta).
+        ``n_open`` (xi, lambda, delta), ``n_realizations`` (lambda), the fast rule's half-widths
+        (xi, lambda), the clean-surface terms and ``crop_cells`` (delta).
     """
     _check_grids(contact, oxide)
+    source = FieldSource.of(scenario) if source is None else source
     radius, weights, pitch = spot_maps(scenario, contact)
     cube = scenario.cube
     settings = {
@@ -249,10 +406,16 @@ def build(
         "method": cube.method,
         "method_used": constriction.AUTO_METHOD if cube.method == "auto" else cube.method,
     }
-    out = _compute(oxide, radius, weights, settings, cube.chunk, options)
+    rule = _rule(scenario, contact["force"].values, contact["force_normalized"].values)
+    per_lambda, uncropped = _compute(scenario, source, radius, weights, settings, rule, options)
+    counts = np.array([p["resistance"].shape[-1] for p in per_lambda])
+    widths = [half_widths(p["resistance"], rule) for p in per_lambda]
+    last = (np.stack([w[0][:, -1] for w in widths], axis=1), np.stack([w[1][:, -1] for w in widths], axis=1))
+    out: dict[str, Any] = _padded(per_lambda)
+    out["n_uncropped"] = uncropped
     clean = _clean(radius, weights, settings)
-    measured = _measured_crop_error(oxide, radius, weights, settings, out["resistance"])
-    return _dataset(scenario, contact, oxide, out, clean, settings, measured)
+    measured = _measured_crop_error(source, radius, weights, settings, out["resistance"])
+    return _dataset(scenario, contact, oxide, out, clean, settings, measured, counts, last)
 
 
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
