@@ -77,6 +77,10 @@ class StoredFields:
     def lambdas(self) -> tuple[float, ...]:
         return tuple(self.oxide["lambda"].values)
 
+    @property
+    def xi(self) -> np.ndarray:
+        return self.oxide["xi"].values
+
     def fields(self, index: int, realizations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         psi = self.oxide["psi"].transpose("lambda", "realization", "y", "x").values[index, realizations]
         threshold = self.oxide["threshold"].transpose("xi", "lambda", "realization").values[:, index, realizations]

@@ -114,15 +114,15 @@ def _chunk(
 
 
 def _field_chunk(
-    source: FieldSource, index: int, realizations: np.ndarray, radius: np.ndarray,
-    weights: np.ndarray, settings: dict[str, Any],
+    source: FieldSource, index: int, realizations: np.ndarray, xi_index: np.ndarray,
+    radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
 ) -> dict[str, Any]:
     """Regenerate the fields of ``realizations`` at lambda number ``index`` and run :func:`_chunk`.
 
-    Returns the terms shaped (xi, delta, realization).
+    Only the fractions ``xi_index`` are evaluated; returns the terms shaped (xi, delta, realization).
     """
     psi, threshold = source.fields(index, realizations)
-    out = _chunk(psi[None], threshold[:, None], radius, weights, settings)
+    out = _chunk(psi[None], threshold[xi_index][:, None], radius, weights, settings)
     return {k: (v[:, 0] if k in _TERMS else v) for k, v in out.items()}
 
 
@@ -161,86 +161,102 @@ def half_widths(resistance: np.ndarray, rule: dict[str, Any]) -> tuple[np.ndarra
     return alpha, gamma
 
 
-def _decide(scenario: Scenario, resistance: np.ndarray, rule: dict[str, Any]) -> int | None:
-    """Realizations one lambda keeps once ``resistance`` (xi, delta, r) is known, or None for more."""
+def _decide(scenario: Scenario, resistance: np.ndarray, rule: dict[str, Any]) -> list[int | None]:
+    """Realizations each xi keeps once ``resistance`` (xi, delta, r) is known (None: more needed)."""
     ox = scenario.oxide
     computed = resistance.shape[-1]
     if ox.ensemble == "fixed":
-        return ox.n_realizations
+        return [ox.n_realizations] * resistance.shape[0]
     alpha, _ = half_widths(resistance, rule)
-    stop = ensemble.stop_count(np.nan_to_num(alpha, nan=np.inf), ox.target_half_width, ox.min_realizations)
-    if stop is not None:
-        return stop
-    return ox.max_realizations if computed >= ox.max_realizations else None
+    alpha = np.nan_to_num(alpha, nan=np.inf)
+    out: list[int | None] = []
+    for row in alpha:
+        stop = ensemble.stop_count(row[None], ox.target_half_width, ox.min_realizations)
+        if stop is None and computed >= ox.max_realizations:
+            stop = ox.max_realizations
+        out.append(stop)
+    return out
 
 
 def _compute(
     scenario: Scenario, source: FieldSource, radius: np.ndarray, weights: np.ndarray,
     settings: dict[str, Any], rule: dict[str, Any], options: ComputeOptions,
-) -> tuple[list[dict[str, np.ndarray]], int]:
-    """Rounds of dask tasks over (lambda, realization chunk) until every lambda has its count.
+) -> tuple[list[list[dict[str, np.ndarray]]], int]:
+    """Rounds of dask tasks over (lambda, realization chunk) until every (xi, lambda) has its count.
 
     Round one computes the first batch of every lambda (the fixed count, or
     ``oxide.min_realizations``); each further round adds ``oxide.batch`` realizations (at most up
-    to the cap) to every lambda whose count is not decided. Realization r of a lambda always gets
-    the same field, and a lambda's count is the first prefix meeting the target, so neither the
-    batch, the chunk size nor the workers change any result.
+    to the cap) to every lambda, for the fractions xi whose count is not decided yet (a field
+    serves every xi, but an xi that reached its target costs nothing more). Realization r of a
+    lambda always gets the same field, and an xi's count is the first prefix meeting the target,
+    so neither the batch, the chunk size nor the workers change any result.
 
     Returns
     -------
     tuple
-        Per lambda the terms (xi, delta, realization) of its kept realizations, and the number of
-        entries recomputed uncropped.
+        ``[xi][lambda]`` the terms (delta, realization) of the kept realizations, and the number
+        of entries recomputed uncropped.
     """
     ox = scenario.oxide
-    n_lam = len(source.lambdas)
+    n_xi, n_lam = source.xi.size, len(source.lambdas)
     first = ox.n_realizations if ox.ensemble == "fixed" else ox.min_realizations
-    pieces: list[list[dict[str, Any]]] = [[] for _ in range(n_lam)]
+    pieces: list[list[tuple[np.ndarray, dict[str, Any]]]] = [[] for _ in range(n_lam)]
+    kept: list[list[int | None]] = [[None] * n_xi for _ in range(n_lam)]
     done = np.zeros(n_lam, int)
     want = np.full(n_lam, first)
-    kept: list[int | None] = [None] * n_lam
     shared = dask.delayed(radius), dask.delayed(weights), dask.delayed(settings)
     chunk = scenario.cube.chunk
-    while any(k is None for k in kept):
+    uncropped = 0
+    while any(k is None for row in kept for k in row):
         tasks, owner = [], []
         for a in range(n_lam):
-            if kept[a] is not None:
+            active = np.array([z for z in range(n_xi) if kept[a][z] is None], int)
+            if active.size == 0:
                 continue
             for start in range(done[a], want[a], chunk):
                 block = np.arange(start, min(start + chunk, want[a]))
-                tasks.append(dask.delayed(_field_chunk, pure=True)(source, a, block, *shared))
-                owner.append(a)
-        for a, piece in zip(owner, compute(*tasks, options=options)):
-            pieces[a].append(piece)
+                tasks.append(dask.delayed(_field_chunk, pure=True)(source, a, block, active, *shared))
+                owner.append((a, active))
+        for (a, active), piece in zip(owner, compute(*tasks, options=options)):
+            pieces[a].append((active, piece))
+            uncropped += piece["n_uncropped"]
         for a in range(n_lam):
-            if kept[a] is None:
-                done[a] = want[a]
-                resistance = np.concatenate([p["resistance"] for p in pieces[a]], axis=-1)
-                kept[a] = _decide(scenario, resistance, rule)
-                want[a] = min(done[a] + ox.batch, ox.max_realizations)
-    out = []
-    for a in range(n_lam):
-        out.append({
-            name: np.concatenate([p[name] for p in pieces[a]], axis=-1)[..., : kept[a]] for name in _TERMS
-        })
-    uncropped = int(sum(p["n_uncropped"] for per in pieces for p in per))
+            active = [z for z in range(n_xi) if kept[a][z] is None]
+            if not active:
+                continue
+            done[a] = want[a]
+            resistance = np.stack([_joined(pieces[a], z, "resistance") for z in active])
+            for z, count in zip(active, _decide(scenario, resistance, rule)):
+                kept[a][z] = count
+            want[a] = min(done[a] + ox.batch, ox.max_realizations)
+    out = [
+        [{name: _joined(pieces[a], z, name)[..., : kept[a][z]] for name in _TERMS} for a in range(n_lam)]
+        for z in range(n_xi)
+    ]
     return out, uncropped
 
 
-def _padded(per_lambda: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
-    """Stack the lambdas' terms into (xi, lambda, delta, realization), padded beyond each count.
+def _joined(pieces: list[tuple[np.ndarray, dict[str, Any]]], z: int, name: str) -> np.ndarray:
+    """One xi's term (delta, realization) of one lambda, from the pieces that evaluated it, in order."""
+    return np.concatenate(
+        [piece[name][int(np.flatnonzero(active == z)[0])] for active, piece in pieces if z in active], axis=-1
+    )
+
+
+def _padded(cells: list[list[dict[str, np.ndarray]]]) -> dict[str, np.ndarray]:
+    """Stack the cells' terms into (xi, lambda, delta, realization), padded beyond each count.
 
     Floats are padded with NaN, ``n_conducting`` with -1.
     """
-    n_max = max(p["resistance"].shape[-1] for p in per_lambda)
+    n_max = max(c["resistance"].shape[-1] for row in cells for c in row)
     out = {}
     for name in _TERMS:
-        first = per_lambda[0][name]
+        first = cells[0][0][name]
         fill = -1 if name == "n_conducting" else np.nan
-        shape = first.shape[:1] + (len(per_lambda),) + first.shape[1:2] + (n_max,)
-        array = np.full(shape, fill, dtype=first.dtype)
-        for a, p in enumerate(per_lambda):
-            array[:, a, :, : p[name].shape[-1]] = p[name]
+        array = np.full((len(cells), len(cells[0]), first.shape[0], n_max), fill, dtype=first.dtype)
+        for z, row in enumerate(cells):
+            for a, c in enumerate(row):
+                array[z, a, :, : c[name].shape[-1]] = c[name]
         out[name] = array
     return out
 
@@ -263,7 +279,8 @@ def _measured_crop_error(
     whole = dict(settings, crops=np.full(radius.shape[0], n), tolerance=0.0)
     first = np.arange(1)
     exact = np.stack(
-        [_field_chunk(source, a, first, radius, weights, whole)["resistance"] for a in range(len(source.lambdas))],
+        [_field_chunk(source, a, first, np.arange(source.xi.size), radius, weights, whole)["resistance"]
+         for a in range(len(source.lambdas))],
         axis=1,
     )
     finite = np.isfinite(exact)
@@ -298,7 +315,7 @@ def _dataset(
                              _attrs("1", "normalized force F' = 2F / (E* sqrt(R* sigma^3))")),
     }
     is_open = np.isposinf(out["resistance"])
-    padding = "NaN beyond n_realizations(lambda)"
+    padding = "NaN beyond n_realizations(xi, lambda)"
     grid = ("xi", "lambda")
     data_vars = {
         "resistance": (dims, out["resistance"], _attrs(
@@ -310,11 +327,11 @@ def _dataset(
             "ohm", f"interaction term rho* sum phi phi w w / d / (pi (sum phi w)^2), w in {w_unit}",
             comment=padding)),
         "n_conducting": (dims, out["n_conducting"].astype(np.int32),
-                         _attrs("1", "number of conducting spots", comment="-1 beyond n_realizations(lambda)")),
+                         _attrs("1", "number of conducting spots", comment="-1 beyond n_realizations(xi, lambda)")),
         "n_open": (("xi", "lambda", "delta"), is_open.sum(axis=-1).astype(np.int32),
                    _attrs("1", "number of open-circuit realizations (R = +inf)")),
-        "n_realizations": ("lambda", counts.astype(np.int32), _attrs(
-            "1", "realizations computed at this lambda (the leading entries of realization)",
+        "n_realizations": (grid, counts.astype(np.int32), _attrs(
+            "1", "realizations used at this (xi, lambda): the leading entries of realization",
             ensemble=ox.ensemble)),
         "rule_alpha_half_width": (grid, widths[0], _attrs(
             "1", "fast-rule relative half-width of alpha at n_realizations",
@@ -350,7 +367,7 @@ def _dataset(
             "min_realizations": ox.min_realizations,
             "max_realizations": ox.max_realizations,
             "stopping_rule": (
-                "per lambda, the smallest n >= min_realizations at which every xi's fast-rule "
+                "per (xi, lambda), the smallest n >= min_realizations at which the fast-rule "
                 "alpha half-width is <= target_half_width, else max_realizations"
             ),
         })
@@ -407,11 +424,11 @@ def build(
         "method_used": constriction.AUTO_METHOD if cube.method == "auto" else cube.method,
     }
     rule = _rule(scenario, contact["force"].values, contact["force_normalized"].values)
-    per_lambda, uncropped = _compute(scenario, source, radius, weights, settings, rule, options)
-    counts = np.array([p["resistance"].shape[-1] for p in per_lambda])
-    widths = [half_widths(p["resistance"], rule) for p in per_lambda]
-    last = (np.stack([w[0][:, -1] for w in widths], axis=1), np.stack([w[1][:, -1] for w in widths], axis=1))
-    out: dict[str, Any] = _padded(per_lambda)
+    cells, uncropped = _compute(scenario, source, radius, weights, settings, rule, options)
+    counts = np.array([[c["resistance"].shape[-1] for c in row] for row in cells])
+    widths = [[half_widths(c["resistance"][None], rule) for c in row] for row in cells]
+    last = tuple(np.array([[w[k][0, -1] for w in row] for row in widths]) for k in (0, 1))
+    out: dict[str, Any] = _padded(cells)
     out["n_uncropped"] = uncropped
     clean = _clean(radius, weights, settings)
     measured = _measured_crop_error(source, radius, weights, settings, out["resistance"])

@@ -10,11 +10,11 @@ replacement, recomputes the reduction at every fitted step and refits. The clean
 has a single deterministic curve, so its interval is the classical least-squares one
 (Student t on the fitted steps) and only reflects the misfit of the power law.
 
-Ensembles of different sizes: a cube may hold ``n_realizations(lambda)`` realizations per lambda
-(the adaptive ensemble, NaN beyond). Every reduction and the bootstrap of a lambda use that
-lambda's realizations only; one resample table is drawn per distinct count, in ascending order of
+Ensembles of different sizes: a cube may hold ``n_realizations(xi, lambda)`` realizations per
+cell (the adaptive ensemble, NaN beyond). Every reduction and the bootstrap of a cell use that
+cell's realizations only; one resample table is drawn per distinct count, in ascending order of
 the counts, from the one generator (a fixed ensemble thus draws exactly one table, as before).
-Cells whose lambda stopped at the cap short of the target are flagged.
+Cells that stopped at the cap short of the target are flagged.
 """
 
 from __future__ import annotations
@@ -66,42 +66,52 @@ def _bootstrap(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Bootstrap alpha and gamma, each shaped (xi, lambda, resample).
 
-    ``normalized`` holds R' on the fitted steps, shape (xi, lambda, step, realization); lambda
-    number a uses its first ``counts[a]`` realizations.
+    ``normalized`` holds R' on the fitted steps, shape (xi, lambda, step, realization); cell
+    (xi, lambda) uses its first ``counts[xi, lambda]`` realizations.
     """
     rng = np.random.default_rng(scenario.fits.seed)
-    n_xi, n_lam = normalized.shape[:2]
-    alpha = np.empty((n_xi, n_lam, scenario.fits.n_bootstrap))
+    alpha = np.empty(counts.shape + (scenario.fits.n_bootstrap,))
     gamma = np.empty_like(alpha)
     for n in np.unique(counts):  # ascending
-        lams = np.flatnonzero(counts == n)
         table = resample_counts(int(n), scenario.fits.n_bootstrap, rng)
-        values = normalized[:, lams, :, :n]
-        if scenario.fits.reduction == "median":
-            reduced = bootstrap_median(values, table)
-        else:
-            reduced = bootstrap_log_mean(values, table, scenario.fits.reduction == "geometric_mean")
-        fit = fit_power_law(force_n, np.moveaxis(reduced, -1, -2))
-        alpha[:, lams], gamma[:, lams] = fit.alpha, fit.gamma
+        if np.all(counts == n):  # one count (a fixed ensemble): the whole grid at once
+            return _bootstrap_fit(scenario, normalized[..., :n], force_n, table)
+        cells = np.nonzero(counts == n)
+        alpha[cells], gamma[cells] = _bootstrap_fit(scenario, normalized[..., :n][cells], force_n, table)
     return alpha, gamma
 
 
+def _bootstrap_fit(
+    scenario: Scenario, values: np.ndarray, force_n: np.ndarray, table: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """alpha and gamma (..., resample) of the resamples ``table`` of ``values`` (..., step, realization)."""
+    if scenario.fits.reduction == "median":
+        reduced = bootstrap_median(values, table)
+    else:
+        reduced = bootstrap_log_mean(values, table, scenario.fits.reduction == "geometric_mean")
+    fit = fit_power_law(force_n, np.moveaxis(reduced, -1, -2))
+    return fit.alpha, fit.gamma
+
+
 def _counts(cube: xr.Dataset) -> np.ndarray:
-    """Realizations per lambda: the cube's ``n_realizations``, else the whole realization axis."""
+    """Realizations per (xi, lambda): the cube's ``n_realizations``, else the whole axis."""
     if "n_realizations" in cube:
-        return cube["n_realizations"].values.astype(int)
-    return np.full(cube.sizes["lambda"], cube.sizes[DIM])
+        return cube["n_realizations"].transpose(*GRID).values.astype(int)
+    return np.full((cube.sizes["xi"], cube.sizes["lambda"]), cube.sizes[DIM])
 
 
 def _reduce(resistance: xr.DataArray, counts: np.ndarray, scale: float) -> xr.Dataset:
-    """:func:`reduce_realizations` of every lambda over its own realizations."""
+    """:func:`reduce_realizations` of every (xi, lambda) over its own realizations."""
     if np.all(counts == resistance.sizes[DIM]):
         return reduce_realizations(resistance, scale)
-    parts = [
-        reduce_realizations(resistance.isel({"lambda": [a], DIM: slice(0, int(n))}), scale)
-        for a, n in enumerate(counts)
+    rows = [
+        xr.concat([
+            reduce_realizations(resistance.isel({"xi": [z], "lambda": [a], DIM: slice(0, int(n))}), scale)
+            for a, n in enumerate(row)
+        ], dim="lambda", combine_attrs="override")
+        for z, row in enumerate(counts)
     ]
-    return xr.concat(parts, dim="lambda", combine_attrs="override")
+    return xr.concat(rows, dim="xi", combine_attrs="override")
 
 
 def _interval(samples: np.ndarray, confidence: float) -> np.ndarray:
@@ -145,7 +155,7 @@ def _ensemble_summary(
     """Realizations used, reached half-widths and flags per (xi, lambda)."""
     lower, upper = ds["alpha_ci"].sel(bound="lower"), ds["alpha_ci"].sel(bound="upper")
     g_lower, g_upper = ds["gamma_ci"].sel(bound="lower"), ds["gamma_ci"].sel(bound="upper")
-    used = xr.DataArray(counts, dims="lambda").broadcast_like(ds["alpha"]).transpose(*GRID)
+    used = xr.DataArray(counts, dims=GRID)
     out = {
         "n_realizations": used.astype(np.int32).assign_attrs(
             units="1", long_name="realizations used per (xi, lambda)"),
@@ -157,8 +167,9 @@ def _ensemble_summary(
     rule = "rule_alpha_half_width" in cube
     flagged = np.zeros(used.shape, np.int8)
     if rule and cube.attrs.get("ensemble") == "adaptive":
-        at_cap = used.values >= int(cube.attrs["max_realizations"])
-        flagged = (at_cap & ~(cube["rule_alpha_half_width"].values <= float(cube.attrs["target_half_width"])))
+        at_cap = counts >= int(cube.attrs["max_realizations"])
+        short = ~(cube["rule_alpha_half_width"].transpose(*GRID).values <= float(cube.attrs["target_half_width"]))
+        flagged = at_cap & short
     out["flagged"] = xr.DataArray(flagged.astype(np.int8), dims=GRID, attrs={
         "units": "1",
         "long_name": "1 where the adaptive ensemble stopped at max_realizations short of the target half-width",
