@@ -181,7 +181,7 @@ class Oxide:
         1000, "1", "adaptive: realizations added per round to a lambda still short of the target "
         "(compute granularity only: results do not depend on it)", ge=1
     )
-    max_realizations: int = _param(20000, "1", "adaptive: cap on the realizations per lambda", ge=2)
+    max_realizations: int = _param(30000, "1", "adaptive: cap on the realizations per (xi, lambda)", ge=2)
     target_half_width: float = _param(
         0.025, "1", "adaptive: target relative 95 % half-width of alpha at every xi", gt=0, lt=1
     )

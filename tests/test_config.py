@@ -123,7 +123,7 @@ def test_malformed_override_and_missing_file() -> None:
 
 def test_large_correlation_length_warns_with_mode_count() -> None:
     with pytest.warns(UserWarning, match=r"oxide.lambda = 60.*independent Fourier modes"):
-        load_scenario("paper", ["oxide.lambda=[60.0]"])
+        load_scenario("paper", ["oxide.lambda=[60.0]", "oxide.period=window"])
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         load_scenario("paper")
@@ -136,9 +136,11 @@ def test_stage_hashes_follow_only_their_inputs(paper) -> None:
     # downstream stages inherit their inputs' hashes
     assert oxide_change.config_hash("cube") != paper.config_hash("cube")
     assert oxide_change.config_hash("fits") != paper.config_hash("fits")
-    fit_change = load_scenario("paper", ["fits.min_force=100"])
+    fit_change = load_scenario("paper", ["fits.n_bootstrap=100"])
     assert fit_change.config_hash("cube") == paper.config_hash("cube")
     assert fit_change.config_hash("fits") != paper.config_hash("fits")
+    # the adaptive ensemble's stopping rule fits the steps with F >= fits.min_force
+    assert load_scenario("paper", ["fits.min_force=100"]).config_hash("cube") != paper.config_hash("cube")
 
 
 def test_parameter_table_documents_every_parameter(paper) -> None:

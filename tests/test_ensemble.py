@@ -139,3 +139,20 @@ def test_fits_use_each_lambdas_realizations_and_flag_the_cap(adaptive_inputs, ad
     # the bootstrap confirms the fast rule's half-widths (both estimate the same standard error)
     ratio = ds["alpha_half_width"] / ds["rule_alpha_half_width"]
     assert float(ratio.min()) > 0.6 and float(ratio.max()) < 1.6
+
+
+def test_doubling_the_spectral_resolution_stays_within_the_intervals(small: Scenario) -> None:
+    """A small case: resolution 6 against 12 at lambda 3 and 13 (the bench does the full grid)."""
+    from pipeline.bench import convergence
+
+    scenario = _adaptive(small, lambda_=[3.0, 13.0], xi=[0.5], min_realizations=150, max_realizations=150,
+                         target_half_width=0.5)
+    con = contact_stage.build(scenario)
+    runs = []
+    for resolution in (6.0, 12.0):
+        variant = dataclasses.replace(scenario, oxide=dataclasses.replace(scenario.oxide, spectral_resolution=resolution))
+        runs.append(convergence.fit_at(variant, con, OPTIONS)[0])
+    result = convergence.compare(*runs)
+    assert result["cells"] == 2
+    assert result["alpha_cells_over_combined"] == 0 and result["gamma_cells_over_combined"] == 0
+    assert all(r["alpha_change"] > 0 for r in result["rows"])  # really different fields

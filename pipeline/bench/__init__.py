@@ -20,7 +20,7 @@ from pipeline.store import atomic_path
 
 __all__ = ["BENCHMARKS", "run_benchmarks", "summary_lines"]
 
-BENCHMARKS: tuple[str, ...] = ("contact", "oxide", "cube")
+BENCHMARKS: tuple[str, ...] = ("contact", "oxide", "cube", "convergence")
 
 
 def _machine() -> dict[str, Any]:
