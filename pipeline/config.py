@@ -170,20 +170,20 @@ class Oxide:
     ensemble: str = _param(
         "adaptive",
         "1",
-        "realizations per lambda: a fixed count (n_realizations), or batches until every xi reaches "
-        "target_half_width on alpha or the cap max_realizations",
+        "realizations: a fixed count per lambda (n_realizations), or per (xi, lambda) batches until "
+        "alpha's 95 % half-width reaches target_half_width or the cap max_realizations",
         choices=("fixed", "adaptive"),
     )
     min_realizations: int = _param(
-        400, "1", "adaptive: first batch, the fewest realizations any lambda uses", ge=2
+        400, "1", "adaptive: first batch, the fewest realizations any (xi, lambda) uses", ge=2
     )
     batch: int = _param(
-        1000, "1", "adaptive: realizations added per round to a lambda still short of the target "
+        1000, "1", "adaptive: realizations added per round to a cell still short of the target "
         "(compute granularity only: results do not depend on it)", ge=1
     )
     max_realizations: int = _param(30000, "1", "adaptive: cap on the realizations per (xi, lambda)", ge=2)
     target_half_width: float = _param(
-        0.025, "1", "adaptive: target relative 95 % half-width of alpha at every xi", gt=0, lt=1
+        0.025, "1", "adaptive: target relative 95 % half-width of alpha in every cell", gt=0, lt=1
     )
     period: str = _param(
         "spectral",

@@ -4,8 +4,21 @@ Reads the discrete spots of ``contact.nc`` and the oxide fields of ``oxide.nc``.
 conducts where its cell's ``psi < threshold`` (the stored float32 values); its resistance at
 every load step follows Greenwood's Eqs. 11-15 (:mod:`pipeline.physics.constriction`), with
 interaction weights ``cube.weights`` (spot radii, Eq. 13, or cell contact areas as in the
-published code). The work is split over realization chunks of ``cube.chunk`` fields, each a
-dask task; every entry's result is bit-identical whatever the chunk size or scheduler.
+published code). The work is split over (lambda, realization chunk) dask tasks of about
+``cube.chunk`` x n_xi masks (``cube.chunk`` fields when every xi is evaluated, proportionally
+more when fewer fractions still need realizations); every entry's result is bit-identical
+whatever the chunk size or scheduler.
+
+The fields are not read from oxide.nc but regenerated inside each task from their seeds
+(:class:`pipeline.stages.oxide.FieldSource`, bit-identical to oxide.nc's record), so the task
+graph stays small and the ensemble can grow. ``oxide.ensemble = "fixed"`` computes
+``oxide.n_realizations`` fields per lambda. ``"adaptive"`` grows every (xi, lambda) cell in
+rounds: first ``oxide.min_realizations``, then ``oxide.batch`` more while the cell's fast-rule
+95 % half-width of alpha (:mod:`pipeline.physics.ensemble`, exact for the geometric-mean fit on
+the steps with F >= ``fits.min_force``) exceeds ``oxide.target_half_width``, up to
+``oxide.max_realizations``. A cell keeps the first prefix of realizations that meets the target,
+so the result does not depend on the batch. The realization axis is padded to the largest count
+(NaN, ``n_conducting`` -1) and ``n_realizations`` (xi, lambda) says how many entries are real.
 """
 
 from __future__ import annotations
@@ -205,7 +218,6 @@ def _compute(
     done = np.zeros(n_lam, int)
     want = np.full(n_lam, first)
     shared = dask.delayed(radius), dask.delayed(weights), dask.delayed(settings)
-    chunk = scenario.cube.chunk
     uncropped = 0
     while any(k is None for row in kept for k in row):
         tasks, owner = [], []
@@ -213,6 +225,9 @@ def _compute(
             active = np.array([z for z in range(n_xi) if kept[a][z] is None], int)
             if active.size == 0:
                 continue
+            # About cube.chunk * n_xi masks per task whatever the number of active fractions: the
+            # resistance kernel works in fixed blocks of masks, so small tasks would waste them.
+            chunk = scenario.cube.chunk * -(-n_xi // active.size)
             for start in range(done[a], want[a], chunk):
                 block = np.arange(start, min(start + chunk, want[a]))
                 tasks.append(dask.delayed(_field_chunk, pure=True)(source, a, block, active, *shared))
