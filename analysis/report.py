@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import xarray as xr
 
 from pipeline import __version__
@@ -130,7 +131,22 @@ def _ensemble_blocks(fits: xr.Dataset, scenario: Scenario) -> list[Block]:
                    f"{100 * float(hw_a.max()):.2f} % (unflagged cells {100 * float(hw_a.where(~fits['flagged'].astype(bool)).max()):.2f} %)."),
         _table(["lambda", "realizations", "max alpha half-width %", "max gamma half-width",
                 "max RMS log residual", "flagged"], rows),
+        Block("p", _smoothness(fits)),
     ]
+
+
+def _smoothness(fits: xr.Dataset) -> str:
+    """Kinks of alpha in lambda: second differences of log alpha against their 95 % bound."""
+    if fits.sizes["lambda"] < 3:
+        return "Smoothness in lambda: fewer than three lambdas."
+    log_alpha = np.log(fits["alpha"].transpose("xi", "lambda").values)
+    se = fits["alpha_half_width"].transpose("xi", "lambda").values / 1.96  # ~ standard error of log alpha
+    second = np.abs(log_alpha[:, 2:] - 2 * log_alpha[:, 1:-1] + log_alpha[:, :-2])
+    bound = 1.96 * np.sqrt(se[:, 2:] ** 2 + 4 * se[:, 1:-1] ** 2 + se[:, :-2] ** 2)
+    ratio = second / bound
+    return (f"Smoothness in lambda at fixed xi: |second difference of log alpha| over its 95 % bound is at most "
+            f"{np.nanmax(ratio):.2f}; {int(np.sum(ratio > 1))} of {ratio.size} interior points exceed 1 "
+            f"(about 5 % expected by chance).")
 
 
 def _surrogate_blocks(sur: xr.Dataset) -> list[Block]:

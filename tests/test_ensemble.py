@@ -86,9 +86,9 @@ def test_adaptive_counts_stop_where_the_interval_is_reached(adaptive_inputs, ada
         assert np.isnan(resistance[..., n:]).all() and not np.isnan(resistance[..., :n]).any()
         alpha, _ = cube.half_widths(resistance[..., :n], rule)
         if n < ox.max_realizations:
-            assert alpha[0, n - 1] <= ox.target_half_width
+            assert alpha[0, n - 1] <= cube.RULE_MARGIN * ox.target_half_width
         if n > ox.min_realizations:  # no earlier prefix reached it
-            assert np.all(alpha[0, ox.min_realizations - 1 : n - 1] > ox.target_half_width)
+            assert np.all(alpha[0, ox.min_realizations - 1 : n - 1] > cube.RULE_MARGIN * ox.target_half_width)
 
 
 @pytest.mark.parametrize(
@@ -133,7 +133,8 @@ def test_fits_use_each_lambdas_realizations_and_flag_the_cap(adaptive_inputs, ad
         np.testing.assert_allclose(ds["alpha"].isel(cell), alone["alpha"], rtol=1e-12)
         np.testing.assert_allclose(ds["resistance_quantile"].isel(cell), alone["resistance_quantile"], rtol=1e-12)
     at_cap = counts >= scenario.oxide.max_realizations
-    short = adaptive_cube["rule_alpha_half_width"].transpose("xi", "lambda").values > scenario.oxide.target_half_width
+    short = (adaptive_cube["rule_alpha_half_width"].transpose("xi", "lambda").values
+             > cube.RULE_MARGIN * scenario.oxide.target_half_width)
     np.testing.assert_array_equal(ds["flagged"].transpose("xi", "lambda").values, (at_cap & short).astype(np.int8))
     assert np.all(ds["alpha_half_width"] > 0) and np.all(ds["gamma_half_width"] > 0)
     # the bootstrap confirms the fast rule's half-widths (both estimate the same standard error)

@@ -168,7 +168,7 @@ def _ensemble_summary(
     flagged = np.zeros(used.shape, np.int8)
     if rule and cube.attrs.get("ensemble") == "adaptive":
         at_cap = counts >= int(cube.attrs["max_realizations"])
-        short = ~(cube["rule_alpha_half_width"].transpose(*GRID).values <= float(cube.attrs["target_half_width"]))
+        short = ~(cube["rule_alpha_half_width"].transpose(*GRID).values <= float(cube.attrs["rule_target_half_width"]))
         flagged = at_cap & short
     out["flagged"] = xr.DataArray(flagged.astype(np.int8), dims=GRID, attrs={
         "units": "1",
