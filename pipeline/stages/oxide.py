@@ -81,19 +81,20 @@ class FieldSource:
         return cls(tuple(bands(scenario)), tuple(ox.lambda_), np.asarray(ox.xi, float), ox.seed,
                    ox.amplitudes, ox.threshold, scenario.n_cells, scenario.cell_size)
 
+    def psi(self, index: int, realizations: np.ndarray) -> np.ndarray:
+        """Fields of ``realizations`` at lambda number ``index``: float32 (realization, y, x)."""
+        return oxide_field.realize(self.modes[index], self.seed, self.lambdas[index], realizations,
+                                   self.amplitudes, self.n_cells, self.cell_size)
+
     def fields(self, index: int, realizations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Fields (realization, y, x) and their float32 thresholds (xi, realization) at lambda ``index``."""
-        psi = oxide_field.realize(self.modes[index], self.seed, self.lambdas[index], realizations,
-                                  self.amplitudes, self.n_cells, self.cell_size)
+        psi = self.psi(index, realizations)
         return psi, _threshold_block(psi[None], xi=self.xi, rule=self.rule)[:, 0]
 
 
 def _psi_block(realizations: np.ndarray, *, source: FieldSource) -> np.ndarray:
     """Fields of a chunk of realizations at every lambda: float32 (lambda, realization, y, x)."""
-    return np.stack([
-        oxide_field.realize(m, source.seed, lam, realizations, source.amplitudes, source.n_cells, source.cell_size)
-        for m, lam in zip(source.modes, source.lambdas)
-    ])
+    return np.stack([source.psi(a, realizations) for a in range(len(source.lambdas))])
 
 
 def _threshold_block(psi: np.ndarray, *, xi: np.ndarray, rule: str) -> np.ndarray:
