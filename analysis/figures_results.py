@@ -147,8 +147,9 @@ def fig10_alpha_gamma(path: Path, fits: xr.Dataset, surrogate: xr.Dataset) -> Pa
             err = np.abs(np.vstack([value - ci.sel(bound="lower"), ci.sel(bound="upper") - value]))
             ax.errorbar(fits.xi, value, yerr=err, fmt="o", ms=3, color=color, capsize=2, label=f"{lam:g}")
             coef = (surrogate[f"{name}_coef_w"].values, surrogate[f"{name}_coef_z"].values)
-            ax.plot(xi_dense, evaluate(*coef, lam, xi_dense), color=color, lw=1)
-        ax.set(xlabel="oxide fraction xi", ylabel=name, title=f"{name}: fits (markers, CI) and SVD surrogate (lines)")
+            transform = str(surrogate.attrs.get(f"{name}_transform", "identity"))
+            ax.plot(xi_dense, evaluate(*coef, lam, xi_dense, transform), color=color, lw=1)
+        ax.set(xlabel="oxide fraction xi", ylabel=name, title=f"{name}: fits (markers, 95 % CI) and surrogate (lines)")
         ax.grid(True, alpha=0.3)
         error = 100 * surrogate[f"{name}_relative_error"].transpose("lambda", "xi")
         ax = axes[1, col]
@@ -159,6 +160,29 @@ def fig10_alpha_gamma(path: Path, fits: xr.Dataset, surrogate: xr.Dataset) -> Pa
         ax.set(xlabel="xi", ylabel="lambda", title=f"{name}: surrogate relative error (%)")
         fig.colorbar(mesh, ax=ax)
     axes[0, 0].legend(title="lambda", fontsize=7, ncol=2)
+    return _save(fig, path)
+
+
+def fig10_realizations(path: Path, fits: xr.Dataset) -> Path:
+    """Beside Fig. 10: heat maps of the realizations used and of alpha's reached half-width."""
+    lams, xis = fits["lambda"].values, fits["xi"].values
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+    panels = (
+        ("n_realizations", "realizations used", "viridis", 1.0),
+        ("alpha_half_width", "alpha: reached 95 % half-width (%)", "magma", 100.0),
+    )
+    flagged = fits["flagged"].transpose("lambda", "xi").values.astype(bool)
+    for ax, (name, title, cmap, factor) in zip(axes, panels):
+        values = factor * fits[name].transpose("lambda", "xi").values
+        mesh = ax.imshow(values, origin="lower", cmap=cmap, aspect="auto")
+        for (a, z), value in np.ndenumerate(values):
+            ax.text(z, a, f"{value:.0f}" if factor == 1.0 else f"{value:.1f}", ha="center", va="center",
+                    fontsize=6, color="w" if value < np.nanmean(values) else "k")
+        ax.plot(*np.nonzero(flagged.T), "rx", ms=10)
+        ax.set_xticks(range(xis.size), [f"{v:g}" for v in xis])
+        ax.set_yticks(range(lams.size), [f"{v:g}" for v in lams])
+        ax.set(xlabel="xi", ylabel="lambda", title=title)
+        fig.colorbar(mesh, ax=ax)
     return _save(fig, path)
 
 
@@ -191,7 +215,7 @@ def fig11_barber(path: Path, fits: xr.Dataset) -> Path:
 
 
 def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
-    """Write Figs. 3, 8, 9, 10 and 11 under ``out_dir``; returns the files in that order."""
+    """Write Figs. 3, 8, 9, 10 (with its realizations map) and 11 under ``out_dir``, in that order."""
     cube = read_stage(data_dir, "cube", scenario)
     fits = read_stage(data_dir, "fits", scenario)
     surrogate = read_stage(data_dir, "surrogate", scenario)
@@ -201,5 +225,6 @@ def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
         fig_load(out_dir / "fig8_resistance.png", cube, fits, normalized=False),
         fig_load(out_dir / "fig9_conductance.png", cube, fits, normalized=True),
         fig10_alpha_gamma(out_dir / "fig10_alpha_gamma.png", fits, surrogate),
+        fig10_realizations(out_dir / "fig10_realizations.png", fits),
         fig11_barber(out_dir / "fig11_barber.png", fits),
     ]

@@ -16,6 +16,7 @@ import difflib
 import hashlib
 import json
 import math
+import os
 import tomllib
 import warnings
 from dataclasses import dataclass, field
@@ -179,7 +180,37 @@ class Oxide:
         each=True,
         key="lambda",
     )
-    n_realizations: int = _param(500, "1", "random fields per correlation length", ge=2)
+    n_realizations: int = _param(
+        500, "1", "fixed ensemble: random fields per correlation length (adaptive: fields recorded in oxide.nc)", ge=2
+    )
+    ensemble: str = _param(
+        "adaptive",
+        "1",
+        "realizations: a fixed count per lambda (n_realizations), or per (xi, lambda) batches until "
+        "alpha's 95 % half-width reaches target_half_width or the cap max_realizations",
+        choices=("fixed", "adaptive"),
+    )
+    min_realizations: int = _param(
+        400, "1", "adaptive: first batch, the fewest realizations any (xi, lambda) uses", ge=2
+    )
+    batch: int = _param(
+        1000, "1", "adaptive: realizations added per round to a cell still short of the target "
+        "(compute granularity only: results do not depend on it)", ge=1
+    )
+    max_realizations: int = _param(30000, "1", "adaptive: cap on the realizations per (xi, lambda)", ge=2)
+    target_half_width: float = _param(
+        0.025, "1", "adaptive: target relative 95 % half-width of alpha in every cell", gt=0, lt=1
+    )
+    period: str = _param(
+        "spectral",
+        "1",
+        "period of the random field: the spot window (the published lattice), or a period of "
+        "P >= n_cells cells with k1 = P / (2 lambda) >= spectral_resolution lattice steps",
+        choices=("window", "spectral"),
+    )
+    spectral_resolution: float = _param(
+        16.0, "1", "period = spectral: k1 in lattice steps 2 pi / P (annulus ~ 4 pi res^2 modes)", gt=0
+    )
     seed: int = _param(20240531, "1", "root seed of every random stream", ge=0)
     hurst: float = _param(0.5, "1", "Hurst exponent H of the spectrum k^-2(1+H)", gt=0, lt=1)
     ks_ratio: float = _param(3.0, "1", "upper to lower cut-off wavenumber ks/k1", gt=1)
@@ -317,7 +348,8 @@ SECTIONS: dict[str, type] = {
 STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "contact": ("material", "roughness", "indenter", "loading", "contact"),
     "oxide": ("roughness.eta", "indenter.radius", "contact.window", "oxide"),
-    "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance"),
+    # fits.min_force and fits.confidence: the adaptive ensemble's stopping rule
+    "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance", "fits.min_force", "fits.confidence"),
     "fits": ("fits",),
     "surrogate": (
         "surrogate.method",
@@ -604,8 +636,9 @@ def check_domains(s: Scenario) -> None:
             f"contact.window = {s.contact.window!r} is out of range: the window holds fewer than "
             f"3 cells of pitch 1/sqrt(eta) = {s.cell_size:.3g} m"
         )
+    _check_ensemble(s)
     longest = max(s.oxide.lambda_) * s.cell_size
-    if longest > window:
+    if s.oxide.period == "window" and longest > window:
         n_modes = _modes_in_band(s, max(s.oxide.lambda_))
         if n_modes == 0:
             raise ConfigError(
@@ -622,13 +655,51 @@ def check_domains(s: Scenario) -> None:
 
 
 def _modes_in_band(s: Scenario, lam: float) -> int:
-    """Independent (half-plane) wave vectors of the window's lattice in k1 <= |k| <= ks."""
-    from pipeline.physics.oxide_field import band  # numpy only when the check needs it
+    """Independent (half-plane) wave vectors of the window's lattice in k1 <= |k| <= ks.
 
-    try:
-        return band(s.n_cells, s.cell_size, lam, s.oxide.ks_ratio, s.oxide.hurst).size
-    except ValueError:  # the band holds no lattice mode
-        return 0
+    Pure arithmetic, the count of ``pipeline.physics.oxide_field.band`` (a test checks both agree).
+    """
+    k1 = s.n_cells / (2.0 * lam)
+    ks = s.oxide.ks_ratio * k1
+    top = math.floor(ks)
+    return sum(
+        1
+        for j in range(top + 1)
+        for i in range(-top, top + 1)
+        if (j > 0 or i > 0) and k1 <= math.hypot(i, j) <= ks
+    )
+
+
+#: Bytes per realization and coefficient-table entry while fields are evaluated (complex table,
+#: its partial DFT and workspace).
+FIELD_BYTES_PER_ENTRY = 48
+
+
+def _available_memory() -> int:
+    """Physical memory of the machine, in bytes."""
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def _check_ensemble(s: Scenario) -> None:
+    """Adaptive-ensemble limits and the memory a spectral resolution needs."""
+    ox = s.oxide
+    if ox.ensemble == "adaptive" and ox.max_realizations < ox.min_realizations:
+        raise ConfigError(
+            f"oxide.max_realizations = {ox.max_realizations} is out of range: must be >= "
+            f"oxide.min_realizations = {ox.min_realizations} (the first batch)"
+        )
+    if ox.period != "spectral":
+        return
+    top = math.floor(ox.ks_ratio * max(ox.spectral_resolution, s.n_cells / (2.0 * min(ox.lambda_))))
+    fields = max(ox.chunk, s.cube.chunk)
+    need = FIELD_BYTES_PER_ENTRY * fields * (top + 1) * (2 * top + 1)
+    have = _available_memory()
+    if need > have:
+        raise ConfigError(
+            f"oxide.spectral_resolution = {ox.spectral_resolution:g} is out of range: a chunk of "
+            f"{fields} fields would need {need / 2**30:.3g} GiB, more than the machine's "
+            f"{have / 2**30:.3g} GiB; lower it (the band's top index is {top})"
+        )
 
 
 def _build(data: Mapping[str, Any], *, name: str, description: str) -> Scenario:

@@ -19,6 +19,7 @@ SMALL_OVERRIDES = {
     "contact.n_radial": 160,
     "oxide.xi": [0.2, 0.5, 0.8],
     "oxide.lambda": [1.0, 5.0, 13.0],
+    "oxide.ensemble": "fixed",
     "oxide.n_realizations": 8,
     "oxide.chunk": 3,
     "cube.chunk": 3,

@@ -42,6 +42,8 @@ def test_published_differs_only_in_its_conventions(paper) -> None:
         "contact.window",
         "cube.weights",
         "surrogate.method",  # the paper's SVD-then-polyfit surrogate, as published
+        "oxide.period",  # the window's lattice, as published
+        "oxide.ensemble",  # 500 fixed realizations, as published
     }
 
 
@@ -131,7 +133,7 @@ def test_malformed_override_and_missing_file() -> None:
 
 def test_large_correlation_length_warns_with_mode_count() -> None:
     with pytest.warns(UserWarning, match=r"oxide.lambda = 60.*independent Fourier modes"):
-        resolve(load_scenario("paper", ["oxide.lambda=[60.0]"]))
+        resolve(load_scenario("paper", ["oxide.lambda=[60.0]", "oxide.period=window"]))
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         resolve(load_scenario("paper"))
@@ -144,9 +146,11 @@ def test_stage_hashes_follow_only_their_inputs(paper) -> None:
     # downstream stages inherit their inputs' hashes
     assert oxide_change.config_hash("cube") != paper.config_hash("cube")
     assert oxide_change.config_hash("fits") != paper.config_hash("fits")
-    fit_change = resolve(load_scenario("paper", ["fits.min_force=100"]))
+    fit_change = resolve(load_scenario("paper", ["fits.n_bootstrap=100"]))
     assert fit_change.config_hash("cube") == paper.config_hash("cube")
     assert fit_change.config_hash("fits") != paper.config_hash("fits")
+    # the adaptive ensemble's stopping rule fits the steps with F >= fits.min_force
+    assert resolve(load_scenario("paper", ["fits.min_force=100"])).config_hash("cube") != paper.config_hash("cube")
 
 
 def test_parameter_table_documents_every_parameter(paper) -> None:

@@ -63,7 +63,32 @@ def _oxide(n: int = N, n_real: int = N_REAL, seed: int = 0) -> xr.Dataset:
 
 
 def _scenario(**cube_overrides):
-    return load_scenario("paper", {f"cube.{k}": v for k, v in cube_overrides.items()})
+    fixed = {"oxide.ensemble": "fixed", "oxide.n_realizations": N_REAL}
+    return load_scenario("paper", {**fixed, **{f"cube.{k}": v for k, v in cube_overrides.items()}})
+
+
+@dataclasses.dataclass(frozen=True)
+class StoredFields:
+    """A field source that serves an oxide dataset's psi and thresholds (synthetic fields)."""
+
+    oxide: xr.Dataset
+
+    @property
+    def lambdas(self) -> tuple[float, ...]:
+        return tuple(self.oxide["lambda"].values)
+
+    @property
+    def xi(self) -> np.ndarray:
+        return self.oxide["xi"].values
+
+    def fields(self, index: int, realizations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        psi = self.oxide["psi"].transpose("lambda", "realization", "y", "x").values[index, realizations]
+        threshold = self.oxide["threshold"].transpose("xi", "lambda", "realization").values[:, index, realizations]
+        return psi, threshold
+
+
+def _build(scenario, contact, oxide, options=OPTIONS):
+    return cube.build(scenario, contact, oxide, options, source=StoredFields(oxide))
 
 
 @pytest.fixture(scope="module")
@@ -73,7 +98,7 @@ def inputs():
 
 @pytest.fixture(scope="module")
 def built(inputs):
-    return cube.build(_scenario(chunk=3), *inputs, OPTIONS)
+    return _build(_scenario(chunk=3), *inputs)
 
 
 def test_layout_units_and_attrs(built):
@@ -94,7 +119,7 @@ def test_layout_units_and_attrs(built):
 
 
 def test_every_entry_matches_the_double_sum(inputs, built):
-    direct = cube.build(_scenario(method="direct", crop_tolerance=0.0, chunk=N_REAL), *inputs, OPTIONS)
+    direct = _build(_scenario(method="direct", crop_tolerance=0.0, chunk=N_REAL), *inputs)
     r, ref = built["resistance"].values, direct["resistance"].values
     assert np.array_equal(np.isinf(r), np.isinf(ref)) and not np.isnan(r).any()
     finite = np.isfinite(ref)
@@ -103,15 +128,15 @@ def test_every_entry_matches_the_double_sum(inputs, built):
 
 
 def test_uncropped_fast_path_within_1e_12(inputs):
-    fast = cube.build(_scenario(crop_tolerance=0.0), *inputs, OPTIONS)["resistance"].values
-    ref = cube.build(_scenario(method="direct", crop_tolerance=0.0), *inputs, OPTIONS)["resistance"].values
+    fast = _build(_scenario(crop_tolerance=0.0), *inputs)["resistance"].values
+    ref = _build(_scenario(method="direct", crop_tolerance=0.0), *inputs)["resistance"].values
     finite = np.isfinite(ref)
     assert np.max(np.abs(fast[finite] / ref[finite] - 1.0)) <= 1e-12
 
 
 def test_bit_identical_for_any_chunk_size(inputs, built):
     for chunk in (1, 4, N_REAL):
-        other = cube.build(_scenario(chunk=chunk), *inputs, OPTIONS)
+        other = _build(_scenario(chunk=chunk), *inputs)
         for name in ("resistance", "resistance_self", "resistance_interaction", "n_conducting"):
             np.testing.assert_array_equal(other[name].values, built[name].values)
 
@@ -119,7 +144,7 @@ def test_bit_identical_for_any_chunk_size(inputs, built):
 def test_no_oxide_gives_the_clean_value(inputs):
     contact, oxide = inputs
     clean_oxide = oxide.assign(threshold=oxide["threshold"] * 0 + np.float32(1e30))
-    ds = cube.build(_scenario(), contact, clean_oxide, OPTIONS)
+    ds = _build(_scenario(), contact, clean_oxide)
     expected = ds["resistance_clean"].broadcast_like(ds["resistance"])
     np.testing.assert_allclose(ds["resistance"], expected, rtol=1e-6)
     assert np.all(ds["n_conducting"].values == N * N)
@@ -128,7 +153,7 @@ def test_no_oxide_gives_the_clean_value(inputs):
 def test_all_oxide_is_open_and_counted(inputs):
     contact, oxide = inputs
     covered = oxide.assign(threshold=oxide["threshold"] * 0 - np.float32(1e30))
-    ds = cube.build(_scenario(), contact, covered, OPTIONS)
+    ds = _build(_scenario(), contact, covered)
     for name in ("resistance", "resistance_self", "resistance_interaction"):
         assert np.all(np.isposinf(ds[name].values))
     assert np.all(ds["n_open"].values == N_REAL) and ds.attrs["n_open_total"] == ds["resistance"].size
@@ -138,7 +163,7 @@ def test_some_open_circuits_are_kept_as_inf(inputs):
     contact, oxide = inputs
     thr = oxide["threshold"].copy()
     thr[-1, :, :3] = np.float32(-1e30)  # the first three fields fully covered at the largest xi
-    ds = cube.build(_scenario(), contact, oxide.assign(threshold=thr), OPTIONS)
+    ds = _build(_scenario(), contact, oxide.assign(threshold=thr))
     assert np.all(ds["n_open"].values[-1] >= 3)
     assert np.all(np.isposinf(ds["resistance"].values[-1, :, :, :3]))
     assert not np.isnan(ds["resistance"].values).any()
@@ -152,7 +177,7 @@ def test_threshold_ties_are_oxide_as_in_the_oxide_stage(inputs):
     assert threshold.dtype == np.float32
     assert np.all((psi[None] == threshold[..., None, None]).any(axis=(-2, -1)))  # a tie in every field
     ties = oxide.assign(threshold=(("xi", "lambda", "realization"), threshold))
-    ds = cube.build(_scenario(), contact, ties, OPTIONS)
+    ds = _build(_scenario(), contact, ties)
     covered = oxide_field.covered_count(np.asarray(XI), N * N)
     expected = N * N - covered[:, None, None, None]  # every cell holds a spot (radius > 0)
     np.testing.assert_array_equal(ds["n_conducting"], np.broadcast_to(expected, ds["n_conducting"].shape))
@@ -161,7 +186,7 @@ def test_threshold_ties_are_oxide_as_in_the_oxide_stage(inputs):
 
 
 def test_resistance_scales_with_rho(inputs, built):
-    scaled = cube.build(load_scenario("paper", {"material.rho": 2 * 7.2e-7, "cube.chunk": 3}), *inputs, OPTIONS)
+    scaled = _build(load_scenario("paper", {"material.rho": 2 * 7.2e-7, "cube.chunk": 3, "oxide.ensemble": "fixed", "oxide.n_realizations": N_REAL}), *inputs)
     np.testing.assert_allclose(scaled["resistance"], 2 * built["resistance"], rtol=1e-14)
 
 
@@ -173,14 +198,14 @@ def test_resistance_grows_with_xi_on_average(inputs, built):
 
 def test_same_cube_on_a_local_distributed_cluster(inputs, built):
     pytest.importorskip("distributed")
-    ds = cube.build(_scenario(chunk=3), *inputs, ComputeOptions(workers=2, progress=False))
+    ds = _build(_scenario(chunk=3), *inputs, ComputeOptions(workers=2, progress=False))
     # Workers run single-threaded BLAS; this process may not (the CLI pins it to one thread,
     # where the two agree bit for bit), and a multi-threaded GEMM may round differently.
     np.testing.assert_allclose(ds["resistance"].values, built["resistance"].values, rtol=1e-14)
 
 
 def test_area_weights_change_only_the_interaction_term(inputs, built):
-    area = cube.build(_scenario(weights="area", chunk=3), *inputs, OPTIONS)
+    area = _build(_scenario(weights="area", chunk=3), *inputs)
     np.testing.assert_array_equal(area["resistance_self"], built["resistance_self"])
     np.testing.assert_array_equal(area["n_conducting"], built["n_conducting"])
     assert not np.allclose(area["resistance_interaction"], built["resistance_interaction"])
@@ -198,6 +223,7 @@ def test_run_writes_atomically_and_keeps_the_old_file(tmp_path, inputs, monkeypa
     contact, oxide = inputs
     store.write_dataset(contact, tmp_path, "contact", scenario)
     store.write_dataset(oxide, tmp_path, "oxide", scenario)
+    monkeypatch.setattr(cube.FieldSource, "of", classmethod(lambda cls, s: StoredFields(oxide)))
     path = cube.run(scenario, tmp_path, OPTIONS)
     before = path.read_bytes()
     written = store.read_stage(tmp_path, "cube", scenario)
@@ -216,4 +242,4 @@ def test_run_writes_atomically_and_keeps_the_old_file(tmp_path, inputs, monkeypa
 def test_mismatched_grids_are_rejected(inputs):
     contact, _ = inputs
     with pytest.raises(ValueError, match="cell centres"):
-        cube.build(_scenario(), contact, _oxide(n=N - 2), OPTIONS)
+        _build(_scenario(), contact, _oxide(n=N - 2))

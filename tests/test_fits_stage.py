@@ -9,7 +9,7 @@ import pytest
 import xarray as xr
 from scipy import stats
 
-from analysis.reductions import (
+from pipeline.reductions import (
     geometric_mean,
     open_probability,
     quantiles,

@@ -199,3 +199,68 @@ def test_unknown_amplitude_model_is_rejected() -> None:
     modes = of.band(N_CELLS, CELL, 5.0, 3.0, 0.5)
     with pytest.raises(ValueError, match="amplitudes"):
         of.coefficients(modes, of.field_stream(0, 5.0, 0), "gaussian")
+
+
+# ------------------------------------------------------------------ spectral period
+def _spectral(lam: float, count: int, resolution: float, n_cells: int = N_CELLS, amplitudes: str = "ideal"):
+    period = of.spectral_period(n_cells, lam, resolution)
+    modes = of.band(n_cells, CELL, lam, 3.0, 0.5, period)
+    coeffs = np.stack(
+        [of.coefficients(modes, of.field_stream(5, lam, r), amplitudes) for r in range(count)]
+    )
+    return period, modes, coeffs
+
+
+@pytest.mark.parametrize("lam", [3.0, 13.0, 23.0])
+def test_centre_values_equal_direct_summation(lam: float) -> None:
+    _, modes, coeffs = _spectral(lam, 2, 7.0)
+    x = cell_centres(N_CELLS, CELL)
+    direct = of.field_at_points(modes, coeffs[1], x[None, :], x[:, None])
+    np.testing.assert_allclose(of.centre_values(modes, coeffs, N_CELLS, CELL)[1], direct, rtol=0, atol=1e-11)
+
+
+def test_spectral_period_grows_with_lambda_and_keeps_thousands_of_modes() -> None:
+    sizes = []
+    for lam in (1.0, 13.0, 15.0, 21.0, 23.0, 50.0):
+        period = of.spectral_period(N_CELLS, lam, 16.0)
+        assert period >= N_CELLS and period / (2 * lam) >= 16.0
+        sizes.append(of.band(N_CELLS, CELL, lam, 3.0, 0.5, period).size)
+    assert min(sizes) > 3000  # against 20 .. 62 modes on the window's lattice at lambda 13 .. 23
+
+
+@pytest.mark.parametrize("amplitudes", ["ideal", "rayleigh"])
+def test_realized_spectrum_matches_phi_on_the_annulus(amplitudes: str) -> None:
+    """Periodogram over one whole period (averaged over realizations) against Phi(k) = k^-3."""
+    lam, resolution = 5.0, 6.0
+    period, modes, coeffs = _spectral(lam, 300, resolution, n_cells=15, amplitudes=amplitudes)
+    values = of.centre_values(modes, coeffs, period, CELL)  # every lattice point of the period
+    power = (np.abs(np.fft.fft2(values, norm="forward")) ** 2).mean(axis=0)
+    q = np.fft.fftfreq(period, 1.0 / period)
+    radius = np.hypot(q[:, None], q[None, :])
+    k1 = period / (2 * lam)
+    inside = (radius >= k1) & (radius <= 3 * k1)
+    assert power[~inside].max() < 1e-20  # nothing outside the band
+    # |c|^2 / 4 on each of the two Hermitian partners; Phi normalized to unit variance
+    phi = radius[inside] ** -3.0
+    expected = phi / phi.sum()
+    rings = np.rint(radius[inside] / 2).astype(int)
+    used = np.bincount(rings) > 0
+    got = np.bincount(rings, power[inside])[used] / np.bincount(rings, expected)[used]
+    tolerance = 1e-12 if amplitudes == "ideal" else 0.1
+    np.testing.assert_allclose(got, 1.0, atol=tolerance)
+    assert power.sum() == pytest.approx(1.0, abs=1e-12 if amplitudes == "ideal" else 0.05)
+
+
+@pytest.mark.parametrize("lam", [1.0, 23.0, 50.0])
+def test_unit_variance_and_xi_quantile_at_the_cell_centres(lam: float) -> None:
+    """Ensemble variance 1 and P(psi >= psi0(xi)) = xi at every lambda, also far above the window."""
+    _, modes, coeffs = _spectral(lam, 400, 16.0)
+    values = (of.centre_values(modes, coeffs, N_CELLS, CELL) if modes.period > N_CELLS * CELL
+              else of.cell_values(modes, coeffs, N_CELLS))
+    per_field = values.reshape(values.shape[0], -1)
+    # realizations are independent; cells within one are not: errors from the spread of field means
+    second = (per_field**2).mean(axis=1)
+    assert abs(second.mean() - 1.0) < 4 * second.std(ddof=1) / np.sqrt(second.size) + 1e-3
+    for xi in (0.1, 0.5, 0.9):
+        share = (per_field >= of.theoretical_threshold(np.array(xi))).mean(axis=1)
+        assert abs(share.mean() - xi) < 4 * share.std(ddof=1) / np.sqrt(share.size) + 1e-3

@@ -135,7 +135,11 @@ def test_run_writes_oxide_nc_with_provenance(small: Scenario, built: xr.Dataset,
         ("oxide.n_realizations=1", "oxide.n_realizations"),
         ("oxide.amplitudes=gaussian", "oxide.amplitudes"),
         ("oxide.threshold=median", "oxide.threshold"),
-        ("oxide.lambda=[500.0]", "oxide.lambda"),
+        ("oxide.period=window;oxide.lambda=[500.0]", "oxide.lambda"),
+        ("oxide.target_half_width=0.0", "oxide.target_half_width"),
+        ("oxide.target_half_width=1.0", "oxide.target_half_width"),
+        ("oxide.min_realizations=300;oxide.max_realizations=200", "oxide.max_realizations"),
+        ("oxide.spectral_resolution=1e5", "oxide.spectral_resolution"),
     ],
 )
 def test_cli_rejects_bad_oxide_parameters(
@@ -144,7 +148,8 @@ def test_cli_rejects_bad_oxide_parameters(
     existing = tmp_path / "oxide.nc"
     existing.write_bytes(b"previous oxide.nc")
     os.utime(existing, (1_000_000_000, 1_000_000_000))
-    assert cli.main(["oxide", "--set", override, "--data-dir", str(tmp_path), "--no-progress"]) == 2
+    sets = [a for o in override.split(";") for a in ("--set", o)]
+    assert cli.main(["oxide", *sets, "--data-dir", str(tmp_path), "--no-progress"]) == 2
     assert name in capsys.readouterr().err
     assert existing.read_bytes() == b"previous oxide.nc"
     assert existing.stat().st_mtime == 1_000_000_000
@@ -154,14 +159,43 @@ def test_cli_rejects_bad_oxide_parameters(
 def test_window_smaller_than_correlation_length_warns_with_mode_count() -> None:
     lam = 60.0  # l_O = 60 cells > the 57-cell window
     with pytest.warns(UserWarning, match=r"oxide.lambda = 60.*only (\d+) independent Fourier modes") as record:
-        scenario = resolve(load_scenario("paper", {"oxide.lambda": [5.0, lam]}))
+        scenario = resolve(load_scenario("paper", {"oxide.lambda": [5.0, lam], "oxide.period": "window"}))
     modes = oxide_field.band(scenario.n_cells, scenario.cell_size, lam, 3.0, 0.5)
     assert f"only {modes.size} independent" in str(record[0].message)
 
 
 def test_window_without_modes_is_an_error() -> None:
     with pytest.raises(ConfigError, match="oxide.lambda"):
-        resolve(load_scenario("paper", {"oxide.lambda": [500.0]}))
+        resolve(load_scenario("paper", {"oxide.lambda": [500.0], "oxide.period": "window"}))
+
+
+def test_spectral_period_has_modes_at_any_lambda() -> None:
+    scenario = resolve(load_scenario("paper", {"oxide.lambda": [500.0], "oxide.spectral_resolution": 4.0}))
+    assert oxide.bands(scenario)[0].size > 100
+
+
+@pytest.mark.parametrize("lam", [1.0, 3.0, 13.0, 19.0, 23.0, 50.0, 60.0])
+def test_config_mode_count_is_the_band_size(paper: Scenario, lam: float) -> None:
+    from pipeline.config import _modes_in_band
+
+    assert _modes_in_band(paper, lam) == oxide_field.band(paper.n_cells, paper.cell_size, lam, 3.0, 0.5).size
+
+
+def test_adaptive_record_is_the_first_batch_and_cube_regenerates_it(small: Scenario) -> None:
+    scenario = dataclasses.replace(
+        small, oxide=dataclasses.replace(small.oxide, ensemble="adaptive", min_realizations=5, chunk=2,
+                                         period="spectral", threshold="empirical")
+    )
+    record = oxide.build(scenario)
+    assert record.sizes["realization"] == 5
+    source = oxide.FieldSource.of(scenario)
+    for a in range(len(scenario.oxide.lambda_)):
+        psi, threshold = source.fields(a, np.arange(2, 5))
+        np.testing.assert_array_equal(psi, record["psi"].values[a, 2:5])
+        np.testing.assert_array_equal(threshold, record["threshold"].values[:, a, 2:5])
+    assert record["period_cells"].values.tolist() == [
+        oxide_field.spectral_period(scenario.n_cells, lam, 16.0) for lam in scenario.oxide.lambda_
+    ]
 
 
 def test_figure_is_written(small: Scenario, tmp_path: Path) -> None:
@@ -172,7 +206,9 @@ def test_figure_is_written(small: Scenario, tmp_path: Path) -> None:
 
 def test_bench_reports_ratio_and_error(small: Scenario, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(bench_oxide, "REPEATS", 1)
-    result = bench_oxide.run(_with(small, lambda_=[1.0, 5.0], n_realizations=4))
-    assert result["fine_pixels"] % small.n_cells == 0
-    assert result["fine_subset_max_abs_error"] < 1e-5  # float32 rounding of unit-variance values
-    assert result["speedup_per_field"] > 1
+    monkeypatch.setattr(bench_oxide, "PER_LAMBDA_FIELDS", 3)
+    for period in ("window", "spectral"):
+        result = bench_oxide.run(_with(small, lambda_=[1.0, 5.0], n_realizations=4, period=period))
+        assert result["direct_subset_max_abs_error"] < 1e-5  # float32 rounding of unit-variance values
+        assert result["speedup_per_field"] > 1
+        assert [row["lambda"] for row in result["per_lambda"]] == [1.0, 5.0]

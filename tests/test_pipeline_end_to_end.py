@@ -50,8 +50,12 @@ def test_cube_is_consistent_with_its_inputs(run_dir, small) -> None:
     np.testing.assert_array_equal(cube["force"].values, contact["force"].values)
     assert cube["resistance"].sizes == {"xi": 3, "lambda": 3, "delta": 6, "realization": 8}
     assert not np.isnan(cube["resistance"].values).any()
-    # oxide only removes conducting spots: never below the clean resistance
-    assert (cube["resistance"] >= cube["resistance_clean"] * (1 - 1e-9)).all()
+    # oxide only removes conducting spots, so the exact resistance never drops below the clean one;
+    # Greenwood's formula (a Rayleigh-quotient bound) is not monotone under removing spots: one that
+    # dominated the interaction term can take more of it away than it adds to the self term
+    # (4e-4 at worst on this case with spectral-period fields, none with the window's lattice)
+    assert (cube["resistance"] >= cube["resistance_clean"] * (1 - 1e-3)).all()
+    assert (cube["resistance"].mean("realization") > cube["resistance_clean"]).all()
 
 
 def test_figures_and_report_are_written(run_dir) -> None:

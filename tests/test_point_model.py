@@ -12,8 +12,7 @@ from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, load_scenario
 from pipeline.physics import constriction, point_model
 from pipeline.physics.interaction_fft import interaction_apply, interaction_apply_dense, interaction_folded
-from pipeline.stages import cube
-from tests.test_cube_stage import N, N_REAL, _contact, _oxide
+from tests.test_cube_stage import N, N_REAL, _build, _contact, _oxide
 
 RHO = 7.2e-7  # ohm m
 PITCH = 7.07e-5  # m
@@ -164,11 +163,11 @@ def inputs():
 
 
 def _scenario(**overrides):
-    return load_scenario("paper", overrides)
+    return load_scenario("paper", {"oxide.ensemble": "fixed", "oxide.n_realizations": N_REAL, **overrides})
 
 
 def test_stage_point_model_matches_dense_and_records_the_solver(inputs):
-    ds = cube.build(_scenario(**{"cube.model": "point", "cube.chunk": 3}), *inputs, OPTIONS)
+    ds = _build(_scenario(**{"cube.model": "point", "cube.chunk": 3}), *inputs)
     assert ds.attrs["model"] == "point" and ds.attrs["n_not_converged"] == 0
     for name in ("iterations", "residual"):
         assert ds[name].dims == ("xi", "lambda", "delta", "realization") and "units" in ds[name].attrs
@@ -183,26 +182,26 @@ def test_stage_point_model_matches_dense_and_records_the_solver(inputs):
     finite = np.isfinite(dense)
     assert np.array_equal(finite, np.isfinite(got))
     assert np.max(np.abs(got[finite] / dense[finite] - 1)) <= 1e-6  # the crop tolerance
-    greenwood = cube.build(_scenario(), *inputs, OPTIONS)["resistance"].values
+    greenwood = _build(_scenario(), *inputs)["resistance"].values
     assert np.all(greenwood[np.isfinite(greenwood)] >= ds["resistance"].values[np.isfinite(greenwood)] * (1 - 1e-6))
 
 
 def test_stage_point_model_invariant_under_chunking_and_scheduler(inputs):
-    base = cube.build(_scenario(**{"cube.model": "point", "cube.chunk": 3}), *inputs, OPTIONS)
+    base = _build(_scenario(**{"cube.model": "point", "cube.chunk": 3}), *inputs)
     for chunk, workers in ((1, 1), (N_REAL, None), (4, 2)):  # one thread, threads, local cluster
         options = ComputeOptions(progress=False, workers=workers)
-        other = cube.build(_scenario(**{"cube.model": "point", "cube.chunk": chunk}), *inputs, options)
+        other = _build(_scenario(**{"cube.model": "point", "cube.chunk": chunk}), *inputs, options)
         for name in ("resistance", "iterations", "residual", "n_conducting"):
             np.testing.assert_array_equal(other[name].values, base[name].values)
 
 
 def test_stage_resistive_film_both_models(inputs):
     film = {"oxide.film": "resistive", "oxide.film_resistance": 1e-11}
-    point = cube.build(_scenario(**film, **{"cube.model": "point"}), *inputs, OPTIONS)
-    greenwood = cube.build(_scenario(**film), *inputs, OPTIONS)
+    point = _build(_scenario(**film, **{"cube.model": "point"}), *inputs)
+    greenwood = _build(_scenario(**film), *inputs)
     assert point.attrs["n_open_total"] == 0 and np.all(point["n_conducting"].values == N * N)
     assert np.all(greenwood["resistance"].values >= point["resistance"].values * (1 - 1e-9))
-    insulating = cube.build(_scenario(**{"cube.model": "point"}), *inputs, OPTIONS)["resistance"].values
+    insulating = _build(_scenario(**{"cube.model": "point"}), *inputs)["resistance"].values
     assert np.all(point["resistance"].values <= insulating * (1 + 1e-6))
 
 

@@ -19,7 +19,7 @@ from pipeline.store import write_dataset
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import cli_overrides, synthetic_cube
 
-FIGURES = ["fig3_bounds.png", "fig8_resistance.png", "fig9_conductance.png", "fig10_alpha_gamma.png", "fig11_barber.png"]
+FIGURES = ["fig3_bounds.png", "fig8_resistance.png", "fig9_conductance.png", "fig10_alpha_gamma.png", "fig10_realizations.png", "fig11_barber.png"]
 
 
 @pytest.fixture(scope="module")
@@ -67,6 +67,9 @@ def test_report_has_everything(run_dir: Path, small: Scenario) -> None:
     assert order == sorted(order)
     assert "Fig. 11: G2TOM against the p-average" in md and "Fig. 11: G2TOM against the p-average" in page
     assert "95 % percentile intervals of alpha and gamma" in md
+    # the ensemble section: a fixed ensemble of 8, nothing flagged, half-widths in the table
+    assert "Ensemble: realizations used and reached confidence" in md and "fixed: 8 realizations" in md
+    assert "Flagged cells (stopped at the cap short of the target): 0." in md
 
 
 def test_report_without_stage_files(tmp_path, small: Scenario) -> None:

@@ -48,7 +48,7 @@ def test_contact_converges_and_stays_physical(overrides) -> None:
 
 def test_nearly_full_oxide_gives_counted_open_circuits_and_finite_fits() -> None:
     scenario = resolve(load_scenario("paper", {
-        **FAST, "oxide.xi": [0.5, 0.99], "oxide.lambda": [23.0], "oxide.n_realizations": 40,
+        **FAST, "oxide.xi": [0.5, 0.99], "oxide.lambda": [23.0], "oxide.ensemble": "fixed", "oxide.n_realizations": 40,
         "fits.n_bootstrap": 20,
     }))
     quiet = ComputeOptions(progress=False)

@@ -23,7 +23,9 @@ from pipeline.store import atomic_path
 
 __all__ = ["BENCHMARKS", "run_benchmarks", "summary_lines"]
 
-BENCHMARKS: tuple[str, ...] = ("contact", "oxide", "cube", "point", "scaling", "predict", "stability", "frontier")
+BENCHMARKS: tuple[str, ...] = (
+    "contact", "oxide", "cube", "point", "scaling", "predict", "convergence", "stability", "frontier",
+)
 
 
 def _machine() -> dict[str, Any]:

@@ -156,7 +156,7 @@ def ensemble_frontier(scenario: Scenario) -> xr.Dataset:
     """Interval widths of alpha and gamma and time against the number of realizations."""
     from pipeline.stages import contact, cube, fits, oxide
 
-    base = _replace(scenario, "oxide", **SUBSET, n_realizations=ENSEMBLE_REALIZATIONS)
+    base = _replace(scenario, "oxide", **SUBSET, ensemble="fixed", n_realizations=ENSEMBLE_REALIZATIONS)
     quiet = ComputeOptions(progress=False)
     contact_ds = contact.build(base)
     t_oxide, oxide_ds = _median_time(lambda: oxide.build(base, quiet), repeats=1)
@@ -167,7 +167,9 @@ def ensemble_frontier(scenario: Scenario) -> xr.Dataset:
     seconds = []
     for n in counts:
         s = _replace(base, "oxide", n_realizations=n)
-        t_fit, fit = _median_time(lambda s=s, n=n: fits.build(s, cube_ds.isel(realization=slice(0, n))), repeats=1)
+        head = cube_ds.isel(realization=slice(0, n))
+        head["n_realizations"] = np.minimum(head["n_realizations"], n)
+        t_fit, fit = _median_time(lambda s=s, head=head: fits.build(s, head), repeats=1)
         seconds.append((t_oxide + t_cube) * n / ENSEMBLE_REALIZATIONS + t_fit)
         for k in widths:
             ci = fit[f"{k}_ci"].transpose("xi", "lambda", ...).values

@@ -21,6 +21,22 @@ a mode takes at the centres exactly the values of the lattice mode ``(i mod n, j
 Folding every coefficient onto that n x n spectrum and doing one n x n inverse FFT gives the
 continuous field's point values, also where ``ks`` lies above the grid's Nyquist frequency
 (lambda near 1); :func:`field_at_points` and :func:`fine_grid` are the slow references.
+
+Spectral period. With the window as the period the band ``k1..3 k1`` holds only n / (2 lambda)
+... 3n / (2 lambda) lattice steps: a few dozen modes at lambda >= 13, and which rings fall inside
+jumps between neighbouring lambda. :func:`spectral_period` instead picks a period of ``P >= n``
+cells with ``k1 = P / (2 lambda)`` at least ``resolution`` lattice steps, so the annulus holds
+about ``4 pi resolution^2`` half-plane modes at every lambda and samples the continuous spectrum
+Phi(k) on a lattice ``resolution`` times finer than k1. Such a field is evaluated exactly at the
+n x n cell centres by separable partial DFTs (:func:`centre_values`): ``psi = Re(E_y C E_x^T)``
+with ``C`` the half-plane coefficient table, two GEMMs whose size depends on ``resolution`` only,
+so the cost per field is about constant in lambda.
+
+Unit variance. ``sum |c_k|^2 / 2 = 1`` is the variance of the field over its whole period, i.e.
+of the continuous spectrum (for "ideal" amplitudes, the ensemble variance at every point). With a
+period larger than the window, one realization's sample variance over the window fluctuates
+around 1 and its window mean around 0: those are the large-scale fluctuations a finite window of
+an infinite surface sees, and they are not normalized away.
 """
 
 from __future__ import annotations
@@ -33,9 +49,12 @@ from scipy.special import erfcinv
 __all__ = [
     "Band",
     "band",
+    "spectral_period",
     "field_stream",
     "coefficients",
     "cell_values",
+    "centre_values",
+    "realize",
     "field_at_points",
     "fine_grid",
     "theoretical_threshold",
@@ -74,13 +93,39 @@ class Band:
         return int(self.i.size)
 
 
-def band(n_cells: int, cell_size: float, lam: float, ks_ratio: float, hurst: float) -> Band:
+def spectral_period(n_cells: int, lam: float, resolution: float) -> int:
+    """Period in cells of a field whose k1 spans at least ``resolution`` lattice steps.
+
+    Parameters
+    ----------
+    n_cells
+        Cells along one side of the window: the period is never shorter.
+    lam
+        Normalized correlation length, > 0.
+    resolution
+        Wanted ``k1`` in lattice steps ``2 pi / period`` (k1 = pi / l_O), > 0.
+
+    Returns
+    -------
+    int
+        ``max(n_cells, ceil(2 lam resolution))``.
+    """
+    if not (lam > 0 and resolution > 0):
+        raise ValueError(f"lambda = {lam}, resolution = {resolution}: both must be > 0")
+    return max(int(n_cells), int(np.ceil(2.0 * lam * resolution)))
+
+
+def band(
+    n_cells: int, cell_size: float, lam: float, ks_ratio: float, hurst: float,
+    period_cells: int | None = None,
+) -> Band:
     """Lattice wave vectors in ``k1 <= |k| <= ks`` with their spectral amplitudes.
 
     Parameters
     ----------
     n_cells
-        Cells along one side of the window; the period is ``n_cells * cell_size``.
+        Cells along one side of the window; the period is ``n_cells * cell_size`` unless
+        ``period_cells`` is given.
     cell_size
         Cell pitch 1/sqrt(eta), in m.
     lam
@@ -89,6 +134,8 @@ def band(n_cells: int, cell_size: float, lam: float, ks_ratio: float, hurst: flo
         Upper to lower cut-off ``ks / k1``, > 1.
     hurst
         Hurst exponent H in (0, 1) of the spectrum ``Phi(k) = k^-2(1+H)``.
+    period_cells
+        Period in cells (>= n_cells), e.g. from :func:`spectral_period`; default the window.
 
     Returns
     -------
@@ -100,9 +147,12 @@ def band(n_cells: int, cell_size: float, lam: float, ks_ratio: float, hurst: flo
         If a parameter is out of range or the band holds no lattice mode.
     """
     _check_band_parameters(n_cells, cell_size, lam, ks_ratio, hurst)
-    period = n_cells * cell_size
-    # |k| in units of the lattice step 2 pi / L: k1 = pi / (lam h) -> n / (2 lam).
-    k1 = n_cells / (2.0 * lam)
+    cells = n_cells if period_cells is None else int(period_cells)
+    if cells < n_cells:
+        raise ValueError(f"period_cells = {cells} is out of range: must be >= n_cells = {n_cells}")
+    period = cells * cell_size
+    # |k| in units of the lattice step 2 pi / L: k1 = pi / (lam h) -> P / (2 lam).
+    k1 = cells / (2.0 * lam)
     ks = ks_ratio * k1
     top = int(np.floor(ks))
     j, i = np.meshgrid(np.arange(0, top + 1), np.arange(-top, top + 1), indexing="ij")
@@ -112,8 +162,8 @@ def band(n_cells: int, cell_size: float, lam: float, ks_ratio: float, hurst: flo
     i, j, radius = i[keep], j[keep], radius[keep]
     if i.size == 0:
         raise ValueError(
-            f"lambda = {lam:g}: the band k1..ks holds no Fourier mode of a window of "
-            f"{n_cells} cells"
+            f"lambda = {lam:g}: the band k1..ks holds no Fourier mode of a period of "
+            f"{cells} cells"
         )
     weight = radius ** (-(1.0 + hurst))
     weight *= np.sqrt(2.0 / np.sum(weight**2))
@@ -219,6 +269,64 @@ def cell_values(modes: Band, coeffs: np.ndarray, n_cells: int) -> np.ndarray:
     values = np.fft.ifft2(spectrum.reshape(lead + (n, n)), norm="forward").real
     # FFT index q is the centre offset p - m (mod n): shift so index p is the p-th centre.
     return np.fft.fftshift(values, axes=(-2, -1))
+
+
+def centre_values(modes: Band, coeffs: np.ndarray, n_cells: int, cell_size: float) -> np.ndarray:
+    """Exact values of fields of any period at the n x n cell centres, by separable partial DFTs.
+
+    ``psi[q, p] = Re sum_j sum_i E_y[q, j] C[j, i] E_x[p, i]`` with ``E[p, i] = exp(2 pi i i
+    x_p / L)`` and ``C`` the coefficient table (``j >= 0``, ``-top <= i <= top``): one complex GEMM
+    over all fields for the x sum, two real GEMMs for the real part of the y sum.
+
+    Parameters
+    ----------
+    modes
+        The band (any period).
+    coeffs
+        Complex coefficients, shape (..., modes.size).
+    n_cells
+        Cells along one side (odd).
+    cell_size
+        Cell pitch, in m.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, shape (..., n_cells, n_cells), indexed ``[..., y, x]``.
+    """
+    lead = coeffs.shape[:-1]
+    batch = int(np.prod(lead, dtype=int))
+    top = int(max(np.abs(modes.i).max(), modes.j.max()))
+    table = np.zeros((batch, top + 1, 2 * top + 1), dtype=complex)  # [field, j, i + top]
+    table[:, modes.j, modes.i + top] = coeffs.reshape(batch, -1)
+    phase = 2.0 * np.pi * (np.arange(n_cells) - (n_cells - 1) / 2.0) * cell_size / modes.period
+    ex = np.exp(1j * np.outer(phase, np.arange(-top, top + 1)))  # (x, i)
+    ey = np.exp(1j * np.outer(phase, np.arange(0, top + 1)))  # (y, j)
+    partial = (table.reshape(-1, 2 * top + 1) @ ex.T).reshape(batch, top + 1, n_cells)  # (field, j, x)
+    partial = partial.transpose(1, 0, 2).reshape(top + 1, batch * n_cells)
+    values = ey.real @ partial.real - ey.imag @ partial.imag  # (y, field * x)
+    return values.reshape(n_cells, batch, n_cells).transpose(1, 0, 2).reshape(lead + (n_cells, n_cells))
+
+
+def realize(
+    modes: Band,
+    seed: int,
+    lam: float,
+    realizations: np.ndarray,
+    amplitudes: str,
+    n_cells: int,
+    cell_size: float,
+) -> np.ndarray:
+    """Fields of the given realizations at the cell centres, float32 (realization, y, x).
+
+    Window-period bands (``modes.period == n_cells * cell_size``) are evaluated by folding
+    (:func:`cell_values`), longer periods by :func:`centre_values`; either way realization r
+    always gets the same field, from its own stream :func:`field_stream`.
+    """
+    coeffs = np.stack([coefficients(modes, field_stream(seed, lam, r), amplitudes) for r in realizations])
+    if modes.period == n_cells * cell_size:
+        return cell_values(modes, coeffs, n_cells).astype(np.float32)
+    return centre_values(modes, coeffs, n_cells, cell_size).astype(np.float32)
 
 
 def field_at_points(modes: Band, coeffs: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:

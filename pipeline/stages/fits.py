@@ -9,6 +9,12 @@ Uncertainty: percentile bootstrap over realizations (``fits.n_bootstrap`` resamp
 replacement, recomputes the reduction at every fitted step and refits. The clean surface
 has a single deterministic curve, so its interval is the classical least-squares one
 (Student t on the fitted steps) and only reflects the misfit of the power law.
+
+Ensembles of different sizes: a cube may hold ``n_realizations(xi, lambda)`` realizations per
+cell (the adaptive ensemble, NaN beyond). Every reduction and the bootstrap of a cell use that
+cell's realizations only; one resample table is drawn per distinct count, in ascending order of
+the counts, from the one generator (a fixed ensemble thus draws exactly one table, as before).
+Cells that stopped at the cap short of the target are flagged.
 """
 
 from __future__ import annotations
@@ -20,7 +26,6 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-from analysis.reductions import DIM, reduce_realizations
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
 from pipeline.physics.powerlaw import (
@@ -30,6 +35,7 @@ from pipeline.physics.powerlaw import (
     percentile_interval,
     resample_counts,
 )
+from pipeline.reductions import DIM, reduce_realizations
 from pipeline.store import read_stage, write_dataset
 
 __all__ = ["build", "run"]
@@ -55,19 +61,57 @@ def fitted_steps(scenario: Scenario, force: xr.DataArray) -> xr.DataArray:
     return mask
 
 
-def _bootstrap(scenario: Scenario, normalized: np.ndarray, force_n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _bootstrap(
+    scenario: Scenario, normalized: np.ndarray, force_n: np.ndarray, counts: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Bootstrap alpha and gamma, each shaped (xi, lambda, resample).
 
-    ``normalized`` holds R' on the fitted steps, shape (xi, lambda, step, realization).
+    ``normalized`` holds R' on the fitted steps, shape (xi, lambda, step, realization); cell
+    (xi, lambda) uses its first ``counts[xi, lambda]`` realizations.
     """
     rng = np.random.default_rng(scenario.fits.seed)
-    counts = resample_counts(normalized.shape[-1], scenario.fits.n_bootstrap, rng)
+    alpha = np.empty(counts.shape + (scenario.fits.n_bootstrap,))
+    gamma = np.empty_like(alpha)
+    for n in np.unique(counts):  # ascending
+        table = resample_counts(int(n), scenario.fits.n_bootstrap, rng)
+        if np.all(counts == n):  # one count (a fixed ensemble): the whole grid at once
+            return _bootstrap_fit(scenario, normalized[..., :n], force_n, table)
+        cells = np.nonzero(counts == n)
+        alpha[cells], gamma[cells] = _bootstrap_fit(scenario, normalized[..., :n][cells], force_n, table)
+    return alpha, gamma
+
+
+def _bootstrap_fit(
+    scenario: Scenario, values: np.ndarray, force_n: np.ndarray, table: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """alpha and gamma (..., resample) of the resamples ``table`` of ``values`` (..., step, realization)."""
     if scenario.fits.reduction == "median":
-        reduced = bootstrap_median(normalized, counts)
+        reduced = bootstrap_median(values, table)
     else:
-        reduced = bootstrap_log_mean(normalized, counts, scenario.fits.reduction == "geometric_mean")
+        reduced = bootstrap_log_mean(values, table, scenario.fits.reduction == "geometric_mean")
     fit = fit_power_law(force_n, np.moveaxis(reduced, -1, -2))
     return fit.alpha, fit.gamma
+
+
+def _counts(cube: xr.Dataset) -> np.ndarray:
+    """Realizations per (xi, lambda): the cube's ``n_realizations``, else the whole axis."""
+    if "n_realizations" in cube:
+        return cube["n_realizations"].transpose(*GRID).values.astype(int)
+    return np.full((cube.sizes["xi"], cube.sizes["lambda"]), cube.sizes[DIM])
+
+
+def _reduce(resistance: xr.DataArray, counts: np.ndarray, scale: float) -> xr.Dataset:
+    """:func:`reduce_realizations` of every (xi, lambda) over its own realizations."""
+    if np.all(counts == resistance.sizes[DIM]):
+        return reduce_realizations(resistance, scale)
+    rows = [
+        xr.concat([
+            reduce_realizations(resistance.isel({"xi": [z], "lambda": [a], DIM: slice(0, int(n))}), scale)
+            for a, n in enumerate(row)
+        ], dim="lambda", combine_attrs="override")
+        for z, row in enumerate(counts)
+    ]
+    return xr.concat(rows, dim="xi", combine_attrs="override")
 
 
 def _interval(samples: np.ndarray, confidence: float) -> np.ndarray:
@@ -103,6 +147,37 @@ def _clean_fit(scenario: Scenario, clean: np.ndarray, force_n: np.ndarray, mask:
         "fit_residual_clean": xr.DataArray(fit.residual, dims="delta", attrs={"units": "1", "long_name": "log residual of the clean fit"}),
         "fit_residual_rms_clean": xr.DataArray(fit.residual_rms, attrs={"units": "1", "long_name": "RMS log residual of the clean fit"}),
     }
+
+
+def _ensemble_summary(
+    scenario: Scenario, cube: xr.Dataset, ds: xr.Dataset, counts: np.ndarray
+) -> dict[str, xr.DataArray]:
+    """Realizations used, reached half-widths and flags per (xi, lambda)."""
+    lower, upper = ds["alpha_ci"].sel(bound="lower"), ds["alpha_ci"].sel(bound="upper")
+    g_lower, g_upper = ds["gamma_ci"].sel(bound="lower"), ds["gamma_ci"].sel(bound="upper")
+    used = xr.DataArray(counts, dims=GRID)
+    out = {
+        "n_realizations": used.astype(np.int32).assign_attrs(
+            units="1", long_name="realizations used per (xi, lambda)"),
+        "alpha_half_width": ((upper - lower) / (2.0 * ds["alpha"])).assign_attrs(
+            units="1", long_name="relative half-width of the alpha interval, (upper - lower) / (2 alpha)"),
+        "gamma_half_width": ((g_upper - g_lower) / 2.0).assign_attrs(
+            units="1", long_name="absolute half-width of the gamma interval, (upper - lower) / 2"),
+    }
+    rule = "rule_alpha_half_width" in cube
+    flagged = np.zeros(used.shape, np.int8)
+    if rule and cube.attrs.get("ensemble") == "adaptive":
+        at_cap = counts >= int(cube.attrs["max_realizations"])
+        short = ~(cube["rule_alpha_half_width"].transpose(*GRID).values <= float(cube.attrs["rule_target_half_width"]))
+        flagged = at_cap & short
+    out["flagged"] = xr.DataArray(flagged.astype(np.int8), dims=GRID, attrs={
+        "units": "1",
+        "long_name": "1 where the adaptive ensemble stopped at max_realizations short of the target half-width",
+    })
+    if rule:
+        for name in ("rule_alpha_half_width", "rule_gamma_half_width"):
+            out[name] = cube[name].transpose(*GRID)
+    return out
 
 
 #: Units and long names of the coordinates, used where the input does not carry them.
@@ -143,14 +218,15 @@ def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     """
     resistance = cube["resistance"].transpose(*GRID, "delta", DIM)
     scale = scenario.resistance_scale
-    ds = reduce_realizations(resistance, scale)
+    counts = _counts(cube)
+    ds = _reduce(resistance, counts, scale)
     mask = fitted_steps(scenario, cube["force"])
     force_n = cube["force_normalized"].values
     center = ds[f"{scenario.fits.reduction}_normalized"]
 
     fit = fit_power_law(force_n, center.values, mask.values)
     steps = np.flatnonzero(mask.values)
-    boot_alpha, boot_gamma = _bootstrap(scenario, resistance.values[:, :, steps, :] / scale, force_n[steps])
+    boot_alpha, boot_gamma = _bootstrap(scenario, resistance.values[:, :, steps, :] / scale, force_n[steps], counts)
     bound = ("bound", ["lower", "upper"])
     level = f"{100 * scenario.fits.confidence:g} % percentile bootstrap over realizations"
 
@@ -160,6 +236,8 @@ def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
         ds[f"{name}_ci"] = (GRID + ("bound",), _interval(boot, scenario.fits.confidence),
                             {"units": "1", "long_name": f"confidence interval of {name}", "method": level})
     ds = ds.assign_coords(bound=bound[1])
+    for name, value in _ensemble_summary(scenario, cube, ds, counts).items():
+        ds[name] = value
     ds["fit_residual"] = (GRID + ("delta",), fit.residual, {"units": "1", "long_name": "log(R') - log(alpha F'^-gamma) on the fitted steps"})
     ds["fit_residual_rms"] = (GRID, fit.residual_rms, {"units": "1", "long_name": "RMS of the log residuals"})
     ds["n_fitted"] = (GRID, fit.n_points, {"units": "1", "long_name": "finite fitted steps"})

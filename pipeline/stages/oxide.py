@@ -18,6 +18,7 @@ on the dask chunking, the scheduler, the worker count or the order of evaluation
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import dask.array as da
@@ -30,38 +31,70 @@ from pipeline.config import Scenario
 from pipeline.physics import oxide_field
 from pipeline.physics.grid import cell_centres
 
-__all__ = ["build", "run", "bands"]
+__all__ = ["build", "run", "bands", "FieldSource", "recorded_realizations"]
 
 
 def bands(scenario: Scenario) -> list[oxide_field.Band]:
-    """The wave-vector band of every correlation length of the scenario, in ``oxide.lambda`` order."""
+    """The wave-vector band of every correlation length of the scenario, in ``oxide.lambda`` order.
+
+    ``oxide.period = "window"`` puts the modes on the window's lattice (the published fields);
+    ``"spectral"`` on the lattice of :func:`oxide_field.spectral_period` at
+    ``oxide.spectral_resolution``.
+    """
     ox = scenario.oxide
-    return [
-        oxide_field.band(scenario.n_cells, scenario.cell_size, lam, ox.ks_ratio, ox.hurst)
-        for lam in ox.lambda_
-    ]
-
-
-def _psi_block(
-    realizations: np.ndarray,
-    *,
-    modes: list[oxide_field.Band],
-    lambdas: list[float],
-    seed: int,
-    amplitudes: str,
-    n_cells: int,
-) -> np.ndarray:
-    """Fields of a chunk of realizations at every lambda: float32 (lambda, realization, y, x)."""
-    out = np.empty((len(lambdas), realizations.size, n_cells, n_cells), dtype=np.float32)
-    for a, (lam, band) in enumerate(zip(lambdas, modes)):
-        coeffs = np.stack(
-            [
-                oxide_field.coefficients(band, oxide_field.field_stream(seed, lam, r), amplitudes)
-                for r in realizations
-            ]
-        )
-        out[a] = oxide_field.cell_values(band, coeffs, n_cells)
+    out = []
+    for lam in ox.lambda_:
+        period = None
+        if ox.period == "spectral":
+            period = oxide_field.spectral_period(scenario.n_cells, lam, ox.spectral_resolution)
+        out.append(oxide_field.band(scenario.n_cells, scenario.cell_size, lam, ox.ks_ratio, ox.hurst, period))
     return out
+
+
+def recorded_realizations(scenario: Scenario) -> int:
+    """Fields per lambda kept in oxide.nc: the fixed count, or the adaptive ensemble's first batch."""
+    ox = scenario.oxide
+    return ox.n_realizations if ox.ensemble == "fixed" else ox.min_realizations
+
+
+@dataclass(frozen=True)
+class FieldSource:
+    """Everything needed to regenerate any field and its thresholds from its seed (picklable).
+
+    The oxide stage and the cube's tasks both call it, so a field regenerated in the cube is
+    bit-identical to the one recorded in oxide.nc.
+    """
+
+    modes: tuple[oxide_field.Band, ...]
+    lambdas: tuple[float, ...]
+    xi: np.ndarray
+    seed: int
+    amplitudes: str
+    rule: str
+    n_cells: int
+    cell_size: float
+
+    @classmethod
+    def of(cls, scenario: Scenario) -> "FieldSource":
+        """The field source of a validated scenario."""
+        ox = scenario.oxide
+        return cls(tuple(bands(scenario)), tuple(ox.lambda_), np.asarray(ox.xi, float), ox.seed,
+                   ox.amplitudes, ox.threshold, scenario.n_cells, scenario.cell_size)
+
+    def psi(self, index: int, realizations: np.ndarray) -> np.ndarray:
+        """Fields of ``realizations`` at lambda number ``index``: float32 (realization, y, x)."""
+        return oxide_field.realize(self.modes[index], self.seed, self.lambdas[index], realizations,
+                                   self.amplitudes, self.n_cells, self.cell_size)
+
+    def fields(self, index: int, realizations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Fields (realization, y, x) and their float32 thresholds (xi, realization) at lambda ``index``."""
+        psi = self.psi(index, realizations)
+        return psi, _threshold_block(psi[None], xi=self.xi, rule=self.rule)[:, 0]
+
+
+def _psi_block(realizations: np.ndarray, *, source: FieldSource) -> np.ndarray:
+    """Fields of a chunk of realizations at every lambda: float32 (lambda, realization, y, x)."""
+    return np.stack([source.psi(a, realizations) for a in range(len(source.lambdas))])
 
 
 def _threshold_block(psi: np.ndarray, *, xi: np.ndarray, rule: str) -> np.ndarray:
@@ -84,15 +117,11 @@ def _lazy(scenario: Scenario) -> tuple[da.Array, da.Array, da.Array]:
     ox = scenario.oxide
     n = scenario.n_cells
     xi = np.asarray(ox.xi, dtype=float)
-    realization = da.arange(ox.n_realizations, chunks=ox.chunk)
+    realization = da.arange(recorded_realizations(scenario), chunks=ox.chunk)
     psi = da.map_blocks(
         _psi_block,
         realization,
-        modes=bands(scenario),
-        lambdas=list(ox.lambda_),
-        seed=ox.seed,
-        amplitudes=ox.amplitudes,
-        n_cells=n,
+        source=FieldSource.of(scenario),
         new_axis=[0, 2, 3],
         chunks=((len(ox.lambda_),), realization.chunks[0], (n,), (n,)),
         dtype=np.float32,
@@ -119,7 +148,7 @@ def _dataset(scenario: Scenario, psi: np.ndarray, threshold: np.ndarray, fractio
     coords = {
         "lambda": ("lambda", np.asarray(ox.lambda_, float),
                    {"units": "1", "long_name": "normalized oxide correlation length l_O sqrt(eta)"}),
-        "realization": ("realization", np.arange(ox.n_realizations),
+        "realization": ("realization", np.arange(recorded_realizations(scenario)),
                         {"units": "1", "long_name": "realization index of the random field"}),
         "xi": ("xi", np.asarray(ox.xi, float), {"units": "1", "long_name": "nominal oxide fraction"}),
         "y": ("y", centres, {"units": "m", "long_name": "cell-centre y coordinate from the axis"}),
@@ -146,13 +175,24 @@ def _dataset(scenario: Scenario, psi: np.ndarray, threshold: np.ndarray, fractio
             "units": "1",
             "long_name": "independent Fourier modes (Hermitian pairs) in the band k1..ks",
         }),
+        "period_cells": ("lambda", np.array([int(round(m.period / scenario.cell_size)) for m in modes]), {
+            "units": "1",
+            "long_name": "period of the random field, in cells",
+        }),
     }
     attrs = {
         "oxide_rule": "a cell is oxide where psi >= threshold (float32 comparison)",
-        "field_normalization": "each realization has unit variance over the whole periodic window",
+        "field_normalization": (
+            "sum |c_k|^2 / 2 = 1: unit variance of the continuous spectrum over the field's whole "
+            "period (not each realization's sample variance over the window)"
+        ),
+        "field_period": ox.period,
+        "ensemble": ox.ensemble,
+        "recorded_realizations": (
+            "every realization of the fixed ensemble" if ox.ensemble == "fixed"
+            else "the adaptive ensemble's first batch; the cube regenerates every field from its seed"
+        ),
         "random_streams": "SeedSequence(oxide.seed, spawn_key=(round(lambda * 1e6), realization))",
-        "period": scenario.n_cells * scenario.cell_size,
-        "period_units": "m",
     }
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 

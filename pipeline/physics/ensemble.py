@@ -1,0 +1,129 @@
+"""How many realizations an ensemble needs: the fast stopping rule of the adaptive ensemble.
+
+The geometric-mean fit ``log alpha_hat = mean_s(y) - slope mean_s(log x)`` over the fitted load
+steps s is LINEAR in ``y_s = mean_r log R_{s,r}``: ``log alpha_hat = sum_s c_s y_s`` with the
+least-squares weights ``c`` of :func:`fit_weights` (``sum c_s = 1``). Hence ``log alpha_hat`` is
+the mean over realizations of the per-realization statistic ``t_r = sum_s c_s log R_{s,r}``, and
+its standard error is exactly ``std(t_r) / sqrt(n)``; the same holds for gamma with the slope
+weights. A normalization ``R' = R / scale`` only shifts ``t_r`` by ``-log scale``.
+
+Open circuits (``R = +inf``) are left out of ``t_r`` (the geometric mean is over conducting
+realizations): the rule then uses the finite statistics only, an approximation that the stage
+notes; the fits stage's bootstrap gives the final intervals.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+__all__ = ["fit_weights", "statistic", "prefix_half_width", "stop_count", "z_value"]
+
+
+def fit_weights(log_x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares weights of intercept and exponent of ``log y = log alpha - gamma log x``.
+
+    Parameters
+    ----------
+    log_x
+        Natural log of the fitted abscissae (e.g. F'), shape (n_steps,), at least two distinct.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(c_alpha, c_gamma)``, each shape (n_steps,): ``log alpha = c_alpha @ log y`` and
+        ``gamma = c_gamma @ log y``.
+    """
+    log_x = np.asarray(log_x, float)
+    centred = log_x - log_x.mean()
+    sxx = centred @ centred
+    if log_x.size < 2 or not sxx > 0:
+        raise ValueError("fit_weights needs at least two distinct abscissae")
+    c_gamma = -centred / sxx
+    c_alpha = 1.0 / log_x.size - log_x.mean() * centred / sxx
+    return c_alpha, c_gamma
+
+
+def statistic(log_r: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Per-realization statistic ``t_r = sum_s c_s log R_{s,r}``.
+
+    Parameters
+    ----------
+    log_r
+        ``log R`` with the fitted steps on axis -2 and realizations on axis -1 (..., s, r);
+        +inf for an open circuit.
+    weights
+        ``c`` from :func:`fit_weights`, shape (s,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (..., r); NaN where a realization is open at a fitted step.
+    """
+    with np.errstate(invalid="ignore"):
+        t = np.einsum("s,...sr->...r", weights, log_r)
+    return np.where(np.isfinite(t), t, np.nan)
+
+
+def z_value(confidence: float) -> float:
+    """Two-sided normal quantile of a confidence level (1.96 for 0.95)."""
+    return float(stats.norm.ppf(0.5 * (1.0 + confidence)))
+
+
+def prefix_half_width(t: np.ndarray, z: float) -> np.ndarray:
+    """Half-width ``z std(t[:n]) / sqrt(n_finite)`` of the mean over every prefix n of the realizations.
+
+    Parameters
+    ----------
+    t
+        Statistics on the last axis (..., r); NaN values (open circuits) are skipped.
+    z
+        Normal quantile of the confidence level.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (..., r): entry n - 1 is the half-width of the first n realizations (NaN below
+        two finite values). For ``t`` of :func:`statistic` with ``c_alpha`` this is the
+        half-width of ``log alpha``; ``sinh`` of it is alpha's relative half-width.
+    """
+    finite = np.isfinite(t)
+    value = np.where(finite, t, 0.0)
+    count = np.cumsum(finite, axis=-1)
+    # Shifting by the mean of the first (up to 16) finite values keeps the running sums well
+    # conditioned; it depends on those realizations only, so every prefix's result is fixed.
+    head = slice(0, min(t.shape[-1], 16))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        shift = value[..., head].sum(-1, keepdims=True) / finite[..., head].sum(-1, keepdims=True)
+    shift = np.where(np.isfinite(shift), shift, 0.0)
+    centred = np.where(finite, value - shift, 0.0)
+    s1 = np.cumsum(centred, axis=-1)
+    s2 = np.cumsum(centred**2, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        var = (s2 - s1**2 / count) / (count - 1)
+        out = z * np.sqrt(np.maximum(var, 0.0) / count)
+    return np.where(count >= 2, out, np.nan)
+
+
+def stop_count(half_width: np.ndarray, target: float, n_min: int) -> int | None:
+    """Smallest prefix n >= n_min at which every row's half-width is <= target, else None.
+
+    Parameters
+    ----------
+    half_width
+        Relative half-widths, shape (rows, r), from :func:`prefix_half_width` (after ``sinh``).
+    target
+        Target half-width, in (0, 1).
+    n_min
+        Fewest realizations allowed.
+
+    Returns
+    -------
+    int or None
+        The count, or None if no prefix up to ``r`` qualifies. It depends only on the first n
+        realizations, so computing further realizations never changes it.
+    """
+    ok = np.all(half_width <= target, axis=0)
+    ok[: max(n_min, 1) - 1] = False
+    hits = np.flatnonzero(ok)
+    return int(hits[0]) + 1 if hits.size else None
