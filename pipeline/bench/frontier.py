@@ -126,7 +126,8 @@ def cube_frontier(scenario: Scenario) -> list[dict[str, Any]]:
     """Every (algorithm, crop tolerance, precision) with its time and errors in R, alpha, gamma."""
     from pipeline.stages import contact, cube, fits, oxide
 
-    base = _replace(_replace(scenario, "oxide", **SUBSET, n_realizations=CUBE_REALIZATIONS), "fits", n_bootstrap=10)
+    base = _replace(_replace(scenario, "oxide", **SUBSET, ensemble="fixed", n_realizations=CUBE_REALIZATIONS),
+                    "fits", n_bootstrap=10)
     quiet = ComputeOptions(progress=False)
     contact_ds, oxide_ds = contact.build(base), oxide.build(base, quiet)
 
