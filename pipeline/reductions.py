@@ -1,7 +1,7 @@
 """Reductions of the resistance cube over realizations, as labelled xarray operations.
 
-They live in the pipeline because the fits stage uses them; ``analysis.reductions`` re-exports
-them for the figures and the report.
+They live in the pipeline because the fits stage uses them (stages import no analysis); the
+figures and the report import them from here.
 
 Open circuits (R = +inf) are policy, not noise:
 

@@ -21,7 +21,6 @@ from typing import Callable
 
 import numpy as np
 import pytest
-import xarray as xr
 
 from pipeline.cli import main
 from pipeline.config import SECTIONS, _key, load_scenario

@@ -10,12 +10,12 @@ uniform grid of the same size shows what the graded grid gains.
 from __future__ import annotations
 
 import dataclasses
-import statistics
 import time
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
+from pipeline.bench.timing import median_time
 from pipeline.config import Scenario
 from pipeline.stages import contact
 
@@ -25,19 +25,11 @@ _REPEATS = 5
 _REFINEMENT = 4
 
 
-def _median_time(fn: Callable[[], Any]) -> tuple[float, Any]:
-    """Median wall time (s) of ``_REPEATS`` calls of ``fn`` and its last result."""
-    times, result = [], None
-    for _ in range(_REPEATS):
-        start = time.perf_counter()
-        result = fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), result
 
 
 def _case(scenario: Scenario, solver: str, reference: np.ndarray) -> dict[str, Any]:
     """Time one solver on the scenario's grid; its force error against ``reference`` (N)."""
-    seconds, (r, sols) = _median_time(lambda: contact.solve_scenario(scenario, solver=solver))
+    seconds, (r, sols) = median_time(lambda: contact.solve_scenario(scenario, solver=solver), _REPEATS)
     force = contact.fields(scenario, r, sols)["force"]
     return {
         "solver": solver,
@@ -63,7 +55,7 @@ def run(scenario: Scenario) -> dict[str, Any]:
     r_ref, sols_ref = contact.solve_scenario(scenario, solver="newton", n_radial=n_ref, tolerance=1e-12)
     reference = contact.fields(scenario, r_ref, sols_ref)["force"]
     ref_seconds = time.perf_counter() - start
-    stage_seconds, _ = _median_time(lambda: contact.build(scenario))
+    stage_seconds, _ = median_time(lambda: contact.build(scenario), _REPEATS)
     cases = [_case(scenario, solver, reference) for solver in ("newton", "fixed_point")]
     uniform = _with_contact(scenario, radial_grid="uniform")
     cases.append(_case(uniform, "newton", reference))

@@ -10,13 +10,13 @@ difference between the two on the common queries (they must agree).
 
 from __future__ import annotations
 
-import statistics
 import time
 import warnings
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
+from pipeline.bench.timing import median_time
 from pipeline.config import Scenario
 from pipeline.predict import GRID_TABLES, STEP_TABLES, SurrogateTables, predict
 
@@ -27,13 +27,6 @@ _QUERIES = 100_000
 _LOOP_QUERIES = 300
 
 
-def _median_time(fn: Callable[[], Any]) -> tuple[float, Any]:
-    times, result = [], None
-    for _ in range(_REPEATS):
-        start = time.perf_counter()
-        result = fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), result
 
 
 def _tables(scenario: Scenario) -> SurrogateTables:
@@ -61,7 +54,7 @@ def run(scenario: Scenario) -> dict[str, Any]:
     lam = rng.uniform(*tables.ranges["lambda"], _QUERIES)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
-        vector_s, result = _median_time(lambda: predict(tables, scenario, force, xi, lam))
+        vector_s, result = median_time(lambda: predict(tables, scenario, force, xi, lam), _REPEATS)
         start = time.perf_counter()
         single = [float(predict(tables, scenario, force[i], xi[i], lam[i])["upper"]) for i in range(_LOOP_QUERIES)]
         loop_per_query = (time.perf_counter() - start) / _LOOP_QUERIES

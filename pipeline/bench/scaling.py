@@ -17,7 +17,6 @@ All times are medians of :data:`REPEATS` runs in this process; the machine is sh
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import statistics
 import time
