@@ -78,6 +78,7 @@ def test_prefix_curve_written_plotted_and_reported(adaptive_dir, tmp_path) -> No
         np.testing.assert_array_equal(ds["prefix_n"].values, curve["prefix_n"].values)
         for name, var in ds.variables.items():
             assert "units" in var.attrs and "long_name" in var.attrs, name
+        assert ds.attrs["prefix_rule_target"] == pytest.approx(0.9 * 0.02)  # 0.9 x oxide.target_half_width
         paths = frontier.plot(ds.load(), tmp_path / "figures")
     assert paths[-1].name == "frontier_prefix.png" and paths[-1].stat().st_size > 10_000
     summary = frontier.prefix_summary(curve, note)

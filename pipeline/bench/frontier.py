@@ -284,12 +284,14 @@ def adaptive_prefix(scenario: Scenario, data_dir: str | Path) -> tuple[xr.Datase
         if ds.attrs.get("ensemble") != "adaptive":
             return None, f"prefix curve skipped: {path} is a fixed ensemble (oxide.ensemble = \"fixed\")"
         cube_ds = ds[["resistance", "n_realizations"]].load()  # with the force coordinates
+        rule_target = float(ds.attrs["rule_target_half_width"])
         config_hash = ds.attrs.get("config_hash")
     timings = Path(data_dir) / "timings.json"
     entry = json.loads(timings.read_text()).get("cube", {}) if timings.is_file() else {}
     if "seconds" not in entry or entry.get("config_hash") != config_hash:
         return None, f"prefix curve skipped: no cube time of {path} in {timings}"
     curve = prefix_curve(scenario, cube_ds, float(entry["seconds"]))
+    curve.attrs["prefix_rule_target"] = rule_target
     return curve, (f"prefix curve of {path}: {int(curve['prefix_count'].sum())} realizations over "
                    f"{curve['prefix_count'].size} cells, cube time {entry['seconds']:.4g} s prorated")
 
@@ -356,7 +358,7 @@ def write(contact_rows: list[dict[str, Any]], cube_rows: list[dict[str, Any]], e
     parts = [_table(contact_rows, "contact"), _table(cube_rows, "cube"), ensemble]
     ds = xr.merge(parts + ([prefix] if prefix is not None else []), combine_attrs="drop_conflicts")
     if prefix is not None:
-        ds.attrs["prefix_cube_seconds"] = prefix.attrs["prefix_cube_seconds"]
+        ds.attrs.update({k: v for k, v in prefix.attrs.items() if k.startswith("prefix_")})
     if prefix_note:
         ds.attrs["prefix_note"] = prefix_note
     ds.attrs.update({"title": "g2tom accuracy-time frontier", "Conventions": "CF-1.10",
@@ -465,11 +467,15 @@ def plot(frontier: xr.Dataset, out_dir: str | Path) -> list[Path]:
                     ax.loglog(n[i, j], width[i, j], "-", color=colors[j], lw=0.8, alpha=0.7,
                               label=f"lambda {lam:g}" if i == 0 else None)
                 ax.loglog(n[:, j, -1], width[:, j, -1], "o", color=colors[j], ms=3)
+            if name == "alpha" and "prefix_rule_target" in frontier.attrs:
+                ax.axhline(frontier.attrs["prefix_rule_target"], color="k", ls="--", lw=0.8,
+                           label="the rule's stopping target")
             ax.set_xlabel("realizations of the cell (dots: the adaptive ensemble's count)")
             ax.set_ylabel(f"fast-rule {'relative' if name == 'alpha' else 'absolute'} half-width of {name}")
             ax.grid(True, which="major", alpha=0.3)
             top = ax.secondary_xaxis("top", functions=(lambda x: x * per_realization, lambda t: t / per_realization))
             top.set_xlabel("cube time prorated to n, s")
+        axes[0].legend(fontsize=7, loc="lower left")
         axes[1].legend(fontsize=6, ncol=2)
         fig.suptitle("Adaptive ensemble: prefixes of every (xi, lambda) cell against the fast rule's half-width")
         paths.append(out_dir / "frontier_prefix.png")
