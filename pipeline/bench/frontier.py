@@ -475,7 +475,9 @@ def plot(frontier: xr.Dataset, out_dir: str | Path) -> list[Path]:
             ax.grid(True, which="major", alpha=0.3)
             top = ax.secondary_xaxis("top", functions=(lambda x: x * per_realization, lambda t: t / per_realization))
             top.set_xlabel("cube time prorated to n, s")
-        axes[0].legend(fontsize=7, loc="lower left")
+        handles, labels = axes[0].get_legend_handles_labels()  # the target only: the colours are in axes[1]
+        axes[0].legend([h for h, t in zip(handles, labels) if not t.startswith("lambda")],
+                       [t for t in labels if not t.startswith("lambda")], fontsize=7, loc="lower left")
         axes[1].legend(fontsize=6, ncol=2)
         fig.suptitle("Adaptive ensemble: prefixes of every (xi, lambda) cell against the fast rule's half-width")
         paths.append(out_dir / "frontier_prefix.png")
