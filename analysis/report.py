@@ -97,6 +97,22 @@ def _frontier_blocks(data_dir: Path) -> list[Block]:
     for stem, caption in FRONTIER_FIGURES.items():
         if (data_dir / "figures" / f"{stem}.png").is_file():
             blocks.append(Block("img", caption, src=f"figures/{stem}.png"))
+    prefix = result.get("prefix")
+    if prefix and "cells" in prefix:
+        blocks.append(Block("p", (
+            f"The adaptive ensemble's own cube, prefix by prefix: over {prefix['cells']} (xi, lambda) cells of "
+            f"{prefix['count_min']} .. {prefix['count_max']} realizations (median {prefix['count_median']:g}, "
+            f"{prefix['realizations']} in all), the fast rule's worst relative half-width of alpha falls from "
+            f"{prefix['alpha_first_max']:.3g} at n = {prefix['first_n']} to {prefix['alpha_last_max']:.3g} at each "
+            f"cell's count, and the absolute half-width of gamma from {prefix['gamma_first_max']:.3g} to "
+            f"{prefix['gamma_last_max']:.3g}; the cube's {prefix['cube_seconds']:.4g} s prorated per realization "
+            f"give the costliest cell {prefix['seconds_per_cell_max']:.3g} s.")))
+        if (data_dir / "figures" / "frontier_prefix.png").is_file():
+            blocks.append(Block("img", "Adaptive ensemble: the fast rule's half-widths of alpha and gamma against the "
+                                       "first n realizations of every (xi, lambda) cell (dots: the cell's count), "
+                                       "prorated cube time on the top axis", src="figures/frontier_prefix.png"))
+    elif prefix:
+        blocks.append(Block("p", prefix["note"] + "."))
     return blocks
 
 

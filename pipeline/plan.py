@@ -5,6 +5,11 @@ of its concurrently running tasks) and its run time (flop-count models with cons
 measured on the 2-core reference machine; ``make bench`` measures the real ones).
 :func:`check_resources` refuses, with :class:`~pipeline.config.ConfigError` naming the
 parameter, a run whose estimate exceeds the machine's memory or :data:`MAX_SECONDS`.
+An adaptive ensemble's realization count is known only after the work, so its estimates
+carry a range (every cell stopped at ``oxide.min_realizations`` .. every cell at the cap
+``oxide.max_realizations``) and a central value typical of the paper's scene
+(:func:`realizations`); memory is always checked at the cap, the padded realization axis
+the cube and fits hold in the worst case.
 :func:`prepare` is what the CLI runs before any stage: the checks, then the resolution of
 ``auto`` domains (:func:`pipeline.domains.resolve`), then the checks on the resolved cell count.
 """
@@ -20,7 +25,7 @@ from typing import Any, Callable
 
 from pipeline.config import AUTO, ConfigError, Scenario, load_scenario
 
-__all__ = ["StageEstimate", "estimate", "check_resources", "prepare", "format_plan",
+__all__ = ["StageEstimate", "Realizations", "realizations", "estimate", "check_resources", "prepare", "format_plan",
            "available_memory", "MAX_SECONDS", "BASE_BYTES"]
 
 #: Resident memory of a process that imported numpy, scipy, xarray, dask and netCDF4 (measured).
@@ -34,6 +39,10 @@ _MAP_S = 2.0e-9       # per cell of one map (masking, sums), any path
 _LU_S = 5.0e-11       # per n_radial^3 and approach (Newton factorizations and solves)
 _MODE_S = 4.0e-8      # per mode and realization of the oxide coefficients
 _CELL_FFT_S = 5.0e-9  # per n^2 log2 n of one oxide field
+#: Mean realizations per (xi, lambda) of the adaptive ensemble on the paper's scene, measured:
+#: 183,125 over 9 xi x 12 lambda at target_half_width 0.025 (min 400, cap 30,000; cube 117 s).
+TYPICAL_REALIZATIONS = 183_125 / 108
+TYPICAL_TARGET = 0.025
 #: Commands that need no resolved domains nor resource checks.
 _NO_DOMAINS = ("params", "predict", "roughness")
 #: Stages whose estimate is printed when they are expected to take longer than this (s).
@@ -47,6 +56,35 @@ class StageEstimate:
     stage: str
     peak_bytes: float
     seconds: float
+    #: Run-time range (s) of an adaptive ensemble: all cells at min_realizations .. at the cap.
+    seconds_range: tuple[float, float] | None = None
+
+
+@dataclass(frozen=True)
+class Realizations:
+    """Realizations per (xi, lambda): the fewest, the most and the central (typical) count."""
+
+    low: int
+    typical: float
+    high: int
+    adaptive: bool
+
+
+def realizations(scenario: Scenario) -> Realizations:
+    """The realization counts per (xi, lambda) a run can use.
+
+    A fixed ensemble uses ``oxide.n_realizations``. An adaptive one uses between
+    ``oxide.min_realizations`` and ``oxide.max_realizations``; the central value is
+    :data:`TYPICAL_REALIZATIONS` (measured on the paper's scene) scaled by
+    ``(TYPICAL_TARGET / oxide.target_half_width)^2`` (a half-width falls like n^-1/2), clipped
+    to that range. It is a typical value on the paper's scene, not a prediction for any scene.
+    """
+    ox = scenario.oxide
+    if ox.ensemble != "adaptive":
+        return Realizations(ox.n_realizations, float(ox.n_realizations), ox.n_realizations, False)
+    typical = TYPICAL_REALIZATIONS * (TYPICAL_TARGET / ox.target_half_width) ** 2
+    return Realizations(ox.min_realizations, min(max(typical, ox.min_realizations), ox.max_realizations),
+                        ox.max_realizations, True)
 
 
 def available_memory() -> float:
@@ -111,7 +149,9 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     n = _cells(scenario)
     cells = float(n) * n
     ox, t = scenario.oxide, _threads(workers)
-    n_xi, n_lam, n_real = len(ox.xi), len(ox.lambda_), ox.n_realizations
+    n_xi, n_lam, n_real = len(ox.xi), len(ox.lambda_), ox.n_realizations  # n_real: fields in oxide.nc
+    counts = realizations(scenario)
+    n_cube = counts.high  # the padded realization axis of the cube, at its largest
     n_delta, n_r = scenario.loading.n_delta, scenario.contact.n_radial
     # contact: influence matrix and its Newton copies; spot maps over delta; the resolve grid.
     contact_mem = 8.0 * (7 * n_r * n_r + 10 * n_delta * cells + 8 * 4 * cells)
@@ -126,9 +166,9 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     # cube: psi read whole, per task the masks and one block of work, the cached operators,
     # the results (five float64 terms, concatenated once). Measured on the 583^2 scene
     # (2 xi x 2 lambda x 50): contact 767 MiB, oxide 953 MiB, cube 1215 MiB peak RSS.
-    results = 8.0 * 5 * n_xi * n_lam * n_delta * n_real
+    results = 8.0 * 5 * n_xi * n_lam * n_delta * n_cube
     block = block_size(n)
-    task_cube = n_xi * n_lam * min(scenario.cube.chunk, n_real) * cells * 1.0 + block * (
+    task_cube = n_xi * n_lam * min(scenario.cube.chunk, n_cube) * cells * 1.0 + block * (
         work_bytes_per_map(n) + 9.0 * cells)
     if n < FFT_FROM:
         operators = min(n_delta, 32) * 4.0 * n**3
@@ -138,17 +178,23 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     # contact's spot maps: read (radius, area) and as float64 maps, and three per-task copies
     spot_maps = 8.0 * n_delta * cells
     cube_mem = psi + t * (task_cube + 3 * spot_maps) + 4 * spot_maps + operators + 2.0 * results
-    cube_s = n_xi * n_lam * n_real * n_delta * _per_map_seconds(n) / t
+    per_realization = n_xi * n_lam * n_delta * _per_map_seconds(n) / t
+    cube_s = per_realization * counts.typical
     # fits: the cube's terms, the bootstrap's resample counts and means.
     boot = scenario.fits.n_bootstrap
-    fits_mem = 3.0 * results + 8.0 * boot * (n_real + 3 * n_xi * n_lam * n_delta)
-    fits_s = 1e-8 * n_xi * n_lam * n_delta * n_real * boot / 50
+    fits_mem = 3.0 * results + 8.0 * boot * (n_cube + 3 * n_xi * n_lam * n_delta)
+    fits_per_realization = 1e-8 * n_xi * n_lam * n_delta * boot / 50
+    fits_s = fits_per_realization * counts.typical
+
+    def spread(per: float) -> tuple[float, float] | None:
+        return (per * counts.low, per * counts.high) if counts.adaptive else None
+
     surrogate_mem = 8.0 * 64 * n_xi * n_lam
     return [
         StageEstimate("contact", BASE_BYTES + contact_mem, contact_s),
         StageEstimate("oxide", BASE_BYTES + oxide_mem, oxide_s),
-        StageEstimate("cube", BASE_BYTES + cube_mem, cube_s),
-        StageEstimate("fits", BASE_BYTES + fits_mem, fits_s),
+        StageEstimate("cube", BASE_BYTES + cube_mem, cube_s, spread(per_realization)),
+        StageEstimate("fits", BASE_BYTES + fits_mem, fits_s, spread(fits_per_realization)),
         StageEstimate("surrogate", BASE_BYTES + surrogate_mem, 0.1),
     ]
 
@@ -156,6 +202,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
 #: Parameters whose values drive memory or time, in the order they are blamed.
 _DRIVERS: tuple[str, ...] = (
     "roughness.eta", "contact.window", "oxide.lambda", "oxide.ks_ratio", "oxide.n_realizations",
+    "oxide.max_realizations", "oxide.target_half_width", "oxide.min_realizations", "oxide.ensemble",
     "oxide.xi", "loading.n_delta", "contact.n_radial", "oxide.chunk", "cube.chunk",
     "fits.n_bootstrap", "indenter.radius", "indenter.shape", "roughness.sigma",
 )
@@ -258,7 +305,9 @@ def prepare(command: str, scenario: Scenario, workers: int | None = None) -> Sce
     resolved = resolve(scenario)
     for e in check_resources(resolved, workers):
         if e.seconds > ANNOUNCE_AFTER and command in (e.stage, "run"):
-            print(f"plan: {e.stage} estimated at ~{e.seconds:.3g} s and ~{e.peak_bytes / 2**20:.0f} MiB peak "
+            span = (f" (adaptive ensemble: {e.seconds_range[0]:.3g} .. {e.seconds_range[1]:.3g} s)"
+                    if e.seconds_range else "")
+            print(f"plan: {e.stage} estimated at ~{e.seconds:.3g} s{span} and ~{e.peak_bytes / 2**20:.0f} MiB peak "
                   f"(`g2tom plan` for all stages)", file=sys.stderr)
     return resolved
 
@@ -266,17 +315,33 @@ def prepare(command: str, scenario: Scenario, workers: int | None = None) -> Sce
 def format_plan(scenario: Scenario, workers: int | None = None) -> list[str]:
     """Lines of ``g2tom plan``: the resolved domains and each stage's estimate."""
     n = scenario.n_cells
+    ox = scenario.oxide
+    counts = realizations(scenario)
+    n_cells = len(ox.xi) * len(ox.lambda_)
+    if counts.adaptive:
+        ensemble = (f"{counts.low} .. {counts.high} realizations per (xi, lambda) (adaptive), "
+                    f"typical {counts.typical:.0f}")
+    else:
+        ensemble = f"{counts.typical:.0f} realizations"
     lines = [
         f"scenario {scenario.name}: {n} x {n} cells of {scenario.cell_size * 1e6:.4g} um, "
         f"window {scenario.contact.window:.4g} R*, r_max {scenario.contact.r_max:.4g} R*",
-        f"{len(scenario.oxide.xi)} xi x {len(scenario.oxide.lambda_)} lambda x {scenario.loading.n_delta} "
-        f"delta x {scenario.oxide.n_realizations} realizations, {_threads(workers)} workers, "
-        f"{available_memory() / 2**30:.3g} GiB available",
-        f"{'stage':10s} {'peak memory':>14s} {'time':>12s}",
+        f"{len(ox.xi)} xi x {len(ox.lambda_)} lambda x {scenario.loading.n_delta} "
+        f"delta x {ensemble}, {_threads(workers)} workers, {available_memory() / 2**30:.3g} GiB available",
     ]
-    total = 0.0
+    if counts.adaptive:
+        lines.append(
+            f"adaptive ensemble: {counts.low * n_cells} .. {counts.high * n_cells} realizations in all, typical "
+            f"{counts.typical * n_cells:.0f} (the paper's scene: {TYPICAL_REALIZATIONS * 108:.0f} at "
+            f"target_half_width {TYPICAL_TARGET:g}, scaled by (target ratio)^2); times below are typical "
+            f"(range: every cell at oxide.min_realizations .. at oxide.max_realizations); memory is for the cap")
+    lines.append(f"{'stage':10s} {'peak memory':>14s} {'time':>12s}")
+    total, low, high = 0.0, 0.0, 0.0
     for e in estimate(scenario, workers):
-        total += e.seconds
-        lines.append(f"{e.stage:10s} {e.peak_bytes / 2**20:11.0f} MiB {e.seconds:10.3g} s")
-    lines.append(f"{'total':10s} {'':>14s} {total:10.3g} s (model constants measured on a 2-core machine)")
+        lo, hi = e.seconds_range or (e.seconds, e.seconds)
+        total, low, high = total + e.seconds, low + lo, high + hi
+        span = f"   ({lo:.3g} .. {hi:.3g} s)" if e.seconds_range else ""
+        lines.append(f"{e.stage:10s} {e.peak_bytes / 2**20:11.0f} MiB {e.seconds:10.3g} s{span}")
+    span = f"   ({low:.3g} .. {high:.3g} s)" if counts.adaptive else ""
+    lines.append(f"{'total':10s} {'':>14s} {total:10.3g} s{span} (model constants measured on a 2-core machine)")
     return lines

@@ -51,8 +51,9 @@ def test_paper_scene_fits_and_plan_prints_every_stage(capsys):
 
 
 def test_estimates_grow_with_the_cell_count():
-    small = plan.estimate(resolve(load_scenario("paper")))
-    large = plan.estimate(resolve(load_scenario("paper", {"roughness.eta": 3.2e9})))
+    fixed = {"oxide.ensemble": "fixed"}  # an adaptive cube's memory is dominated by its cap, not the cells
+    small = plan.estimate(resolve(load_scenario("paper", fixed)))
+    large = plan.estimate(resolve(load_scenario("paper", {**fixed, "roughness.eta": 3.2e9})))
     for a, b in zip(small, large):
         if a.stage in ("oxide", "cube"):
             assert b.peak_bytes > 5 * (a.peak_bytes - plan.BASE_BYTES)
@@ -83,3 +84,48 @@ def test_memory_estimate_within_a_factor_2_of_measured_peak(tmp_path, eta):
         ratio = estimates[stage] / measured
         print(f"eta {eta:g} {stage}: estimate {estimates[stage] / 2**20:.0f} MiB, measured {measured / 2**20:.0f} MiB")
         assert 0.5 <= ratio <= 2.0, (stage, estimates[stage] / 2**20, measured / 2**20)
+
+
+# The default scenario's adaptive cube measured on a quiet 2-core machine (fresh clone): 183,125
+# realizations over the 108 (xi, lambda) cells (fits.nc n_realizations), 112,470 fields, 117 s.
+MEASURED_REALIZATIONS = 183_125
+MEASURED_CUBE_SECONDS = 117.0
+
+
+def test_adaptive_plan_prints_a_range_containing_the_measured_run(capsys):
+    scenario = resolve(load_scenario("paper"))
+    counts = plan.realizations(scenario)
+    assert counts.adaptive and (counts.low, counts.high) == (400, 30_000)
+    assert counts.low * 108 <= MEASURED_REALIZATIONS <= counts.high * 108
+    assert counts.typical * 108 == pytest.approx(MEASURED_REALIZATIONS)
+    cube = next(e for e in plan.estimate(scenario) if e.stage == "cube")
+    low, high = cube.seconds_range
+    assert low < cube.seconds < high and high / low == pytest.approx(30_000 / 400)
+    assert low <= MEASURED_CUBE_SECONDS <= high
+    assert main(["plan"]) == 0
+    out = capsys.readouterr().out
+    assert "400 .. 30000 realizations per (xi, lambda) (adaptive)" in out
+    assert "43200 .. 3240000 realizations in all, typical 183125" in out
+    assert f"({low:.3g} .. {high:.3g} s)" in out
+
+
+def test_adaptive_memory_is_checked_at_the_cap():
+    scenario = resolve(load_scenario("paper"))
+    fixed = resolve(load_scenario("paper", {"oxide.ensemble": "fixed"}))  # same fields in oxide.nc (500)
+    adaptive = {e.stage: e.peak_bytes for e in plan.estimate(scenario)}
+    grown = {e.stage: adaptive[e.stage] - e.peak_bytes for e in plan.estimate(fixed)}
+    # the cube's and fits' results are held on the padded realization axis, 30,000 instead of 500
+    results = 8.0 * 5 * 9 * 12 * 20 * (30_000 - 500)
+    assert grown["cube"] == pytest.approx(2 * results) and grown["fits"] >= 3 * results
+    assert grown["contact"] == grown["oxide"] == grown["surrogate"] == 0
+    plan.check_resources(scenario, memory=MEMORY)  # the default scenario is not refused
+    with pytest.raises(ConfigError) as err:
+        plan.check_resources(resolve(load_scenario("paper", {"oxide.max_realizations": 3_000_000})), memory=MEMORY)
+    assert str(err.value).startswith("oxide.max_realizations = 3000000 is out of range for this machine"), str(err.value)
+
+
+def test_adaptive_cap_refused_before_work_by_the_cli(tmp_path, capsys):
+    code = main(["cube", "--set", "oxide.max_realizations=3000000", "--data-dir", str(tmp_path), "--no-progress"])
+    assert code == 2
+    assert "oxide.max_realizations = 3000000 is out of range" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())

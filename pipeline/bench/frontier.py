@@ -14,15 +14,19 @@ Three sweeps, each against a reference computed in the same process:
 * ensemble: the first n = 25..N realizations of one ensemble (today's fixed counts) against
   the width of the bootstrap intervals of alpha and gamma per (xi, lambda), and the time
   (oxide and cube prorated to n from one timed run of N, plus the timed fits).
+* prefix (from an existing adaptive ``<data_dir>/cube.nc``, else skipped with a note): per
+  (xi, lambda), the fast rule's half-widths of alpha and gamma (:func:`pipeline.stages.cube.half_widths`)
+  at log-spaced prefixes n = 50 .. the cell's count, and the cube time prorated to n.
 
 ``make bench`` writes ``<data_dir>/bench/frontier.nc`` (:func:`write`) and its figures
-``frontier_contact.png``, ``frontier_cube.png`` and ``frontier_ensemble.png`` under
-``<data_dir>/figures``; :func:`recommend` turns the sweeps into a setting per use.
+``frontier_contact.png``, ``frontier_cube.png``, ``frontier_ensemble.png`` (and
+``frontier_prefix.png`` with a prefix curve) under ``<data_dir>/figures``; :func:`recommend` turns the sweeps into a setting per use.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import statistics
 import time
@@ -37,8 +41,8 @@ from pipeline.config import Scenario
 from pipeline.physics import greenwood_tripp as gt
 from pipeline.store import atomic_path
 
-__all__ = ["run", "contact_frontier", "cube_frontier", "ensemble_frontier", "recommend", "write", "plot",
-           "USES"]
+__all__ = ["run", "contact_frontier", "cube_frontier", "ensemble_frontier", "prefix_counts", "prefix_curve",
+           "adaptive_prefix", "prefix_summary", "recommend", "write", "plot", "USES"]
 
 REPEATS = 3
 #: Radial node counts and Newton tolerances of the contact sweep.
@@ -52,6 +56,9 @@ CUBE_REALIZATIONS = 40
 #: Ensemble sweep: the largest ensemble and the prefixes fitted.
 ENSEMBLE_REALIZATIONS = 400
 ENSEMBLE_COUNTS = (25, 50, 100, 200, 400)
+#: Prefix curve of an adaptive cube: the smallest prefix and the points per (xi, lambda).
+PREFIX_FROM = 50
+PREFIX_POINTS = 12
 #: Uses and their targets: contact force error, cube R error, relative interval half-width.
 USES: dict[str, dict[str, float]] = {
     "quick look": {"force_error": 1e-3, "resistance_error": 1e-3, "interval": 0.10},
@@ -196,6 +203,117 @@ def ensemble_frontier(scenario: Scenario) -> xr.Dataset:
     return ds
 
 
+def prefix_counts(count: int) -> np.ndarray:
+    """:data:`PREFIX_POINTS` prefixes log-spaced from ``min(PREFIX_FROM, count)`` to ``count`` (rounded)."""
+    return np.round(np.geomspace(min(PREFIX_FROM, count), count, PREFIX_POINTS)).astype(np.int64)
+
+
+def prefix_curve(scenario: Scenario, cube_ds: xr.Dataset, cube_seconds: float) -> xr.Dataset:
+    """The fast rule's half-widths and the prorated time at prefixes of every (xi, lambda) of a cube.
+
+    Parameters
+    ----------
+    scenario
+        The scenario the cube was built with (``fits.min_force`` and ``fits.confidence`` set the rule).
+    cube_ds
+        An adaptive cube: ``resistance`` (xi, lambda, delta, realization), NaN beyond
+        ``n_realizations`` (xi, lambda); ``force`` and ``force_normalized`` (delta).
+    cube_seconds
+        Wall time of the cube stage that built ``cube_ds`` (s), spread evenly over every
+        realization of every cell.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``prefix_n``, ``prefix_alpha_halfwidth`` (relative), ``prefix_gamma_halfwidth``
+        (absolute) and ``prefix_seconds``, each (cube_xi, cube_lambda, prefix_step); the last
+        step is the cell's count, where the half-widths equal the cube's ``rule_*_half_width``.
+    """
+    from pipeline.stages import cube
+
+    rule = cube._rule(scenario, cube_ds["force"].values, cube_ds["force_normalized"].values)
+    resistance = cube_ds["resistance"].transpose("xi", "lambda", "delta", "realization").values
+    counts = cube_ds["n_realizations"].transpose("xi", "lambda").values.astype(np.int64)
+    per_realization = cube_seconds / counts.sum()
+    shape = (*counts.shape, PREFIX_POINTS)
+    n = np.zeros(shape, np.int64)
+    alpha, gamma = np.full(shape, np.nan), np.full(shape, np.nan)
+    for i, j in np.ndindex(counts.shape):
+        n[i, j] = prefix_counts(int(counts[i, j]))
+        a, g = cube.half_widths(resistance[i, j][None, :, : counts[i, j]], rule)
+        alpha[i, j], gamma[i, j] = a[0, n[i, j] - 1], g[0, n[i, j] - 1]
+    dims = ("cube_xi", "cube_lambda", "prefix_step")
+    return xr.Dataset(
+        {
+            "prefix_n": (dims, n, {"long_name": "realizations in the prefix of the adaptive cube's cell", "units": "1"}),
+            "prefix_alpha_halfwidth": (dims, alpha, {
+                "long_name": "fast-rule relative half-width of alpha with the first prefix_n realizations",
+                "units": "1"}),
+            "prefix_gamma_halfwidth": (dims, gamma, {
+                "long_name": "fast-rule absolute half-width of gamma with the first prefix_n realizations",
+                "units": "1"}),
+            "prefix_seconds": (dims, n * per_realization, {
+                "long_name": "cube stage time prorated to prefix_n realizations of the cell", "units": "s"}),
+            "prefix_count": (dims[:2], counts, {"long_name": "realizations of the adaptive cube's cell", "units": "1"}),
+        },
+        coords={
+            "cube_xi": ("cube_xi", cube_ds["xi"].values, {"long_name": "oxide fraction (adaptive cube)", "units": "1"}),
+            "cube_lambda": ("cube_lambda", cube_ds["lambda"].values,
+                            {"long_name": "normalized correlation length (adaptive cube)", "units": "1"}),
+            "prefix_step": ("prefix_step", np.arange(PREFIX_POINTS), {"long_name": "prefix index", "units": "1"}),
+        },
+        attrs={"prefix_cube_seconds": cube_seconds},
+    )
+
+
+def adaptive_prefix(scenario: Scenario, data_dir: str | Path) -> tuple[xr.Dataset | None, str]:
+    """:func:`prefix_curve` of ``<data_dir>/cube.nc`` when it is an adaptive cube of ``scenario``.
+
+    Returns
+    -------
+    tuple
+        The curve (None when skipped) and a one-line note saying where it came from or why not.
+    """
+    from pipeline import store
+
+    problem = store.stage_problem(data_dir, "cube", scenario)
+    if problem:
+        return None, f"prefix curve skipped: {problem}"
+    path = store.stage_path(data_dir, "cube")
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        if ds.attrs.get("ensemble") != "adaptive":
+            return None, f"prefix curve skipped: {path} is a fixed ensemble (oxide.ensemble = \"fixed\")"
+        cube_ds = ds[["resistance", "n_realizations"]].load()  # with the force coordinates
+        rule_target = float(ds.attrs["rule_target_half_width"])
+        config_hash = ds.attrs.get("config_hash")
+    timings = Path(data_dir) / "timings.json"
+    entry = json.loads(timings.read_text()).get("cube", {}) if timings.is_file() else {}
+    if "seconds" not in entry or entry.get("config_hash") != config_hash:
+        return None, f"prefix curve skipped: no cube time of {path} in {timings}"
+    curve = prefix_curve(scenario, cube_ds, float(entry["seconds"]))
+    curve.attrs["prefix_rule_target"] = rule_target
+    return curve, (f"prefix curve of {path}: {int(curve['prefix_count'].sum())} realizations over "
+                   f"{curve['prefix_count'].size} cells, cube time {entry['seconds']:.4g} s prorated")
+
+
+def prefix_summary(prefix: xr.Dataset | None, note: str) -> dict[str, Any]:
+    """JSON-ready summary of a prefix curve for the report: its note and, if any, its extremes."""
+    if prefix is None:
+        return {"note": note}
+    first = {k: prefix[f"prefix_{k}_halfwidth"].isel(prefix_step=0) for k in ("alpha", "gamma")}
+    last = {k: prefix[f"prefix_{k}_halfwidth"].isel(prefix_step=-1) for k in ("alpha", "gamma")}
+    counts = prefix["prefix_count"].values
+    return {
+        "note": note, "cells": int(counts.size), "realizations": int(counts.sum()),
+        "count_min": int(counts.min()), "count_median": float(np.median(counts)), "count_max": int(counts.max()),
+        "first_n": int(prefix["prefix_n"].isel(prefix_step=0).min()),
+        "alpha_first_max": float(first["alpha"].max()), "alpha_last_max": float(last["alpha"].max()),
+        "gamma_first_max": float(first["gamma"].max()), "gamma_last_max": float(last["gamma"].max()),
+        "cube_seconds": float(prefix.attrs["prefix_cube_seconds"]),
+        "seconds_per_cell_max": float(prefix["prefix_seconds"].isel(prefix_step=-1).max()),
+    }
+
+
 def _table(rows: list[dict[str, Any]], dim: str) -> xr.Dataset:
     """Rows of equal keys as a dataset over ``dim`` (strings stay strings)."""
     units = {"seconds": "s", "n_radial": "1"}
@@ -235,9 +353,14 @@ def recommend(contact_rows: list[dict[str, Any]], cube_rows: list[dict[str, Any]
 
 
 def write(contact_rows: list[dict[str, Any]], cube_rows: list[dict[str, Any]], ensemble: xr.Dataset,
-          target: str | Path) -> Path:
-    """All three sweeps in one labelled netCDF file, written atomically."""
-    ds = xr.merge([_table(contact_rows, "contact"), _table(cube_rows, "cube"), ensemble], combine_attrs="drop_conflicts")
+          target: str | Path, prefix: xr.Dataset | None = None, prefix_note: str = "") -> Path:
+    """All sweeps (and the adaptive cube's ``prefix`` curve, if any) in one labelled netCDF file, atomically."""
+    parts = [_table(contact_rows, "contact"), _table(cube_rows, "cube"), ensemble]
+    ds = xr.merge(parts + ([prefix] if prefix is not None else []), combine_attrs="drop_conflicts")
+    if prefix is not None:
+        ds.attrs.update({k: v for k, v in prefix.attrs.items() if k.startswith("prefix_")})
+    if prefix_note:
+        ds.attrs["prefix_note"] = prefix_note
     ds.attrs.update({"title": "g2tom accuracy-time frontier", "Conventions": "CF-1.10",
                      "contact_reference": "Newton to 1e-12 on 4x the scenario's radial nodes",
                      "cube_reference": "gemm, crop_tolerance 0, float64",
@@ -330,6 +453,36 @@ def plot(frontier: xr.Dataset, out_dir: str | Path) -> list[Path]:
     paths.append(out_dir / "frontier_ensemble.png")
     fig.savefig(paths[-1], dpi=120)
     plt.close(fig)
+
+    if "prefix_n" in frontier:
+        fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+        lambdas = frontier["cube_lambda"].values
+        colors = plt.cm.viridis(np.linspace(0, 1, lambdas.size))
+        per_realization = float(frontier.attrs["prefix_cube_seconds"]) / float(frontier["prefix_count"].sum())
+        for ax, name in zip(axes, ("alpha", "gamma")):
+            width = frontier[f"prefix_{name}_halfwidth"].transpose("cube_xi", "cube_lambda", "prefix_step").values
+            n = frontier["prefix_n"].transpose("cube_xi", "cube_lambda", "prefix_step").values
+            for j, lam in enumerate(lambdas):
+                for i in range(n.shape[0]):
+                    ax.loglog(n[i, j], width[i, j], "-", color=colors[j], lw=0.8, alpha=0.7,
+                              label=f"lambda {lam:g}" if i == 0 else None)
+                ax.loglog(n[:, j, -1], width[:, j, -1], "o", color=colors[j], ms=3)
+            if name == "alpha" and "prefix_rule_target" in frontier.attrs:
+                ax.axhline(frontier.attrs["prefix_rule_target"], color="k", ls="--", lw=0.8,
+                           label="the rule's stopping target")
+            ax.set_xlabel("realizations of the cell (dots: the adaptive ensemble's count)")
+            ax.set_ylabel(f"fast-rule {'relative' if name == 'alpha' else 'absolute'} half-width of {name}")
+            ax.grid(True, which="major", alpha=0.3)
+            top = ax.secondary_xaxis("top", functions=(lambda x: x * per_realization, lambda t: t / per_realization))
+            top.set_xlabel("cube time prorated to n, s")
+        handles, labels = axes[0].get_legend_handles_labels()  # the target only: the colours are in axes[1]
+        axes[0].legend([h for h, t in zip(handles, labels) if not t.startswith("lambda")],
+                       [t for t in labels if not t.startswith("lambda")], fontsize=7, loc="lower left")
+        axes[1].legend(fontsize=6, ncol=2)
+        fig.suptitle("Adaptive ensemble: prefixes of every (xi, lambda) cell against the fast rule's half-width")
+        paths.append(out_dir / "frontier_prefix.png")
+        fig.savefig(paths[-1], dpi=120)
+        plt.close(fig)
     return paths
 
 
@@ -341,7 +494,9 @@ def run(scenario: Scenario, data_dir: str | Path | None = None) -> dict[str, Any
     result: dict[str, Any] = {"recommended": recommend(contact_rows, cube_rows, ensemble),
                               "contact": contact_rows, "cube": cube_rows}
     if data_dir is not None:
-        path = write(contact_rows, cube_rows, ensemble, Path(data_dir) / "bench" / "frontier.nc")
+        prefix, note = adaptive_prefix(scenario, data_dir)
+        result["prefix"] = prefix_summary(prefix, note)
+        path = write(contact_rows, cube_rows, ensemble, Path(data_dir) / "bench" / "frontier.nc", prefix, note)
         with xr.open_dataset(path, decode_timedelta=False) as ds:
             plot(ds.load(), Path(data_dir) / "figures")
     return result
