@@ -28,8 +28,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import statistics
-import time
 from pathlib import Path
 from typing import Any, Callable
 
@@ -37,6 +35,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline.compute import ComputeOptions
+from pipeline.bench.timing import median_time
 from pipeline.config import Scenario
 from pipeline.physics import greenwood_tripp as gt
 from pipeline.store import atomic_path
@@ -67,13 +66,9 @@ USES: dict[str, dict[str, float]] = {
 }
 
 
-def _median_time(fn: Callable[[], Any], repeats: int = REPEATS) -> tuple[float, Any]:
-    times, result = [], None
-    for _ in range(repeats):
-        start = time.perf_counter()
-        result = fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), result
+def _median_time(fn: Callable[[], Any], repeats: int | None = None) -> tuple[float, Any]:
+    """Median wall time (s) of ``repeats`` (default :data:`REPEATS`) calls of ``fn`` and its result."""
+    return median_time(fn, REPEATS if repeats is None else repeats)
 
 
 def _replace(scenario: Scenario, section: str, **changes: Any) -> Scenario:
