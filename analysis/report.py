@@ -22,6 +22,7 @@ from scipy.stats import norm
 
 from pipeline import __version__
 from pipeline.config import STAGE_INPUTS, Scenario, parameter_table
+from pipeline.physics import surrogate as sg
 from pipeline.stages.surrogate import PARAMETERS, table3_rows
 from pipeline.store import StaleInputError, atomic_path, read_stage
 
@@ -211,11 +212,13 @@ def _surrogate_model_blocks(sur: xr.Dataset) -> list[Block]:
         sigma = sur[f"{p}_fit_sigma"].values * z_c
         half = np.expm1(sigma) if p == "alpha" else sigma / sur[f"{p}_fit"].values  # relative 95 % half-width
         met = int(np.sum(err <= np.fmax(0.03, half)))
-        rows.append([p, a.get(f"{p}_transform", "identity"), int(a.get(f"{p}_rank", 0)), int(a.get(f"{p}_order_w", 0)),
+        transform, w_map = sg.split_spec(str(a.get(f"{p}_transform", "identity")))
+        rows.append([p, transform, sg.W_TEXT[w_map], int(a.get(f"{p}_rank", 0)), int(a.get(f"{p}_order_w", 0)),
                      int(a.get(f"{p}_order_z", 0)), int(a.get(f"{p}_free_parameters", 0)), f"{100 * float(a.get(f'{p}_cv_rms', np.nan)):.2f}",
                      f"{100 * err.max():.2f}", f"{100 * np.sqrt(np.mean(err**2)):.2f}", f"{met} / {err.size}"])
     text = ("joint weighted least-squares fit of all coefficients of the rank-r model T(p) = sum_k P_k(w) Q_k(z), "
-            "each cell weighted by its confidence interval; transform, rank and orders chosen by leave-one-line-out "
+            "each cell weighted by its confidence interval; transform, coordinate w of lambda, rank and orders chosen "
+            "by leave-one-line-out "
             "cross-validation" if method == "joint" else
             "the paper's Sect. 3.1: truncated SVD of the grid matrix, each mode fitted by its own polynomial")
     formulas = "\n".join(str(sur.attrs.get(f"{p}_formula", "")) for p in PARAMETERS)
@@ -225,9 +228,9 @@ def _surrogate_model_blocks(sur: xr.Dataset) -> list[Block]:
                    f"dimensions p and q: r (p + q - r). CV: RMS relative error of each grid value predicted with its "
                    f"lambda row or xi column left out. Target per cell: |error| <= max(3 %, the cell's "
                    f"{100 * float(sur.attrs.get('fit_confidence', 0.95)):g} % half-width)."),
-        _table(["parameter", "transform T", "rank r", "order w", "order z", "free parameters", "CV RMS %",
+        _table(["parameter", "transform T", "w", "rank r", "order w", "order z", "free parameters", "CV RMS %",
                 "max |error| %", "RMS error %", "cells within target"], rows),
-        Block("p", "Closed formulas (w = LN(lambda), z = -LN(1 - xi); also in surrogate.json with everything the "
+        Block("p", "Closed formulas (w = LN(lambda) where written in w, z = -LN(1 - xi); also in surrogate.json with everything the "
                    "predictor needs):"),
         Block("pre", formulas),
         Block("p", "Predictor band (g2tom predict): three one-sigma half-widths in ln R, each reported: the "
@@ -306,9 +309,9 @@ def _surrogate_blocks(sur: xr.Dataset) -> list[Block]:
     blocks.append(_table(header, rows))
     blocks.append(Block("h2", "Table 4: surrogate coefficients (ascending powers)"))
     for p in PARAMETERS:
-        transform = sur[f"{p}_coef_w"].attrs.get("transform", "identity")
+        transform, w_map = sg.split_spec(str(sur[f"{p}_coef_w"].attrs.get("transform", "identity")))
         what = f"ln {p}" if transform == "log" else p
-        for axis, var in (("w = log lambda", "w"), ("z = -log(1 - xi)", "z")):
+        for axis, var in ((f"w = {sg.W_TEXT[w_map]}", "w"), ("z = -LN(1 - xi)", "z")):
             coef = sur[f"{p}_coef_{var}"].values
             blocks.append(Block("p", f"{what}, modes in {axis}:"))
             blocks.append(_table(["mode"] + [f"c{i}" for i in range(coef.shape[1])],

@@ -316,6 +316,10 @@ class Surrogate:
         "auto", "1", "joint method: gamma fitted as log(gamma), as gamma, or the better by cross-validation",
         choices=("log", "identity", "auto"),
     )
+    lambda_map: str = _param(
+        "auto", "1", "joint method: coordinate w of lambda: log (the paper's), lambda, sqrt, or the best by "
+        "cross-validation", choices=("log", "lambda", "sqrt", "auto"),
+    )
     max_rank: int = _param(3, "1", "joint method: highest rank tried by cross-validation", ge=1)
     max_order_w: int = _param(4, "1", "joint method: highest order in w tried by cross-validation", ge=0)
     max_order_z: int = _param(3, "1", "joint method: highest order in z tried by cross-validation", ge=0)
@@ -360,6 +364,7 @@ STAGE_INPUTS: dict[str, tuple[str, ...]] = {
         "surrogate.gamma_order_z",
         "surrogate.alpha_transform",
         "surrogate.gamma_transform",
+        "surrogate.lambda_map",
         "surrogate.max_rank",
         "surrogate.max_order_w",
         "surrogate.max_order_z",

@@ -8,13 +8,16 @@ import warnings
 import numpy as np
 import pytest
 import xarray as xr
+from numpy.polynomial import polynomial as P
 
 from pipeline.cli import main
-from pipeline.config import ConfigError, Scenario
+from pipeline.config import ConfigError, Scenario, load_scenario
+from pipeline.domains import resolve
 from pipeline.physics.surrogate import evaluate
 from pipeline.predict import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
 from pipeline.stages import fits, surrogate
 from pipeline.store import write_dataset
+from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import cli_overrides, synthetic_cube
 
 
@@ -248,3 +251,24 @@ def test_json_round_trips_every_table_value(data_dir) -> None:
         np.testing.assert_array_equal(back.coef[p][1], cz)
         assert back.coef[p][2] == t
     assert back.ranges == tables.ranges
+
+
+def test_json_carries_the_lambda_map(tmp_path, small: Scenario) -> None:
+    scenario = resolve(load_scenario("paper", {**SMALL_OVERRIDES, "surrogate.lambda_map": "lambda"}))
+    write_dataset(fits.build(scenario, synthetic_cube(scenario, noise=0.2)), tmp_path, "fits", scenario)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        surrogate.run(scenario, tmp_path, None)
+    from_json = load_surrogate(tmp_path / "surrogate.json")
+    from_nc = load_surrogate(tmp_path / "surrogate.nc")
+    lam, xi = np.array([2.0, 6.0, 12.0]), np.array([0.3, 0.5, 0.7])
+    for p in ("alpha", "gamma"):
+        coef_w, coef_z, spec = from_json.coef[p]
+        assert spec.endswith(";w=lambda")
+        np.testing.assert_array_equal(from_json.parameter(p, lam, xi), from_nc.parameter(p, lam, xi))
+        # the predictor evaluates polynomials in lambda itself, not in log(lambda)
+        direct = sum(P.polyval(lam, cw) * P.polyval(-np.log1p(-xi), cz) for cw, cz in zip(coef_w, coef_z))
+        direct = np.exp(direct) if spec.startswith("log") else direct
+        np.testing.assert_allclose(from_json.parameter(p, lam, xi), direct, rtol=1e-12)
+    args = (np.array([900.0, 2000.0]), np.array([0.3, 0.6]), np.array([2.0, 11.0]))
+    xr.testing.assert_identical(_quiet(from_json, scenario, *args), _quiet(from_nc, scenario, *args))

@@ -8,6 +8,7 @@ from numpy.polynomial import polynomial as P
 from scipy.optimize import least_squares
 
 from pipeline.config import ConfigError, load_scenario
+from pipeline.domains import resolve
 from pipeline.physics import surrogate as sg
 from pipeline.stages import fits, surrogate
 from tests.conftest import SMALL_OVERRIDES
@@ -273,3 +274,52 @@ def test_weights_keep_an_uncertain_cell_from_pulling_the_fit() -> None:
     plain = sg.fit_joint(data, LAM, XI, 2, 3, 2, "log")(LAM[:, None], XI[None, :])
     assert np.abs(weighted / field - 1)[rest].max() < 1e-4
     assert np.abs(plain / field - 1)[rest].max() > 1e-2
+
+
+def test_lambda_map_specs_round_trip_and_reject_malformed() -> None:
+    assert sg.split_spec("log") == ("log", "log") and sg.model_spec("log", "log") == "log"
+    for t in sg.TRANSFORMS:
+        for m in sg.W_MAPS:
+            assert sg.split_spec(sg.model_spec(t, m)) == (t, m)
+    np.testing.assert_allclose(sg.to_w(LAM, "lambda"), LAM)
+    np.testing.assert_allclose(sg.to_w(LAM, "sqrt") ** 2, LAM)
+    for bad in ("log;w=cube", "log;v=lambda", "log;lambda"):
+        with pytest.raises(ValueError, match="malformed"):
+            sg.split_spec(bad)
+    with pytest.raises(ValueError, match="w map"):
+        sg.to_w(LAM, "cube")
+
+
+def test_polynomial_in_lambda_recovered_exactly_and_chosen_by_cross_validation() -> None:
+    lam, z = LAM[:, None], -np.log1p(-XI)[None, :]
+    log_field = (-1.4 + 0.01 * lam) * (1 - 0.3 * z) + (0.002 * lam**2) * (z**2 - 0.1 * z)  # rank 2, orders (2, 2) in lambda
+    field = np.exp(log_field)
+    sigma = np.random.default_rng(5).uniform(0.005, 0.2, field.shape)
+    model = sg.fit_joint(field, LAM, XI, 2, 2, 2, "log;w=lambda", sigma)
+    np.testing.assert_allclose(model(LAM[:, None], XI[None, :]), field, rtol=1e-9)
+    # in log(lambda) the same orders cannot represent it
+    assert np.abs(sg.fit_joint(field, LAM, XI, 2, 2, 2, "log", sigma)(LAM[:, None], XI[None, :]) / field - 1).max() > 1e-3
+    # the closed formula is written in lambda itself and is the model
+    formula = sg.closed_formula(model.coef_w, model.coef_z, model.transform, "alpha").split("=", 1)[1]
+    assert "w" not in formula.replace("EXP", "")
+    value = eval(formula.replace("EXP", "np.exp").replace("^", "**").replace("lambda", "lam"),
+                 {"np": np, "lam": 6.5, "z": -np.log1p(-0.45)})
+    assert value == pytest.approx(float(model(6.5, 0.45)), rel=1e-12)
+    # cross-validation over the maps picks lambda with the true orders
+    specs = tuple(sg.model_spec("log", m) for m in sg.W_MAPS)
+    best, _ = sg.select_model(field, LAM, XI, specs, 3, 4, 3, None, 0.05)
+    assert (best.transform, best.rank, best.order_w, best.order_z) == ("log;w=lambda", 2, 2, 2) and best.score < 1e-9
+
+
+
+@pytest.mark.parametrize(("choice", "spec"), [("log", "log"), ("sqrt", "log;w=sqrt")])
+def test_joint_stage_uses_the_configured_lambda_map(choice: str, spec: str) -> None:
+    scenario = resolve(load_scenario("paper", {**SMALL_OVERRIDES, "surrogate.lambda_map": choice}))
+    with pytest.warns(UserWarning, match="reduced to"):
+        ds = surrogate.build(scenario, fits.build(scenario, synthetic_cube(scenario, noise=0.0)))
+    assert ds.attrs["alpha_transform"] == spec
+    assert set(ds["alpha_cv_transform"].values) == {spec}
+    # the stored spec is the model: evaluating it reproduces the stage's surrogate values
+    values = sg.evaluate(ds["alpha_coef_w"].values, ds["alpha_coef_z"].values, ds["lambda"].values[:, None],
+                         ds["xi"].values[None, :], ds["alpha_coef_w"].attrs["transform"])
+    np.testing.assert_allclose(values, ds["alpha_surrogate"].values, rtol=1e-12)

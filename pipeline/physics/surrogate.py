@@ -22,6 +22,12 @@ least squares (alternating least squares over the two factors of ``C = X Y^T``, 
 unweighted optimum), each cell weighted by the inverse square of its uncertainty. A rank-r
 p x q matrix has ``r (p + q - r)`` free parameters (:func:`free_parameters`). The factors are
 stored in the symmetric SVD form of ``C`` (``coef_w = sqrt(s) U^T``, ``coef_z = sqrt(s) V^T``).
+
+Model spec: the joint surrogate's transform string names T and, optionally, the coordinate map
+of lambda: ``"log"`` / ``"identity"`` use the paper's ``w = log(lambda)``; ``"log;w=lambda"``
+uses ``w = lambda`` and ``"log;w=sqrt"`` ``w = sqrt(lambda)`` (:data:`W_MAPS`,
+:func:`model_spec`, :func:`split_spec`). :func:`evaluate` reads the spec, so a stored
+``(coef_w, coef_z, spec)`` triple is the whole model.
 """
 
 from __future__ import annotations
@@ -34,6 +40,10 @@ from numpy.typing import ArrayLike
 
 __all__ = [
     "TRANSFORMS",
+    "W_MAPS",
+    "W_TEXT",
+    "model_spec",
+    "split_spec",
     "forward_transform",
     "inverse_transform",
     "closed_formula",
@@ -54,9 +64,36 @@ __all__ = [
 ]
 
 
-def to_w(lam: ArrayLike) -> np.ndarray:
-    """w = log(lambda), lambda > 0 (dimensionless)."""
-    return np.log(np.asarray(lam, dtype=float))
+#: Coordinate maps w(lambda) of the joint surrogate: the paper's log, lambda itself, its square root.
+W_MAPS = ("log", "lambda", "sqrt")
+
+
+def to_w(lam: ArrayLike, w_map: str = "log") -> np.ndarray:
+    """w = log(lambda) (default), lambda or sqrt(lambda), lambda > 0 (dimensionless)."""
+    lam = np.asarray(lam, dtype=float)
+    if w_map == "log":
+        return np.log(lam)
+    if w_map == "lambda":
+        return lam
+    if w_map == "sqrt":
+        return np.sqrt(lam)
+    raise ValueError(f"w map = {w_map!r} is not allowed: must be one of {W_MAPS}")
+
+
+def model_spec(transform: str, w_map: str) -> str:
+    """The spec string of transform T and lambda map: ``"log"`` for (log, log), ``"log;w=lambda"`` otherwise."""
+    return transform if w_map == "log" else f"{transform};w={w_map}"
+
+
+def split_spec(spec: str) -> tuple[str, str]:
+    """(transform, w map) of a spec string written by :func:`model_spec`."""
+    transform, sep, rest = spec.partition(";")
+    if not sep:
+        return transform, "log"
+    key, _, w_map = rest.partition("=")
+    if key != "w" or w_map not in W_MAPS:
+        raise ValueError(f"surrogate spec {spec!r} is malformed: expected 'T' or 'T;w=<one of {W_MAPS}>'")
+    return transform, w_map
 
 
 def to_z(xi: ArrayLike) -> np.ndarray:
@@ -107,14 +144,16 @@ def evaluate(
     xi
         Oxide fraction in [0, 1).
     transform
-        ``"identity"`` (the paper's surrogate) or ``"log"`` (the sum is the log of the field).
+        ``"identity"`` (the paper's surrogate) or ``"log"`` (the sum is the log of the field),
+        optionally with the lambda map (``"log;w=lambda"``, see :func:`model_spec`).
 
     Returns
     -------
     numpy.ndarray
         Broadcast shape of ``lam`` and ``xi``.
     """
-    w, z = np.broadcast_arrays(to_w(lam), to_z(xi))
+    transform, w_map = split_spec(transform)
+    w, z = np.broadcast_arrays(to_w(lam, w_map), to_z(xi))
     total = np.zeros(w.shape)
     for cw, cz in zip(np.asarray(coef_w), np.asarray(coef_z)):
         total = total + P.polyval(w, cw) * P.polyval(z, cz)
@@ -306,7 +345,7 @@ class JointModel:
     coef_z
         Shape (rank, order_z + 1): ``Q_k`` in ascending powers of z = -log(1 - xi).
     transform
-        ``"log"`` or ``"identity"``.
+        Spec of T and the lambda map (:func:`model_spec`), e.g. ``"log"`` or ``"log;w=lambda"``.
     iterations
         Alternating least-squares sweeps used (0: solved in closed form).
     """
@@ -413,7 +452,7 @@ def fit_joint(
     order_w, order_z
         Polynomial orders in w and z, each below the number of grid points along its axis.
     transform
-        ``"log"`` or ``"identity"``.
+        ``"log"`` or ``"identity"``, optionally with the lambda map (:func:`model_spec`).
     sigma
         Uncertainty of ``T(M)`` per cell (same shape, > 0), or None for equal weights.
 
@@ -430,14 +469,15 @@ def fit_joint(
             f"orders (w {order_w}, z {order_z}) are out of range: must be >= 0 and below the number of "
             f"grid points ({lam.size} lambda, {xi.size} xi)"
         )
-    if transform == "log" and np.any(values <= 0):
+    field, w_map = split_spec(transform)
+    if field == "log" and np.any(values <= 0):
         raise ValueError("transform = 'log' needs a positive field")
-    t = forward_transform(values, transform)
+    t = forward_transform(values, field)
     with np.errstate(divide="ignore"):
         weights = np.ones_like(t) if sigma is None else 1.0 / np.asarray(sigma, dtype=float) ** 2
     if weights.shape != t.shape or not np.all(np.isfinite(weights) & (weights > 0)):
         raise ValueError("sigma must be finite and > 0 on every cell of the grid")
-    A, B = _vander(to_w(lam), order_w), _vander(to_z(xi), order_z)
+    A, B = _vander(to_w(lam, w_map), order_w), _vander(to_z(xi), order_z)
     r = min(rank, order_w + 1, order_z + 1)
     if r == min(order_w + 1, order_z + 1):
         coef = _weighted_lstsq(_kron(A, B), t.ravel(), np.sqrt(weights.ravel())).reshape(order_w + 1, order_z + 1)
@@ -528,11 +568,12 @@ def select_model(
     lam, xi
         The grid.
     transforms
-        Transforms to try (a subset of :data:`TRANSFORMS`).
+        Specs to try (:func:`model_spec` of a transform in :data:`TRANSFORMS` and a map in
+        :data:`W_MAPS`).
     max_rank, max_order_w, max_order_z
         Scan limits.
     sigma_of
-        Transform -> uncertainty of T(M) per cell (weights 1/sigma^2); None: equal weights.
+        Transform (without the map) -> uncertainty of T(M) per cell (weights 1/sigma^2); None: equal weights.
     tolerance
         Relative slack on the best score that buys a simpler model (dimensionless, >= 0).
 
@@ -549,9 +590,10 @@ def select_model(
     values = np.asarray(values, dtype=float)
     tried: list[Candidate] = []
     for transform in transforms:
-        if transform == "log" and np.any(values <= 0):
+        field = split_spec(transform)[0]
+        if field == "log" and np.any(values <= 0):
             continue
-        sigma = None if sigma_of is None else sigma_of[transform]
+        sigma = None if sigma_of is None else sigma_of[field]
         for ow in range(max_order_w + 1):
             for oz in range(max_order_z + 1):
                 for rank in range(1, min(max_rank, ow + 1, oz + 1) + 1):
@@ -574,11 +616,18 @@ def _poly_text(coef: np.ndarray, var: str) -> str:
     return "(" + " ".join(terms) + ")"
 
 
+#: The lambda map of each spec as a spreadsheet expression of w.
+W_TEXT = {"log": "LN(lambda)", "lambda": "lambda", "sqrt": "SQRT(lambda)"}
+
+
 def closed_formula(coef_w: np.ndarray, coef_z: np.ndarray, transform: str, name: str) -> str:
     """The surrogate as one spreadsheet-style formula in ``w`` and ``z`` (full precision).
 
-    ``w = LN(lambda)`` and ``z = -LN(1 - xi)``; e.g.
+    ``z = -LN(1 - xi)``; ``w = LN(lambda)`` for the paper's map (the formula is written in
+    ``w``), otherwise the formula is written in ``lambda`` or ``SQRT(lambda)`` directly; e.g.
     ``alpha = EXP((c0 + c1*w)*(d0 + d1*z) + ...)`` for the log transform.
     """
-    body = " + ".join(f"{_poly_text(cw, 'w')}*{_poly_text(cz, 'z')}" for cw, cz in zip(coef_w, coef_z))
+    transform, w_map = split_spec(transform)
+    var = "w" if w_map == "log" else W_TEXT[w_map]
+    body = " + ".join(f"{_poly_text(cw, var)}*{_poly_text(cz, 'z')}" for cw, cz in zip(coef_w, coef_z))
     return f"{name} = EXP({body})" if transform == "log" else f"{name} = {body}"

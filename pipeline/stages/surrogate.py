@@ -7,7 +7,8 @@ Two methods (``surrogate.method``):
 
 * ``paper``: the paper's Sect. 3.1: truncated SVD of the grid matrix, each mode fitted by its
   own polynomial, with the configured rank and orders;
-* ``joint``: ``T(p) = sum_k P_k(w) Q_k(z)`` with T = log or identity, all coefficients fitted
+* ``joint``: ``T(p) = sum_k P_k(w) Q_k(z)`` with T = log or identity and w = log(lambda),
+  lambda or sqrt(lambda) (``surrogate.lambda_map``; the spec string ``T`` or ``T;w=<map>``), all coefficients fitted
   at once by weighted least squares (weights 1 / max(relative 95 % half-width,
   ``weight_floor``)^2 from ``fits.nc``'s ``{p}_ci``), transform, rank and orders chosen by
   leave-one-line-out cross-validation (:func:`pipeline.physics.surrogate.select_model`).
@@ -177,10 +178,12 @@ def _joint(scenario: Scenario, fits: xr.Dataset, name: str, matrix: np.ndarray, 
         if choice == "log":
             raise ConfigError(f"surrogate.{name}_transform = 'log' needs {name} > 0 on every cell (min {matrix.min():.4g})")
         transforms = ("identity",)
+    w_maps = sg.W_MAPS if s.lambda_map == "auto" else (s.lambda_map,)
+    specs = tuple(sg.model_spec(t, m) for m in w_maps for t in transforms)
     relative = np.fmax(np.abs(_half_width(fits, name) / matrix), s.weight_floor)
     sigma_of = {"log": relative, "identity": relative * np.abs(matrix)}
-    best, tried = sg.select_model(matrix, lam, xi, transforms, max_rank, max_w, max_z, sigma_of, s.cv_tolerance)
-    model = sg.fit_joint(matrix, lam, xi, best.rank, best.order_w, best.order_z, best.transform, sigma_of[best.transform])
+    best, tried = sg.select_model(matrix, lam, xi, specs, max_rank, max_w, max_z, sigma_of, s.cv_tolerance)
+    model = sg.fit_joint(matrix, lam, xi, best.rank, best.order_w, best.order_z, best.transform, sigma_of[sg.split_spec(best.transform)[0]])
     dim = f"{name}_candidate"
     labels = {"transform": ("1", "transform T"), "rank": ("1", "rank r"), "order_w": ("1", "order in w"),
               "order_z": ("1", "order in z"), "free_parameters": ("1", "free parameters r (p + q - r)")}
