@@ -303,24 +303,22 @@ EXACT = 1e-9
 TRANSFORMS = ("log", "identity")
 
 
+def _transform_pair(transform: str) -> tuple:
+    """(T, T^-1) of a transform name; ValueError for an unknown one."""
+    pairs = {"log": (np.log, np.exp), "identity": (np.asarray, np.asarray)}
+    if transform not in pairs:
+        raise ValueError(f"transform = {transform!r} is not allowed: must be one of {TRANSFORMS}")
+    return pairs[transform]
+
+
 def forward_transform(values: ArrayLike, transform: str) -> np.ndarray:
     """T(values): natural log (values > 0) or the identity."""
-    values = np.asarray(values, dtype=float)
-    if transform == "log":
-        return np.log(values)
-    if transform == "identity":
-        return values
-    raise ValueError(f"transform = {transform!r} is not allowed: must be one of {TRANSFORMS}")
+    return _transform_pair(transform)[0](np.asarray(values, dtype=float))
 
 
 def inverse_transform(values: ArrayLike, transform: str) -> np.ndarray:
     """T^-1(values): exp or the identity."""
-    values = np.asarray(values, dtype=float)
-    if transform == "log":
-        return np.exp(values)
-    if transform == "identity":
-        return values
-    raise ValueError(f"transform = {transform!r} is not allowed: must be one of {TRANSFORMS}")
+    return _transform_pair(transform)[1](np.asarray(values, dtype=float))
 
 
 def free_parameters(rank: int, order_w: int, order_z: int) -> int:
