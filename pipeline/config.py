@@ -268,7 +268,14 @@ class Cube:
         choices=("greenwood", "point"),
     )
     solver_tolerance: float = _param(
-        1e-10, "1", "point model: relative residual (Jacobi norm) at which the solver stops", gt=0, lt=1
+        1e-10, "1", "point model: where the solver stops, in the measure cube.solver_criterion names", gt=0, lt=1
+    )
+    solver_criterion: str = _param(
+        "error",
+        "1",
+        "point model: what solver_tolerance bounds: error (the estimated relative error of the "
+        "conductance, from CG's energy-norm record) or residual (the relative residual, Jacobi norm)",
+        choices=("error", "residual"),
     )
     max_iterations: int = _param(100, "1", "point model: conjugate-gradient iterations per solve at most", ge=1)
 

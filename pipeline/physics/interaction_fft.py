@@ -246,8 +246,8 @@ def _fold_matrices(n_cells: int) -> tuple[np.ndarray, np.ndarray]:
     return g_e, g_o
 
 
-def scratch(slot: str, shape: tuple[int, ...]) -> np.ndarray:
-    """A float64 work array of ``shape`` reused by this thread under ``slot`` (contents undefined).
+def scratch(slot: str, shape: tuple[int, ...], dtype: type = np.float64) -> np.ndarray:
+    """A work array of ``shape`` and ``dtype`` reused by this thread under ``slot`` (contents undefined).
 
     The hot loop reuses its large temporaries instead of allocating them afresh: with the
     allocator settings of ``dask.distributed`` workers (``MALLOC_TRIM_THRESHOLD_``) every large
@@ -257,9 +257,10 @@ def scratch(slot: str, shape: tuple[int, ...]) -> np.ndarray:
     if pool is None:
         pool = _SCRATCH.pool = {}
     size = math.prod(shape)
-    flat = pool.get(slot)
+    key = (slot, np.dtype(dtype).char)
+    flat = pool.get(key)
     if flat is None or flat.size < size:
-        flat = pool[slot] = np.empty(size)
+        flat = pool[key] = np.empty(size, dtype)
     return flat[:size].reshape(shape)
 
 
@@ -273,8 +274,8 @@ def _fold(c: np.ndarray, axis: int, slot: str) -> tuple[np.ndarray, np.ndarray]:
 
     lower = part(c, slice(half - 1, None, -1) if half else slice(0, 0))
     upper = part(c, slice(half, None))
-    even = scratch(f"{slot}_even", upper.shape)
-    odd_half = scratch(f"{slot}_odd", lower.shape)
+    even = scratch(f"{slot}_even", upper.shape, c.dtype)
+    odd_half = scratch(f"{slot}_odd", lower.shape, c.dtype)
     np.copyto(even, upper)
     np.add(part(even, slice(odd, None)), lower, out=part(even, slice(odd, None)))
     np.subtract(part(c, slice(half + odd, None)), lower, out=odd_half)
@@ -301,6 +302,15 @@ def _folded_operators(n_cells: int) -> tuple[np.ndarray, ...]:
         np.ascontiguousarray(g_e.T @ stack @ g_e),
         np.ascontiguousarray(g_o.T @ stack @ g_o),
     )
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
+@lru_cache(maxsize=64)
+def _folded_operators_as(n_cells: int, dtype: str) -> tuple[np.ndarray, ...]:
+    """:func:`_folded_operators` rounded to ``dtype`` (a numpy type code), read-only."""
+    out = tuple(np.ascontiguousarray(a, dtype=dtype) for a in _folded_operators(n_cells))
     for a in out:
         a.setflags(write=False)
     return out
@@ -372,13 +382,13 @@ def _unfold(even: np.ndarray, odd_half: np.ndarray, axis: int, out: np.ndarray) 
 def _coupled_apply(rows: np.ndarray, coupling: np.ndarray, halves: np.ndarray, slot: str) -> np.ndarray:
     """``rows^T a_f rows`` applied to folded halves of shape (n_x, n_y, batch) (x transform, y coupling, back)."""
     n_x, n_y, batch = halves.shape
-    out = scratch(slot, halves.shape)
+    out = scratch(slot, halves.shape, halves.dtype)
     if n_x == 0 or n_y == 0:
         out.fill(0.0)
         return out
-    spectra = scratch("spectra", (rows.shape[0], n_y, batch))
+    spectra = scratch("spectra", (rows.shape[0], n_y, batch), halves.dtype)
     np.matmul(rows, halves.reshape(n_x, n_y * batch), out=spectra.reshape(-1, n_y * batch))
-    coupled = np.matmul(coupling, spectra, out=scratch("coupled", spectra.shape))
+    coupled = np.matmul(coupling, spectra, out=scratch("coupled", spectra.shape, halves.dtype))
     np.matmul(rows.T, coupled.reshape(rows.shape[0], n_y * batch), out=out.reshape(n_x, n_y * batch))
     return out
 
@@ -396,26 +406,30 @@ def interaction_apply_columns(columns: np.ndarray, pitch: float) -> np.ndarray:
     Parameters
     ----------
     columns
-        Weights, shape (n, n, batch) as (x, y, map).
+        Weights, shape (n, n, batch) as (x, y, map), float64 or float32 (the whole computation
+        then runs in float32, about twice as fast, with relative errors of order 1e-7).
     pitch
         Cell pitch ``h``, in m.
 
     Returns
     -------
     numpy.ndarray
-        ``K * u``, a new C-contiguous array of shape (n, n, batch) as (x, y, map), in units of ``u / m``.
+        ``K * u``, a new C-contiguous array of shape (n, n, batch) as (x, y, map), in units of
+        ``u / m``, of the dtype of ``columns``.
     """
     if columns.ndim != 3 or columns.shape[0] != columns.shape[1]:
         raise ValueError(f"weights must have shape (n, n, batch), got {columns.shape}")
-    cos_e, sin_o, a_e, a_o = _folded_operators(columns.shape[0])
+    if columns.dtype not in (np.float32, np.float64):
+        raise ValueError(f"weights must be float32 or float64, got {columns.dtype}")
+    cos_e, sin_o, a_e, a_o = _folded_operators_as(columns.shape[0], columns.dtype.char)
     x_even, x_odd = _fold(columns, axis=0, slot="x")
     halves = []
     for rows, x_half, part in ((cos_e, x_even, "e"), (sin_o, x_odd, "o")):
         y_even, y_odd = _fold(x_half, axis=1, slot="y")
         back_e = _coupled_apply(rows, a_e, y_even, "back_e")
         back_o = _coupled_apply(rows, a_o, y_odd, "back_o")
-        halves.append(_unfold(back_e, back_o, axis=1, out=scratch(f"unfold_{part}", x_half.shape)))
-    out = _unfold(halves[0], halves[1], axis=0, out=np.empty(columns.shape))
+        halves.append(_unfold(back_e, back_o, axis=1, out=scratch(f"unfold_{part}", x_half.shape, columns.dtype)))
+    out = _unfold(halves[0], halves[1], axis=0, out=np.empty(columns.shape, columns.dtype))
     out /= pitch
     return out
 

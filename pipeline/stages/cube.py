@@ -43,7 +43,7 @@ __all__ = ["build", "run", "spot_maps"]
 
 _TERMS = ("resistance", "resistance_self", "resistance_interaction", "n_conducting", "crop_bound")
 #: Extra terms of the point model's iterative solve.
-_SOLVER_TERMS = ("iterations", "residual")
+_SOLVER_TERMS = ("iterations", "residual", "error_estimate")
 _LONG_NAMES = {
     "greenwood": "Greenwood constriction resistance R = R_self + R_int",
     "point": "point-interaction constriction resistance R = rho* / sum f (exact solve of M f = 1)",
@@ -97,6 +97,7 @@ def _model(settings: dict[str, Any]) -> Any:
         return functools.partial(
             point_model.resistance, film_resistance=film,
             solver_tolerance=settings["solver_tolerance"], max_iterations=settings["max_iterations"],
+            criterion=settings["solver_criterion"],
         )
     if np.isfinite(film):
         return functools.partial(point_model.greenwood_resistance, film_resistance=film)
@@ -403,6 +404,9 @@ def _dataset(
             "1", "conjugate-gradient iterations of the point-model solve", comment="-1 beyond n_realizations(xi, lambda)"))
         data_vars["residual"] = (dims, out["residual"], _attrs(
             "1", "final relative residual of the point-model solve (Jacobi norm)", comment=padding))
+        data_vars["error_estimate"] = (dims, out["error_estimate"], _attrs(
+            "1", "estimated relative error of the point-model conductance (energy norm of the last step)",
+            comment=padding))
     attrs = {
         "interaction_weights": scenario.cube.weights,
         "method": settings["method_used"],
@@ -423,7 +427,9 @@ def _dataset(
         attrs["conducting_rule"] = "every spot conducts; where psi >= threshold through the film"
     if "iterations" in out:
         attrs["solver_tolerance"] = scenario.cube.solver_tolerance
-        attrs["n_not_converged"] = int((out["residual"] > scenario.cube.solver_tolerance).sum())
+        attrs["solver_criterion"] = scenario.cube.solver_criterion
+        measure = out["error_estimate"] if scenario.cube.solver_criterion == "error" else out["residual"]
+        attrs["n_not_converged"] = int((measure > scenario.cube.solver_tolerance).sum())
     if ox.ensemble == "adaptive":
         attrs.update({
             "target_half_width": ox.target_half_width,
@@ -488,6 +494,7 @@ def build(
         "film_resistance": film,
         "solver_tolerance": cube.solver_tolerance,
         "max_iterations": cube.max_iterations,
+        "solver_criterion": cube.solver_criterion,
         "crops": constriction.choose_crops(radius, weights, pitch, 0.0 if whole_window else cube.crop_tolerance),
         "tolerance": cube.crop_tolerance,
         "method": cube.method,
