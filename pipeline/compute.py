@@ -9,7 +9,6 @@ every dask thread also starts one BLAS thread per core).
 from __future__ import annotations
 
 import os
-import sys
 from contextlib import ExitStack
 from dataclasses import dataclass
 from typing import Any
@@ -17,9 +16,11 @@ from typing import Any
 import dask
 from threadpoolctl import threadpool_limits
 
+from pipeline.progress import DaskProgress, ProgressLine, watch_futures
+
 __all__ = ["ComputeOptions", "compute"]
 
-#: Runs shorter than this (s) show no local progress bar.
+#: Runs shorter than this (s) show no progress line.
 PROGRESS_AFTER = 3.0
 #: Seconds to wait for a remote scheduler before giving up.
 CONNECT_TIMEOUT = 5.0
@@ -39,7 +40,8 @@ class ComputeOptions:
         (and for one) that many threads. None means the threaded scheduler with one thread
         per core.
     progress
-        Show a progress bar while computing.
+        Show a progress line with the time left while computing (on a terminal only, see
+        :class:`pipeline.progress.ProgressLine`).
     """
 
     scheduler: str | None = None
@@ -72,13 +74,8 @@ def _client(stack: ExitStack, options: ComputeOptions) -> Any:
     return None
 
 
-def _show_progress(options: ComputeOptions) -> bool:
-    """A progress bar only when asked and stderr is a terminal (no ``\\r`` spray into logs)."""
-    return options.progress and sys.stderr.isatty()
-
-
-def compute(*collections: Any, options: ComputeOptions) -> tuple[Any, ...]:
-    """Compute dask collections where ``options`` says, with a progress bar if asked.
+def compute(*collections: Any, options: ComputeOptions, label: str = "computing") -> tuple[Any, ...]:
+    """Compute dask collections where ``options`` says, with a progress line if asked.
 
     Parameters
     ----------
@@ -86,12 +83,17 @@ def compute(*collections: Any, options: ComputeOptions) -> tuple[Any, ...]:
         Dask arrays or delayed objects.
     options
         Scheduler address, local worker count and progress display.
+    label
+        What the progress line calls this computation (e.g. ``cube round 2 (...)``).
 
     Returns
     -------
     tuple
         The computed values, in the order given (as :func:`dask.compute`).
     """
+    # Only when asked and stderr is a terminal (no ``\r`` spray into logs), after PROGRESS_AFTER s.
+    line = ProgressLine(label, after=PROGRESS_AFTER)
+    show = options.progress and line.enabled
     with ExitStack() as stack:
         client = _client(stack, options)
         if client is None:
@@ -99,14 +101,14 @@ def compute(*collections: Any, options: ComputeOptions) -> tuple[Any, ...]:
             stack.enter_context(
                 dask.config.set(scheduler="threads", num_workers=options.workers or os.cpu_count())
             )
-            if _show_progress(options):
-                from dask.diagnostics import ProgressBar
-
-                stack.enter_context(ProgressBar(minimum=PROGRESS_AFTER, dt=0.5, out=sys.stderr))
+            if show:
+                stack.enter_context(DaskProgress(line))
             return dask.compute(*collections)
-        futures = client.compute(list(collections))
-        if _show_progress(options):
-            from distributed import progress
+        if not show:
+            return tuple(client.gather(client.compute(list(collections))))
+        from distributed import futures_of
 
-            progress(futures)
-        return tuple(client.gather(futures))
+        # Persisted first, so the line counts every output chunk rather than whole collections.
+        persisted = client.persist(list(collections))
+        watch_futures(futures_of(persisted), line)
+        return tuple(client.gather(client.compute(persisted)))

@@ -254,8 +254,11 @@ def _compute(
     done = np.zeros(n_lam, int)
     want = np.full(n_lam, first)
     shared = dask.delayed(radius), dask.delayed(weights), dask.delayed(settings)
-    uncropped = 0
-    while any(k is None for row in kept for k in row):
+    uncropped = round_ = 0
+    while open_cells := sum(k is None for row in kept for k in row):
+        round_ += 1
+        label = (f"cube round {round_} ({n_xi * n_lam} cells, {first} realizations each)" if round_ == 1 else
+                 f"cube round {round_} (adaptive: {open_cells} of {n_xi * n_lam} cells still open)")
         tasks, owner = [], []
         for a in range(n_lam):
             active = np.array([z for z in range(n_xi) if kept[a][z] is None], int)
@@ -268,7 +271,7 @@ def _compute(
                 block = np.arange(start, min(start + chunk, want[a]))
                 tasks.append(dask.delayed(_field_chunk, pure=True)(source, a, block, active, *shared))
                 owner.append((a, active))
-        for (a, active), piece in zip(owner, compute(*tasks, options=options)):
+        for (a, active), piece in zip(owner, compute(*tasks, options=options, label=label)):
             pieces[a].append((active, piece))
             uncropped += piece["n_uncropped"]
         for a in range(n_lam):
