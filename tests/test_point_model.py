@@ -11,7 +11,12 @@ from pipeline import cli
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, load_scenario
 from pipeline.physics import constriction, point_model
-from pipeline.physics.interaction_fft import interaction_apply, interaction_apply_dense, interaction_folded
+from pipeline.physics.interaction_fft import (
+    interaction_apply,
+    interaction_apply_columns,
+    interaction_apply_dense,
+    interaction_folded,
+)
 from tests.test_cube_stage import N, N_REAL, _build, _contact, _oxide
 
 RHO = 7.2e-7  # ohm m
@@ -37,6 +42,16 @@ def test_apply_matches_dense_matrix_and_contraction(n):
     np.testing.assert_allclose(applied, interaction_apply_dense(u, PITCH), rtol=1e-13, atol=1e-13 * applied.max(initial=1))
     q = np.einsum("bij,bij->b", u, applied)
     np.testing.assert_allclose(q, interaction_folded(u, PITCH), rtol=1e-13, atol=1e-30)
+
+
+@pytest.mark.parametrize("n", [1, 6, 13])
+def test_apply_in_float32_stays_float32_and_close(n):
+    u = np.random.default_rng(n).random((n, n, 5))
+    double = interaction_apply_columns(u, PITCH)
+    single = interaction_apply_columns(u.astype(np.float32), PITCH)
+    assert single.dtype == np.float32
+    np.testing.assert_allclose(single, double, rtol=1e-5, atol=1e-6 * double.max(initial=1))
+    assert np.array_equal(interaction_apply_columns(u, PITCH), double)  # the float64 scratch is untouched
 
 
 def test_one_spot_conducts_2a_over_rho():
