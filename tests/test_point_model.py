@@ -197,6 +197,32 @@ def test_cropping_bound_holds():
     assert np.all(cropped.resistance[finite] >= whole.resistance[finite] * (1 - 1e-9))  # cropping lowers kappa
 
 
+def test_no_current_inside_the_crop_is_solved_on_the_whole_window():
+    contact = _contact(n=15, n_delta=5)
+    radius = contact["spot_radius"].values
+    crops = constriction.choose_crops(radius, radius, PITCH, 1e-3)
+    edge = (15 - crops.min()) // 2
+    mask = np.zeros((1, 15, 15), bool)
+    mask[0, :edge, :] = True  # current only outside the smallest crop
+    res = point_model.resistance(mask, radius, radius, PITCH, RHO, crops, 1e-3)
+    dense, _ = point_model.resistance_dense(mask, radius, PITCH, RHO)
+    finite = np.isfinite(dense)
+    assert finite[0, 0] and np.array_equal(finite, np.isfinite(res.resistance))
+    assert np.max(np.abs(res.resistance[finite] / dense[finite] - 1)) <= 1e-10 and res.n_uncropped >= 1
+
+
+def test_tiny_spots_neither_underflow_nor_stop_early():
+    """Spots of 1e-30 m (edge cells of a light contact reach 1e-51 m) are solved like any other."""
+    masks, radius = _random_case(9, n=11)
+    radius = radius * 1e-30 / PITCH
+    res = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    dense, _ = point_model.resistance_dense(masks, radius, PITCH, RHO)
+    finite = np.isfinite(dense)
+    assert np.array_equal(finite, np.isfinite(res.resistance))
+    assert np.max(np.abs(res.resistance[finite] / dense[finite] - 1)) <= 1e-10
+    assert np.all(res.error_estimate <= 1e-10)
+
+
 def test_iteration_cap_is_recorded_not_hidden():
     masks, radius = _random_case(3, n=11)
     res = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, max_iterations=1)

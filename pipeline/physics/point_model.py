@@ -282,7 +282,11 @@ def _cg_round(
     """
     single = system.single
     tolerance, by_error = settings["solver_tolerance"], settings["criterion"] == "error"
-    r = (system.root_t * r).astype(single)
+    r = system.root_t * r
+    # each map's residual scaled to unit norm, so float32 neither underflows nor overflows
+    norm = np.sqrt(_dot(r, r))
+    norm = np.where(norm > 0, norm, 1.0)
+    r = (r / norm).astype(single)
     p = r.copy()
     y = np.zeros_like(r)
     rr = _dot(r, r).astype(np.float64)
@@ -306,14 +310,15 @@ def _cg_round(
         beta = np.divide(rr_new, rr, out=np.zeros_like(rr), where=running)
         p *= beta.astype(single)
         p += r
-        step = np.divide(alpha * rr, scale, out=np.zeros_like(rr), where=running)
+        # the step's energy reduction estimates the error before it; none is left at a zero residual
+        step = np.divide(alpha * rr * norm**2, scale, out=np.zeros_like(rr), where=running & (rr_new > 0))
         error = np.where(running, step, error)
         iterations += running
         rr = np.where(running, rr_new, rr)
-        now = (error <= tolerance) if by_error else (np.sqrt(np.maximum(rr, 0.0)) / safe_b <= tolerance)
+        now = (error <= tolerance) if by_error else (np.sqrt(np.maximum(rr, 0.0)) * norm / safe_b <= tolerance)
         met |= running & (now | ~(rr_new > 0))
         running &= ~met & (rr_new > floor) & (iterations < budget)
-    return system.root_t * y, iterations, error, met, breakdown
+    return system.root_t * norm * y, iterations, error, met, breakdown
 
 
 def _solve_step(
@@ -419,7 +424,9 @@ def _solve_block(
     previous = None
     for k, a in enumerate(radius):
         step = _solve_step(columns, a, int(crops[k]), previous, settings)
-        bound = np.divide(step.outside, step.total, out=np.zeros_like(step.total), where=step.total > 0)
+        # no current inside the crop but some outside: the crop bound is infinite
+        bound = np.divide(step.outside, step.total, out=np.where(step.outside > 0, np.inf, 0.0),
+                          where=step.total > 0)
         rows = np.flatnonzero(bound > tolerance)
         for start in range(0, rows.size, REDO_BLOCK):
             chosen = rows[start : start + REDO_BLOCK]

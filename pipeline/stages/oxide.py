@@ -214,7 +214,7 @@ def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=
         ``oxide_fraction`` (xi, lambda, realization), ``n_modes`` (lambda).
     """
     psi, threshold, fraction = _lazy(scenario)
-    psi, threshold, fraction = compute(psi, threshold, fraction, options=options)
+    psi, threshold, fraction = compute(psi, threshold, fraction, options=options, label="oxide fields")
     return _dataset(scenario, psi, threshold, fraction)
 
 
