@@ -34,7 +34,7 @@ BASE_BYTES = 150 * 2**20
 MAX_SECONDS = 7 * 24 * 3600.0
 #: Seconds per flop-like unit of the models below (measured on the reference machine, one thread).
 _FOLDED_S = 2.5e-10   # per n^3 of one folded map
-_FFT_S = 2.5e-9       # per P^2 log2 P of one FFT map
+_FFT_S = 6.5e-10      # per P^2 log2 P of one FFT map (two threads, blocks of 4, 229 cells: 1.37 ms)
 _MAP_S = 2.0e-9       # per cell of one map (masking, sums), any path
 _LU_S = 5.0e-11       # per n_radial^3 and approach (Newton factorizations and solves)
 _MODE_S = 4.0e-8      # per mode and realization of the oxide coefficients
@@ -174,7 +174,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
         operators = min(n_delta, 32) * 4.0 * n**3
     else:
         p = padded_length(n)
-        operators = n_delta * 4.0 * p * p
+        operators = n_delta * 12.0 * p * p  # the cached spectrum and its interleaved copy
     # contact's spot maps: read (radius, area) and as float64 maps, and three per-task copies
     spot_maps = 8.0 * n_delta * cells
     cube_mem = psi + t * (task_cube + 3 * spot_maps) + 4 * spot_maps + operators + 2.0 * results

@@ -58,15 +58,17 @@ __all__ = [
 BLOCK = 128
 #: Work memory of one block of maps, per thread (bytes): bounds the peak whatever the size.
 WORK_BYTES = 128 * 2**20
-#: Cells per side from which ``auto`` takes the FFT path. Measured on this shared 2-core
-#: machine, one thread, per map (folded / fft): quiet, 0.09 / 0.28 ms at 57, 0.48 / 0.53 ms
-#: at 113, 0.74 / 1.20 ms at 161, 2.6 / 3.0 ms at 227, 8.0 / 6.7 ms at 321; under load (``make
-#: bench``, ``scaling``, paths timed in turn) 0.98 / 2.6 ms at 113 but 43 / 7.1 ms at 229:
-#: the folded path's operators (~4 n^3 bytes per crop size, one size per load step) stop
-#: fitting in cache and memory bandwidth. From 161 cells the FFT path is taken: at most
-#: 15 % slower on a quiet machine, far faster under load, and the cached operators stay
-#: below 16 MiB per size.
-FFT_FROM = 161
+#: Cells per side from which ``auto`` takes the FFT path. Measured on this 2-core machine, one
+#: thread, medians per map (folded in blocks of up to 128 / fft in blocks of 4, after the FFT
+#: path was pruned to the rows holding weights and its spectrum summed by one GEMV): 0.033 /
+#: 0.045 ms at 57, 0.067 / 0.074 ms at 73, 0.093 / 0.088 ms at 81, 0.117 / 0.099 ms at 89,
+#: 0.24 / 0.18 ms at 113, 0.70 / 0.48 ms at 161, 2.1 / 0.92 ms at 229. The paper's windows (55,
+#: 57) stay on the folded path.
+FFT_FROM = 85
+#: Work memory of one block of the FFT path, per thread (bytes): its arrays exceed the cache
+#: anyway, and in two threads at 229 cells blocks of 4 maps ran 1.7 times faster than blocks
+#: of 14 (memory bandwidth).
+FFT_WORK_BYTES = 40 * 2**20
 
 
 def interaction_direct(u: np.ndarray, pitch: float) -> np.ndarray:
@@ -143,8 +145,10 @@ def work_bytes_per_map(n_cells: int) -> int:
 
 
 def block_size(n_cells: int) -> int:
-    """Maps per block for an ``n_cells``-wide window: at most :data:`BLOCK`, within :data:`WORK_BYTES`."""
-    return int(min(BLOCK, max(1, WORK_BYTES // work_bytes_per_map(n_cells))))
+    """Maps per block for an ``n_cells``-wide window: at most :data:`BLOCK`, within :data:`WORK_BYTES`
+    (:data:`FFT_WORK_BYTES` on the FFT path)."""
+    budget = WORK_BYTES if auto_method(n_cells) == "folded" else FFT_WORK_BYTES
+    return int(min(BLOCK, max(1, budget // work_bytes_per_map(n_cells))))
 
 
 def interaction_sum(u: np.ndarray, pitch: float, method: str = "auto") -> np.ndarray:
@@ -380,17 +384,22 @@ def _block_pair_sums(
     """Cropped interaction sums of one block, shape (block, n_delta).
 
     The weight maps are laid out (x, y, map) in memory, the layout the ``*_gemm`` transforms
-    consume, and passed on as (map, y, x) views of it.
+    consume, and passed on as (map, y, x) views of it; for the FFT, whose transforms run along
+    the rows of each map, they are laid out (map, y, x).
     """
     n = masks.shape[-1]
     columns = np.ascontiguousarray(masks.transpose(2, 1, 0))
     weights_xy = weights.transpose(0, 2, 1)
     out = np.empty((masks.shape[0], weights.shape[0]))
     for k, size in enumerate(crops):
-        c = crop_slice(n, int(size))
-        u = scratch("weights", (int(size), int(size), masks.shape[0]))
-        np.multiply(columns[c, c], weights_xy[k, c, c, None], out=u)
-        out[:, k] = interaction_sum(u.transpose(2, 1, 0), pitch, method)
+        size = int(size)
+        c = crop_slice(n, size)
+        if (auto_method(size) if method == "auto" else method) == "fft":
+            u = np.multiply(masks[:, c, c], weights[k, c, c], out=scratch("weights_maps", (masks.shape[0], size, size)))
+        else:
+            u = np.multiply(columns[c, c], weights_xy[k, c, c, None], out=scratch("weights", (size, size, masks.shape[0])))
+            u = u.transpose(2, 1, 0)
+        out[:, k] = interaction_sum(u, pitch, method)
     return out
 
 
