@@ -145,6 +145,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     """
     from pipeline.physics.constriction import FFT_FROM, block_size, work_bytes_per_map
     from pipeline.physics.interaction_fft import padded_length
+    from pipeline.stages.oxide import CHUNK_BYTES
 
     n = _cells(scenario)
     cells = float(n) * n
@@ -156,12 +157,13 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     # contact: influence matrix and its Newton copies; spot maps over delta; the resolve grid.
     contact_mem = 8.0 * (7 * n_r * n_r + 10 * n_delta * cells + 8 * 4 * cells)
     contact_s = _LU_S * n_r**3 * (1 + n_delta) + 4e-7 * n_r * n_r + 1e-7 * n_delta * cells
-    # oxide: psi (float32) held whole and copied once for the file; per task the complex
-    # spectra of its fields; the band's lattice and coefficients.
+    # oxide: psi (float32) held whole (chunks are copied in as they come); per task a chunk's
+    # fields and the complex spectra of their synthesis; the band's lattice and coefficients.
     psi = 4.0 * n_lam * n_real * cells
     modes = _max_modes(scenario, n)
-    task_ox = min(ox.chunk, n_real) * cells * (4.0 * n_lam + 24.0) + 64.0 * modes
-    oxide_mem = 2.0 * psi + t * task_ox + 48.0 * modes
+    chunk = min(ox.chunk, n_real, max(1, int(CHUNK_BYTES // (4.0 * n_lam * cells))))
+    task_ox = chunk * cells * (4.0 * n_lam + 24.0) + 64.0 * modes
+    oxide_mem = psi + t * task_ox + 48.0 * modes
     oxide_s = n_lam * n_real * (_MODE_S * modes + _CELL_FFT_S * cells * math.log2(max(n, 2))) / t
     # cube: psi read whole, per task the masks and one block of work, the cached operators,
     # the results (five float64 terms, concatenated once). Measured on the 583^2 scene

@@ -18,6 +18,7 @@ on the dask chunking, the scheduler, the worker count or the order of evaluation
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -92,9 +93,23 @@ class FieldSource:
         return psi, _threshold_block(psi[None], xi=self.xi, rule=self.rule)[:, 0]
 
 
+#: Largest float32 fields of one chunk (all lambdas), bytes: bounds the stage's peak on large grids.
+CHUNK_BYTES = 64 * 2**20
+#: Working memory of the field synthesis, bytes per cell and realization (measured: 336 MiB
+#: beyond the result for 50 fields of 229^2 cells), and the most a chunk's synthesis may use.
+FIELD_WORK_PER_CELL = 128
+FIELD_WORK_BYTES = 64 * 2**20
+
+
 def _psi_block(realizations: np.ndarray, *, source: FieldSource) -> np.ndarray:
     """Fields of a chunk of realizations at every lambda: float32 (lambda, realization, y, x)."""
-    return np.stack([source.psi(a, realizations) for a in range(len(source.lambdas))])
+    out = np.empty((len(source.lambdas), realizations.size, source.n_cells, source.n_cells), np.float32)
+    # a few realizations at a time: each field is independent of its batch, bit for bit
+    step = max(1, FIELD_WORK_BYTES // (FIELD_WORK_PER_CELL * source.n_cells**2))
+    for a in range(len(source.lambdas)):
+        for start in range(0, realizations.size, step):
+            out[a, start : start + step] = source.psi(a, realizations[start : start + step])
+    return out
 
 
 def _threshold_block(psi: np.ndarray, *, xi: np.ndarray, rule: str) -> np.ndarray:
@@ -102,14 +117,15 @@ def _threshold_block(psi: np.ndarray, *, xi: np.ndarray, rule: str) -> np.ndarra
     if rule == "theoretical":
         value = oxide_field.theoretical_threshold(xi).astype(np.float32)
         return np.broadcast_to(value[:, None, None], (xi.size,) + psi.shape[:2]).copy()
-    return oxide_field.empirical_threshold(psi.reshape(psi.shape[:2] + (-1,)), xi)
+    flat = psi.reshape(psi.shape[:2] + (-1,))
+    return np.stack([oxide_field.empirical_threshold(f, xi) for f in flat], axis=1)  # one lambda at a time
 
 
 def _fraction_block(psi: np.ndarray, threshold: np.ndarray) -> np.ndarray:
     """Covered fraction (xi, lambda, realization) of the cell centres: mean of psi >= threshold."""
     flat = psi.reshape(psi.shape[:2] + (-1,))
-    covered = flat[None] >= threshold[..., None]
-    return covered.sum(axis=-1) / flat.shape[-1]
+    counts = np.stack([(flat >= t[..., None]).sum(axis=-1) for t in threshold])  # one xi at a time
+    return counts / flat.shape[-1]
 
 
 def _lazy(scenario: Scenario) -> tuple[da.Array, da.Array, da.Array]:
@@ -117,7 +133,9 @@ def _lazy(scenario: Scenario) -> tuple[da.Array, da.Array, da.Array]:
     ox = scenario.oxide
     n = scenario.n_cells
     xi = np.asarray(ox.xi, dtype=float)
-    realization = da.arange(recorded_realizations(scenario), chunks=ox.chunk)
+    # at most oxide.chunk realizations per chunk, fewer where a chunk's fields would pass CHUNK_BYTES
+    chunk = min(ox.chunk, max(1, CHUNK_BYTES // (4 * len(ox.lambda_) * n * n)))
+    realization = da.arange(recorded_realizations(scenario), chunks=chunk)
     psi = da.map_blocks(
         _psi_block,
         realization,
@@ -214,8 +232,35 @@ def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=
         ``oxide_fraction`` (xi, lambda, realization), ``n_modes`` (lambda).
     """
     psi, threshold, fraction = _lazy(scenario)
-    psi, threshold, fraction = compute(psi, threshold, fraction, options=options, label="oxide fields")
-    return _dataset(scenario, psi, threshold, fraction)
+    return _dataset(scenario, *_computed(psi, threshold, fraction, options))
+
+
+#: Realization chunks computed per call, per worker. Each chunk comes back on its own and is
+#: copied into one preallocated array, so the peak holds the ensemble once plus a chunk per
+#: worker (one call over all chunks also held them all once more while they were joined:
+#: 2.9 GB for 500 fields of 229^2 cells per lambda).
+CHUNKS_PER_WORKER = 1
+
+
+def _computed(
+    psi: da.Array, threshold: da.Array, fraction: da.Array, options: ComputeOptions
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The three arrays computed a group of realization chunks at a time, into preallocated arrays."""
+    out = tuple(np.empty(a.shape, a.dtype) for a in (psi, threshold, fraction))
+    bounds = np.cumsum((0,) + psi.chunks[1])
+    n_chunks = len(psi.chunks[1])
+    step = CHUNKS_PER_WORKER * max(1, options.workers or os.cpu_count() or 1)
+    groups = range(0, n_chunks, step)
+    for number, first in enumerate(groups, start=1):
+        chunks = range(first, min(first + step, n_chunks))
+        label = "oxide fields" + (f" (part {number} of {len(groups)})" if len(groups) > 1 else "")
+        parts = compute(*[block for i in chunks for block in
+                          (psi.blocks[:, i], threshold.blocks[:, :, i], fraction.blocks[:, :, i])],
+                        options=options, label=label)
+        for i, (p, t, f) in zip(chunks, zip(parts[0::3], parts[1::3], parts[2::3])):
+            r = slice(int(bounds[i]), int(bounds[i + 1]))
+            out[0][:, r], out[1][:, :, r], out[2][:, :, r] = p, t, f
+    return out
 
 
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
