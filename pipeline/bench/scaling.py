@@ -86,7 +86,7 @@ def _interleaved(jobs: dict[str, tuple]) -> dict[str, float]:
 def _default_ratio() -> dict[str, Any]:
     """Cube time of the paper's scene (auto window) against today's 0.4 R* window, interleaved."""
     quiet = ComputeOptions(progress=False)
-    sets = {"oxide.n_realizations": RATIO_REALIZATIONS}
+    sets = {"oxide.ensemble": "fixed", "oxide.n_realizations": RATIO_REALIZATIONS}
     scenes = {"auto": resolve(load_scenario("paper", sets)),
               "window_0.4": resolve(load_scenario("paper", {**sets, "contact.window": 0.4, "contact.r_max": 0.3}))}
     jobs = {name: (cube.build, s, contact_stage.build(s), oxide_stage.build(s, quiet), quiet)
