@@ -176,7 +176,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
         operators = min(n_delta, 32) * 4.0 * n**3
     else:
         p = padded_length(n)
-        operators = n_delta * 12.0 * p * p  # the cached spectrum and its interleaved copy
+        operators = n_delta * 8.0 * p * p  # the cached interleaved spectrum, one per crop size
     # contact's spot maps: read (radius, area) and as float64 maps, and three per-task copies
     spot_maps = 8.0 * n_delta * cells
     cube_mem = psi + t * (task_cube + 3 * spot_maps) + 4 * spot_maps + operators + 2.0 * results

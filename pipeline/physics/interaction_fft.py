@@ -95,7 +95,6 @@ def _dense_kernel(n_cells: int) -> np.ndarray:
     return out
 
 
-@lru_cache(maxsize=64)
 def _spectrum_2d(n_cells: int, length: int) -> np.ndarray:
     """Half-plane spectrum weights ``Khat(f)`` of the kernel on a ``length^2`` circular grid.
 
@@ -204,7 +203,10 @@ def interaction_fft(u: np.ndarray, pitch: float) -> np.ndarray:
 
 @lru_cache(maxsize=64)
 def _interleaved_spectrum(n_cells: int, length: int) -> np.ndarray:
-    """:func:`_spectrum_2d` with each weight repeated for the real and imaginary part, flattened."""
+    """:func:`_spectrum_2d` with each weight repeated for the real and imaginary part, flattened.
+
+    Only this copy is cached, one per crop size.
+    """
     out = np.repeat(_spectrum_2d(n_cells, length), 2, axis=1).ravel()
     out.setflags(write=False)
     return out
