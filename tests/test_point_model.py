@@ -223,6 +223,17 @@ def test_tiny_spots_neither_underflow_nor_stop_early():
     assert np.all(res.error_estimate <= 1e-10)
 
 
+def test_current_appearing_at_a_later_load_step_is_solved_to_the_tolerance():
+    """No current at the first step (no spot yet), some at the second: the warm start is empty."""
+    masks, radius = _cluster_case(6)
+    radius = np.concatenate([np.zeros_like(radius[:1]), radius[1:]])
+    res = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    dense, _ = point_model.resistance_dense(masks, radius, PITCH, RHO)
+    finite = np.isfinite(dense)
+    assert not finite[:, 0].any() and finite[:, 1].all()
+    assert np.max(np.abs(res.resistance[finite] / dense[finite] - 1)) <= 1e-10
+
+
 def test_iteration_cap_is_recorded_not_hidden():
     masks, radius = _random_case(3, n=11)
     res = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, max_iterations=1)

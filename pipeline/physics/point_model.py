@@ -366,7 +366,8 @@ def _solve_step(
     st = t.sum(axis=(0, 1))
     has = st > 0
     v = t if previous is None else t * previous[c, c]
-    x, mx = _scaled_start(v, system.apply_m(v), has & (v.sum(axis=(0, 1)) > 0))
+    v = np.where(v.sum(axis=(0, 1)) > 0, v, t)  # no current before on these spots: Greenwood's vector
+    x, mx = _scaled_start(v, system.apply_m(v), has)
     r = system.b - mx
     # Residuals in the Jacobi norm ||r||_{D^-1} = sqrt(r . r / M_ii), i.e. weighted by each spot's own
     # conductance t: ||r|| / ||1|| = sqrt(r . z / sum t), with z = D^-1 r the preconditioned residual.
