@@ -245,12 +245,13 @@ class _System:
         self.single = np.float32 if spots.max(initial=0.0) < SINGLE_PRECISION_DIAGONAL else np.float64
         self.root_t = self.b / np.sqrt(self.diag)  # D^-1/2 on the spots, 0 elsewhere
         self._scaled = tuple(np.asarray(a, self.single) for a in (self.root_t, self.root_t / np.pi))
+        self._coupling, self._own = self.b / np.pi, self.diag * self.b
 
     def apply_m(self, v: np.ndarray) -> np.ndarray:
         """``M v`` on the spots carrying current (0 elsewhere), in float64."""
         out = self.apply(v, self.pitch)
-        out *= self.b / np.pi
-        out += self.diag * self.b * v
+        out *= self._coupling
+        out += self._own * v
         return out
 
     def apply_scaled(self, y: np.ndarray) -> np.ndarray:
