@@ -30,6 +30,8 @@ from pipeline.physics.interaction_fft import (
     padded_length,
     interaction_dft_gemm,
     interaction_fft,
+    interaction_fft_filled,
+    fft_weights,
     interaction_folded,
     interaction_gemm,
     scratch,
@@ -65,10 +67,11 @@ WORK_BYTES = 128 * 2**20
 #: 0.24 / 0.18 ms at 113, 0.70 / 0.48 ms at 161, 2.1 / 0.92 ms at 229. The paper's windows (55,
 #: 57) stay on the folded path.
 FFT_FROM = 85
-#: Work memory of one block of the FFT path, per thread (bytes): its arrays exceed the cache
-#: anyway, and in two threads at 229 cells blocks of 4 maps ran 1.7 times faster than blocks
-#: of 14 (memory bandwidth).
-FFT_WORK_BYTES = 40 * 2**20
+#: Work memory of one block of the FFT path, per thread (bytes): its arrays exceed the L2 cache
+#: anyway, and two threads share the memory bandwidth. On the 229-cell scene (fixed 20
+#: realizations, two threads, ducc0 transforms) blocks of 1 and 2 maps ran the cube in 21.8-23.4 s,
+#: blocks of 4 in 27.9-29.3 s.
+FFT_WORK_BYTES = 16 * 2**20
 
 
 def interaction_direct(u: np.ndarray, pitch: float) -> np.ndarray:
@@ -378,29 +381,50 @@ def _blocks(masks: np.ndarray, size: int) -> Iterator[np.ndarray]:
         yield block
 
 
+def _path(size: int, method: str) -> str:
+    """The algorithm ``method`` runs on a ``size``-wide crop (``auto`` decides by size)."""
+    return auto_method(size) if method == "auto" else method
+
+
 def _block_pair_sums(
-    masks: np.ndarray, weights: np.ndarray, crops: np.ndarray, pitch: float, method: str
-) -> np.ndarray:
-    """Cropped interaction sums of one block, shape (block, n_delta).
+    masks: np.ndarray, weights: np.ndarray, crops: np.ndarray, steps: list[int],
+    pitch: float, method: str, out: np.ndarray,
+) -> None:
+    """Cropped interaction sums of one block at the load steps ``steps``, into ``out[:, k]``.
 
     The weight maps are laid out (x, y, map) in memory, the layout the ``*_gemm`` transforms
-    consume, and passed on as (map, y, x) views of it; for the FFT, whose transforms run along
-    the rows of each map, they are laid out (map, y, x).
+    consume, and passed on as (map, y, x) views of it.
     """
     n = masks.shape[-1]
     columns = np.ascontiguousarray(masks.transpose(2, 1, 0))
     weights_xy = weights.transpose(0, 2, 1)
-    out = np.empty((masks.shape[0], weights.shape[0]))
-    for k, size in enumerate(crops):
-        size = int(size)
+    for k in steps:
+        size = int(crops[k])
         c = crop_slice(n, size)
-        if (auto_method(size) if method == "auto" else method) == "fft":
-            u = np.multiply(masks[:, c, c], weights[k, c, c], out=scratch("weights_maps", (masks.shape[0], size, size)))
-        else:
-            u = np.multiply(columns[c, c], weights_xy[k, c, c, None], out=scratch("weights", (size, size, masks.shape[0])))
-            u = u.transpose(2, 1, 0)
-        out[:, k] = interaction_sum(u, pitch, method)
-    return out
+        u = np.multiply(columns[c, c], weights_xy[k, c, c, None], out=scratch("weights", (size, size, masks.shape[0])))
+        out[:, k] = interaction_sum(u.transpose(2, 1, 0), pitch, method)
+
+
+def _fft_pair_sums(
+    masks: np.ndarray, weights: np.ndarray, crops: np.ndarray, steps: list[int],
+    pitch: float, size: int, out: np.ndarray,
+) -> None:
+    """Cropped interaction sums by the FFT path at the load steps ``steps``, into ``out[:, k]``.
+
+    Load steps outside, blocks of ``size`` maps (the last padded with empty maps) inside: the
+    weights are written straight into the FFT's zero-padded input, whose padding then stays
+    valid across the blocks of one crop size (:func:`fft_weights`).
+    """
+    n, batch = masks.shape[-1], masks.shape[0]
+    for k in steps:
+        crop = int(crops[k])
+        c = crop_slice(n, crop)
+        u = fft_weights(size, crop)
+        for start in range(0, batch, size):
+            block = masks[start : start + size, c, c]
+            np.multiply(block, weights[k, c, c], out=u[: block.shape[0]])
+            u[block.shape[0] :] = 0.0
+            out[start : start + size, k] = np.maximum(interaction_fft_filled(u, pitch), 0.0)
 
 
 def _recompute_uncropped(
@@ -464,15 +488,22 @@ def resistance(
         c = crop_slice(n, int(size))
         outside[k, c, c] = 0.0
     w_out = (weights * outside).reshape(n_delta, n * n)
-    parts: list[np.ndarray] = []
     size = block_size(n)
-    for block in _blocks(masks, size):
+    padded_batch = -(-batch // size) * size
+    sums = np.empty((4, padded_batch, n_delta))
+    pair = np.empty((padded_batch, n_delta))
+    fft_steps = [k for k, crop in enumerate(crops) if _path(int(crop), method) == "fft"]
+    other_steps = [k for k in range(n_delta) if k not in fft_steps]
+    for start, block in zip(range(0, padded_batch, size), _blocks(masks, size)):
         m = scratch("masks", (size, n * n))
         np.copyto(m, block.reshape(size, n * n))
-        sums = np.stack([m @ spots.T, m @ a_flat.T, m @ w_flat.T, m @ w_out.T])
-        pair = _block_pair_sums(block, weights, crops, pitch, method)
-        parts.append(np.concatenate([sums, pair[None]]))
-    count, s_a, s_w, eps, pair = np.concatenate(parts, axis=1)[:, :batch]
+        rows = slice(start, start + size)
+        for i, table in enumerate((spots, a_flat, w_flat, w_out)):
+            sums[i, rows] = m @ table.T
+        _block_pair_sums(block, weights, crops, other_steps, pitch, method, pair[rows])
+    _fft_pair_sums(masks, weights, crops, fft_steps, pitch, size, pair)
+    count, s_a, s_w, eps = sums[:, :batch]
+    pair = pair[:batch]
     n_cond = np.rint(count).astype(np.int32)
     r_crop = greenwood_terms(s_a, s_w, pair, n_cond, rho)[0]
     bound = crop_error_bound(s_a, s_w, eps, r_crop, pitch, rho)
