@@ -61,12 +61,11 @@ BLOCK = 128
 #: Work memory of one block of maps, per thread (bytes): bounds the peak whatever the size.
 WORK_BYTES = 128 * 2**20
 #: Cells per side from which ``auto`` takes the FFT path. Measured on this 2-core machine, one
-#: thread, medians per map (folded in blocks of up to 128 / fft in blocks of 4, after the FFT
-#: path was pruned to the rows holding weights and its spectrum summed by one GEMV): 0.033 /
-#: 0.045 ms at 57, 0.067 / 0.074 ms at 73, 0.093 / 0.088 ms at 81, 0.117 / 0.099 ms at 89,
-#: 0.24 / 0.18 ms at 113, 0.70 / 0.48 ms at 161, 2.1 / 0.92 ms at 229. The paper's windows (55,
-#: 57) stay on the folded path.
-FFT_FROM = 85
+#: thread, medians per map (folded in blocks of 128 / fft in its blocks of :data:`FFT_WORK_BYTES`,
+#: ducc0 transforms): 0.059 / 0.067 ms at 59, 0.092 / 0.102 ms at 71, 0.117 / 0.108 ms at 77,
+#: 0.134 / 0.118 ms at 81, 0.31 / 0.17 ms at 113. The paper's windows (55, 57) stay on the
+#: folded path.
+FFT_FROM = 75
 #: Work memory of one block of the FFT path, per thread (bytes): its arrays exceed the L2 cache
 #: anyway, and two threads share the memory bandwidth. On the 229-cell scene (fixed 20
 #: realizations, two threads, ducc0 transforms) blocks of 1 and 2 maps ran the cube in 21.8-23.4 s,
