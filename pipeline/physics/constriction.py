@@ -69,8 +69,8 @@ FFT_FROM = 75
 #: Work memory of one block of the FFT path, per thread (bytes): its arrays exceed the L2 cache
 #: anyway, and two threads share the memory bandwidth. On the 229-cell scene (fixed 20
 #: realizations, two threads, ducc0 transforms) blocks of 1 and 2 maps ran the cube in 21.8-23.4 s,
-#: blocks of 4 in 27.9-29.3 s.
-FFT_WORK_BYTES = 16 * 2**20
+#: blocks of 4 in 27.9-29.3 s. This budget gives blocks of 2 maps there.
+FFT_WORK_BYTES = 6 * 2**20
 
 
 def interaction_direct(u: np.ndarray, pitch: float) -> np.ndarray:
@@ -137,13 +137,13 @@ def work_bytes_per_map(n_cells: int) -> int:
     """Estimated work memory (bytes) of one map of an ``n_cells``-wide window in a block.
 
     The folded path holds about six float64 copies of the map (mask, weights, folded halves,
-    spectra, couplings); the FFT path a complex half spectrum and two real ones of the padded
-    ``P x P`` grid, ``P ~ 2 n``.
+    spectra, couplings); the FFT path the complex half spectrum of the padded ``P x P`` grid
+    (``P ~ 2 n``, 8 P^2 bytes), its x-padded input (8 n P) and the mask.
     """
     if auto_method(n_cells) == "folded":
         return 48 * n_cells * n_cells
     length = int(padded_length(n_cells))
-    return 32 * length * length + 32 * n_cells * n_cells
+    return 8 * length * length + 8 * n_cells * length + n_cells * n_cells
 
 
 def block_size(n_cells: int) -> int:

@@ -24,7 +24,8 @@ all batched over a leading axis of independent weight maps:
 
 ``make bench`` measures them all against the double sum.
 All results are in the units of ``u**2 / h`` (``h`` in m). Every function is pure numpy/scipy
-and thread-safe; FFTs run single-threaded (parallelism comes from the caller, e.g. dask).
+(the FFT path's transforms are ducc0's) and thread-safe; FFTs run single-threaded, one map per
+call (parallelism comes from the caller, e.g. dask).
 """
 
 from __future__ import annotations
