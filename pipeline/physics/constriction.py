@@ -58,6 +58,10 @@ __all__ = [
 #: and every block has exactly that many columns (the last one is padded), so each map's
 #: result is bit-identical whatever the batch it arrives in.
 BLOCK = 128
+#: Work memory of one block of the spot sums (counts, radius and weight sums), per thread
+#: (bytes): they read four (load step, cell) tables per block, so their blocks hold more maps
+#: than the FFT path's (40 instead of 2 at 229 cells).
+SUMS_WORK_BYTES = 16 * 2**20
 #: Work memory of one block of maps, per thread (bytes): bounds the peak whatever the size.
 WORK_BYTES = 128 * 2**20
 #: Cells per side from which ``auto`` takes the FFT path. Measured on this 2-core machine, one
@@ -488,18 +492,23 @@ def resistance(
         outside[k, c, c] = 0.0
     w_out = (weights * outside).reshape(n_delta, n * n)
     size = block_size(n)
-    padded_batch = -(-batch // size) * size
+    # The spot sums read four (n_delta, n^2) tables per block: in blocks of whole pair-sum
+    # blocks, up to BLOCK maps within SUMS_WORK_BYTES, whatever the (small) FFT blocks.
+    sums_size = size * max(1, min(BLOCK, SUMS_WORK_BYTES // (8 * n * n)) // size)
+    padded_batch = -(-batch // sums_size) * sums_size
     sums = np.empty((4, padded_batch, n_delta))
     pair = np.empty((padded_batch, n_delta))
     fft_steps = [k for k, crop in enumerate(crops) if _path(int(crop), method) == "fft"]
     other_steps = [k for k in range(n_delta) if k not in fft_steps]
-    for start, block in zip(range(0, padded_batch, size), _blocks(masks, size)):
-        m = scratch("masks", (size, n * n))
-        np.copyto(m, block.reshape(size, n * n))
-        rows = slice(start, start + size)
+    for start, block in zip(range(0, padded_batch, sums_size), _blocks(masks, sums_size)):
+        m = scratch("masks", (sums_size, n * n))
+        np.copyto(m, block.reshape(sums_size, n * n))
+        rows = slice(start, start + sums_size)
         for i, table in enumerate((spots, a_flat, w_flat, w_out)):
             sums[i, rows] = m @ table.T
-        _block_pair_sums(block, weights, crops, other_steps, pitch, method, pair[rows])
+        for sub in range(0, sums_size, size) if other_steps else ():
+            part = slice(start + sub, start + sub + size)
+            _block_pair_sums(block[sub : sub + size], weights, crops, other_steps, pitch, method, pair[part])
     _fft_pair_sums(masks, weights, crops, fft_steps, pitch, size, pair)
     count, s_a, s_w, eps = sums[:, :batch]
     pair = pair[:batch]
