@@ -34,7 +34,8 @@ BASE_BYTES = 150 * 2**20
 MAX_SECONDS = 7 * 24 * 3600.0
 #: Seconds per flop-like unit of the models below (measured on the reference machine, one thread).
 _FOLDED_S = 2.5e-10   # per n^3 of one folded map
-_FFT_S = 6.5e-10      # per P^2 log2 P of one FFT map (two threads, blocks of 4, 229 cells: 1.37 ms)
+_FFT_S = 3.2e-10      # per P^2 log2 P of one FFT map (ducc0, blocks of 2; fitted to the 229^2 study's
+                      # cube, 410 s on two threads: 0.76 ms per map and thread with _MAP_S)
 _MAP_S = 2.0e-9       # per cell of one map (masking, sums), any path
 _LU_S = 5.0e-11       # per n_radial^3 and approach (Newton factorizations and solves)
 _MODE_S = 4.0e-8      # per mode and realization of the oxide coefficients
