@@ -72,8 +72,8 @@ WORK_BYTES = 128 * 2**20
 FFT_FROM = 75
 #: Work memory of one block of the FFT path, per thread (bytes): its arrays exceed the L2 cache
 #: anyway, and two threads share the memory bandwidth. On the 229-cell scene (fixed 20
-#: realizations, two threads, ducc0 transforms) blocks of 1 and 2 maps ran the cube in 21.8-23.4 s,
-#: blocks of 4 in 27.9-29.3 s. This budget gives blocks of 2 maps there.
+#: realizations, two threads, ducc0 transforms) blocks of 4 maps ran the cube in 27.9-29.3 s,
+#: blocks of 1 or 2 in 19.3-21.6 s (three runs each). This budget gives blocks of 2 maps there.
 FFT_WORK_BYTES = 6 * 2**20
 
 
