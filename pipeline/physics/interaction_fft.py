@@ -220,7 +220,7 @@ def interaction_fft_filled(weights: np.ndarray, pitch: float) -> np.ndarray:
     batch, n = weights.shape[0], weights.shape[1]
     length = padded_length(n)
     padded = _zero_padded("fft_rows", (batch, n, length), np.float64)
-    if weights.base is not padded:
+    if weights.base is None or weights.base is not padded.base:
         raise ValueError("interaction_fft_filled needs the view returned by fft_weights")
     # ducc0 (the successor of the pocketfft inside numpy and scipy, with wider SIMD) transforms
     # in reused buffers (fresh large arrays cost page faults, see :func:`scratch`). The x
@@ -243,17 +243,25 @@ def interaction_fft_filled(weights: np.ndarray, pitch: float) -> np.ndarray:
 
 
 def _zero_padded(slot: str, shape: tuple[int, ...], dtype: type) -> np.ndarray:
-    """This thread's zeroed work array of ``shape`` under ``slot``, reused while the shape holds.
+    """This thread's work array of ``shape`` under ``slot``, zeroed whenever the shape changes.
 
     Its users write only into a head of it, so the rest stays zero between calls of one shape.
+    The storage is reused across shapes (a fresh array would cost page faults, see :func:`scratch`).
     """
     pool = getattr(_SCRATCH, "padded", None)
     if pool is None:
         pool = _SCRATCH.padded = {}
-    buffer = pool.get(slot)
-    if buffer is None or buffer.shape != shape or buffer.dtype != dtype:
-        buffer = pool[slot] = np.zeros(shape, dtype)
-    return buffer
+    key = (slot, np.dtype(dtype).char)
+    flat, current = pool.get(key, (None, None))
+    size = math.prod(shape)
+    if flat is None or flat.size < size:
+        flat = np.empty(size, dtype)
+        current = None
+    view = flat[:size].reshape(shape)
+    if current != shape:
+        view.fill(0)
+        pool[key] = (flat, shape)
+    return view
 
 
 @lru_cache(maxsize=64)
