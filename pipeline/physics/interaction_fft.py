@@ -203,20 +203,8 @@ def fft_weights(batch: int, n_cells: int) -> np.ndarray:
 
 
 def interaction_fft_filled(weights: np.ndarray, pitch: float) -> np.ndarray:
-    """:func:`interaction_fft` of the maps just written into :func:`fft_weights` (no copy).
-
-    Parameters
-    ----------
-    weights
-        The view returned by :func:`fft_weights`, filled with the weights, shape (batch, n, n).
-    pitch
-        Cell pitch ``h``, in m.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``sum_{i != j} u_i u_j / d_ij`` per map, shape (batch,), in units of ``u**2 / m``.
-    """
+    """:func:`interaction_fft` (same units) of the maps just written into ``weights``, the
+    (batch, n, n) view returned by :func:`fft_weights`, without copying them."""
     batch, n = weights.shape[0], weights.shape[1]
     length = padded_length(n)
     padded = _zero_padded("fft_rows", (batch, n, length), np.float64)
