@@ -231,24 +231,18 @@ def interaction_fft_filled(weights: np.ndarray, pitch: float) -> np.ndarray:
 
 
 def _zero_padded(slot: str, shape: tuple[int, ...], dtype: type) -> np.ndarray:
-    """This thread's work array of ``shape`` under ``slot``, zeroed whenever the shape changes.
+    """:func:`scratch` of ``shape`` under ``slot``, zeroed whenever its shape or storage changes.
 
     Its users write only into a head of it, so the rest stays zero between calls of one shape.
-    The storage is reused across shapes (a fresh array would cost page faults, see :func:`scratch`).
     """
-    pool = getattr(_SCRATCH, "padded", None)
-    if pool is None:
-        pool = _SCRATCH.padded = {}
+    view = scratch(slot, shape, dtype)
+    zeroed = getattr(_SCRATCH, "zeroed", None)
+    if zeroed is None:
+        zeroed = _SCRATCH.zeroed = {}
     key = (slot, np.dtype(dtype).char)
-    flat, current = pool.get(key, (None, None))
-    size = math.prod(shape)
-    if flat is None or flat.size < size:
-        flat = np.empty(size, dtype)
-        current = None
-    view = flat[:size].reshape(shape)
-    if current != shape:
+    if zeroed.get(key) != (shape, id(view.base)):
         view.fill(0)
-        pool[key] = (flat, shape)
+        zeroed[key] = (shape, id(view.base))
     return view
 
 
