@@ -163,6 +163,14 @@ class Contact:
         "auto", "R*", "side of the square spot window, in units of R*, or auto: every cell whose "
         "spot can change R by more than cube.crop_tolerance at the heaviest load", gt=0, auto=True,
     )
+    spots: str = _param(
+        "expected",
+        "1",
+        "one spot per cell: expected (radius sqrt(beta) F_1/2(h), the expected sum of asperity "
+        "radii; obeys Barber's theorem), mean_area (the paper's radius sqrt(A* dx^2 / pi)) or "
+        "asperities (one Gaussian asperity per cell, drawn per realization)",
+        choices=("mean_area", "expected", "asperities"),
+    )
 
 
 @dataclass(frozen=True)
@@ -601,8 +609,32 @@ def _check_point_model(s: Scenario) -> None:
         )
 
 
+def _check_spots(s: Scenario) -> None:
+    """``expected`` and ``asperities`` spots need the separation at the cells and radius weights."""
+    if s.contact.spots == "mean_area":
+        return
+    if s.contact.area_interpolation != "separation":
+        raise ConfigError(
+            f"contact.area_interpolation = {s.contact.area_interpolation!r} is not allowed with "
+            f"contact.spots = {s.contact.spots!r}: must be 'separation' (these spots are computed from "
+            "the separation at each cell centre)"
+        )
+    if s.cube.weights != "radius":
+        raise ConfigError(
+            f"cube.weights = {s.cube.weights!r} is not allowed with contact.spots = {s.contact.spots!r}: "
+            "must be 'radius' (cell-area weights are the published code's convention for mean_area spots)"
+        )
+    if s.contact.spots == "asperities" and (s.cube.model != "greenwood" or s.oxide.film != "insulating"):
+        raise ConfigError(
+            f"contact.spots = 'asperities' is not allowed with cube.model = {s.cube.model!r} and oxide.film = "
+            f"{s.oxide.film!r}: asperity spots drawn per realization need cube.model = 'greenwood' and "
+            "oxide.film = 'insulating' (use contact.spots = 'expected', their mean, with the point model or films)"
+        )
+
+
 def _cross_checks(s: Scenario) -> None:
     _check_point_model(s)
+    _check_spots(s)
     for section in SECTIONS:
         obj = getattr(s, section)
         for f in dataclasses.fields(obj):

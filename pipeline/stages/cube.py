@@ -36,7 +36,7 @@ import xarray as xr
 from pipeline import store
 from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
-from pipeline.physics import constriction, ensemble, point_model
+from pipeline.physics import constriction, ensemble, point_model, spot_models
 from pipeline.stages.oxide import FieldSource
 
 __all__ = ["build", "run", "spot_maps"]
@@ -109,12 +109,31 @@ def _terms(settings: dict[str, Any]) -> tuple[str, ...]:
     return _TERMS + _SOLVER_TERMS if settings["model"] == "point" else _TERMS
 
 
-def _resistance(masks: np.ndarray, radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any]) -> constriction.ChunkResult:
-    """Resistance terms of a batch of conducting masks (batch, y, x) at every load step."""
+def _resistance(masks: np.ndarray, radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
+                groups: np.ndarray | None = None) -> constriction.ChunkResult:
+    """Resistance terms of a batch of conducting masks (batch, y, x) at every load step (map
+    ``b`` with the spots ``radius[groups[b]]`` when ``groups`` is given)."""
+    extra = {} if groups is None else {"groups": groups}
     return _model(settings)(
         masks, radius, weights, settings["pitch"], settings["rho"],
-        settings["crops"], settings["tolerance"], settings["method"],
+        settings["crops"], settings["tolerance"], settings["method"], **extra,
     )
+
+
+def asperity_spots(settings: dict[str, Any], realizations: np.ndarray) -> np.ndarray:
+    """The ``asperities`` discretization's spot radii of ``realizations``, (realization, delta, y, x), m.
+
+    Realization ``k`` draws its asperity heights from its own stream
+    (:func:`pipeline.physics.spot_models.heights`), held over every load step and shared by
+    every (xi, lambda): the surface is one, the oxide fields vary.
+    """
+    seed, sigma, beta = settings["asperities"]
+    separation = settings["separation"]
+    n = separation.shape[-1]
+    return np.stack([
+        spot_models.asperity_radius(spot_models.heights(seed, int(k), n, sigma)[None], separation, beta)
+        for k in realizations
+    ])
 
 
 def _chunk(
@@ -123,6 +142,7 @@ def _chunk(
     radius: np.ndarray,
     weights: np.ndarray,
     settings: dict[str, Any],
+    realizations: np.ndarray | None = None,
 ) -> dict[str, Any]:
     """Greenwood terms of a chunk of fields.
 
@@ -135,7 +155,11 @@ def _chunk(
     radius, weights
         Spot radii (m) and interaction weights, shape (delta, y, x).
     settings
-        ``pitch``, ``rho``, ``crops``, ``tolerance``, ``method``.
+        ``pitch``, ``rho``, ``crops``, ``tolerance``, ``method`` (and for ``asperities`` spots
+        what :func:`asperity_spots` needs).
+    realizations
+        The realization indices of the fields, for ``asperities`` spots (which then replace
+        ``radius`` and ``weights``); None for spots shared by every realization.
 
     Returns
     -------
@@ -146,7 +170,11 @@ def _chunk(
     n_xi, n_lam, n_real = threshold.shape
     n = psi.shape[-1]
     masks = psi[None] < threshold[..., None, None]
-    res = _resistance(masks.reshape(-1, n, n), radius, weights, settings)
+    groups = None
+    if realizations is not None:  # per-realization spots: map (xi, lambda, r) takes group r
+        radius = weights = asperity_spots(settings, realizations)
+        groups = np.tile(np.arange(n_real), n_xi * n_lam)
+    res = _resistance(masks.reshape(-1, n, n), radius, weights, settings, groups)
     out: dict[str, Any] = {
         name: getattr(res, name).reshape(n_xi, n_lam, n_real, -1).transpose(0, 1, 3, 2)
         for name in _terms(settings)
@@ -164,7 +192,8 @@ def _field_chunk(
     Only the fractions ``xi_index`` are evaluated; returns the terms shaped (xi, delta, realization).
     """
     psi, threshold = source.fields(index, realizations)
-    out = _chunk(psi[None], threshold[xi_index][:, None], radius, weights, settings)
+    drawn = realizations if settings["spots"] == "asperities" else None
+    out = _chunk(psi[None], threshold[xi_index][:, None], radius, weights, settings, drawn)
     return {k: (v[:, 0] if k in _terms(settings) else v) for k, v in out.items()}
 
 
@@ -315,13 +344,29 @@ def _padded(cells: list[list[dict[str, np.ndarray]]]) -> dict[str, np.ndarray]:
     return out
 
 
-def _clean(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any]) -> constriction.ChunkResult:
-    """Every spot conducting, on the whole window (exact)."""
-    n = radius.shape[-1]
-    return _model(settings)(
-        np.ones((1, n, n), dtype=bool), radius, weights, settings["pitch"], settings["rho"],
-        np.full(radius.shape[0], n), 0.0, settings["method"],
-    )
+def _clean(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any], n_drawn: int) -> dict[str, np.ndarray]:
+    """The oxide-free surface, every spot conducting, on the whole window (exact), over delta.
+
+    For ``asperities`` spots, over the first ``n_drawn`` realizations of the heights: the
+    resistance of the mean conductance (open circuits conduct nothing), the self term of the
+    mean self-conductance, and the probability of an open circuit.
+    """
+    n, n_delta = radius.shape[-1], radius.shape[0]
+    whole = np.full(n_delta, n)
+    call = functools.partial(_model(settings), pitch=settings["pitch"], rho=settings["rho"], crops=whole,
+                             tolerance=0.0, method=settings["method"])
+    if settings["spots"] != "asperities":
+        res = call(np.ones((1, n, n), dtype=bool), radius, weights)
+        return {"resistance": res.resistance[0], "self": res.resistance_self[0],
+                "interaction": res.resistance_interaction[0], "open": np.zeros(n_delta), "n_drawn": 0}
+    drawn = asperity_spots(settings, np.arange(n_drawn))
+    res = call(np.ones((n_drawn, n, n), dtype=bool), drawn, drawn, groups=np.arange(n_drawn))
+    rho = settings["rho"]
+    with np.errstate(divide="ignore"):
+        total = rho / np.mean(rho / res.resistance, axis=0)
+        own = rho / np.mean(rho / res.resistance_self, axis=0)
+    return {"resistance": total, "self": own, "interaction": total - own,
+            "open": np.mean(np.isinf(res.resistance), axis=0), "n_drawn": n_drawn}
 
 
 def _measured_crop_error(
@@ -350,7 +395,7 @@ def _attrs(units: str, long_name: str, **extra: Any) -> dict[str, Any]:
 
 def _dataset(
     scenario: Scenario, contact: xr.Dataset, oxide: xr.Dataset, out: dict[str, Any],
-    clean: constriction.ChunkResult, settings: dict[str, Any], measured: float,
+    clean: dict[str, Any], settings: dict[str, Any], measured: float,
     counts: np.ndarray, widths: tuple[np.ndarray, np.ndarray],
 ) -> xr.Dataset:
     """Wrap the computed arrays with coordinates and CF attributes."""
@@ -369,6 +414,9 @@ def _dataset(
                              _attrs("1", "normalized force F' = 2F / (E* sqrt(R* sigma^3))")),
     }
     is_open = np.isposinf(out["resistance"])
+    clean_comment = ("the mean conductance (self-conductance) over the first "
+                     f"{clean['n_drawn']} realizations of the asperity heights"
+                     if scenario.contact.spots == "asperities" else "exact, every spot conducting")
     padding = "NaN beyond n_realizations(xi, lambda)"
     grid = ("xi", "lambda")
     data_vars = {
@@ -393,12 +441,16 @@ def _dataset(
         "rule_gamma_half_width": (grid, widths[1], _attrs(
             "1", "fast-rule absolute half-width of gamma at n_realizations",
             method="z std(t_r) / sqrt(n), t_r = least-squares slope weights . log R_r")),
-        "resistance_clean": ("delta", clean.resistance[0],
-                             _attrs("ohm", "resistance of the oxide-free surface")),
-        "resistance_clean_self": ("delta", clean.resistance_self[0],
-                                  _attrs("ohm", "self term of the oxide-free surface")),
-        "resistance_clean_interaction": ("delta", clean.resistance_interaction[0],
+        "resistance_clean": ("delta", clean["resistance"],
+                             _attrs("ohm", "resistance of the oxide-free surface", comment=clean_comment)),
+        "resistance_clean_self": ("delta", clean["self"],
+                                  _attrs("ohm", "self term of the oxide-free surface", comment=clean_comment)),
+        "resistance_clean_interaction": ("delta", clean["interaction"],
                                          _attrs("ohm", "interaction term of the oxide-free surface")),
+        "conductance_clean": ("delta", 1.0 / clean["resistance"],
+                              _attrs("S", f"conductance of the oxide-free surface ({scenario.cube.model} model)")),
+        "clean_open_probability": ("delta", clean["open"], _attrs(
+            "1", "probability that the oxide-free surface is an open circuit (no touching asperity)")),
         "crop_cells": ("delta", np.asarray(settings["crops"], np.int32), _attrs(
             "1", "side of the centred square of cells kept at each approach")),
     }
@@ -502,7 +554,12 @@ def build(
         "tolerance": cube.crop_tolerance,
         "method": cube.method,
         "method_used": constriction.AUTO_METHOD if cube.method == "auto" else cube.method,
+        "spots": scenario.contact.spots,
     }
+    if scenario.contact.spots == "asperities":
+        rough = scenario.roughness
+        settings["asperities"] = (scenario.oxide.seed, rough.sigma, rough.beta)
+        settings["separation"] = np.asarray(contact["spot_separation"].transpose("delta", "y", "x").values, np.float64)
     rule = _rule(scenario, contact["force"].values, contact["force_normalized"].values)
     cells, uncropped = _compute(scenario, source, radius, weights, settings, rule, options)
     counts = np.array([[c["resistance"].shape[-1] for c in row] for row in cells])
@@ -510,7 +567,8 @@ def build(
     last = tuple(np.array([[w[k][0, -1] for w in row] for row in widths]) for k in (0, 1))
     out: dict[str, Any] = _padded(cells)
     out["n_uncropped"] = uncropped
-    clean = _clean(radius, weights, settings)
+    first = scenario.oxide.n_realizations if scenario.oxide.ensemble == "fixed" else scenario.oxide.min_realizations
+    clean = _clean(radius, weights, settings, first)
     measured = _measured_crop_error(source, radius, weights, settings, out["resistance"])
     return _dataset(scenario, contact, oxide, out, clean, settings, measured, counts, last)
 
