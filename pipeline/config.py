@@ -286,6 +286,11 @@ class Cube:
         choices=("error", "residual"),
     )
     max_iterations: int = _param(100, "1", "point model: conjugate-gradient iterations per solve at most", ge=1)
+    lattice_constant: float = _param(
+        0.0, "1", "point model: C of the lattice self term C / (pi dx) added to every spot's own "
+        "resistance: the interaction with its own cell that the sum over the other cells misses; "
+        "3.90026 for the square lattice (pipeline.physics.lattice), 0: none", ge=0,
+    )
 
 
 @dataclass(frozen=True)
@@ -594,7 +599,13 @@ _INT_MAX = 2**63 - 1
 
 
 def _check_point_model(s: Scenario) -> None:
-    """The point model and resistive films need radius weights; the point model, an operator it can apply."""
+    """The point model and resistive films need radius weights; the point model, an operator it can
+    apply; the lattice term belongs to the point model."""
+    if s.cube.lattice_constant > 0 and s.cube.model != "point":
+        raise ConfigError(
+            f"cube.lattice_constant = {s.cube.lattice_constant!r} is not allowed with cube.model = "
+            f"{s.cube.model!r}: the lattice self term belongs to cube.model = 'point' (must be 0 otherwise)"
+        )
     if s.cube.model == "point" and s.cube.method not in ("auto", "folded", "gemm", "direct"):
         raise ConfigError(
             f"cube.method = {s.cube.method!r} is not allowed with cube.model = 'point': must be one of "

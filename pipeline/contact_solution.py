@@ -14,7 +14,7 @@ from pipeline.config import AUTO, Scenario
 from pipeline.physics import greenwood_tripp as gt
 from pipeline.physics.indenter import profile
 
-__all__ = ["indenter_profile", "radial_grid", "layer", "solve"]
+__all__ = ["indenter_profile", "radial_grid", "layer", "solve", "solve_with_stiffness"]
 
 #: Rigid gap (units of sigma) beyond which the graded grid coarsens: F_{3/2}(4) / F_{3/2}(0) ~ 1e-5.
 _FINE_GAP = 4.0
@@ -53,6 +53,29 @@ def layer(scenario: Scenario) -> gt.Layer:
     return gt.Layer(rough.sigma, rough.eta, rough.beta, scenario.material.E_star)
 
 
+def _solve(
+    scenario: Scenario, solver: str | None, n_radial: int | None, tolerance: float | None,
+) -> tuple[np.ndarray, np.ndarray, list[gt.Solution]]:
+    """Radial nodes (m), influence matrix (m/Pa) and the solution of every approach."""
+    c = scenario.contact
+    if c.r_max == AUTO:
+        raise ValueError("contact.r_max = 'auto' must be resolved first (pipeline.domains.resolve)")
+    r = radial_grid(scenario, n_radial)
+    matrix = gt.influence_matrix(r, scenario.material.E_star)
+    sols = gt.solve(
+        matrix,
+        indenter_profile(scenario, r),
+        scenario.deltas,
+        layer(scenario),
+        solver=solver or c.solver,
+        tolerance=tolerance or c.tolerance,
+        max_iterations=c.max_iterations,
+        relaxation=c.relaxation,
+        fixed_point_tolerance=c.fixed_point_tolerance,
+    )
+    return r, matrix, sols
+
+
 def solve(
     scenario: Scenario, *, solver: str | None = None, n_radial: int | None = None,
     tolerance: float | None = None,
@@ -66,19 +89,13 @@ def solve(
     ValueError
         If ``contact.r_max`` is still ``auto``.
     """
-    c = scenario.contact
-    if c.r_max == AUTO:
-        raise ValueError("contact.r_max = 'auto' must be resolved first (pipeline.domains.resolve)")
-    r = radial_grid(scenario, n_radial)
-    sols = gt.solve(
-        gt.influence_matrix(r, scenario.material.E_star),
-        indenter_profile(scenario, r),
-        scenario.deltas,
-        layer(scenario),
-        solver=solver or c.solver,
-        tolerance=tolerance or c.tolerance,
-        max_iterations=c.max_iterations,
-        relaxation=c.relaxation,
-        fixed_point_tolerance=c.fixed_point_tolerance,
-    )
+    r, _, sols = _solve(scenario, solver, n_radial, tolerance)
     return r, sols
+
+
+def solve_with_stiffness(scenario: Scenario) -> tuple[np.ndarray, list[gt.Solution], np.ndarray]:
+    """:func:`solve` and the contact stiffness ``K = -dF/d delta`` of every approach (N/m), by the
+    exact linearisation of the discretised system (:func:`pipeline.physics.greenwood_tripp.stiffness`)."""
+    r, matrix, sols = _solve(scenario, None, None, None)
+    stiffness = gt.stiffness(matrix, indenter_profile(scenario, r), scenario.deltas, layer(scenario), sols, r)
+    return r, sols, stiffness

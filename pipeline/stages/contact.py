@@ -14,7 +14,7 @@ import xarray as xr
 
 from pipeline.compute import ComputeOptions
 from pipeline.config import AUTO, ConfigError, Scenario
-from pipeline.contact_solution import indenter_profile, radial_grid, solve
+from pipeline.contact_solution import indenter_profile, radial_grid, solve, solve_with_stiffness
 from pipeline.domains import resolve
 from pipeline.physics import greenwood_tripp as gt
 from pipeline.physics import hertz, spot_models, spots
@@ -115,12 +115,13 @@ def build(scenario: Scenario) -> xr.Dataset:
         Coordinates delta (m), delta_sigma, r (m), y, x (m); fields over (delta, r):
         pressure, displacement, separation, area_fraction, hertz_pressure,
         hertz_displacement, hertz_separation; over delta: force, force_normalized,
-        hertz_radius, holm_radius, roughness_parameter, iterations, residual, converged;
+        hertz_radius, holm_radius, roughness_parameter, iterations, residual, converged,
+        stiffness (N/m) and barber_conductance (S);
         over (delta, y, x): spot_area, spot_radius (by ``contact.spots``), spot_separation; over r: profile. ``auto`` domains are
         resolved first (:func:`pipeline.domains.resolve`).
     """
     scenario = resolve(scenario)
-    r, sols = solve_scenario(scenario)
+    r, sols, stiffness = solve_with_stiffness(scenario)
     failed = [d / scenario.roughness.sigma for d, s in zip(scenario.deltas, sols) if not s.converged]
     if failed:
         warnings.warn(f"contact: the {scenario.contact.solver} solver did not converge for "
@@ -131,6 +132,10 @@ def build(scenario: Scenario) -> xr.Dataset:
     data_vars = {
         **_continuous_vars(scenario, r, f),
         **_scalar_vars(scenario, f["force"], sols),
+        "stiffness": _var(("delta",), stiffness, "contact stiffness K = -dF/d delta (exact linearisation of the "
+                          "discretised Greenwood-Tripp system)", "N m-1"),
+        "barber_conductance": _var(("delta",), stiffness / (scenario.material.E_star * scenario.material.rho),
+                                   "Barber's conductance K / (E* rho*) of the clean elastic contact (Eq. 1)", "S"),
         "spot_area": _var(_SPOTS, cells["area"], "cell contact area A*(r_i) dx^2", "m2"),
         "spot_radius": _var(_SPOTS, cells["radius"], _RADIUS_NAMES[scenario.contact.spots], "m"),
         "spot_separation": _var(_SPOTS, cells["separation"], "separation of the mean planes at the cell centre", "m"),

@@ -33,12 +33,13 @@ from pipeline import store
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
 from pipeline.physics import constriction
+from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
 from pipeline.stages.cube_chunks import asperity_spots, field_chunk, model
 from pipeline.stages.cube_dataset import dataset
 from pipeline.stages.cube_rounds import compute_cells, half_widths, padded, stopping_rule
 from pipeline.stages.oxide import FieldSource
 
-__all__ = ["build", "run", "spot_maps"]
+__all__ = ["build", "run", "spot_maps", "work_settings", "clean_conductances", "CLEAN_MODELS"]
 
 def spot_maps(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, np.ndarray, float]:
     """Spot radii and interaction weights per load step, and the cell pitch.
@@ -104,6 +105,29 @@ def _clean(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any], n_
             "open": np.mean(np.isinf(res.resistance), axis=0), "n_drawn": n_drawn}
 
 
+#: The clean surface's conductance by each model, for Barber's check: (name, model, lattice constant).
+CLEAN_MODELS = (("greenwood", "greenwood", 0.0), ("point", "point", 0.0),
+                ("point_lattice", "point", SQUARE_LATTICE_CONSTANT))
+
+
+def _clean_models(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any], n_drawn: int,
+                  known: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The oxide-free conductance (S, over delta) of every model of :data:`CLEAN_MODELS` with the
+    run's spots, solved tightly (NaN where the model does not apply: the point model needs radius
+    weights and shared spots); the models in ``known`` are taken from it."""
+    out = dict(known)
+    for name, kind, constant in CLEAN_MODELS:
+        if name in out:
+            continue
+        if kind == "point" and (settings["spots"] == "asperities" or weights is not radius and not np.array_equal(weights, radius)):
+            out[name] = np.full(radius.shape[0], np.nan)
+            continue
+        chosen = dict(settings, model=kind, lattice_constant=constant, film_resistance=np.inf,
+                      solver_tolerance=1e-12, solver_criterion="error", max_iterations=200)
+        out[name] = 1.0 / _clean(radius, weights, chosen, n_drawn)["resistance"]
+    return out
+
+
 def _measured_crop_error(
     source: FieldSource, radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
     cropped: np.ndarray,
@@ -121,6 +145,49 @@ def _measured_crop_error(
     if not finite.any():
         return 0.0
     return float(np.max(np.abs(cropped[..., :1][finite] / exact[finite] - 1.0)))
+
+
+def work_settings(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """Spot radii and weights (delta, y, x) of ``contact`` and the settings every task of the cube reads."""
+    radius, weights, pitch = spot_maps(scenario, contact)
+    cube = scenario.cube
+    film = scenario.oxide.film_resistance if scenario.oxide.film == "resistive" else np.inf
+    whole_window = cube.model == "greenwood" and np.isfinite(film)
+    settings = {
+        "pitch": pitch,
+        "rho": scenario.material.rho,
+        "model": cube.model,
+        "film_resistance": film,
+        "solver_tolerance": cube.solver_tolerance,
+        "max_iterations": cube.max_iterations,
+        "solver_criterion": cube.solver_criterion,
+        "crops": constriction.choose_crops(radius, weights, pitch, 0.0 if whole_window else cube.crop_tolerance),
+        "tolerance": cube.crop_tolerance,
+        "method": cube.method,
+        "method_used": constriction.AUTO_METHOD if cube.method == "auto" else cube.method,
+        "spots": scenario.contact.spots,
+        "lattice_constant": cube.lattice_constant,
+    }
+    if scenario.contact.spots == "asperities":
+        rough = scenario.roughness
+        settings["asperities"] = (scenario.oxide.seed, rough.sigma, rough.beta)
+        settings["separation"] = np.asarray(contact["spot_separation"].transpose("delta", "y", "x").values, np.float64)
+    return radius, weights, settings
+
+
+def _clean_draws(scenario: Scenario) -> int:
+    """Realizations of the asperity heights behind the clean surface: the ensemble's first round."""
+    ox = scenario.oxide
+    return ox.n_realizations if ox.ensemble == "fixed" else ox.min_realizations
+
+
+def clean_conductances(scenario: Scenario, contact: xr.Dataset,
+                       known: dict[str, np.ndarray] | None = None) -> dict[str, np.ndarray]:
+    """The oxide-free conductance (S, over delta) of ``contact``'s spots by every model of
+    :data:`CLEAN_MODELS`, for Barber's check against ``contact["barber_conductance"]`` (those
+    in ``known`` are taken from it)."""
+    radius, weights, settings = work_settings(scenario, contact)
+    return _clean_models(radius, weights, settings, _clean_draws(scenario), known or {})
 
 
 def build(
@@ -158,28 +225,7 @@ def build(
     """
     _check_grids(contact, oxide)
     source = FieldSource.of(scenario) if source is None else source
-    radius, weights, pitch = spot_maps(scenario, contact)
-    cube = scenario.cube
-    film = scenario.oxide.film_resistance if scenario.oxide.film == "resistive" else np.inf
-    whole_window = cube.model == "greenwood" and np.isfinite(film)
-    settings = {
-        "pitch": pitch,
-        "rho": scenario.material.rho,
-        "model": cube.model,
-        "film_resistance": film,
-        "solver_tolerance": cube.solver_tolerance,
-        "max_iterations": cube.max_iterations,
-        "solver_criterion": cube.solver_criterion,
-        "crops": constriction.choose_crops(radius, weights, pitch, 0.0 if whole_window else cube.crop_tolerance),
-        "tolerance": cube.crop_tolerance,
-        "method": cube.method,
-        "method_used": constriction.AUTO_METHOD if cube.method == "auto" else cube.method,
-        "spots": scenario.contact.spots,
-    }
-    if scenario.contact.spots == "asperities":
-        rough = scenario.roughness
-        settings["asperities"] = (scenario.oxide.seed, rough.sigma, rough.beta)
-        settings["separation"] = np.asarray(contact["spot_separation"].transpose("delta", "y", "x").values, np.float64)
+    radius, weights, settings = work_settings(scenario, contact)
     rule = stopping_rule(scenario, contact["force"].values, contact["force_normalized"].values)
     cells, uncropped = compute_cells(scenario, source, radius, weights, settings, rule, options)
     counts = np.array([[c["resistance"].shape[-1] for c in row] for row in cells])
@@ -187,8 +233,10 @@ def build(
     last = tuple(np.array([[w[k][0, -1] for w in row] for row in widths]) for k in (0, 1))
     out: dict[str, Any] = padded(cells)
     out["n_uncropped"] = uncropped
-    first = scenario.oxide.n_realizations if scenario.oxide.ensemble == "fixed" else scenario.oxide.min_realizations
-    clean = _clean(radius, weights, settings, first)
+    clean = _clean(radius, weights, settings, _clean_draws(scenario))
+    insulating_greenwood = scenario.cube.model == "greenwood" and scenario.oxide.film == "insulating"
+    clean["models"] = clean_conductances(
+        scenario, contact, {"greenwood": 1.0 / clean["resistance"]} if insulating_greenwood else None)
     measured = _measured_crop_error(source, radius, weights, settings, out["resistance"])
     return dataset(scenario, contact, oxide, out, clean, settings, measured, counts, last)
 

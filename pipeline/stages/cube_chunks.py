@@ -29,7 +29,7 @@ def model(settings: dict[str, Any]) -> Any:
         return functools.partial(
             point_model.resistance, film_resistance=film,
             solver_tolerance=settings["solver_tolerance"], max_iterations=settings["max_iterations"],
-            criterion=settings["solver_criterion"],
+            criterion=settings["solver_criterion"], lattice_constant=settings["lattice_constant"],
         )
     if np.isfinite(film):
         return functools.partial(point_model.greenwood_resistance, film_resistance=film)

@@ -79,6 +79,10 @@ def dataset(
                                          _attrs("ohm", "interaction term of the oxide-free surface")),
         "conductance_clean": ("delta", 1.0 / clean["resistance"],
                               _attrs("S", f"conductance of the oxide-free surface ({scenario.cube.model} model)")),
+        **{f"conductance_clean_{name}": ("delta", values, _attrs(
+            "S", f"conductance of the oxide-free surface by the {name.replace('_', ' + ')} model",
+            comment="beside contact.nc's barber_conductance (Barber's theorem); NaN where the model does not apply"))
+           for name, values in clean["models"].items()},
         "clean_open_probability": ("delta", clean["open"], _attrs(
             "1", "probability that the oxide-free surface is an open circuit (no touching asperity)")),
         "crop_cells": ("delta", np.asarray(settings["crops"], np.int32), _attrs(
