@@ -7,16 +7,17 @@ misses curved resistance-force laws (Barber's clean curve has a local exponent f
     ln y = sum_{k=0}^{p} c_k (ln x)^k
 
 is fitted by weighted least squares in ln y, each point weighted by the inverse square of the
-half-width of its tolerance band, and the order is chosen by one rule: **the smallest order
-p = 1, 2, ..., max_order whose curve lies inside every fitted point's band**; where no order
-does, ``max_order`` is kept and the curve is marked as not meeting its tolerance. The order
-never exceeds the number of fitted points minus 1. Powers of ln x are not centred, so that
-order 1 reads as the power law (``c_0 = ln alpha``, ``c_1 = -gamma``).
-
-A point's band is given in ln y as ``lower <= ln y_model - ln y <= upper``; for "within
-max(3 %, its interval)" it is ``lower = min(ln 0.97, ln(lo / y))`` and
-``upper = max(ln 1.03, ln(hi / y))`` with ``[lo, hi]`` the point's confidence interval
-(:func:`tolerance_band`).
+half-width of its band (below), and the order is chosen by one rule, **the smallest order
+p = 1, 2, ..., max_order whose curve lies inside every fitted point's band**, applied first
+with the relative tolerance alone (3 %: ``ln 0.97 <= ln y_model - ln y <= ln 1.03``) and, only
+where no order meets that, with max(tolerance, the point's confidence interval
+``[lo, hi]``): ``min(ln 0.97, ln(lo / y)) <= ln y_model - ln y <= max(ln 1.03, ln(hi / y))``
+(:func:`tolerance_band`). So a mean curve that is smooth to 3 % gets its shape to 3 %, even
+where its intervals are wider (they are, when realizations differ mostly by a factor common
+to all loads); the interval only excuses the noise of a mean curve that is not smooth. Where
+no order meets either band, ``max_order`` is kept and the curve is marked as missing its
+tolerance. The order never exceeds the number of fitted points minus 1. Powers of ln x are
+not centred, so that order 1 reads as the power law (``c_0 = ln alpha``, ``c_1 = -gamma``).
 """
 
 from __future__ import annotations
@@ -45,7 +46,8 @@ class CurveFit:
     max_error
         Largest relative error |y_model / y - 1| over the fitted points.
     within
-        1 where the curve lies inside every fitted point's band, else 0 (int8).
+        Which band the curve lies inside at every fitted point (int8): 1 the relative tolerance,
+        2 only max(tolerance, interval), 0 neither (or no fit).
     n_points
         Points that entered the fit.
     """
@@ -113,24 +115,20 @@ def evaluate_curve(coefficients: ArrayLike, x: ArrayLike) -> np.ndarray:
     return out
 
 
-def _fit_one(lx: np.ndarray, ly: np.ndarray, lower: np.ndarray, upper: np.ndarray,
-             max_order: int) -> tuple[np.ndarray, int, bool]:
-    """Coefficients (max_order + 1), chosen order and whether it is within the band, for one curve."""
-    weight = 2.0 / (upper - lower)  # 1 / half-width of the band
-    top = min(max_order, lx.size - 1)
-    coef = np.zeros(max_order + 1)
+def _lowest_order(lx: np.ndarray, ly: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                  top: int) -> tuple[np.ndarray, bool]:
+    """Coefficients of the lowest order <= top inside the band (else of order ``top``) and whether inside."""
+    weight = 2.0 / (upper - lower)  # 1 / half-width of the band (0 for an unbounded one)
     for order in range(1, top + 1):
         basis = lx[:, None] ** np.arange(order + 1)
         c, *_ = np.linalg.lstsq(basis * weight[:, None], ly * weight, rcond=None)
         res = basis @ c - ly
-        ok = bool(np.all((res >= lower) & (res <= upper)))
-        if ok:
-            break
-    coef[: order + 1] = c
-    return coef, order, ok
+        if np.all((res >= lower) & (res <= upper)):
+            return c, True
+    return c, False
 
 
-def fit_curve(x: ArrayLike, y: ArrayLike, lower: ArrayLike, upper: ArrayLike,
+def fit_curve(x: ArrayLike, y: ArrayLike, tolerance: float, interval: ArrayLike | None = None,
               mask: ArrayLike | None = None, max_order: int = 3) -> CurveFit:
     """Fit the curve model to every curve along the last axis (see the module docstring).
 
@@ -141,8 +139,11 @@ def fit_curve(x: ArrayLike, y: ArrayLike, lower: ArrayLike, upper: ArrayLike,
     y
         Ordinates (e.g. the mean R'), shape (..., n); non-finite or non-positive values do not
         enter the fit.
-    lower, upper
-        The band of each point in ln y (:func:`tolerance_band`), lower < 0 < upper.
+    tolerance
+        Relative error of y always allowed, in (0, 1) (0.03 for 3 %).
+    interval
+        Confidence interval of each value, shape (..., n, 2) as (lower, upper) limits, or None
+        (a deterministic curve: the tolerance alone).
     mask
         Points allowed in the fit, broadcast against ``y``; default all.
     max_order
@@ -156,12 +157,13 @@ def fit_curve(x: ArrayLike, y: ArrayLike, lower: ArrayLike, upper: ArrayLike,
         raise ValueError(f"max_order = {max_order!r} is out of range: must be >= 1")
     y = np.asarray(y, dtype=float)
     x = np.broadcast_to(np.asarray(x, dtype=float), y.shape)
-    lower = np.broadcast_to(np.asarray(lower, dtype=float), y.shape)
-    upper = np.broadcast_to(np.asarray(upper, dtype=float), y.shape)
+    bands = [tolerance_band(y, tolerance)]
+    if interval is not None:
+        bands.append(tolerance_band(y, tolerance, interval))
     use = np.ones(y.shape, bool) if mask is None else np.broadcast_to(np.asarray(mask, bool), y.shape)
     with np.errstate(divide="ignore", invalid="ignore"):
         lx, ly = np.log(x), np.log(y)
-    use = use & np.isfinite(lx) & np.isfinite(ly) & (lower < 0) & (upper > 0)
+    use = use & np.isfinite(lx) & np.isfinite(ly)
     lead = y.shape[:-1]
     coefficients = np.full(lead + (max_order + 1,), np.nan)
     order = np.zeros(lead, int)
@@ -170,9 +172,14 @@ def fit_curve(x: ArrayLike, y: ArrayLike, lower: ArrayLike, upper: ArrayLike,
         sel = use[idx]
         if np.unique(lx[idx][sel]).size < 2:
             continue
-        coefficients[idx], order[idx], ok = _fit_one(lx[idx][sel], ly[idx][sel], lower[idx][sel],
-                                                     upper[idx][sel], max_order)
-        within[idx] = ok
+        for level, (lower, upper) in enumerate(bands, start=1):
+            c, ok = _lowest_order(lx[idx][sel], ly[idx][sel], lower[idx][sel], upper[idx][sel],
+                                  min(max_order, int(sel.sum()) - 1))
+            if ok:
+                break
+        coefficients[idx] = np.concatenate([c, np.zeros(max_order + 1 - c.size)])
+        order[idx] = c.size - 1
+        within[idx] = level if ok else 0
     with np.errstate(invalid="ignore"):
         residual = np.where(use, evaluate_curve(np.nan_to_num(coefficients), x) - ly, np.nan)
     residual = np.where(np.isnan(coefficients[..., :1]), np.nan, residual)
