@@ -303,7 +303,25 @@ class Fits:
         "reduction over realizations that is fitted",
         choices=("geometric_mean", "arithmetic_mean", "median"),
     )
-    min_force: float = _param(200.0, "N", "fit only load steps with F >= min_force", ge=0)
+    min_force: float = _param(200.0, "N", "fit only load steps with F >= min_force (fit_range = force)", ge=0)
+    fit_range: str = _param(
+        "force",
+        "1",
+        "what selects the fitted load steps: force (F >= min_force, in N) or force_normalized "
+        "(F' >= min_force_normalized, the same steps for every scene of equal F')",
+        choices=("force", "force_normalized"),
+    )
+    min_force_normalized: float = _param(
+        0.4, "1", "fit only load steps with F' >= min_force_normalized (fit_range = force_normalized)", ge=0
+    )
+    curve_max_order: int = _param(
+        3, "1", "curve model ln R'(ln F'): highest polynomial order tried (the lowest order within "
+        "tolerance is kept)", ge=1, le=6
+    )
+    curve_tolerance: float = _param(
+        0.03, "1", "curve model: relative error of R' allowed at every fitted step (or the step's "
+        "confidence interval where wider)", gt=0, lt=1
+    )
     n_bootstrap: int = _param(400, "1", "bootstrap resamples over realizations", ge=10)
     confidence: float = _param(0.95, "1", "confidence level of the intervals", gt=0, lt=1)
     seed: int = _param(7, "1", "seed of the bootstrap", ge=0)

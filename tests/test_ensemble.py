@@ -127,11 +127,20 @@ def test_fits_use_each_lambdas_realizations_and_flag_the_cap(adaptive_inputs, ad
     ds = fits.build(scenario, adaptive_cube)
     counts = adaptive_cube["n_realizations"].transpose("xi", "lambda").values
     np.testing.assert_array_equal(ds["n_realizations"].transpose("xi", "lambda").values, counts)
+    compared = 0
     for (z, a), n in np.ndenumerate(counts):  # each cell's reduction equals that of its slice alone
         cell = {"xi": [z], "lambda": [a]}
         alone = fits.build(scenario, adaptive_cube.isel({**cell, "realization": slice(0, int(n))}).drop_vars("n_realizations"))
         np.testing.assert_allclose(ds["alpha"].isel(cell), alone["alpha"], rtol=1e-12)
         np.testing.assert_allclose(ds["resistance_quantile"].isel(cell), alone["resistance_quantile"], rtol=1e-12)
+        if ds["curve_within"].isel(cell).item() == 1 == alone["curve_within"].item():  # no interval used
+            np.testing.assert_allclose(ds["curve_coefficients"].isel(cell), alone["curve_coefficients"], atol=1e-12)
+            compared += 1
+    assert compared >= 1
+    fitted = ds["fitted"].values.astype(bool)
+    band = ds["geometric_mean_normalized_ci"].transpose("xi", "lambda", "delta", "bound").values[:, :, fitted]
+    mean = ds["geometric_mean_normalized"].transpose("xi", "lambda", "delta").values[:, :, fitted]
+    assert np.all(band[..., 0] < mean) and np.all(mean < band[..., 1])  # each cell's own resamples
     at_cap = counts >= scenario.oxide.max_realizations
     short = (adaptive_cube["rule_alpha_half_width"].transpose("xi", "lambda").values
              > cube_rounds.RULE_MARGIN * scenario.oxide.target_half_width)
