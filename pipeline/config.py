@@ -390,8 +390,9 @@ SECTIONS: dict[str, type] = {
 STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "contact": ("material", "roughness", "indenter", "loading", "contact"),
     "oxide": ("roughness.eta", "indenter.radius", "contact.window", "oxide"),
-    # fits.min_force and fits.confidence: the adaptive ensemble's stopping rule
-    "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance", "fits.min_force", "fits.confidence"),
+    # the fitted steps and fits.confidence: the adaptive ensemble's stopping rule
+    "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance", "fits.min_force", "fits.fit_range",
+             "fits.min_force_normalized", "fits.confidence"),
     "fits": ("fits",),
     "surrogate": (
         "surrogate.method",
