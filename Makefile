@@ -22,7 +22,7 @@ all: run
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(VENV)/bin/pip install --quiet --upgrade pip
-	$(VENV)/bin/pip install --quiet -e '.[test]'
+	$(VENV)/bin/pip install --quiet -e '.[test,reference]'
 	touch $@
 
 # The stamps are rewritten only when a stage's parameters change, so make re-runs a stage
