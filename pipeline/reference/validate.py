@@ -1,0 +1,114 @@
+"""``g2tom validate [--quick]``: the full-field reference against g2tom on one validation set.
+
+Prints the plan first (scene, grid, cases, estimated time), runs g2tom's stages in memory for every
+spot discretization and ``cube.model``, then every reference case (resumable: finished cases are
+read back from ``<out>/cases/``), with one progress line per case, and writes ``validate.nc``,
+the figure ``validate.png`` and the report section ``validate.md`` under ``<out>``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+import time
+from pathlib import Path
+from typing import TextIO
+
+import numpy as np
+
+from pipeline.config import load_scenario
+from pipeline.progress import format_duration
+from pipeline.reference import cases as cases_mod
+from pipeline.reference import scene, section, summary
+from pipeline.stages.oxide import FieldSource
+from pipeline.store import atomic_path
+
+__all__ = ["available_discretizations", "default_discretization", "plan_lines", "run_validation"]
+
+
+def available_discretizations() -> tuple[str, ...]:
+    """The spot discretizations this g2tom offers (``contact.spots``, issue 21; else today's one)."""
+    if scene.has_spots_key(load_scenario("paper")):
+        return ("mean_area", "expected", "asperities")
+    return ("mean_area",)
+
+
+def default_discretization() -> str:
+    """The discretization of the default scenario ``paper``."""
+    paper = load_scenario("paper")
+    return paper.contact.spots if scene.has_spots_key(paper) else "mean_area"
+
+
+def plan_lines(vset: scene.ValidationSet, todo: list[cases_mod.Case], total: int) -> list[str]:
+    """The plan printed before any work."""
+    seconds = cases_mod.estimate_seconds(vset, todo)
+    oxide = ", ".join(f"xi {x:g}/lambda {lam:g}" for x in vset.xi for lam in vset.lambdas)
+    return [
+        f"validate: scene sigma {vset.sigma:g} m, eta {vset.eta:g} m^-2, beta {vset.beta:g} m, "
+        f"R* {vset.radius:g} m, E* {vset.e_star:.4g} Pa, rho* {vset.rho:g} ohm m (mu = {vset.mu:.3f})",
+        f"validate: grid {vset.n_grid}^2 of {vset.pixel * 1e6:.3g} um ({vset.pixels_per_cell:g} pixels per "
+        f"asperity spacing), window {vset.side * 1e3:.3g} mm; convergence grid "
+        + (f"{vset.convergence_grid}^2" if vset.convergence_grid else "none"),
+        f"validate: loads delta/sigma {list(vset.deltas)}; realizations {list(vset.realizations)}; "
+        f"clean + {oxide}",
+        f"validate: g2tom {' x '.join([str(list(vset.discretizations)), str(list(vset.models))])}",
+        f"validate: {total} cases, {total - len(todo)} already done; estimated {format_duration(seconds)}",
+    ]
+
+
+def _g2tom_side(vset: scene.ValidationSet) -> dict[str, np.ndarray]:
+    """g2tom's forces and resistances of the set, stacked (discretization, model, ...)."""
+    clean, oxidized, forces = [], [], []
+    for spots in vset.discretizations:
+        clean.append([])
+        oxidized.append([])
+        for model in vset.models:
+            cube = scene.g2tom_resistances(vset, model, spots)
+            clean[-1].append(cube["resistance_clean"].values)
+            oxidized[-1].append(cube["resistance"].transpose("xi", "lambda", "realization", "delta").values)
+            forces.append(cube["force"].values)
+    for f in forces[1:]:
+        if not np.allclose(f, forces[0], rtol=1e-9, atol=0):
+            raise RuntimeError("g2tom's forces differ between discretizations or models")
+    return {"force": forces[0], "clean": np.asarray(clean), "resistance": np.asarray(oxidized)}
+
+
+def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.stderr) -> list[Path]:
+    """Run the set into ``out`` (plan, g2tom, every case, outputs); return the written files."""
+    start = time.perf_counter()
+    out = Path(out)
+    case_dir = out / "cases"
+    everything = cases_mod.plan_cases(vset)
+    source = FieldSource.of(scene.g2tom_scenario(vset, vset.models[0], vset.discretizations[0]))
+    g2tom = _g2tom_side(vset)
+    keys = {c: cases_mod.case_key(vset, c, g2tom["force"][c.load], source) for c in everything}
+    done = {c: cases_mod.load_case(case_dir / f"{c.name}.json", keys[c]) for c in everything}
+    todo = [c for c in everything if done[c] is None]
+    for line in plan_lines(vset, todo, len(everything)):
+        print(line, file=stream, flush=True)
+    for number, case in enumerate(todo, start=1):
+        record = cases_mod.run_case(vset, case, g2tom["force"][case.load], source, keys[case],
+                                    case_dir / f"{case.name}.json")
+        done[case] = record
+        elapsed = time.perf_counter() - start
+        left = cases_mod.estimate_seconds(vset, todo[number:]) - cases_mod.G2TOM_SECONDS * len(vset.models) * len(vset.discretizations)
+        print(f"validate: case {number}/{len(todo)} {case.name}: F = {record['force']:.4g} N, "
+              f"R = {record['resistance_clean']:.4g} ohm in {record['seconds_total']:.1f} s; "
+              f"elapsed {format_duration(elapsed)}, ~{format_duration(max(left, 0.0))} left",
+              file=stream, flush=True)
+    ds = summary.dataset(vset, everything, done, g2tom, default_discretization())
+    paths = [out / "validate.nc", out / "validate.png", out / "validate.md"]
+    with atomic_path(paths[0]) as tmp:
+        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4")
+    section.figure(ds, paths[1])
+    with atomic_path(paths[2]) as tmp:
+        tmp.write_text(section.markdown(ds))
+    print(f"validate: wrote {', '.join(map(str, paths))} in {format_duration(time.perf_counter() - start)}",
+          file=stream, flush=True)
+    return paths
+
+
+def chosen_set(quick: bool) -> scene.ValidationSet:
+    """The default or the quick set, with every discretization this g2tom offers."""
+    base = scene.QUICK if quick else scene.DEFAULT
+    return dataclasses.replace(base, discretizations=available_discretizations())
