@@ -75,7 +75,7 @@ def solve_pressure(operator: FreeSurface, heights: np.ndarray, force: float, tol
 
     solver = tm.PolonskyKeerRey(operator.model, np.ascontiguousarray(heights, dtype=float), tolerance)
     solver.setIntegralOperator(_OPERATOR)
-    solver.setMaxIterations(10000)
+    solver.max_iter = 10000
     error = solver.solve(force / (operator.n * operator.pixel) ** 2)  # the mean pressure over the grid
     if not error <= tolerance:
         raise RuntimeError(f"contact solver stopped at error {error:.3g} > tolerance {tolerance:.3g}")

@@ -69,7 +69,7 @@ class ValidationSet:
     E: float = 2.1e11
     nu: float = 0.3
     rho: float = 7.2e-7
-    deltas: tuple[float, ...] = (1.0, -0.5, -2.0)
+    deltas: tuple[float, ...] = (2.0, -0.5, -3.0)
     xi: tuple[float, ...] = (0.5, 0.7)
     lambdas: tuple[float, ...] = (1.0, 5.0)
     realizations: tuple[int, ...] = (0, 1, 2, 3)
@@ -156,11 +156,22 @@ def g2tom_scenario(vset: ValidationSet, model: str, spots: str) -> Scenario:
     return scenario
 
 
+#: The contact's extent: the largest radius where GT's area fraction is at least this fraction of
+#: its peak; the reference grid's half side must reach it at every load.
+EXTENT_FRACTION = 1e-4
+
+
 def g2tom_resistances(vset: ValidationSet, model: str, spots: str) -> xr.Dataset:
     """g2tom's cube of the scene: ``force`` (delta), ``resistance_clean`` (delta) and
-    ``resistance`` (xi, lambda, delta, realization) with the set's realizations."""
+    ``resistance`` (xi, lambda, delta, realization) with the set's realizations, and
+    ``contact_extent`` (delta, m, see :data:`EXTENT_FRACTION`)."""
     scenario = g2tom_scenario(vset, model, spots)
     contact = contact_stage.build(scenario)
     oxide = oxide_stage.build(scenario)
-    cube = cube_stage.build(scenario, contact, oxide)
-    return cube.isel(realization=list(vset.realizations))
+    cube = cube_stage.build(scenario, contact, oxide).isel(realization=list(vset.realizations))
+    fraction = contact["area_fraction"].transpose("delta", "r").values
+    r = contact["r"].values
+    extent = [r[np.flatnonzero(a >= EXTENT_FRACTION * a.max())[-1]] for a in fraction]
+    cube["contact_extent"] = ("delta", np.asarray(extent), {
+        "units": "m", "long_name": f"largest radius where GT's area fraction >= {EXTENT_FRACTION:g} of its peak"})
+    return cube

@@ -67,6 +67,10 @@ def _g2tom_side(vset: scene.ValidationSet) -> dict[str, np.ndarray]:
             clean[-1].append(cube["resistance_clean"].values)
             oxidized[-1].append(cube["resistance"].transpose("xi", "lambda", "realization", "delta").values)
             forces.append(cube["force"].values)
+            extent = float(cube["contact_extent"].max())
+            if extent > vset.side / 2.0:
+                raise ValueError(f"the contact reaches r = {extent * 1e3:.3g} mm (GT), beyond the reference grid's "
+                                 f"half side {vset.side / 2 * 1e3:.3g} mm: enlarge n_grid or the pixel")
     for f in forces[1:]:
         if not np.allclose(f, forces[0], rtol=1e-9, atol=0):
             raise RuntimeError("g2tom's forces differ between discretizations or models")
