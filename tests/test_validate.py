@@ -61,6 +61,8 @@ def test_outputs_are_labelled_and_consistent(tiny_run) -> None:
     # oxide only removes conducting area: never a lower resistance than the clean contact's
     assert np.all(ds["resistance_reference"].values >= ref[None, None] * (1 - 1e-9))
     assert np.all(np.abs(ds["convergence_change"].values) < 0.5)
+    barber = ds["barber_ratio"].values  # the coarse grid's light load may fail (one-pixel contact): NaN
+    assert np.isfinite(barber).any() and np.nanmax(np.abs(barber - 1.0)) < 0.02
     text = (out / "validate.md").read_text()
     assert text.startswith("## How right is the model?")
     first = text.splitlines()[2]

@@ -33,6 +33,8 @@ CONTACT_SECONDS = 5.5e-6
 PUNCH_SECONDS = 1.6e-6
 #: g2tom's side (contact, oxide and cube stages per model and discretization), seconds each.
 G2TOM_SECONDS = 4.0
+#: Relative force step of the two nearby loads whose dF/d(delta) checks Barber's theorem.
+BARBER_STEP = 0.01
 
 
 @dataclass(frozen=True)
@@ -52,7 +54,7 @@ class Case:
 
 def plan_cases(vset: scene.ValidationSet) -> list[Case]:
     """Every case of the set: all realizations and loads on the main grid (clean and oxidized), then
-    the first realization's loads on the convergence grid (clean)."""
+    the first realization's loads on the convergence grid (clean, with the Barber check)."""
     cases = [Case(r, k, vset.n_grid, True) for r in vset.realizations for k in range(len(vset.deltas))]
     if vset.convergence_grid:
         cases += [Case(vset.realizations[0], k, vset.convergence_grid, False) for k in range(len(vset.deltas))]
@@ -70,7 +72,7 @@ def estimate_seconds(vset: scene.ValidationSet, cases: list[Case]) -> float:
     total = G2TOM_SECONDS * len(vset.models) * len(vset.discretizations)
     for case in cases:
         contact, punch = _seconds(case.n)
-        total += contact + punch * (punches if case.oxide else 1)
+        total += (contact + punch * punches) if case.oxide else (3 * contact + punch)
     return total
 
 
@@ -107,9 +109,25 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
     start = time.perf_counter()
     pixel = vset.side / case.n
     operator = elastic.free_surface(case.n, pixel, vset.e_star)
-    state = contact_at_force(operator, scene.rough_sphere(vset, case.realization, case.n), force)
+    heights = scene.rough_sphere(vset, case.realization, case.n)
+    try:
+        state = contact_at_force(operator, heights, force)
+    except elastic.SolverFailure as exc:  # recorded (NaN results with the reason), not fatal to the set
+        return _store(path, {"key": key, **dataclasses.asdict(case), "error": str(exc), "force": np.nan,
+                             "delta": np.nan, "contact_fraction": np.nan, "gap_spread": np.nan,
+                             "barber_ratio": np.nan, "resistance_clean": np.nan,
+                             "resistance": np.full((len(vset.xi), len(vset.lambdas)), np.nan).tolist(),
+                             "seconds_contact": np.nan, "seconds_total": time.perf_counter() - start})
     contact_seconds = time.perf_counter() - start
     clean = punch_conductance(operator, state.contact, vset.rho)
+    barber = np.nan
+    if not case.oxide:  # the convergence grid also checks Barber's theorem: kappa = K / (E* rho*)
+        try:
+            low, high = (contact_at_force(operator, heights, force * (1.0 + s * BARBER_STEP)) for s in (-1, 1))
+            stiffness = -(high.force - low.force) / (high.delta - low.delta)
+            barber = clean.conductance / (stiffness / (vset.e_star * vset.rho))
+        except elastic.SolverFailure:
+            barber = np.nan
     oxidized = np.full((len(vset.xi), len(vset.lambdas)), np.nan)
     if case.oxide:
         for a in range(len(vset.lambdas)):
@@ -120,12 +138,17 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
     record = {
         "key": key, **dataclasses.asdict(case),
         "force": state.force, "delta": state.delta, "contact_fraction": float(state.contact.mean()),
-        "gap_spread": state.gap_spread,
+        "gap_spread": state.gap_spread, "barber_ratio": barber,
         "resistance_clean": 1.0 / clean.conductance if clean.conductance > 0 else np.inf,
         "resistance": oxidized.tolist(),
         "seconds_contact": contact_seconds,
         "seconds_total": time.perf_counter() - start,
     }
+    return _store(path, record)
+
+
+def _store(path: Path, record: dict[str, Any]) -> dict[str, Any]:
+    """Write ``record`` to ``path`` atomically (JSON; NaN and Infinity as Python writes them)."""
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps(record, indent=1) + "\n")
     return record

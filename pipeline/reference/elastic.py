@@ -18,9 +18,13 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["FreeSurface", "free_surface", "solve_pressure"]
+__all__ = ["FreeSurface", "free_surface", "solve_pressure", "SolverFailure"]
 
 _OPERATOR = "boussinesq_non_periodic"
+
+
+class SolverFailure(RuntimeError):
+    """The contact solver failed (e.g. tamaas' NaN on a contact of a single pixel) or did not converge."""
 
 
 @dataclass
@@ -76,7 +80,10 @@ def solve_pressure(operator: FreeSurface, heights: np.ndarray, force: float, tol
     solver = tm.PolonskyKeerRey(operator.model, np.ascontiguousarray(heights, dtype=float), tolerance)
     solver.setIntegralOperator(_OPERATOR)
     solver.max_iter = 10000
-    error = solver.solve(force / (operator.n * operator.pixel) ** 2)  # the mean pressure over the grid
+    try:
+        error = solver.solve(force / (operator.n * operator.pixel) ** 2)  # the mean pressure over the grid
+    except (tm.FloatingPointError, FloatingPointError) as exc:
+        raise SolverFailure(f"contact solver failed at F = {force:.4g} N: {str(exc).splitlines()[0]}") from None
     if not error <= tolerance:
-        raise RuntimeError(f"contact solver stopped at error {error:.3g} > tolerance {tolerance:.3g}")
+        raise SolverFailure(f"contact solver stopped at error {error:.3g} > tolerance {tolerance:.3g}")
     return np.array(operator.model.traction, dtype=float, copy=True)

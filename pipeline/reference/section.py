@@ -103,7 +103,10 @@ def markdown(ds: xr.Dataset) -> str:
     """The report section: flags first, then the ratio tables, the grid convergence and the wall times."""
     n_real = ds.sizes["realization"]
     lines = ["## How right is the model? g2tom against the full-field reference", ""]
-    lines += _flags(ds) + [""]
+    lines += _flags(ds)
+    if ds.attrs.get("failed_cases", "none") != "none":
+        lines.append(f"**Failed reference cases (NaN in the tables): {ds.attrs['failed_cases']}.**")
+    lines.append("")
     lines += [
         f"Scene: mu = {ds.attrs['mu']:.3f}, sigma {ds.attrs['scene_sigma']:g} m, eta {ds.attrs['scene_eta']:g} m^-2, "
         f"beta {ds.attrs['scene_beta']:g} m, R* {ds.attrs['scene_radius']:g} m; GW surfaces on a "
@@ -128,6 +131,8 @@ def markdown(ds: xr.Dataset) -> str:
     change = ds["convergence_change"].values
     lines += [f"Grid convergence (first realization, clean): doubling the grid step ({ds['grid'].values[0]}^2 -> "
               f"{ds['grid'].values[1]}^2) changes R by " + ", ".join(f"{100 * c:+.2f} %" for c in change) + " at the loads.",
+              "Barber's theorem on the full-field clean solution (convergence grid, first realization): punch "
+              "conductance / (K / (E* rho*)) = " + ", ".join(f"{b:.4f}" for b in ds["barber_ratio"].values) + ".",
               f"Wall time: {float(np.nansum(ds['seconds_case'].values)):.0f} s for the main grid's cases "
               f"(contact solves {float(np.nansum(ds['seconds_contact'].values)):.0f} s), "
               f"{float(np.nansum(ds['seconds_convergence'].values)):.0f} s for the convergence grid.", ""]

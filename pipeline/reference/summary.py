@@ -30,7 +30,8 @@ def _reference(vset: scene.ValidationSet, everything: list, done: dict) -> dict[
     out = {k: np.full(shape, np.nan) for k in ("force", "delta", "contact_fraction", "resistance_clean",
                                                 "seconds_contact", "seconds_total")}
     out["resistance"] = np.full((len(vset.xi), len(vset.lambdas)) + shape, np.nan)
-    coarse = {k: np.full(len(vset.deltas), np.nan) for k in ("resistance_clean", "seconds_total")}
+    coarse = {k: np.full(len(vset.deltas), np.nan) for k in ("resistance_clean", "seconds_total", "barber_ratio")}
+    out["failed"] = [f"{case.name}: {done[case]['error']}" for case in everything if "error" in done[case]]
     for case in everything:
         rec = done[case]
         if case.n != vset.n_grid:
@@ -85,6 +86,8 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
                                    _a("ohm", "clean full-field resistance of the first realization on each grid")),
         "convergence_change": ("load", ref["coarse"]["resistance_clean"] / fine - 1.0,
                                _a("1", "relative change of the clean R when the grid step doubles")),
+        "barber_ratio": ("load", ref["coarse"]["barber_ratio"], _a(
+            "1", "punch conductance / (K / (E* rho*)), K = dF/d(-delta) from loads F (1 +- 1 %), convergence grid")),
         "seconds_contact": (rl, ref["seconds_contact"], _a("s", "wall time of the full-field contact solve")),
         "seconds_case": (rl, ref["seconds_total"], _a("s", "wall time of the case (contact and every conductance)")),
         "seconds_convergence": ("load", ref["coarse"]["seconds_total"], _a("s", "wall time of the convergence-grid case")),
@@ -97,6 +100,7 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "default_discretization": default_spots, "default_model": "greenwood",
         "reference": "tamaas non-periodic Boussinesq operator; Polonsky-Keer contact; punch conductance by CG",
         "resistance_scale": scale_r, "force_scale": scale_f, "mu": vset.mu,
+        "failed_cases": "; ".join(ref["failed"]) or "none",
         "surface": "GW: Poisson asperities of density eta, heights N(0, sigma^2), paraboloidal tips of radius beta",
     })
     return xr.Dataset(data, coords=coords, attrs=attrs)

@@ -96,8 +96,9 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
         done[case] = record
         elapsed = time.perf_counter() - start
         left = cases_mod.estimate_seconds(vset, todo[number:]) - cases_mod.G2TOM_SECONDS * len(vset.models) * len(vset.discretizations)
-        print(f"validate: case {number}/{len(todo)} {case.name}: F = {record['force']:.4g} N, "
-              f"R = {record['resistance_clean']:.4g} ohm in {record['seconds_total']:.1f} s; "
+        result = (f"FAILED ({record['error']})" if "error" in record else
+                  f"F = {record['force']:.4g} N, R = {record['resistance_clean']:.4g} ohm")
+        print(f"validate: case {number}/{len(todo)} {case.name}: {result} in {record['seconds_total']:.1f} s; "
               f"elapsed {format_duration(elapsed)}, ~{format_duration(max(left, 0.0))} left",
               file=stream, flush=True)
     ds = summary.dataset(vset, everything, done, g2tom, default_discretization())
