@@ -28,7 +28,7 @@ def test_smooth_sphere_gives_hertz_force_radius_approach_and_conductance() -> No
     operator = elastic.free_surface(n, pixel, E_STAR)
     state = contact_at_force(operator, surfaces.sphere(n, pixel, radius), force)
     assert state.force == pytest.approx(force, rel=1e-9)
-    assert state.gap_spread < 1e-9 * a**2 / radius  # the gap is closed on the whole contact set
+    assert state.gap_spread < 1e-6 * a**2 / radius  # the gap is closed on the whole contact set
     assert np.sqrt(state.contact.sum() * pixel**2 / np.pi) == pytest.approx(a, rel=0.01)
     assert state.delta == pytest.approx(-(a**2) / radius, rel=0.01)  # g2tom's convention: delta = -a^2/R
     kappa = punch_conductance(operator, state.contact, RHO).conductance

@@ -27,7 +27,8 @@ from pipeline.store import atomic_path
 
 __all__ = ["Case", "plan_cases", "case_key", "load_case", "run_case", "estimate_seconds"]
 
-#: Measured on the 2-core machine (GW rough sphere, 512^2, one thread): contact solve and one
+#: Measured on the shared 2-core machine (GW rough sphere, 512^2 and 1024^2, one thread; 1024^2:
+#: contact 15-45 s, punch 4-10 s): contact solve and one
 #: punch conductance, seconds per N^2 log2(N) pixel; the plan's estimate scales them by grid size.
 CONTACT_SECONDS = 5.5e-6
 PUNCH_SECONDS = 1.6e-6

@@ -46,7 +46,7 @@ class ContactState:
 
 
 def contact_at_force(operator: FreeSurface, heights: np.ndarray, force: float,
-                     tolerance: float = 1e-10) -> ContactState:
+                     tolerance: float = 1e-8) -> ContactState:
     """Solve the contact of the rigid ``heights`` (m, (n, n)) pressed by ``force`` (N, > 0).
 
     Raises

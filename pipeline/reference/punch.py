@@ -40,7 +40,7 @@ class PunchResult:
 
 
 def punch_conductance(operator: FreeSurface, conducting: np.ndarray, rho: float,
-                      tolerance: float = 1e-9) -> PunchResult:
+                      tolerance: float = 1e-7) -> PunchResult:
     """Conductance (S) of the conducting pixels ``conducting`` (bool, (n, n)) for resistivity ``rho`` (ohm m).
 
     ``tolerance`` is the conjugate gradients' relative residual.
