@@ -113,3 +113,12 @@ def test_random_process_gw_parameters_match_the_spectrum_closed_forms() -> None:
     assert measured.beta == pytest.approx(0.737 / np.sqrt(m4), rel=0.02)
     with pytest.raises(ValueError, match="q_low"):
         surfaces.random_process(n, pixel, hurst, q_high, q_low, rms, np.random.default_rng(2))
+
+
+def test_only_the_reference_package_imports_the_extra() -> None:
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    importers = {p.relative_to(root).as_posix() for folder in ("pipeline", "analysis")
+                 for p in (root / folder).rglob("*.py") if "import tamaas" in p.read_text()}
+    assert importers == {"pipeline/reference/__init__.py", "pipeline/reference/elastic.py"}
