@@ -187,7 +187,8 @@ def _fit_blocks(fits: xr.Dataset, scenario: Scenario) -> list[Block]:
     return [
         Block("h2", "Clean-surface fit"),
         Block("p", f"R' = alpha F'^-gamma fitted by least squares in log-log on the {steps} load steps with "
-                   f"F >= {f.min_force:g} N; intervals: {100 * f.confidence:g} % least-squares (Student t)."),
+                   f"{fits.attrs.get('fit_range', f'F >= {f.min_force:g} N')}; intervals: "
+                   f"{100 * f.confidence:g} % least-squares (Student t)."),
         _table(["parameter", "value", "lower", "upper"], [
             ["alpha_clean", float(fits["alpha_clean"]), float(ci["alpha"][0]), float(ci["alpha"][1])],
             ["gamma_clean", float(fits["gamma_clean"]), float(ci["gamma"][0]), float(ci["gamma"][1])],
