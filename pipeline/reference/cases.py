@@ -27,9 +27,9 @@ from pipeline.store import atomic_path
 
 __all__ = ["Case", "plan_cases", "case_key", "load_case", "run_case", "estimate_seconds"]
 
-#: Measured on the shared 2-core machine (GW rough sphere, 512^2 and 1024^2, one thread; 1024^2:
-#: contact 15-45 s, punch 4-10 s): contact solve and one
-#: punch conductance, seconds per N^2 log2(N) pixel; the plan's estimate scales them by grid size.
+#: Seconds per N^2 log2(N) pixels of one contact solve and of one punch conductance, from runs on
+#: the shared 2-core machine (GW rough sphere, one thread; at 1024^2 a contact took 15-45 s and a
+#: punch 4-10 s, depending on the load and on the machine's other work): upper ends, rounded up.
 CONTACT_SECONDS = 5.5e-6
 PUNCH_SECONDS = 1.6e-6
 #: g2tom's side (contact, oxide and cube stages per model and discretization), seconds each.
