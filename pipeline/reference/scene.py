@@ -79,7 +79,7 @@ class ValidationSet:
     surface_seed: int = 20261124
     oxide_seed: int = 20240531
     models: tuple[str, ...] = ("greenwood", "point")
-    discretizations: tuple[str, ...] = ("mean_area",)
+    discretizations: tuple[str, ...] = ("mean_area", "expected", "asperities")
 
     @property
     def pixel(self) -> float:

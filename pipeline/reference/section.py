@@ -47,6 +47,8 @@ def figure(ds: xr.Dataset, path: Path) -> Path:
         for d in ds["discretization"].values:
             for m in ds["model"].values:
                 curve = g2.sel(discretization=d, model=m)
+                if not np.isfinite(curve.values).any():  # a combination g2tom refuses
+                    continue
                 if "realization" in curve.dims:
                     finite = np.where(np.isfinite(curve.values), curve.values, np.nan)
                     curve = np.exp(np.nanmean(np.log(finite), axis=0))
@@ -79,10 +81,12 @@ def _flags(ds: xr.Dataset) -> list[str]:
     f = ds["force"].values
     lines = []
     for model in ds["model"].values:
+        if f"{spots}/{model}:" in ds.attrs.get("skipped_g2tom", "none"):
+            continue
         clean = ratios(ds["ratio_clean"].sel(discretization=spots, model=model).values)[0]
         bad = np.flatnonzero(~(np.abs(clean - 1.0) <= CLEAN_LIMIT))
         if bad.size:
-            where = ", ".join(f"{100 * (clean[k] - 1):+.0f} % at {f[k]:.4g} N" for k in bad)
+            where = ", ".join(f"{100 * (clean[k] - 1):+.1f} % at {f[k]:.4g} N" for k in bad)
             lines.append(f"**Clean: g2tom's default discretization ({spots}, {model}) is off the full field by "
                          f"more than ±{100 * CLEAN_LIMIT:.0f} %: {where}.**")
         ox = ratios(ds["ratio"].sel(discretization=spots, model=model).values)[0]  # (xi, lambda, load)
@@ -91,7 +95,7 @@ def _flags(ds: xr.Dataset) -> list[str]:
             z, a, k = max(bad, key=lambda i: abs(np.log(ox[tuple(i)])) if np.isfinite(ox[tuple(i)]) else np.inf)
             lines.append(f"**Oxidized: g2tom's default discretization ({spots}, {model}) is off the full field by "
                          f"more than ±{100 * OXIDE_LIMIT:.0f} % in {len(bad)} of {ox.size} (case, load) pairs; worst "
-                         f"{100 * (ox[z, a, k] - 1):+.0f} % at xi {ds['xi'].values[z]:g}, lambda "
+                         f"{100 * (ox[z, a, k] - 1):+.1f} % at xi {ds['xi'].values[z]:g}, lambda "
                          f"{ds['lambda'].values[a]:g}, {f[k]:.4g} N.**")
     if not lines:
         lines.append(f"g2tom's default discretization ({spots}) is within ±{100 * CLEAN_LIMIT:.0f} % of the full "
@@ -114,9 +118,14 @@ def markdown(ds: xr.Dataset) -> str:
         f"{n_real} realization(s); the reference is solved at g2tom's force. Ratio g2tom / full field: "
         "geometric mean [min-max] over realizations.", "",
     ]
+    skipped = ds.attrs.get("skipped_g2tom", "none")
+    if skipped != "none":
+        lines += [f"Not compared (g2tom refuses the combination): {skipped}", ""]
     cases = ["clean"] + [f"xi {x:g}, lambda {lam:g}" for x in ds["xi"].values for lam in ds["lambda"].values]
     for d in ds["discretization"].values:
         for m in ds["model"].values:
+            if f"{d}/{m}:" in skipped:
+                continue
             lines += [f"### {d}, {m}", "", "| F (N) | F' | " + " | ".join(cases) + " |",
                       "|---|---|" + "---|" * len(cases)]
             clean = ratios(ds["ratio_clean"].sel(discretization=d, model=m).values)

@@ -101,6 +101,9 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "reference": "tamaas non-periodic Boussinesq operator; Polonsky-Keer contact; punch conductance by CG",
         "resistance_scale": scale_r, "force_scale": scale_f, "mu": vset.mu,
         "failed_cases": "; ".join(ref["failed"]) or "none",
+        "skipped_g2tom": "; ".join(g2tom["skipped"]) or "none",
+        "g2tom_clean": "asperities: 1 / (g2tom's mean clean conductance over its own asperity draws); others: "
+                       "the clean cube entry",
         "surface": "GW: Poisson asperities of density eta, heights N(0, sigma^2), paraboloidal tips of radius beta",
     })
     return xr.Dataset(data, coords=coords, attrs=attrs)

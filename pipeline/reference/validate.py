@@ -16,12 +16,16 @@ from typing import TextIO
 
 import numpy as np
 
-from pipeline.config import load_scenario
+from pipeline.config import ConfigError, load_scenario
 from pipeline.progress import format_duration
 from pipeline.reference import cases as cases_mod
 from pipeline.reference import scene, section, summary
 from pipeline.stages.oxide import FieldSource
 from pipeline.store import atomic_path
+
+#: Largest relative difference of g2tom's forces at one delta between discretizations and models
+#: (their auto domains differ); the reference is solved at the first one's.
+FORCE_AGREEMENT = 1e-4
 
 __all__ = ["available_discretizations", "default_discretization", "plan_lines", "run_validation"]
 
@@ -56,25 +60,36 @@ def plan_lines(vset: scene.ValidationSet, todo: list[cases_mod.Case], total: int
     ]
 
 
-def _g2tom_side(vset: scene.ValidationSet) -> dict[str, np.ndarray]:
-    """g2tom's forces and resistances of the set, stacked (discretization, model, ...)."""
-    clean, oxidized, forces = [], [], []
-    for spots in vset.discretizations:
-        clean.append([])
-        oxidized.append([])
-        for model in vset.models:
-            cube = scene.g2tom_resistances(vset, model, spots)
-            clean[-1].append(cube["resistance_clean"].values)
-            oxidized[-1].append(cube["resistance"].transpose("xi", "lambda", "realization", "delta").values)
+def _g2tom_side(vset: scene.ValidationSet) -> dict:
+    """g2tom's forces and resistances of the set, stacked (discretization, model, ...).
+
+    A combination g2tom refuses (``asperities`` spots with the point model) is NaN, and named in
+    ``skipped`` with g2tom's reason.
+    """
+    shape_clean = (len(vset.deltas),)
+    shape = (len(vset.xi), len(vset.lambdas), len(vset.realizations), len(vset.deltas))
+    clean = np.full((len(vset.discretizations), len(vset.models)) + shape_clean, np.nan)
+    oxidized = np.full((len(vset.discretizations), len(vset.models)) + shape, np.nan)
+    forces, skipped = [], []
+    for d, spots in enumerate(vset.discretizations):
+        for m, model in enumerate(vset.models):
+            try:
+                cube = scene.g2tom_resistances(vset, model, spots)
+            except ConfigError as exc:
+                skipped.append(f"{spots}/{model}: {exc}")
+                continue
+            clean[d, m] = cube["resistance_clean"].values
+            oxidized[d, m] = cube["resistance"].transpose("xi", "lambda", "realization", "delta").values
             forces.append(cube["force"].values)
             extent = float(cube["contact_extent"].max())
             if extent > vset.side / 2.0:
                 raise ValueError(f"the contact reaches r = {extent * 1e3:.3g} mm (GT), beyond the reference grid's "
                                  f"half side {vset.side / 2 * 1e3:.3g} mm: enlarge n_grid or the pixel")
-    for f in forces[1:]:
-        if not np.allclose(f, forces[0], rtol=1e-9, atol=0):
-            raise RuntimeError("g2tom's forces differ between discretizations or models")
-    return {"force": forces[0], "clean": np.asarray(clean), "resistance": np.asarray(oxidized)}
+    for f in forces[1:]:  # each discretization's auto domain (r_max) moves F by ~1e-6 at the same delta
+        if not np.allclose(f, forces[0], rtol=FORCE_AGREEMENT, atol=0):
+            raise RuntimeError(f"g2tom's forces differ between discretizations or models by more than "
+                               f"{FORCE_AGREEMENT:g}: {forces[0]} and {f}")
+    return {"force": forces[0], "clean": clean, "resistance": oxidized, "skipped": skipped}
 
 
 def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.stderr) -> list[Path]:
