@@ -49,9 +49,8 @@ def figure(ds: xr.Dataset, path: Path) -> Path:
                 curve = g2.sel(discretization=d, model=m)
                 if not np.isfinite(curve.values).any():  # a combination g2tom refuses
                     continue
-                if "realization" in curve.dims:
-                    finite = np.where(np.isfinite(curve.values), curve.values, np.nan)
-                    curve = np.exp(np.nanmean(np.log(finite), axis=0))
+                if "realization" in curve.dims:  # geometric mean over conducting realizations
+                    curve = ratios(curve.transpose("realization", "load").values)[0]
                 ax.loglog(f, np.asarray(curve) / scale, "-" if m == "greenwood" else "--", marker=".",
                           label=f"g2tom {d}, {m}")
         ax.set_title(title)
