@@ -110,7 +110,7 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
 
 
 def ratios(ratio: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Geometric mean, min, max and count over the last-but-one axis (realization) of finite ratios."""
+    """Geometric mean, min, max and count over the last-but-one axis (realization) of the finite positive values."""
     ok = np.isfinite(ratio) & (ratio > 0)
     logs = np.where(ok, np.log(np.where(ok, ratio, 1.0)), 0.0)
     count = ok.sum(axis=-2)
