@@ -49,7 +49,8 @@ def tiny_run(tmp_path_factory):
 
 def test_outputs_are_labelled_and_consistent(tiny_run) -> None:
     out, log = tiny_run
-    assert log.index("cases, 0 already done; estimated") < log.index("case 1/6")  # the plan comes first
+    assert log.index("validate: 6 cases; estimated") < log.index("g2tom done; 0 of 6 cases already stored")
+    assert log.index("already stored") < log.index("case 1/6")  # the plan comes first, then g2tom, then the cases
     ds = xr.open_dataset(out / "validate.nc")
     for name, var in ds.variables.items():
         assert var.attrs.get("units") is not None and var.attrs.get("long_name"), name
@@ -82,7 +83,7 @@ def test_a_rerun_resumes_from_the_stored_cases(tiny_run) -> None:
     log = io.StringIO()
     run_validation(TINY, out, stream=log)
     text = log.getvalue()
-    assert "6 cases, 5 already done" in text and "case 1/1 r1_load0_n96" in text
+    assert "5 of 6 cases already stored, 1 to run" in text and "case 1/1 r1_load0_n96" in text
     after = xr.open_dataset(out / "validate.nc").load()
     np.testing.assert_allclose(after["resistance_reference"].values, before["resistance_reference"].values, rtol=1e-12)
     assert json.loads(damaged.read_text())["key"]  # rewritten whole

@@ -67,10 +67,10 @@ def _seconds(n: int) -> tuple[float, float]:
     return CONTACT_SECONDS * size, PUNCH_SECONDS * size
 
 
-def estimate_seconds(vset: scene.ValidationSet, cases: list[Case]) -> float:
-    """The plan's wall-time estimate of ``cases`` and g2tom's side, s."""
+def estimate_seconds(vset: scene.ValidationSet, cases: list[Case], g2tom: bool = True) -> float:
+    """The plan's wall-time estimate of ``cases`` (and of g2tom's side if ``g2tom``), s."""
     punches = 1 + len(vset.xi) * len(vset.lambdas)
-    total = G2TOM_SECONDS * len(vset.models) * len(vset.discretizations)
+    total = G2TOM_SECONDS * len(vset.models) * len(vset.discretizations) if g2tom else 0.0
     for case in cases:
         contact, punch = _seconds(case.n)
         total += (contact + punch * punches) if case.oxide else (3 * contact + punch)

@@ -43,9 +43,9 @@ def default_discretization() -> str:
     return paper.contact.spots if scene.has_spots_key(paper) else "mean_area"
 
 
-def plan_lines(vset: scene.ValidationSet, todo: list[cases_mod.Case], total: int) -> list[str]:
-    """The plan printed before any work."""
-    seconds = cases_mod.estimate_seconds(vset, todo)
+def plan_lines(vset: scene.ValidationSet, everything: list[cases_mod.Case]) -> list[str]:
+    """The plan printed before any work (the estimate assumes no case is stored yet)."""
+    seconds = cases_mod.estimate_seconds(vset, everything)
     oxide = ", ".join(f"xi {x:g}/lambda {lam:g}" for x in vset.xi for lam in vset.lambdas)
     return [
         f"validate: scene sigma {vset.sigma:g} m, eta {vset.eta:g} m^-2, beta {vset.beta:g} m, "
@@ -56,7 +56,7 @@ def plan_lines(vset: scene.ValidationSet, todo: list[cases_mod.Case], total: int
         f"validate: loads delta/sigma {list(vset.deltas)}; realizations {list(vset.realizations)}; "
         f"clean + {oxide}",
         f"validate: g2tom {' x '.join([str(list(vset.discretizations)), str(list(vset.models))])}",
-        f"validate: {total} cases, {total - len(todo)} already done; estimated {format_duration(seconds)}",
+        f"validate: {len(everything)} cases; estimated {format_duration(seconds)} (without stored cases)",
     ]
 
 
@@ -98,19 +98,22 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
     out = Path(out)
     case_dir = out / "cases"
     everything = cases_mod.plan_cases(vset)
+    for line in plan_lines(vset, everything):
+        print(line, file=stream, flush=True)
     source = FieldSource.of(scene.g2tom_scenario(vset, vset.models[0], vset.discretizations[0]))
     g2tom = _g2tom_side(vset)
     keys = {c: cases_mod.case_key(vset, c, g2tom["force"][c.load], source) for c in everything}
     done = {c: cases_mod.load_case(case_dir / f"{c.name}.json", keys[c]) for c in everything}
     todo = [c for c in everything if done[c] is None]
-    for line in plan_lines(vset, todo, len(everything)):
-        print(line, file=stream, flush=True)
+    print(f"validate: g2tom done; {len(everything) - len(todo)} of {len(everything)} cases already stored, "
+          f"{len(todo)} to run (~{format_duration(cases_mod.estimate_seconds(vset, todo, g2tom=False))})",
+          file=stream, flush=True)
     for number, case in enumerate(todo, start=1):
         record = cases_mod.run_case(vset, case, g2tom["force"][case.load], source, keys[case],
                                     case_dir / f"{case.name}.json")
         done[case] = record
         elapsed = time.perf_counter() - start
-        left = cases_mod.estimate_seconds(vset, todo[number:]) - cases_mod.G2TOM_SECONDS * len(vset.models) * len(vset.discretizations)
+        left = cases_mod.estimate_seconds(vset, todo[number:], g2tom=False)
         result = (f"FAILED ({record['error']})" if "error" in record else
                   f"F = {record['force']:.4g} N, R = {record['resistance_clean']:.4g} ohm")
         print(f"validate: case {number}/{len(todo)} {case.name}: {result} in {record['seconds_total']:.1f} s; "
