@@ -236,6 +236,9 @@ def _cmd_validate(args: argparse.Namespace, scenario: Scenario) -> None:
     """The full-field reference against g2tom (pipeline.reference); the extra is checked first."""
     from pipeline.reference import missing_extra
 
+    if args.overrides or args.config != "paper":
+        raise ConfigError("g2tom validate runs its own validation scene (the default set or --quick): "
+                          "--config and --set are not used by it; leave them out")
     problem = missing_extra()
     if problem:
         raise ConfigError(problem)

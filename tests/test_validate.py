@@ -27,6 +27,12 @@ def test_without_the_extra_validate_names_the_install_command_and_exits_2(tmp_pa
     assert not (tmp_path / "validate").exists()  # refused before any work
 
 
+def test_validate_refuses_scenario_options_it_would_ignore(tmp_path, capsys) -> None:
+    assert main(["validate", "--quick", "--data-dir", str(tmp_path), "--set", "roughness.sigma=1e-5"]) == 2
+    assert "--config and --set are not used" in capsys.readouterr().err
+    assert not (tmp_path / "validate").exists()
+
+
 def test_default_and_quick_sets_meet_the_issue() -> None:
     default, quick = chosen_set(False), chosen_set(True)
     assert default.mu == pytest.approx(8.262, abs=0.01)  # the paper's mu
