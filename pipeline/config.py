@@ -390,8 +390,9 @@ SECTIONS: dict[str, type] = {
 STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "contact": ("material", "roughness", "indenter", "loading", "contact"),
     "oxide": ("roughness.eta", "indenter.radius", "contact.window", "oxide"),
-    # fits.min_force and fits.confidence: the adaptive ensemble's stopping rule
-    "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance", "fits.min_force", "fits.confidence"),
+    # the fitted steps and fits.confidence: the adaptive ensemble's stopping rule
+    "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance", "fits.min_force", "fits.fit_range",
+             "fits.min_force_normalized", "fits.confidence"),
     "fits": ("fits",),
     "surrogate": (
         "surrogate.method",
@@ -652,12 +653,6 @@ def _check_spots(s: Scenario) -> None:
         raise ConfigError(
             f"cube.weights = {s.cube.weights!r} is not allowed with contact.spots = {s.contact.spots!r}: "
             "must be 'radius' (cell-area weights are the published code's convention for mean_area spots)"
-        )
-    if s.contact.spots == "asperities" and (s.cube.model != "greenwood" or s.oxide.film != "insulating"):
-        raise ConfigError(
-            f"contact.spots = 'asperities' is not allowed with cube.model = {s.cube.model!r} and oxide.film = "
-            f"{s.oxide.film!r}: asperity spots drawn per realization need cube.model = 'greenwood' and "
-            "oxide.film = 'insulating' (use contact.spots = 'expected', their mean, with the point model or films)"
         )
 
 

@@ -103,9 +103,11 @@ def _hand_cases() -> list[Case]:
         # --- the 19 failures of the first campaign and their neighbours
         Case("oxide.seed = 1e30", ("oxide", "--set", "oxide.seed=1e30"), ("oxide.seed", "2**63 - 1")),
         Case("fits.seed = 2**64", ("fits", "--set", "fits.seed=18446744073709551616"), ("fits.seed", "2**63 - 1")),
-        Case("fits.min_force beyond every load", ("contact", *_SMALL, "--set", "fits.min_force=1e9"),
+        Case("fits.min_force beyond every load", ("contact", *_SMALL, "--set", "fits.fit_range=force",
+                                                  "--set", "fits.min_force=1e9"),
              ("fits.min_force = 1e+09", "load step", "must be <=")),
-        Case("fits.min_force at run", ("run", *_SMALL, "--set", "fits.min_force=1e9"), ("fits.min_force",)),
+        Case("fits.min_force at run", ("run", *_SMALL, "--set", "fits.fit_range=force", "--set", "fits.min_force=1e9"),
+             ("fits.min_force",)),
         Case("fits.min_force_normalized beyond every load",
              ("contact", *_SMALL, "--set", "fits.fit_range=force_normalized", "--set", "fits.min_force_normalized=1e6"),
              ("fits.min_force_normalized = 1e+06", "load step", "must be <=")),

@@ -39,6 +39,7 @@ def test_published_differs_only_in_its_conventions(paper) -> None:
         "contact.radial_grid",
         "contact.area_interpolation",
         "contact.spots",  # the paper's mean-area spots, as published
+        "fits.fit_range",  # F >= 200 N, as published (the paper fits F' >= 0.4: the same steps)
         "contact.r_max",  # explicit 0.3 and 0.4 R*, as published; the paper's are resolved (auto)
         "contact.window",
         "cube.weights",
@@ -150,8 +151,8 @@ def test_stage_hashes_follow_only_their_inputs(paper) -> None:
     fit_change = resolve(load_scenario("paper", ["fits.n_bootstrap=100"]))
     assert fit_change.config_hash("cube") == paper.config_hash("cube")
     assert fit_change.config_hash("fits") != paper.config_hash("fits")
-    # the adaptive ensemble's stopping rule fits the steps with F >= fits.min_force
-    assert resolve(load_scenario("paper", ["fits.min_force=100"])).config_hash("cube") != paper.config_hash("cube")
+    # the adaptive ensemble's stopping rule fits the steps the fits stage fits (F' >= fits.min_force_normalized)
+    assert resolve(load_scenario("paper", ["fits.min_force_normalized=0.2"])).config_hash("cube") != paper.config_hash("cube")
 
 
 def test_parameter_table_documents_every_parameter(paper) -> None:

@@ -78,7 +78,7 @@ def test_fit_range_in_normalized_force_selects_the_same_steps():
     cube = synthetic_cube(SCENARIO, noise=0.1)
     k = 9
     by_newtons = load_scenario("paper", {**SMALL_OVERRIDES, "loading.n_delta": 16,
-                                         "fits.min_force": float(cube["force"][k])})
+                                         "fits.fit_range": "force", "fits.min_force": float(cube["force"][k])})
     by_normalized = load_scenario("paper", {**SMALL_OVERRIDES, "loading.n_delta": 16,
                                             "fits.fit_range": "force_normalized",
                                             "fits.min_force_normalized": float(cube["force_normalized"][k])})

@@ -21,7 +21,8 @@ from pipeline.physics.hertz import (
     roughness_parameter,
 )
 from pipeline.physics.indenter import profile
-from pipeline.stages.contact import _layer, indenter_profile, radial_grid, solve_scenario
+from pipeline.contact_solution import indenter_profile, layer as _layer, radial_grid
+from pipeline.stages.contact import solve_scenario
 
 
 def _quad_displacement(r_nodes, p_nodes, r, e_star):

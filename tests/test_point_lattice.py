@@ -6,12 +6,8 @@ import numpy as np
 import pytest
 
 from pipeline.physics import constriction, point_model
-from pipeline.physics import greenwood_tripp as gt
-from pipeline.physics import spots
-from pipeline.physics.asperity import asperity_integral
-from pipeline.physics.grid import cell_centres
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
-from pipeline.stages.contact import _layer, indenter_profile, radial_grid
+from pipeline.stages import contact
 
 RHO = 7.2e-7  # ohm m
 PITCH = 7.07e-5  # m
@@ -97,19 +93,13 @@ def test_greenwood_closed_form_with_vanishing_radii_is_finite():
 
 
 def test_expected_spots_with_the_lattice_term_obey_barber(paper):
-    """Clean paper scene: one spot per cell of the expected radius sum eta dx^2 sqrt(beta) F_1/2(h)
-    conducts K / E* (Barber, K from the linearised Greenwood-Tripp system) to 1e-4 at every step
+    """Clean paper scene: the contact stage's expected spots (radius sqrt(beta) F_1/2(h) per cell)
+    conduct K / (E* rho*) (Barber, K from the linearised Greenwood-Tripp system) to 1e-4 at every step
     with the lattice term (measured 2e-5), and 0.5-3.4 % too much without it."""
-    r, layer = radial_grid(paper), _layer(paper)
-    z, deltas = indenter_profile(paper, r), np.asarray(paper.deltas)
-    m = gt.influence_matrix(r, layer.e_star)
-    sols = gt.solve(m, z, deltas, layer)
-    barber = gt.stiffness(m, z, deltas, layer, sols, r) / layer.e_star  # conductance x rho*, m
-    dx = paper.cell_size
-    r_cells = spots.cell_radii(*(2 * [cell_centres(paper.n_cells, dx)]))
-    u_cells = spots.interpolate_smooth(r, np.stack([s.displacement for s in sols]), r_cells)
-    h = deltas[:, None, None] + indenter_profile(paper, r_cells)[None] + u_cells
-    radius = layer.eta * dx**2 * np.sqrt(layer.beta) * asperity_integral(h, layer.sigma, 0.5)
+    ds = contact.build(paper)  # the stage's expected spots and its Barber conductance
+    assert paper.contact.spots == "expected"
+    barber = ds["barber_conductance"].values * RHO  # conductance x rho*, m
+    radius, dx = ds["spot_radius"].values, paper.cell_size
     masks = np.ones((1, paper.n_cells, paper.n_cells), bool)
     crops = constriction.choose_crops(radius, radius, dx, 1e-9)
 
@@ -119,3 +109,23 @@ def test_expected_spots_with_the_lattice_term_obey_barber(paper):
 
     assert np.max(np.abs(conductance(SQUARE_LATTICE_CONSTANT) / barber - 1)) < 1e-4
     assert np.min(conductance(0.0) / barber - 1) > 4e-3
+
+
+@pytest.mark.parametrize("film", [np.inf, 1e-11])
+def test_per_map_spots_equal_one_solve_per_map(film):
+    """Groups (asperity spots drawn per realization): each map equals the dense solve of its own spots."""
+    rng = np.random.default_rng(8)
+    n, n_groups, batch = 9, 3, 7
+    base = np.exp(-((np.arange(n) - 4.0)[:, None] ** 2 + (np.arange(n) - 4.0)[None, :] ** 2) / 8.0)
+    radius = 2e-6 * base[None, None] * (rng.random((n_groups, 2, n, n)) < 0.6) * np.array([0.5, 1.0])[None, :, None, None]
+    masks = rng.random((batch, n, n)) < 0.7
+    groups = rng.integers(0, n_groups, batch)
+    whole = np.full(2, n)
+    got = point_model.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=film,
+                                 solver_tolerance=1e-13, groups=groups)
+    green = point_model.greenwood_resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=film,
+                                             groups=groups)
+    for b in range(batch):
+        dense, dense_green = point_model.resistance_dense(masks[b : b + 1], radius[groups[b]], PITCH, RHO, film)
+        np.testing.assert_allclose(got.resistance[b], dense[0], rtol=1e-9)
+        np.testing.assert_allclose(green.resistance[b], dense_green[0], rtol=1e-12)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -50,6 +51,15 @@ __all__ = ["build", "run"]
 GRID = ("xi", "lambda")
 
 
+def fit_range(scenario: Scenario, force: Any, force_normalized: Any) -> tuple[str, float, Any, str]:
+    """What selects the fitted load steps: the parameter's key, its threshold, the loads it is
+    compared with (``force`` in N or ``force_normalized``, as given) and their unit."""
+    f = scenario.fits
+    if f.fit_range == "force":
+        return "min_force", f.min_force, force, " N"
+    return "min_force_normalized", f.min_force_normalized, force_normalized, ""
+
+
 def fitted_steps(scenario: Scenario, force: xr.DataArray, force_normalized: xr.DataArray) -> xr.DataArray:
     """Boolean mask (delta) of the fitted load steps: F >= fits.min_force (N) or, with
     ``fits.fit_range = "force_normalized"``, F' >= fits.min_force_normalized.
@@ -59,11 +69,7 @@ def fitted_steps(scenario: Scenario, force: xr.DataArray, force_normalized: xr.D
     ConfigError
         If fewer than two steps qualify.
     """
-    f = scenario.fits
-    if f.fit_range == "force":
-        key, threshold, values, unit = "min_force", f.min_force, force, " N"
-    else:
-        key, threshold, values, unit = "min_force_normalized", f.min_force_normalized, force_normalized, ""
+    key, threshold, values, unit = fit_range(scenario, force, force_normalized)
     mask = values >= threshold
     if int(mask.sum()) < 2:
         raise ConfigError(
