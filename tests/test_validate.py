@@ -74,10 +74,8 @@ def test_outputs_are_labelled_and_consistent(tiny_run) -> None:
     assert text.startswith("## How right is the model?")
     first = text.splitlines()[2]
     assert "g2tom's default discretization (expected" in first
-    # g2tom refuses asperity spots with the point model: NaN, named, not compared
-    assert np.isnan(ds["resistance_g2tom"].sel(discretization="asperities", model="point").values).all()
-    assert "asperities/point" in ds.attrs["skipped_g2tom"] and "### asperities, point" not in text
-    assert not np.isnan(ds["resistance_g2tom"].sel(discretization="asperities", model="greenwood").values).any()
+    assert ds.attrs["skipped_g2tom"] == "none" and "### asperities, point" in text
+    assert not np.isnan(ds["resistance_g2tom"].values).any()  # +inf where g2tom's own asperities all miss
     assert (out / "validate.png").stat().st_size > 10_000
 
 
@@ -98,3 +96,21 @@ def test_a_rerun_resumes_from_the_stored_cases(tiny_run) -> None:
     source_key = json.loads((out / "cases" / f"{case.name}.json").read_text())["key"]
     assert cases.load_case(out / "cases" / f"{case.name}.json", source_key) is not None
     assert cases.load_case(out / "cases" / f"{case.name}.json", "0" * 16) is None
+
+
+def test_a_combination_g2tom_refuses_is_nan_and_named(monkeypatch) -> None:
+    from pipeline.config import ConfigError
+    from pipeline.reference import validate
+
+    real = scene.g2tom_resistances
+
+    def refusing(vset, model, spots):
+        if (spots, model) == ("asperities", "point"):
+            raise ConfigError("contact.spots = 'asperities' is not allowed with cube.model = 'point'")
+        return real(vset, model, spots)
+
+    monkeypatch.setattr(scene, "g2tom_resistances", refusing)
+    side = validate._g2tom_side(dataclasses.replace(TINY, realizations=(0,)))
+    assert np.isnan(side["resistance"][1, 1]).all() and np.isnan(side["clean"][1, 1]).all()
+    assert not np.isnan(side["clean"][0]).any() and not np.isnan(side["resistance"][1, 0]).any()
+    assert side["skipped"] == ["asperities/point: contact.spots = 'asperities' is not allowed with cube.model = 'point'"]
