@@ -16,13 +16,13 @@ SOURCES  := $(shell find pipeline -name '*.py' -o -name '*.toml')
 ANALYSIS := $(shell find analysis -name '*.py')
 STAMPS   := $(DATA)/.stamps
 
-.PHONY: all run test stress bench compare figures report contact oxide cube fits surrogate params clean FORCE
+.PHONY: all run test stress bench compare figures report contact oxide cube fits surrogate params validate clean FORCE
 all: run
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(VENV)/bin/pip install --quiet --upgrade pip
-	$(VENV)/bin/pip install --quiet -e '.[test]'
+	$(VENV)/bin/pip install --quiet -e '.[test,reference]'
 	touch $@
 
 # The stamps are rewritten only when a stage's parameters change, so make re-runs a stage
@@ -79,6 +79,13 @@ compare: | $(VENV)/.installed
 
 bench: | $(VENV)/.installed
 	$(G2TOM) bench $(ARGS)
+
+# The full-field reference (tamaas, the `reference` extra) against g2tom; not part of `make run`.
+# VALIDATE="--quick" for the 256^2 check (a few minutes at most).
+VALIDATE ?=
+validate: | $(VENV)/.installed
+	$(VENV)/bin/pip install --quiet -e '.[reference]'
+	$(G2TOM) validate --data-dir $(DATA) $(VALIDATE)
 
 params: | $(VENV)/.installed
 	$(G2TOM) params $(ARGS)

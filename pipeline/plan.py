@@ -45,7 +45,7 @@ _CELL_FFT_S = 5.0e-9  # per n^2 log2 n of one oxide field
 TYPICAL_REALIZATIONS = 183_125 / 108
 TYPICAL_TARGET = 0.025
 #: Commands that need no resolved domains nor resource checks.
-_NO_DOMAINS = ("params", "predict", "roughness")
+_NO_DOMAINS = ("params", "predict", "roughness", "validate")
 #: Stages whose estimate is printed when they are expected to take longer than this (s).
 ANNOUNCE_AFTER = 10.0
 
