@@ -345,6 +345,8 @@ def _parser() -> argparse.ArgumentParser:
     predict.add_argument("--csv", type=Path, default=None, help="CSV file of queries with columns force, xi, lambda")
     predict.add_argument("--output", type=Path, default=None, help="write the CSV result here (default: stdout)")
     predict.add_argument("--extrapolate", action="store_true", help="allow queries outside the fitted ranges (with a warning)")
+    predict.add_argument("--model", choices=("curve", "power_law"), default="curve",
+                         help="curve: each cell's ln R'(ln F') curve, interpolated (default); power_law: Eq. 27")
     predict.add_argument("--surrogate", type=Path, default=None,
                          help="surrogate.json or surrogate.nc (default: <data-dir>/surrogate.json, else surrogate.nc)")
     validate = add("validate", _cmd_validate,

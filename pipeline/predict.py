@@ -52,6 +52,7 @@ import xarray as xr
 from scipy.interpolate import RegularGridInterpolator
 
 from pipeline.config import ConfigError, Scenario
+from pipeline.physics.curve_model import evaluate_curve
 from pipeline.physics.surrogate import evaluate, to_w, to_z
 
 __all__ = [
@@ -69,8 +70,12 @@ FORMAT = "g2tom-surrogate"
 VERSION = 1
 PARAMETERS = ("alpha", "gamma")
 #: Per-cell (lambda, xi) tables and per-step (lambda, xi, step) tables the band needs.
-GRID_TABLES = ("alpha_fit_sigma", "gamma_fit_sigma", "alpha_cv_error", "gamma_cv_error")
-STEP_TABLES = ("band_ratio_lower", "band_ratio_upper", "open_probability")
+GRID_TABLES = ("alpha_fit_sigma", "gamma_fit_sigma", "alpha_cv_error", "gamma_cv_error", "curve_interpolation_error")
+STEP_TABLES = ("band_ratio_lower", "band_ratio_upper", "open_probability", "curve_fit_error")
+#: The curve model's coefficients, (lambda, xi, power).
+CURVE_TABLE = "curve_coefficients"
+#: What :func:`predict` can answer with: the curve model (default) or Eq. 27's power law.
+MODELS = ("curve", "power_law")
 RANGES = ("xi", "lambda", "force_normalized")
 
 
@@ -114,13 +119,14 @@ class SurrogateTables:
     @classmethod
     def from_dataset(cls, ds: xr.Dataset) -> "SurrogateTables":
         """From ``surrogate.nc`` (or the surrogate stage's dataset)."""
-        missing = [n for n in (*(f"{p}_coef_w" for p in PARAMETERS), *GRID_TABLES, *STEP_TABLES) if n not in ds]
+        missing = [n for n in (*(f"{p}_coef_w" for p in PARAMETERS), *GRID_TABLES, *STEP_TABLES, CURVE_TABLE) if n not in ds]
         if missing:
             raise ConfigError(f"the surrogate dataset lacks {', '.join(missing)}: re-run `g2tom surrogate`")
         coef = {p: (ds[f"{p}_coef_w"].values, ds[f"{p}_coef_z"].values, str(ds[f"{p}_coef_w"].attrs.get("transform", "identity")))
                 for p in PARAMETERS}
         tables = {n: ds[n].transpose("lambda", "xi").values for n in GRID_TABLES}
         tables.update({n: ds[n].transpose("lambda", "xi", "step").values for n in STEP_TABLES})
+        tables[CURVE_TABLE] = ds[CURVE_TABLE].transpose("lambda", "xi", "power").values
         info = {k: _plain(ds.attrs[k]) for k in _INFO_KEYS if k in ds.attrs}
         return cls(
             coef=coef,
@@ -138,7 +144,9 @@ class SurrogateTables:
             "format": FORMAT,
             "version": VERSION,
             "model": {
-                "predictor": "R_el = alpha * 2 rho* / sqrt(R* sigma) * F'^(-gamma)  (Eq. 27)",
+                "predictor": "curve (default): R_el = 2 rho* / sqrt(R* sigma) * exp(sum_k c_k (ln F')^k), c_k = "
+                             "tables.curve_coefficients[lambda][xi][k] interpolated linearly in (w, z); "
+                             "power_law: R_el = alpha * 2 rho* / sqrt(R* sigma) * F'^(-gamma)  (Eq. 27)",
                 "surrogate": "T(p) = sum_k P_k(w) Q_k(z), P_k(w) = sum_i coef_w[k][i] w^i, "
                              "Q_k(z) = sum_j coef_z[k][j] z^j; T = log (p = exp(...)) or identity",
                 "coordinates": {"w": "ln(lambda), lambda = l_O sqrt(eta)", "z": "-ln(1 - xi)"},
@@ -170,7 +178,7 @@ class SurrogateTables:
                 raise ValueError(f"format is {doc.get('format')!r}, not {FORMAT!r}")
             coef = {p: (np.array(doc["parameters"][p]["coef_w"], dtype=float), np.array(doc["parameters"][p]["coef_z"], dtype=float),
                         str(doc["parameters"][p]["transform"])) for p in PARAMETERS}
-            tables = {k: np.array(_decode(doc["tables"][k]), dtype=float) for k in GRID_TABLES + STEP_TABLES}
+            tables = {k: np.array(_decode(doc["tables"][k]), dtype=float) for k in (*GRID_TABLES, *STEP_TABLES, CURVE_TABLE)}
             grid = doc["grid"]
             return cls(
                 coef=coef,
@@ -190,8 +198,15 @@ class SurrogateTables:
         coef_w, coef_z, transform = self.coef[name]
         return evaluate(coef_w, coef_z, lam, xi, transform)
 
+    def curve(self, lam: np.ndarray, xi: np.ndarray, force_n: np.ndarray) -> np.ndarray:
+        """ln R' of the curve model: each cell's coefficients interpolated linearly in (w, z),
+        clamped to the grid (exact at the grid's cells), evaluated at ``force_n``."""
+        coef = self.interpolate((CURVE_TABLE,), lam, xi)[..., 0]  # (n, power)
+        return evaluate_curve(coef, force_n[:, None])[:, 0]
+
     def interpolate(self, names: tuple[str, ...], lam: np.ndarray, xi: np.ndarray, force_n: np.ndarray | None = None) -> np.ndarray:
-        """Tables linearly interpolated in (w, z[, ln F']), clamped to the grid; shape (n, len(names))."""
+        """Tables linearly interpolated in (w, z[, ln F']), clamped to the grid; shape (n, len(names))
+        (tables with trailing axes beyond (lambda, xi[, step]) keep them after the query axis)."""
         axes = [to_w(self.lam), to_z(self.xi)]
         points = [to_w(lam), to_z(xi)]
         if force_n is not None:
@@ -330,7 +345,7 @@ OUTPUT_COLUMNS: dict[str, tuple[str, str]] = {
     "force_normalized": ("1", "F' = 2F/(E* sqrt(R* sigma^3))"),
     "alpha": ("1", "surrogate factor alpha"),
     "gamma": ("1", "surrogate exponent gamma"),
-    "resistance": ("ohm", "R_el (Eq. 27)"),
+    "resistance": ("ohm", "R_el of the chosen model (curve by default; Eq. 27 with model = power_law)"),
     "lower": ("ohm", "lower end of the combined band R exp(-total_lower)"),
     "upper": ("ohm", "upper end of the combined band R exp(total_upper)"),
     "realization_lower": ("ohm", "16 % of single realizations, R exp(-spread_lower)"),
@@ -342,6 +357,8 @@ OUTPUT_COLUMNS: dict[str, tuple[str, str]] = {
     "total_lower": ("1", "combined half-width below R in ln R (quadrature sum)"),
     "total_upper": ("1", "combined half-width above R in ln R (quadrature sum)"),
     "open_probability": ("1", "interpolated share of open-circuit realizations"),
+    "resistance_curve": ("ohm", "R_el of the curve model (ln R' polynomial in ln F' per cell, interpolated)"),
+    "resistance_power_law": ("ohm", "R_el of Eq. 27 with the surrogate's alpha and gamma"),
 }
 
 
@@ -358,8 +375,9 @@ def predict(
     lam: Any,
     extrapolate: bool = False,
     warn_error: float | None = None,
+    model: str = "curve",
 ) -> xr.Dataset:
-    """R_el of Eq. 27 with its band and the band's components (see the module docstring).
+    """R_el of the curve model (default) or Eq. 27 with its band and the band's components (see the module docstring).
 
     Parameters
     ----------
@@ -374,6 +392,11 @@ def predict(
         Allow queries outside the fitted ranges (with a warning) instead of refusing them.
     warn_error
         Threshold on ``surrogate_error``; default ``scenario.surrogate.warn_error``.
+    model
+        ``curve``: each cell's curve model ln R'(ln F') interpolated between cells (its band:
+        the mean curve's interval at that load and the grid's leave-one-out interpolation error);
+        ``power_law``: Eq. 27 with the surrogate's alpha and gamma. Both are reported
+        (``resistance_curve``, ``resistance_power_law``); ``resistance`` is the chosen one.
 
     Returns
     -------
@@ -390,6 +413,8 @@ def predict(
     -----
     ExtrapolationWarning, SurrogateErrorWarning
     """
+    if model not in MODELS:
+        raise ConfigError(f"model = {model!r} is not allowed: must be one of {', '.join(MODELS)}")
     tables = surrogate if isinstance(surrogate, SurrogateTables) else SurrogateTables.from_dataset(surrogate)
     (f, x, lm), label = _queries(force, xi, lam)
     _check_values(f, x, lm)
@@ -402,13 +427,16 @@ def predict(
         raise ConfigError(f"the surrogate gives alpha = {alpha[i]:.4g} <= 0 at xi = {x[i]:g}, lambda = {lm[i]:g}: "
                           "too far outside the fitted range")
     ln_f = np.log(force_n)
-    resistance = alpha * scenario.resistance_scale * np.exp(-gamma * ln_f)
-    s_a, s_g, e_a, e_g = tables.interpolate(GRID_TABLES, lm, x).T
-    ratio_lower, ratio_upper, open_p = tables.interpolate(STEP_TABLES, lm, x, force_n).T
+    power_law = alpha * scenario.resistance_scale * np.exp(-gamma * ln_f)
+    curve = scenario.resistance_scale * np.exp(tables.curve(lm, x, force_n))
+    s_a, s_g, e_a, e_g, e_curve = tables.interpolate(GRID_TABLES, lm, x).T
+    ratio_lower, ratio_upper, open_p, s_curve = tables.interpolate(STEP_TABLES, lm, x, force_n).T
     with np.errstate(divide="ignore"):
         spread_lower, spread_upper = -np.log(ratio_lower), -np.log(ratio_upper)
-    fit_error = np.hypot(s_a, ln_f * s_g)
-    surrogate_error = np.hypot(e_a, ln_f * e_g)
+    if model == "curve":
+        resistance, fit_error, surrogate_error = curve, s_curve, e_curve
+    else:
+        resistance, fit_error, surrogate_error = power_law, np.hypot(s_a, ln_f * s_g), np.hypot(e_a, ln_f * e_g)
     _warn_components(fit_error, surrogate_error, lm, x)
     threshold = scenario.surrogate.warn_error if warn_error is None else warn_error
     _warn_surrogate_error(surrogate_error, threshold, lm, x, force_n)
@@ -420,13 +448,14 @@ def predict(
         "realization_lower": resistance * np.exp(-spread_lower), "realization_upper": resistance * np.exp(spread_upper),
         "spread_lower": spread_lower, "spread_upper": spread_upper, "fit_error": fit_error,
         "surrogate_error": surrogate_error, "total_lower": total_lower, "total_upper": total_upper,
-        "open_probability": open_p,
+        "open_probability": open_p, "resistance_curve": curve, "resistance_power_law": power_law,
     }
     ds = xr.Dataset({name: label(values) for name, values in columns.items()})
     for name, (units, long_name) in OUTPUT_COLUMNS.items():
         ds[name].attrs = {"units": units, "long_name": long_name}
     ds.attrs["band"] = "total = sqrt(spread^2 + fit_error^2 + surrogate_error^2) per side; lower = R exp(-total_lower), upper = R exp(total_upper)"
     ds.attrs["surrogate_method"] = str(tables.info.get("method", "unknown"))
+    ds.attrs["model"] = model
     return ds
 
 
@@ -528,7 +557,7 @@ def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
     tables = load_surrogate(args.surrogate if args.surrogate is not None else _default_surrogate(args.data_dir))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
-        result = predict(tables, scenario, force, xi, lam, extrapolate=args.extrapolate)
+        result = predict(tables, scenario, force, xi, lam, extrapolate=args.extrapolate, model=args.model)
     for w in caught:
         print(f"g2tom: warning: {w.message}", file=sys.stderr)
     text = to_csv(result)

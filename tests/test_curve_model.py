@@ -99,3 +99,20 @@ def test_order_never_exceeds_the_points():
 def test_bad_arguments(call, message):
     with pytest.raises(ValueError, match=message):
         call()
+
+
+def test_interpolation_error_of_a_grid_of_curves():
+    """Zero for values linear in both coordinates; for a quadratic in u, the leave-one-out error of
+    linear interpolation from the two neighbours is h^2 a / ... = a (h_-) (h_+) exactly."""
+    from pipeline.physics.curve_model import interpolation_error
+
+    u, v = np.array([0.0, 1.0, 3.0, 4.0]), np.array([0.0, 0.5, 2.0])
+    steps = np.array([1.0, 2.0])
+    linear = 0.3 * u[:, None, None] - 1.2 * v[None, :, None] + steps
+    np.testing.assert_allclose(interpolation_error(linear, u, v), 0.0, atol=1e-14)
+    quad = 0.5 * u[:, None, None] ** 2 + 0.0 * v[None, :, None] + 0.0 * steps
+    got = interpolation_error(quad, u, v)
+    inner = 0.5 * np.array([1.0 * 2.0, 2.0 * 1.0])  # a h_- h_+ at u = 1 and u = 3
+    expected_u = np.array([inner[0], inner[0], inner[1], inner[1]])  # edges take the nearest interior
+    np.testing.assert_allclose(got, (expected_u / np.sqrt(2.0))[:, None] * np.ones(3), rtol=1e-12)
+    assert np.isnan(interpolation_error(quad[:2, :2], u[:2], v[:2])).all()

@@ -61,8 +61,9 @@ def test_equals_eq27_by_hand(small: Scenario, surrogate_ds: xr.Dataset) -> None:
     by_hand = alpha * 2 * m.rho / math.sqrt(r * s) * (2 * force / (e_star * math.sqrt(r * s**3))) ** -gamma
     with warnings.catch_warnings():
         warnings.simplefilter("error", ExtrapolationWarning)
-        result = _quiet(surrogate_ds, small, force, xi, lam)
+        result = _quiet(surrogate_ds, small, force, xi, lam, model="power_law")
     assert float(result["resistance"]) == pytest.approx(by_hand, rel=1e-12)
+    assert float(result["resistance_power_law"]) == pytest.approx(by_hand, rel=1e-12)
     assert float(result["alpha"]) == pytest.approx(alpha, rel=1e-14)
     assert result["lower"] < result["resistance"] < result["upper"]
     assert result["resistance"].attrs["units"] == "ohm"
@@ -93,7 +94,7 @@ def test_band_components_match_the_tables_on_the_grid(small: Scenario, surrogate
     cell = {"xi": xi, "lambda": lam}
     f = float(surrogate_ds["force"][step])
     ln_f = math.log(float(surrogate_ds["force_normalized"][step]))
-    r = _quiet(surrogate_ds, small, f, xi, lam)
+    r = _quiet(surrogate_ds, small, f, xi, lam, model="power_law")
     ratio = float(surrogate_ds["band_ratio_lower"].sel(cell)[step])
     assert float(r["realization_lower"] / r["resistance"]) == pytest.approx(ratio, rel=1e-9)
     s_a, s_g = (float(surrogate_ds[f"{p}_fit_sigma"].sel(cell)) for p in ("alpha", "gamma"))
@@ -272,3 +273,40 @@ def test_json_carries_the_lambda_map(tmp_path, small: Scenario) -> None:
         np.testing.assert_allclose(from_json.parameter(p, lam, xi), direct, rtol=1e-12)
     args = (np.array([900.0, 2000.0]), np.array([0.3, 0.6]), np.array([2.0, 11.0]))
     xr.testing.assert_identical(_quiet(from_json, scenario, *args), _quiet(from_nc, scenario, *args))
+
+
+def test_curve_model_reproduces_every_cell_at_every_fitted_step(small: Scenario) -> None:
+    """The default predictor (the curve model) at a grid cell's (xi, lambda) and a fitted step is
+    that cell's curve, within max(3 %, the step's interval) of the cell's mean (issue 21's target)."""
+    fits_ds = fits.build(small, synthetic_cube(small, noise=0.2))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        sur = surrogate.build(small, fits_ds)
+    steps = np.flatnonzero(fits_ds["fitted"].values)
+    reduction = fits_ds.attrs["reduction"]
+    for xi in small.oxide.xi:
+        for lam in small.oxide.lambda_:
+            cell = {"xi": xi, "lambda": lam}
+            force = fits_ds["force"].values[steps]
+            r = _quiet(sur, small, force, np.full(force.size, xi), np.full(force.size, lam))
+            assert r.attrs["model"] == "curve"
+            got = r["resistance"].values / small.resistance_scale
+            coef = fits_ds["curve_coefficients"].sel(cell).values
+            by_hand = np.exp(np.polynomial.polynomial.polyval(np.log(fits_ds["force_normalized"].values[steps]), coef))
+            np.testing.assert_allclose(got, by_hand, rtol=1e-12)
+            mean = fits_ds[f"{reduction}_normalized"].sel(cell).values[steps]
+            ci = fits_ds[f"{reduction}_normalized_ci"].sel(cell).values[steps]
+            lo = np.minimum(0.97, ci[:, 0] / mean)
+            hi = np.maximum(1.03, ci[:, 1] / mean)
+            assert np.all((got / mean >= lo * (1 - 1e-12)) & (got / mean <= hi * (1 + 1e-12)))
+            assert np.all(r["fit_error"].values > 0) and np.all(np.isfinite(r["surrogate_error"].values))
+
+
+def test_curve_between_cells_is_the_linear_interpolation_of_the_cells(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+    lam = np.asarray(small.oxide.lambda_)
+    xi = small.oxide.xi[1]
+    mid = float(np.exp(0.5 * (np.log(lam[0]) + np.log(lam[1]))))  # halfway in w = ln lambda
+    force = float(surrogate_ds["force"][2])
+    ends = [float(_quiet(surrogate_ds, small, force, xi, v)["resistance"]) for v in (lam[0], lam[1])]
+    got = float(_quiet(surrogate_ds, small, force, xi, mid)["resistance"])
+    assert math.log(got) == pytest.approx(0.5 * (math.log(ends[0]) + math.log(ends[1])), rel=1e-12)

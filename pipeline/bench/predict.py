@@ -18,7 +18,7 @@ import numpy as np
 
 from pipeline.bench.timing import median_time
 from pipeline.config import Scenario
-from pipeline.predict import GRID_TABLES, STEP_TABLES, SurrogateTables, predict
+from pipeline.predict import CURVE_TABLE, GRID_TABLES, STEP_TABLES, SurrogateTables, predict
 
 __all__ = ["run"]
 
@@ -35,7 +35,9 @@ def _tables(scenario: Scenario) -> SurrogateTables:
     grid = np.add.outer(np.log(lam), -np.log1p(-xi))
     tables = {name: 0.01 * (1 + k) * (1 + 0.1 * grid) for k, name in enumerate(GRID_TABLES)}
     band = 0.8 - 0.02 * grid[..., None] * np.ones(force_n.size)
-    tables.update(dict(zip(STEP_TABLES, (band, band, np.zeros_like(band)))))
+    tables.update(dict(zip(STEP_TABLES, (band, band, np.zeros_like(band), 0.01 * band))))
+    # a curved clean-like law, ln R' = -0.5 - 0.5 ln F' + 0.03 (ln F')^2, shifted up with xi
+    tables[CURVE_TABLE] = np.stack([-0.5 + 0.3 * grid, -0.5 - 0.02 * grid, 0.03 + 0.0 * grid, 0.0 * grid], axis=-1)
     coef = {
         "alpha": (np.array([[-1.2, 0.01, 0.01], [0.0, 0.1, -0.05]]), np.array([[1.2, -0.3], [0.05, 0.2]]), "log"),
         "gamma": (np.array([[-1.2]]), np.array([[1.2, -0.26]]), "log"),

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["CurveFit", "tolerance_band", "fit_curve", "evaluate_curve"]
+__all__ = ["CurveFit", "tolerance_band", "fit_curve", "evaluate_curve", "interpolation_error"]
 
 
 @dataclass(frozen=True)
@@ -187,3 +187,42 @@ def fit_curve(x: ArrayLike, y: ArrayLike, tolerance: float, interval: ArrayLike 
     error = np.where(fitted, np.abs(np.expm1(np.where(fitted, residual, 0.0))), -np.inf)
     max_error = np.where(fitted.any(-1), error.max(-1, initial=-np.inf), np.nan)
     return CurveFit(coefficients, order, residual, max_error, within, fitted.sum(-1))
+
+
+def interpolation_error(values: ArrayLike, u: ArrayLike, v: ArrayLike) -> np.ndarray:
+    """Leave-one-out error of linear interpolation on a grid of curves, per grid node.
+
+    Each node's values (its curve at the fitted steps) are predicted by linear interpolation in
+    ``u`` from its two neighbours along the first axis, and in ``v`` along the second; the node's
+    error is the root mean square over the available directions of the largest absolute
+    difference over the steps. A node on an edge has no neighbour on one side: it takes the
+    error of the nearest interior node along that axis (none when the axis has fewer than 3
+    nodes: NaN).
+
+    Parameters
+    ----------
+    values
+        Shape (len(u), len(v), steps): e.g. ln R' of each (lambda, xi) cell at the fitted steps.
+    u, v
+        Strictly increasing coordinates of the grid's axes (e.g. w = ln lambda, z = -ln(1 - xi)).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (len(u), len(v)), in the unit of ``values`` (ln R': a relative error).
+    """
+    y = np.asarray(values, dtype=float)
+    squares, counts = np.zeros(y.shape[:2]), np.zeros(y.shape[:2])
+    for axis, coord in ((0, np.asarray(u, float)), (1, np.asarray(v, float))):
+        n = coord.size
+        if n < 3:
+            continue
+        moved = np.moveaxis(y, axis, 0)
+        t = ((coord[1:-1] - coord[:-2]) / (coord[2:] - coord[:-2]))[:, None, None]
+        guess = (1.0 - t) * moved[:-2] + t * moved[2:]
+        inner = np.max(np.abs(guess - moved[1:-1]), axis=-1)  # (n - 2, other axis)
+        error = np.concatenate([inner[:1], inner, inner[-1:]])  # edges take the nearest interior node
+        squares += np.moveaxis(error, 0, axis) ** 2
+        counts += 1.0
+    with np.errstate(invalid="ignore"):
+        return np.where(counts > 0, np.sqrt(squares / np.maximum(counts, 1.0)), np.nan)

@@ -51,6 +51,7 @@ from scipy.stats import norm
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
 from pipeline.physics import surrogate as sg
+from pipeline.physics.curve_model import evaluate_curve, interpolation_error
 from pipeline.stages.fits import COORD_LABELS
 from pipeline.store import atomic_path, read_stage, write_dataset
 
@@ -251,6 +252,29 @@ def _band(fits: xr.Dataset) -> dict[str, xr.DataArray]:
     return out
 
 
+def _curve(scenario: Scenario, fits: xr.Dataset) -> dict[str, xr.DataArray]:
+    """The curve model of every cell for the predictor (its default): coefficients (lambda, xi,
+    power), the one-sigma error of ln R' from each fitted step's interval (lambda, xi, step) and
+    the grid's leave-one-out interpolation error of ln R' (lambda, xi)."""
+    steps = fits["fitted"].values.astype(bool)
+    coef = fits["curve_coefficients"].transpose("lambda", "xi", "power").values
+    ln_r = evaluate_curve(coef, fits["force_normalized"].values[steps])
+    ci = fits[f"{fits.attrs['reduction']}_normalized_ci"].isel(delta=steps).transpose("lambda", "xi", "delta", "bound")
+    z = norm.ppf(0.5 + scenario.fits.confidence / 2.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sigma = (np.log(ci.sel(bound="upper").values) - np.log(ci.sel(bound="lower").values)) / (2.0 * z)
+    error = interpolation_error(ln_r, sg.to_w(fits["lambda"].values), sg.to_z(fits["xi"].values))
+    return {
+        "curve_coefficients": xr.DataArray(coef, dims=("lambda", "xi", "power"), attrs={
+            "units": "1", "long_name": "curve model: ln R' = sum_k c_k (ln F')^k of each cell (fits.nc)"}),
+        "curve_fit_error": xr.DataArray(sigma, dims=("lambda", "xi", "step"), attrs={
+            "units": "1", "long_name": "one standard deviation of ln R' of the cell's mean curve at each fitted step"}),
+        "curve_interpolation_error": xr.DataArray(error, dims=("lambda", "xi"), attrs={
+            "units": "1", "long_name": "leave-one-out error of ln R' interpolated linearly in (ln lambda, -ln(1 - xi))",
+            "method": "largest over the fitted steps; RMS of the two axes; edge cells take the nearest interior value"}),
+    }
+
+
 def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
     """The surrogate dataset of a fits dataset (see the module docstring)."""
     ds = xr.Dataset(coords={"lambda": fits["lambda"].values, "xi": fits["xi"].values})
@@ -260,6 +284,7 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
             ds[key] = value
         ds.attrs.update(attrs)
     ds.update(_band(fits))
+    ds.update(_curve(scenario, fits))
     steps = fits["fitted"].values.astype(bool)
     force_n = fits["force_normalized"].values[steps]
     ds = ds.assign_coords(force_normalized=("step", force_n), force=("step", fits["force"].values[steps]))
@@ -282,7 +307,9 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
     ds.attrs["method"] = scenario.surrogate.method
     ds.attrs["fit_confidence"] = scenario.fits.confidence
     ds.attrs["model"] = "T(p)(lambda, xi) = sum_k P_k(log lambda) Q_k(-log(1 - xi)), T = log or identity (Eq. 26)"
-    ds.attrs["predictor"] = "R_el = alpha 2 rho*/sqrt(R* sigma) F'^-gamma (Eq. 27)"
+    ds.attrs["predictor"] = ("R_el = 2 rho*/sqrt(R* sigma) exp(sum_k c_k(xi, lambda) (ln F')^k), the curve model "
+                             "interpolated linearly in (ln lambda, -ln(1 - xi)) (default); or alpha 2 rho*/sqrt(R* sigma) "
+                             "F'^-gamma (Eq. 27, model = power_law)")
     return ds
 
 
