@@ -19,7 +19,8 @@ from pathlib import Path  # noqa: E402
 from typing import TYPE_CHECKING, Callable, NoReturn, Sequence  # noqa: E402
 
 from pipeline import __version__  # noqa: E402
-from pipeline.config import STAGE_INPUTS, ConfigError, Scenario, load_scenario, parameter_table  # noqa: E402
+from pipeline.config import (  # noqa: E402
+    STAGE_INPUTS, ConfigError, Scenario, check_surrogate_grid, load_scenario, parameter_table)
 from pipeline.errors import StaleInputError  # noqa: E402
 from pipeline.plan import prepare  # noqa: E402
 
@@ -36,6 +37,10 @@ STAGES: dict[str, str] = {
     "fits": "pipeline.stages.fits",
     "surrogate": "pipeline.stages.surrogate",
 }
+
+
+#: Commands that run the surrogate stage: its limits on the oxide grid are checked before any stage.
+_REACH_SURROGATE = ("run", "surrogate")
 
 
 def _scenario_args(p: argparse.ArgumentParser) -> None:
@@ -351,6 +356,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning
     try:
         scenario = _load(args)
+        if args.command in _REACH_SURROGATE:
+            check_surrogate_grid(scenario)
         if getattr(args, "workers", None) is not None:
             _options(args)  # --workers is checked before the plan is announced
         with warnings.catch_warnings():
