@@ -338,8 +338,16 @@ def _parser() -> argparse.ArgumentParser:
     predict.add_argument("--surrogate", type=Path, default=None,
                          help="surrogate.json or surrogate.nc (default: <data-dir>/surrogate.json, else surrogate.nc)")
     rough = add("roughness", _cmd_roughness, "sigma, eta and beta from a measured height map")
-    rough.add_argument("heightmap", type=Path, help=".npy, netCDF or whitespace-separated text")
-    rough.add_argument("--pixel-size", type=float, required=True, help="pixel size, m")
+    rough.add_argument("heightmap", type=Path, help=".npy, netCDF or text (heights in m), or an instrument file "
+                       "(SurfaceTopography: pip install 'g2tom[topography]')")
+    rough.add_argument("--pixel-size", type=float, default=None,
+                       help="pixel size, m (required for .npy, netCDF and text; overrides an instrument file's)")
+    rough.add_argument("--cutoff", type=float, default=None,
+                       help="shortest wavelength in the moments, m (default: 4 pixels)")
+    rough.add_argument("--periodic", action="store_true", help="the map is one period (no window, mean removed)")
+    rough.add_argument("--beta-rule", choices=("paper", "nayak"), default="paper",
+                       help="beta = 0.737/sqrt(m4) (paper, default) or 0.375 sqrt(pi/m4) (nayak)")
+    rough.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
     return parser
 
 

@@ -213,7 +213,8 @@ def _hand_cases() -> list[Case]:
     c += [
         Case("unknown option", ("contact", "--bogus"), ("unrecognized arguments: --bogus",)),
         Case("--workers not a number", ("oxide", "--workers", "two"), ("--workers", "invalid int value")),
-        Case("missing --pixel-size", ("roughness", f"{outside}none.npy"), ("--pixel-size",)),
+        Case("missing --pixel-size for a .npy", ("roughness", f"{outside}nopix.npy"), ("no pixel size", "--pixel-size"),
+             setup=_npy("nopix.npy", _SURFACE)),
         Case("--force not a number", ("predict", "--force", "lots", "--xi", "0.3", "--lambda", "5"), ("--force",)),
         Case("unknown command", ("bogus",), ("invalid choice: 'bogus'",)),
     ]
