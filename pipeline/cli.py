@@ -335,6 +335,11 @@ def _parser() -> argparse.ArgumentParser:
     predict.add_argument("--csv", type=Path, default=None, help="CSV file of queries with columns force, xi, lambda")
     predict.add_argument("--output", type=Path, default=None, help="write the CSV result here (default: stdout)")
     predict.add_argument("--extrapolate", action="store_true", help="allow queries outside the fitted ranges (with a warning)")
+    predict.add_argument("--roughness", type=Path, default=None,
+                         help="a measured topography (see `g2tom roughness`): its summit sigma, eta and beta "
+                              "replace roughness.*")
+    predict.add_argument("--pixel-size", type=float, default=None,
+                         help="with --roughness: pixel size, m (for .npy, netCDF and text maps)")
     predict.add_argument("--surrogate", type=Path, default=None,
                          help="surrogate.json or surrogate.nc (default: <data-dir>/surrogate.json, else surrogate.nc)")
     rough = add("roughness", _cmd_roughness, "sigma, eta and beta from a measured height map")
