@@ -62,8 +62,10 @@ def pair() -> tuple:
     lattice, and the fit's lower force bound scaled with F's unit, so that only the groups
     can differ.
     """
-    base = dict(SMALL_OVERRIDES, **{"oxide.xi": [0.5, 0.8], "oxide.lambda": [1.0, 9.0],
-                                    "contact.window": 0.389, "contact.r_max": 0.2842})
+    base = dict(SMALL_OVERRIDES, **{"oxide.xi": [0.5, 0.8], "oxide.lambda": [1.0, 9.0]})
+    auto = resolve(load_scenario("paper", base))  # the auto domains of the first scene, pinned for both
+    window, r_max = auto.contact.window, auto.contact.r_max
+    base.update({"contact.window": window, "contact.r_max": r_max})
     a = _chain(base)
     sa = a[0]
     g = groups(sa.roughness.sigma, sa.roughness.eta, sa.roughness.beta, sa.indenter.radius)
@@ -72,7 +74,7 @@ def pair() -> tuple:
     b_over = dict(base, **{
         "roughness.sigma": other.sigma, "roughness.eta": other.eta, "roughness.beta": other.beta,
         "indenter.radius": other.radius, "material.E": 7.0e10, "material.nu": 0.25, "material.rho": 2.0e-8,
-        "contact.window": 0.389 * stretch, "contact.r_max": 0.2842 * stretch,
+        "contact.window": window * stretch, "contact.r_max": r_max * stretch,
     })
     b_scene = load_scenario("paper", b_over)
     b_over["fits.min_force"] = sa.fits.min_force * b_scene.force_scale / sa.force_scale
