@@ -216,6 +216,13 @@ def _cmd_params(args: argparse.Namespace, scenario: Scenario) -> None:
 def _cmd_plan(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.plan import format_plan
 
+    if args.atlas:
+        from pipeline.atlas_design import AtlasDesign, format_atlas_plan, plan_atlas
+
+        # one single-threaded scene per worker
+        parallel = max(1, args.workers or os.cpu_count() or 1)
+        print("\n".join(format_atlas_plan(plan_atlas(scenario, AtlasDesign()), parallel)))
+        return
     print("\n".join(format_plan(scenario, getattr(args, "workers", None))))
 
 
@@ -325,8 +332,10 @@ def _parser() -> argparse.ArgumentParser:
     bench = add("bench", _cmd_bench, "benchmarks: run time against error, printed and saved")
     bench.add_argument("--only", action="append", default=None, help="run only this benchmark")
     add("stamp", _cmd_stamp, "update per-stage configuration stamps (used by make)")
-    add("plan", _cmd_plan, "estimate each stage's peak memory and run time; refuse what cannot fit",
-        compute=True)
+    plan = add("plan", _cmd_plan, "estimate each stage's peak memory and run time; refuse what cannot fit",
+               compute=True)
+    plan.add_argument("--atlas", action="store_true",
+                      help="plan the atlas's default design over (mu, Pi) on this scenario (one scene per worker)")
     add("params", _cmd_params, "list every parameter with its value, unit and range")
     predict = add("predict", _cmd_predict, "predict R_el with the surrogate (Eq. 27)")
     predict.add_argument("--force", default=None, help="normal force F, N: a number or a comma-separated list")
