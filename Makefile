@@ -16,7 +16,7 @@ SOURCES  := $(shell find pipeline -name '*.py' -o -name '*.toml')
 ANALYSIS := $(shell find analysis -name '*.py')
 STAMPS   := $(DATA)/.stamps
 
-.PHONY: all run test stress bench compare figures report contact oxide cube fits surrogate params clean FORCE
+.PHONY: all run test stress bench compare figures report contact oxide cube fits surrogate params atlas atlas-plan clean FORCE
 all: run
 
 $(VENV)/.installed: pyproject.toml
@@ -68,6 +68,13 @@ compare: | $(VENV)/.installed
 	for m in greenwood point; do for s in contact oxide cube fits surrogate; do \
 	  $(G2TOM) $$s --config $(SCENARIO) --data-dir $(DATA)/compare/$$m $(foreach s,$(SET),--set $(s)) \
 	    --set oxide.n_realizations=$(COMPARE_N) --set cube.model=$$m || exit 1; done; done
+
+# The chain on every scene of the atlas's design over (mu, Pi) (pipeline/atlas.py): the plan first,
+# then one scene per core; a killed atlas continues with the scenes not written yet.
+atlas-plan: | $(VENV)/.installed
+	$(G2TOM) plan --atlas $(ARGS)
+atlas: atlas-plan | $(VENV)/.installed
+	$(G2TOM) atlas $(ARGS)
 
 bench: | $(VENV)/.installed
 	$(G2TOM) bench $(ARGS)

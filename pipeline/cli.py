@@ -238,6 +238,17 @@ def _cmd_predict(args: argparse.Namespace, scenario: Scenario) -> None:
     predict_cli(args, scenario)
 
 
+def _cmd_atlas(args: argparse.Namespace, scenario: Scenario) -> None:
+    from pipeline.atlas import run_atlas
+    from pipeline.atlas_design import AtlasDesign
+
+    _preflight(args, scenario, scene=False)
+    if args.workers is None and args.scheduler is None:
+        args.workers = os.cpu_count() or 1  # a local cluster, one single-threaded scene per core
+    path = run_atlas(scenario, AtlasDesign(), args.data_dir, _options(args))
+    print(f"atlas: wrote {path}", file=sys.stderr)
+
+
 def _cmd_roughness(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.roughness_cli import roughness_cli
 
@@ -336,6 +347,8 @@ def _parser() -> argparse.ArgumentParser:
                compute=True)
     plan.add_argument("--atlas", action="store_true",
                       help="plan the atlas's default design over (mu, Pi) on this scenario (one scene per worker)")
+    add("atlas", _cmd_atlas, "run the chain on every scene of the atlas's design over (mu, Pi), one scene per "
+        "task, resumable (<data-dir>/atlas/)", compute=True)
     add("params", _cmd_params, "list every parameter with its value, unit and range")
     predict = add("predict", _cmd_predict, "predict R_el with the surrogate (Eq. 27)")
     predict.add_argument("--force", default=None, help="normal force F, N: a number or a comma-separated list")
