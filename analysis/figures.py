@@ -23,6 +23,7 @@ FAMILIES: tuple[str, ...] = (
     "analysis.figures_oxide",
     "analysis.figures_results",
     "analysis.figures_point",
+    "analysis.figures_barber",
 )
 
 

@@ -12,7 +12,6 @@ import html
 import json
 import re
 import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +19,8 @@ import numpy as np
 import xarray as xr
 from scipy.stats import norm
 
+from analysis.report_blocks import Block, table as _table
+from analysis.report_physics import barber_blocks, bias_blocks
 from pipeline import __version__
 from pipeline.config import STAGE_INPUTS, Scenario, parameter_table
 from pipeline.physics import surrogate as sg
@@ -27,20 +28,6 @@ from pipeline.stages.surrogate import PARAMETERS, table3_rows
 from pipeline.store import StaleInputError, atomic_path, read_stage
 
 __all__ = ["Block", "build_blocks", "to_markdown", "to_html", "write_report"]
-
-
-@dataclass(frozen=True)
-class Block:
-    """One report element.
-
-    ``kind`` is ``h1``, ``h2``, ``p``, ``table`` (``rows[0]`` is the header), ``img``
-    (``text`` = caption, ``src`` = relative path) or ``pre``.
-    """
-
-    kind: str
-    text: str = ""
-    rows: tuple[tuple[str, ...], ...] = ()
-    src: str = ""
 
 
 #: Captions of the known figures, keyed by file stem; other figures are captioned by their stem.
@@ -55,12 +42,14 @@ CAPTIONS = {
     "fig10_realizations": "Fig. 10 (beside): realizations used per (xi, lambda) and alpha's reached 95 % half-width; x marks flagged cells",
     "fig11_barber": "Fig. 11: G2TOM against the p-average of the oxide-extended Barber bounds (Eq. 10)",
     "point_alpha_gamma": "Point-interaction model against Greenwood's closed form: alpha ratio and gamma shift",
+    "barber_spots": "Barber's check: clean conductance over K / (E* rho*) against F for every spot discretization "
+                    "(colours) and model (lines), from `g2tom bench --only spots`",
     "point_film": "Resistance against the oxide film's specific resistance r_f: clean to insulating",
 }
 
 
 #: Benchmarks with a section of their own (not dumped with the other benchmark results).
-OWN_SECTIONS = ("frontier", "stability")
+OWN_SECTIONS = ("frontier", "stability", "biases")
 #: Figures of the frontier benchmark, shown in "How fast, how accurate".
 FRONTIER_FIGURES = {
     "frontier_contact": "Contact: error of the force and of the real contact area against solve time, per "
@@ -163,16 +152,6 @@ def _figure_order(path: Path) -> tuple[Any, ...]:
     return tuple(int(part) if part.isdigit() else part for part in re.split(r"(\d+)", path.stem))
 
 
-def _fmt(value: Any) -> str:
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    return str(value)
-
-
-def _table(header: list[str], rows: list[list[Any]]) -> Block:
-    return Block("table", rows=(tuple(header),) + tuple(tuple(_fmt(v) for v in row) for row in rows))
-
-
 def _load(data_dir: Path, stage: str, scenario: Scenario) -> tuple[xr.Dataset | None, list[Block]]:
     try:
         return read_stage(data_dir, stage, scenario), []
@@ -187,7 +166,8 @@ def _fit_blocks(fits: xr.Dataset, scenario: Scenario) -> list[Block]:
     return [
         Block("h2", "Clean-surface fit"),
         Block("p", f"R' = alpha F'^-gamma fitted by least squares in log-log on the {steps} load steps with "
-                   f"F >= {f.min_force:g} N; intervals: {100 * f.confidence:g} % least-squares (Student t)."),
+                   f"{fits.attrs.get('fit_range', f'F >= {f.min_force:g} N')}; intervals: "
+                   f"{100 * f.confidence:g} % least-squares (Student t)."),
         _table(["parameter", "value", "lower", "upper"], [
             ["alpha_clean", float(fits["alpha_clean"]), float(ci["alpha"][0]), float(ci["alpha"][1])],
             ["gamma_clean", float(fits["gamma_clean"]), float(ci["gamma"][0]), float(ci["gamma"][1])],
@@ -436,6 +416,7 @@ def build_blocks(scenario: Scenario, data_dir: str | Path, started: float | None
     blocks += missing if fits is None else _fit_blocks(fits, scenario) + _ensemble_blocks(fits, scenario)
     sur, missing = _load(data_dir, "surrogate", scenario)
     blocks += missing if sur is None else _surrogate_blocks(sur)
+    blocks += bias_blocks(data_dir) + barber_blocks(data_dir, scenario)
     blocks += _point_blocks(data_dir)
     blocks.append(Block("h2", "Figures"))
     figures = sorted((p for p in (data_dir / "figures").glob("*.png") if p.stem not in FRONTIER_FIGURES),

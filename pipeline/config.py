@@ -164,6 +164,14 @@ class Contact:
         "auto", "R*", "side of the square spot window, in units of R*, or auto: every cell whose "
         "spot can change R by more than cube.crop_tolerance at the heaviest load", gt=0, auto=True,
     )
+    spots: str = _param(
+        "expected",
+        "1",
+        "one spot per cell: expected (radius sqrt(beta) F_1/2(h), the expected sum of asperity "
+        "radii; obeys Barber's theorem), mean_area (the paper's radius sqrt(A* dx^2 / pi)) or "
+        "asperities (one Gaussian asperity per cell, drawn per realization)",
+        choices=("mean_area", "expected", "asperities"),
+    )
 
 
 @dataclass(frozen=True)
@@ -279,6 +287,11 @@ class Cube:
         choices=("error", "residual"),
     )
     max_iterations: int = _param(100, "1", "point model: conjugate-gradient iterations per solve at most", ge=1)
+    lattice_constant: float = _param(
+        0.0, "1", "point model: C of the lattice self term C / (pi dx) added to every spot's own "
+        "resistance: the interaction with its own cell that the sum over the other cells misses; "
+        "3.90026 for the square lattice (pipeline.physics.lattice), 0: none", ge=0,
+    )
 
 
 @dataclass(frozen=True)
@@ -291,7 +304,25 @@ class Fits:
         "reduction over realizations that is fitted",
         choices=("geometric_mean", "arithmetic_mean", "median"),
     )
-    min_force: float = _param(200.0, "N", "fit only load steps with F >= min_force", ge=0)
+    min_force: float = _param(200.0, "N", "fit only load steps with F >= min_force (fit_range = force)", ge=0)
+    fit_range: str = _param(
+        "force",
+        "1",
+        "what selects the fitted load steps: force (F >= min_force, in N) or force_normalized "
+        "(F' >= min_force_normalized, the same steps for every scene of equal F')",
+        choices=("force", "force_normalized"),
+    )
+    min_force_normalized: float = _param(
+        0.4, "1", "fit only load steps with F' >= min_force_normalized (fit_range = force_normalized)", ge=0
+    )
+    curve_max_order: int = _param(
+        3, "1", "curve model ln R'(ln F'): highest polynomial order tried (the lowest order within "
+        "tolerance is kept)", ge=1, le=6
+    )
+    curve_tolerance: float = _param(
+        0.03, "1", "curve model: relative error of R' allowed at every fitted step (or the step's "
+        "confidence interval where wider)", gt=0, lt=1
+    )
     n_bootstrap: int = _param(400, "1", "bootstrap resamples over realizations", ge=10)
     confidence: float = _param(0.95, "1", "confidence level of the intervals", gt=0, lt=1)
     seed: int = _param(7, "1", "seed of the bootstrap", ge=0)
@@ -360,8 +391,9 @@ SECTIONS: dict[str, type] = {
 STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "contact": ("material", "roughness", "indenter", "loading", "contact"),
     "oxide": ("roughness.eta", "indenter.radius", "contact.window", "oxide"),
-    # fits.min_force and fits.confidence: the adaptive ensemble's stopping rule
-    "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance", "fits.min_force", "fits.confidence"),
+    # the fitted steps and fits.confidence: the adaptive ensemble's stopping rule
+    "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance", "fits.min_force", "fits.fit_range",
+             "fits.min_force_normalized", "fits.confidence"),
     "fits": ("fits",),
     "surrogate": (
         "surrogate.method",
@@ -587,7 +619,13 @@ _INT_MAX = 2**63 - 1
 
 
 def _check_point_model(s: Scenario) -> None:
-    """The point model and resistive films need radius weights; the point model, an operator it can apply."""
+    """The point model and resistive films need radius weights; the point model, an operator it can
+    apply; the lattice term belongs to the point model."""
+    if s.cube.lattice_constant > 0 and s.cube.model != "point":
+        raise ConfigError(
+            f"cube.lattice_constant = {s.cube.lattice_constant!r} is not allowed with cube.model = "
+            f"{s.cube.model!r}: the lattice self term belongs to cube.model = 'point' (must be 0 otherwise)"
+        )
     if s.cube.model == "point" and s.cube.method not in ("auto", "folded", "gemm", "direct"):
         raise ConfigError(
             f"cube.method = {s.cube.method!r} is not allowed with cube.model = 'point': must be one of "
@@ -602,8 +640,32 @@ def _check_point_model(s: Scenario) -> None:
         )
 
 
+def _check_spots(s: Scenario) -> None:
+    """``expected`` and ``asperities`` spots need the separation at the cells and radius weights."""
+    if s.contact.spots == "mean_area":
+        return
+    if s.contact.area_interpolation != "separation":
+        raise ConfigError(
+            f"contact.area_interpolation = {s.contact.area_interpolation!r} is not allowed with "
+            f"contact.spots = {s.contact.spots!r}: must be 'separation' (these spots are computed from "
+            "the separation at each cell centre)"
+        )
+    if s.cube.weights != "radius":
+        raise ConfigError(
+            f"cube.weights = {s.cube.weights!r} is not allowed with contact.spots = {s.contact.spots!r}: "
+            "must be 'radius' (cell-area weights are the published code's convention for mean_area spots)"
+        )
+    if s.contact.spots == "asperities" and (s.cube.model != "greenwood" or s.oxide.film != "insulating"):
+        raise ConfigError(
+            f"contact.spots = 'asperities' is not allowed with cube.model = {s.cube.model!r} and oxide.film = "
+            f"{s.oxide.film!r}: asperity spots drawn per realization need cube.model = 'greenwood' and "
+            "oxide.film = 'insulating' (use contact.spots = 'expected', their mean, with the point model or films)"
+        )
+
+
 def _cross_checks(s: Scenario) -> None:
     _check_point_model(s)
+    _check_spots(s)
     for section in SECTIONS:
         obj = getattr(s, section)
         for f in dataclasses.fields(obj):

@@ -27,8 +27,9 @@ import math
 import numpy as np
 
 from pipeline.config import AUTO, ConfigError, Scenario, check_domains
-from pipeline.physics import constriction, spots
-from pipeline.physics.asperity import area_fraction, log_asperity_integral
+from pipeline.contact_solution import indenter_profile, solve
+from pipeline.physics import constriction, spot_models, spots
+from pipeline.physics.asperity import log_asperity_integral
 from pipeline.physics.grid import cell_centres
 
 __all__ = ["Domains", "resolve", "domains", "estimate_cells", "check_cell_count", "MARGIN_CELLS",
@@ -69,18 +70,12 @@ class Domains:
     window_bound: float
 
 
-def _profile(scenario: Scenario, r: np.ndarray) -> np.ndarray:
-    from pipeline.stages.contact import indenter_profile  # the stage's one profile helper
-
-    return indenter_profile(scenario, r)
-
-
 def _reach(scenario: Scenario) -> float:
     """Radius (m) beyond which the rigid gap at the heaviest approach exceeds :data:`_FAR_GAP` sigma."""
     sigma = scenario.roughness.sigma
     delta = min(scenario.deltas)
     r = scenario.cell_size
-    while delta + float(_profile(scenario, np.array([r]))[0]) < _FAR_GAP * sigma:
+    while delta + float(indenter_profile(scenario, np.array([r]))[0]) < _FAR_GAP * sigma:
         r *= 2.0
     return r
 
@@ -111,20 +106,19 @@ def _cell_grid(scenario: Scenario, half_width: float) -> tuple[int, np.ndarray]:
 
 
 def _spot_radii(scenario: Scenario, gap: np.ndarray) -> np.ndarray:
+    """The cells' spot radii at separation ``gap`` (m) under ``contact.spots`` (for ``asperities``
+    their mean over realizations: the window bounds the expected truncation)."""
     rough = scenario.roughness
-    fraction = area_fraction(gap, rough.sigma, rough.eta, rough.beta)
-    return spots.spot_radii(spots.spot_areas(fraction, scenario.cell_size))
+    return spot_models.cell_radius(gap, scenario.contact.spots, rough.sigma, rough.eta, rough.beta)
 
 
 def _solve_heaviest(scenario: Scenario, r_max: float) -> tuple[np.ndarray, np.ndarray]:
     """Radial nodes (m) and the displacement (m) at the heaviest approach on [0, r_max]."""
-    from pipeline.stages.contact import solve_scenario
-
     loading = dataclasses.replace(scenario.loading, delta_max=scenario.loading.delta_min, n_delta=1)
     contact = dataclasses.replace(scenario.contact, r_max=r_max / scenario.indenter.radius,
                                   radial_grid="graded", window=1.0)
     fast = dataclasses.replace(scenario, loading=loading, contact=contact)
-    r, sols = solve_scenario(fast, solver="newton", n_radial=_N_RADIAL, tolerance=1e-8)
+    r, sols = solve(fast, solver="newton", n_radial=_N_RADIAL, tolerance=1e-8)
     return r, sols[0].displacement
 
 
@@ -132,7 +126,7 @@ def _pressure_radius(scenario: Scenario, tolerance: float) -> float:
     """Radius (m) past which the rigid-gap pressure is below ``tolerance`` x the peak pressure."""
     sigma = scenario.roughness.sigma
     r = np.linspace(0.0, _reach(scenario), 4097)
-    log_p = log_asperity_integral((min(scenario.deltas) + _profile(scenario, r)) / sigma, 1.5)
+    log_p = log_asperity_integral((min(scenario.deltas) + indenter_profile(scenario, r)) / sigma, 1.5)
     small = log_p < math.log(tolerance) + log_p.max()
     beyond = np.flatnonzero(~small)
     return float(r[min(beyond[-1] + 1, r.size - 1)])
@@ -178,7 +172,7 @@ def estimate_cells(scenario: Scenario) -> int:
     h = scenario.cell_size
     tol = max(scenario.cube.crop_tolerance, TOLERANCE_FLOOR)
     r = np.linspace(0.0, _reach(scenario), 8193)
-    a = _spot_radii(scenario, min(scenario.deltas) + _profile(scenario, r))
+    a = _spot_radii(scenario, min(scenario.deltas) + indenter_profile(scenario, r))
     w, margin = _weights(scenario, a)
     ring = 2.0 * np.pi * r * (r[1] - r[0]) / h**2
     outside_w = np.cumsum((w * ring)[::-1])[::-1]
@@ -219,7 +213,7 @@ def domains(scenario: Scenario) -> Domains:
     radius_star, h = scenario.indenter.radius, scenario.cell_size
     # Rigid gap: an upper bound of every spot, so its window holds the solved one.
     _, r_cells = _cell_grid(scenario, _reach(scenario))
-    rigid = _spot_radii(scenario, min(scenario.deltas) + _profile(scenario, r_cells))[None]
+    rigid = _spot_radii(scenario, min(scenario.deltas) + indenter_profile(scenario, r_cells))[None]
     n_rigid, _ = _needed_cells(scenario, rigid, tol)
     corner_rigid = math.sqrt(2.0) * (n_rigid - 1) / 2.0 * h + MARGIN_CELLS * h
     r_solve = max(corner_rigid, _pressure_radius(scenario, tol))
@@ -227,7 +221,7 @@ def domains(scenario: Scenario) -> Domains:
     r_nodes, u = _solve_heaviest(scenario, r_solve)
     x = cell_centres(n_rigid, h)
     r_cells = spots.cell_radii(x, x)
-    gap = min(scenario.deltas) + _profile(scenario, r_cells) + spots.interpolate_smooth(r_nodes, u, r_cells)
+    gap = min(scenario.deltas) + indenter_profile(scenario, r_cells) + spots.interpolate_smooth(r_nodes, u, r_cells)
     radius = _spot_radii(scenario, gap)[None]
     n_needed, bounds = _needed_cells(scenario, radius, tol)
     window_needed = n_needed * h / radius_star

@@ -3,7 +3,8 @@
 * the data directory exists (or can be made) and is writable;
 * a ``--scheduler`` address is well formed and something answers there quickly;
 * the cross-stage constraints that need physics (config.py is a leaf and checks only what
-  needs no computation): the fit's ``fits.min_force`` must be reached by at least two load
+  needs no computation): the fit's ``fits.min_force`` (or ``fits.min_force_normalized``, by
+  ``fits.fit_range``) must be reached by at least two load
   steps of the contact stage, and at the heaviest approach at least two cells must touch
   (otherwise the Holm radius and every resistance are undefined). Both are judged on the
   contact stage's own output when ``contact.nc`` is current, otherwise on a coarse solve of
@@ -146,13 +147,18 @@ def check_scene(scenario: Scenario, data_dir: str | Path | None = None) -> None:
             f"(loading.delta_min = {loading.delta_min!r} sigma) only {int(touching[heaviest])} cell(s) of "
             f"pitch 1/sqrt(eta) = {scenario.cell_size:.3g} m touch, so the Holm radius and the resistance are "
             f"undefined; increase roughness.sigma or lower loading.delta_min")
-    reached = int(np.sum(force * (1.0 + FORCE_SLACK) >= scenario.fits.min_force))
+    if scenario.fits.fit_range == "force":
+        key, threshold, values, unit = "min_force", scenario.fits.min_force, force, " N"
+    else:
+        key, threshold, values, unit = ("min_force_normalized", scenario.fits.min_force_normalized,
+                                        force / scenario.force_scale, "")
+    reached = int(np.sum(values * (1.0 + FORCE_SLACK) >= threshold))
     if reached < 2:
-        top = float(np.sort(force)[-2]) if force.size >= 2 else float(force.max())
+        top = float(np.sort(values)[-2]) if values.size >= 2 else float(values.max())
         raise ConfigError(
-            f"fits.min_force = {scenario.fits.min_force:g} is out of range: only {reached} load step(s) "
-            f"reach it (contact forces {force.min():.3g}..{force.max():.3g} N); a fit needs >= 2, so it "
-            f"must be <= {top:.3g} N for this scene")
+            f"fits.{key} = {threshold:g} is out of range: only {reached} load step(s) "
+            f"reach it (contact forces {values.min():.3g}..{values.max():.3g}{unit}); a fit needs >= 2, so it "
+            f"must be <= {top:.3g}{unit} for this scene")
 
 
 def preflight(scenario: Scenario, data_dir: str | Path, scheduler: str | None = None,

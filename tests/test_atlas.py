@@ -94,7 +94,7 @@ def test_two_worker_cluster_gives_the_same_bits(tmp_path, base, uninterrupted) -
 
 
 def test_a_refused_scene_stops_the_atlas_before_work(tmp_path) -> None:
-    bad = load_scenario("paper", {**BASE, "fits.min_force": 1e9})
+    bad = load_scenario("paper", {**BASE, "fits.fit_range": "force", "fits.min_force": 1e9})
     with pytest.raises(ConfigError, match=r"atlas scene d00 \(mu 4, Pi 20\): fits.min_force"):
         atlas.run_atlas(bad, DESIGN, tmp_path)
     assert not (tmp_path / "atlas").exists()

@@ -66,7 +66,8 @@ def test_plan_grows_with_pi_and_reports_refusals() -> None:
     assert est["d02"].n_cells > est["d00"].n_cells and est["d02"].seconds > est["d00"].seconds
     lines = format_atlas_plan(list(est.values()), parallel=2)
     assert lines[-1].startswith("5 of 5 scenes runnable")
-    refused = plan_atlas(load_scenario("paper", {**SMALL_OVERRIDES, "fits.min_force": 1e9}), design)
+    refused = plan_atlas(load_scenario("paper", {**SMALL_OVERRIDES, "fits.fit_range": "force", "fits.min_force": 1e9}),
+                         design)
     assert all(e.problem and "fits.min_force" in e.problem for e in refused)
     assert "refused: fits.min_force" in format_atlas_plan(refused)[1]
 

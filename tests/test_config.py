@@ -26,7 +26,7 @@ def test_paper_scenario_embeds_tables_1_and_2(paper) -> None:
     assert len(deltas) == 20
     assert deltas[0] == pytest.approx(2 * 20e-6) and deltas[-1] == pytest.approx(-3 * 20e-6)
     # auto window: the spots outside 55 cells change R by < cube.crop_tolerance at -3 sigma
-    assert paper.n_cells == 55
+    assert paper.n_cells == 49  # the auto window of expected spots (mean_area spots need 55)
     assert load_scenario("published").n_cells == 57  # explicit 0.4 R* sqrt(eta) = 56.6 -> nearest odd
 
 
@@ -38,6 +38,8 @@ def test_published_differs_only_in_its_conventions(paper) -> None:
         "contact.n_radial",
         "contact.radial_grid",
         "contact.area_interpolation",
+        "contact.spots",  # the paper's mean-area spots, as published
+        "fits.fit_range",  # F >= 200 N, as published (the paper fits F' >= 0.4: the same steps)
         "contact.r_max",  # explicit 0.3 and 0.4 R*, as published; the paper's are resolved (auto)
         "contact.window",
         "cube.weights",
@@ -149,8 +151,8 @@ def test_stage_hashes_follow_only_their_inputs(paper) -> None:
     fit_change = resolve(load_scenario("paper", ["fits.n_bootstrap=100"]))
     assert fit_change.config_hash("cube") == paper.config_hash("cube")
     assert fit_change.config_hash("fits") != paper.config_hash("fits")
-    # the adaptive ensemble's stopping rule fits the steps with F >= fits.min_force
-    assert resolve(load_scenario("paper", ["fits.min_force=100"])).config_hash("cube") != paper.config_hash("cube")
+    # the adaptive ensemble's stopping rule fits the steps the fits stage fits (F' >= fits.min_force_normalized)
+    assert resolve(load_scenario("paper", ["fits.min_force_normalized=0.2"])).config_hash("cube") != paper.config_hash("cube")
 
 
 def test_parameter_table_documents_every_parameter(paper) -> None:
@@ -181,7 +183,8 @@ def test_list_split_at_spaces_by_make_is_glued_back(capsys) -> None:
     assert _rejoin(["oxide.xi=[0.3,", "0.5]", "cube.weights=area"]) == ["oxide.xi=[0.3, 0.5]", "cube.weights=area"]
     assert _rejoin(["oxide.lambda=[1.0,", "5.0,", "13.0]"]) == ["oxide.lambda=[1.0, 5.0, 13.0]"]
     assert _rejoin(["fits.reduction='median'"]) == ["fits.reduction='median'"]
-    assert main(["params", "--set", "oxide.xi=[0.3,", "--set", "0.5]", "--set", "cube.weights=area"]) == 0
+    assert main(["params", "--set", "oxide.xi=[0.3,", "--set", "0.5]", "--set", "contact.spots=mean_area",
+                 "--set", "cube.weights=area"]) == 0
     out = capsys.readouterr().out
     assert "oxide.xi" in out and "[0.3, 0.5]" in out and "area" in out
 

@@ -304,3 +304,27 @@ def test_fft_steps_agree_with_the_folded_path_and_the_batch():
               for i in range(0, masks.shape[0], 5)]
     whole = cn.resistance(masks, radius[fft], radius[fft], 2e-5, 7.2e-7, crops[fft], 1.0).resistance
     np.testing.assert_array_equal(np.concatenate(pieces), whole)
+
+
+@pytest.mark.parametrize(("n", "method"), [(15, "auto"), (15, "direct"), (81, "auto")])
+def test_per_map_spots_equal_one_call_per_map(n, method):
+    """Groups (spots drawn per realization): each map equals a call with its own spots alone, within
+    1e-12 (the FFT path from 75 cells, the folded one below), cropped or not, whatever the batch."""
+    rng = np.random.default_rng(4)
+    base = _gaussian_spots(n, (2.0, 4.0, 9.0))
+    n_groups, batch = 3, 11
+    radius = base[None] * (rng.random((n_groups, 1, n, n)) < 0.6) * rng.lognormal(0.0, 0.5, (n_groups, 1, n, n))
+    masks = rng.random((batch, n, n)) < 0.7
+    groups = rng.integers(0, n_groups, batch)
+    crops = cn.choose_crops(base, base, PITCH, 1e-6)
+    got = cn.resistance(masks, radius, radius, PITCH, RHO, crops, 1e-6, method, groups=groups)
+    for b in range(batch):
+        own = cn.resistance(masks[b : b + 1], radius[groups[b]], radius[groups[b]], PITCH, RHO, _whole(base), 0.0, "direct")
+        assert _rel(got.resistance[b], own.resistance[0]) <= 1e-6  # the crop tolerance
+        np.testing.assert_array_equal(got.n_conducting[b], own.n_conducting[0])
+    # a map's result does not depend on the others in its batch
+    order = rng.permutation(batch)
+    again = cn.resistance(masks[order], radius, radius, PITCH, RHO, crops, 1e-6, method, groups=groups[order])
+    np.testing.assert_array_equal(again.resistance, got.resistance[order])
+    first = cn.resistance(masks[:4], radius, radius, PITCH, RHO, crops, 1e-6, method, groups=groups[:4])
+    np.testing.assert_array_equal(first.resistance, got.resistance[:4])

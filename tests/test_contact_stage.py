@@ -12,6 +12,8 @@ from pipeline.bench import contact as bench_contact
 from pipeline.cli import main
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, load_scenario
+from pipeline.physics import spot_models
+from pipeline.physics.asperity import area_fraction
 from pipeline.physics.grid import cell_centres
 from pipeline.stages import contact
 from tests.conftest import SMALL_OVERRIDES
@@ -32,7 +34,7 @@ def test_dataset_contract(ds, small):
         assert ds[name].dims == ("delta", "r")
     for name in SCALARS:
         assert ds[name].dims == ("delta",)
-    for name in ("spot_area", "spot_radius"):
+    for name in ("spot_area", "spot_radius", "spot_separation"):
         assert ds[name].dims == ("delta", "y", "x")
     for name in list(ds.data_vars) + list(ds.coords):
         assert ds[name].attrs["units"] and ds[name].attrs["long_name"], name
@@ -40,7 +42,12 @@ def test_dataset_contract(ds, small):
     np.testing.assert_array_equal(ds.y, ds.x)
     np.testing.assert_allclose(ds.delta, small.deltas)
     np.testing.assert_allclose(ds.delta_sigma, np.asarray(small.deltas) / small.roughness.sigma)
-    np.testing.assert_allclose(ds.spot_radius, np.sqrt(ds.spot_area / np.pi))
+    rough = small.roughness
+    assert small.contact.spots == "expected" and ds.attrs["spots"] == "expected"
+    np.testing.assert_allclose(ds.spot_radius, spot_models.expected_radius(ds.spot_separation, rough.sigma, rough.beta),
+                               rtol=1e-14)
+    np.testing.assert_allclose(ds.spot_area, area_fraction(ds.spot_separation, rough.sigma, rough.eta, rough.beta)
+                               * small.cell_size**2, rtol=1e-14)
     assert np.all(ds.residual <= small.contact.tolerance)
 
 
@@ -106,7 +113,7 @@ def test_window_corner_outside_radial_domain(tmp_path, capsys):
                  "--data-dir", str(tmp_path), "--no-progress"])
     assert code == 2
     err = capsys.readouterr().err
-    assert "contact.r_max = 0.25 truncates the contact" in err and "need r_max >= 0.2842 (R*)" in err
+    assert "contact.r_max = 0.25 truncates the contact" in err and "need r_max >= 0.2542 (R*)" in err
     assert target.read_text() == "previous"
 
 
@@ -130,7 +137,8 @@ def test_window_check_of_the_stage_itself(small):
         ("contact.radial_grid=log", "contact.radial_grid = 'log' is not allowed"),
         ("contact.relaxation=1.5", "contact.relaxation = 1.5 is out of range: must be > 0 and <= 1"),
         ("contact.window=0.1", "contact.window = 0.1 truncates the contact: the spots outside it can "
-         "change R by up to 99.2 > cube.crop_tolerance = 1e-06; it must be >= 0.389 (R*, 55 cells)"),
+         "change R by up to 37.1 > cube.crop_tolerance = 1e-06; it must be >= 0.3465 (R*, 49 cells)"),
+        ("contact.spots=disc", "contact.spots = 'disc' is not allowed: must be one of 'mean_area', 'expected', 'asperities'"),
         ("indenter.shape=torus", "indenter.shape = 'torus' is not allowed"),
         ("contact.tolerance=nan", "contact.tolerance = nan is not finite"),
         ("contact.nradial=40", "unknown parameter 'contact.nradial'; did you mean 'contact.n_radial'?"),

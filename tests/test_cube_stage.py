@@ -12,8 +12,8 @@ from scipy.special import erfcinv
 from pipeline import store
 from pipeline.compute import ComputeOptions
 from pipeline.config import load_scenario
-from pipeline.physics import constriction, oxide_field
-from pipeline.stages import cube
+from pipeline.physics import constriction, oxide_field, spot_models
+from pipeline.stages import contact, cube
 from pipeline.stages import oxide as oxide_stage
 
 N = 13
@@ -64,6 +64,8 @@ def _oxide(n: int = N, n_real: int = N_REAL, seed: int = 0) -> xr.Dataset:
 
 def _scenario(**cube_overrides):
     fixed = {"oxide.ensemble": "fixed", "oxide.n_realizations": N_REAL}
+    if cube_overrides.get("weights") == "area":  # the published convention of mean-area spots
+        fixed["contact.spots"] = "mean_area"
     return load_scenario("paper", {**fixed, **{f"cube.{k}": v for k, v in cube_overrides.items()}})
 
 
@@ -243,3 +245,46 @@ def test_mismatched_grids_are_rejected(inputs):
     contact, _ = inputs
     with pytest.raises(ValueError, match="cell centres"):
         _build(_scenario(), contact, _oxide(n=N - 2))
+
+
+@pytest.fixture(scope="module")
+def asperity_inputs(small):
+    asperities = dataclasses.replace(small, contact=dataclasses.replace(small.contact, spots="asperities"))
+    options = ComputeOptions(progress=False)
+    return asperities, contact.build(asperities), oxide_stage.build(asperities, options)
+
+
+def test_asperity_spots_independent_of_chunks_and_workers(asperity_inputs):
+    scenario, contact_ds, oxide_ds = asperity_inputs
+    base = cube.build(scenario, contact_ds, oxide_ds)
+    for chunk, workers in ((1, None), (8, 2)):
+        other_scenario = dataclasses.replace(scenario, cube=dataclasses.replace(scenario.cube, chunk=chunk))
+        other = cube.build(other_scenario, contact_ds, oxide_ds, ComputeOptions(progress=False, workers=workers))
+        for name in ("resistance", "n_conducting", "resistance_clean"):
+            np.testing.assert_array_equal(other[name].values, base[name].values)
+
+
+def test_asperity_spots_are_the_drawn_surface(asperity_inputs):
+    """Each realization's spots are its drawn asperities: counts and the clean surface by hand."""
+    scenario, contact_ds, oxide_ds = asperity_inputs
+    built = cube.build(scenario, contact_ds, oxide_ds)
+    rough = scenario.roughness
+    separation = contact_ds["spot_separation"].values
+    n = separation.shape[-1]
+    psi, threshold = oxide_ds["psi"].values, oxide_ds["threshold"].values
+    for k in (0, 5):
+        z = spot_models.heights(scenario.oxide.seed, k, n, rough.sigma)
+        radius = spot_models.asperity_radius(z[None], separation, rough.beta)
+        for a, z_i in ((0, 0), (2, 1)):
+            mask = psi[a, k] < threshold[z_i, a, k]
+            expected_count = np.count_nonzero((radius > 0) & mask[None], axis=(1, 2))
+            np.testing.assert_array_equal(built["n_conducting"].values[z_i, a, :, k], expected_count)
+            ref = constriction.resistance(mask[None], radius, radius, scenario.cell_size, scenario.material.rho,
+                                np.full(radius.shape[0], n), 0.0, "direct").resistance[0]
+            got = built["resistance"].values[z_i, a, :, k]
+            finite = np.isfinite(ref)
+            np.testing.assert_array_equal(np.isfinite(got), finite)
+            assert np.max(np.abs(got[finite] / ref[finite] - 1), initial=0.0) <= scenario.cube.crop_tolerance
+    # the clean surface: the mean conductance over the first realizations, open circuits counted
+    assert 0.0 < built["clean_open_probability"].values[0] < 1.0  # light load: some surfaces do not touch
+    assert np.all(built["clean_open_probability"].values[1:] == 0.0)

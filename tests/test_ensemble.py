@@ -13,7 +13,7 @@ from pipeline.config import Scenario
 from pipeline.physics import ensemble
 from pipeline.physics.powerlaw import fit_power_law
 from pipeline.stages import contact as contact_stage
-from pipeline.stages import cube, fits
+from pipeline.stages import cube, cube_rounds, fits
 from pipeline.stages import oxide as oxide_stage
 
 OPTIONS = ComputeOptions(progress=False)
@@ -80,15 +80,15 @@ def test_adaptive_counts_stop_where_the_interval_is_reached(adaptive_inputs, ada
     counts = adaptive_cube["n_realizations"].transpose("xi", "lambda").values
     assert counts.min() >= ox.min_realizations and counts.max() <= ox.max_realizations
     assert len(set(counts.ravel().tolist())) > 2  # cells really differ in how many fields they need
-    rule = cube._rule(scenario, adaptive_cube["force"].values, adaptive_cube["force_normalized"].values)
+    rule = cube_rounds.stopping_rule(scenario, adaptive_cube["force"].values, adaptive_cube["force_normalized"].values)
     for (z, a), n in np.ndenumerate(counts):
         resistance = adaptive_cube["resistance"].isel(xi=[z], **{"lambda": a}).values
         assert np.isnan(resistance[..., n:]).all() and not np.isnan(resistance[..., :n]).any()
-        alpha, _ = cube.half_widths(resistance[..., :n], rule)
+        alpha, _ = cube_rounds.half_widths(resistance[..., :n], rule)
         if n < ox.max_realizations:
-            assert alpha[0, n - 1] <= cube.RULE_MARGIN * ox.target_half_width
+            assert alpha[0, n - 1] <= cube_rounds.RULE_MARGIN * ox.target_half_width
         if n > ox.min_realizations:  # no earlier prefix reached it
-            assert np.all(alpha[0, ox.min_realizations - 1 : n - 1] > cube.RULE_MARGIN * ox.target_half_width)
+            assert np.all(alpha[0, ox.min_realizations - 1 : n - 1] > cube_rounds.RULE_MARGIN * ox.target_half_width)
 
 
 @pytest.mark.parametrize(
@@ -127,14 +127,23 @@ def test_fits_use_each_lambdas_realizations_and_flag_the_cap(adaptive_inputs, ad
     ds = fits.build(scenario, adaptive_cube)
     counts = adaptive_cube["n_realizations"].transpose("xi", "lambda").values
     np.testing.assert_array_equal(ds["n_realizations"].transpose("xi", "lambda").values, counts)
+    compared = 0
     for (z, a), n in np.ndenumerate(counts):  # each cell's reduction equals that of its slice alone
         cell = {"xi": [z], "lambda": [a]}
         alone = fits.build(scenario, adaptive_cube.isel({**cell, "realization": slice(0, int(n))}).drop_vars("n_realizations"))
         np.testing.assert_allclose(ds["alpha"].isel(cell), alone["alpha"], rtol=1e-12)
         np.testing.assert_allclose(ds["resistance_quantile"].isel(cell), alone["resistance_quantile"], rtol=1e-12)
+        if ds["curve_within"].isel(cell).item() == 1 == alone["curve_within"].item():  # no interval used
+            np.testing.assert_allclose(ds["curve_coefficients"].isel(cell), alone["curve_coefficients"], atol=1e-12)
+            compared += 1
+    assert compared >= 1
+    fitted = ds["fitted"].values.astype(bool)
+    band = ds["geometric_mean_normalized_ci"].transpose("xi", "lambda", "delta", "bound").values[:, :, fitted]
+    mean = ds["geometric_mean_normalized"].transpose("xi", "lambda", "delta").values[:, :, fitted]
+    assert np.all(band[..., 0] < mean) and np.all(mean < band[..., 1])  # each cell's own resamples
     at_cap = counts >= scenario.oxide.max_realizations
     short = (adaptive_cube["rule_alpha_half_width"].transpose("xi", "lambda").values
-             > cube.RULE_MARGIN * scenario.oxide.target_half_width)
+             > cube_rounds.RULE_MARGIN * scenario.oxide.target_half_width)
     np.testing.assert_array_equal(ds["flagged"].transpose("xi", "lambda").values, (at_cap & short).astype(np.int8))
     assert np.all(ds["alpha_half_width"] > 0) and np.all(ds["gamma_half_width"] > 0)
     # the bootstrap confirms the fast rule's half-widths (both estimate the same standard error)

@@ -152,7 +152,7 @@ def test_other_reductions(small: Scenario, reduction: str) -> None:
 
 
 def test_too_few_fitted_steps_is_a_config_error(small: Scenario) -> None:
-    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "fits.min_force": 1e6})
+    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "fits.fit_range": "force", "fits.min_force": 1e6})
     with pytest.raises(ConfigError, match="fits.min_force"):
         fits.build(scenario, synthetic_cube(scenario))
 
@@ -218,7 +218,7 @@ def test_clean_interval_is_the_least_squares_one(open_step: bool) -> None:
 
 
 def test_clean_interval_undefined_on_two_steps() -> None:
-    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "fits.min_force": 1000.0})
+    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "fits.fit_range": "force", "fits.min_force": 1000.0})
     ds = fits.build(scenario, synthetic_cube(scenario, noise=0.0))
     assert int(ds["fitted"].sum()) == 2
     assert np.all(np.isnan(ds["gamma_clean_ci"])) and np.all(np.isnan(ds["alpha_clean_ci"]))

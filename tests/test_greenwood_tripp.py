@@ -21,6 +21,7 @@ from pipeline.physics.hertz import (
     roughness_parameter,
 )
 from pipeline.physics.indenter import profile
+from pipeline.contact_solution import indenter_profile, layer as _layer, radial_grid
 from pipeline.stages.contact import solve_scenario
 
 
@@ -213,3 +214,48 @@ def test_hertz_limit():
     stiff, _ = _limit_force(1e6)
     assert abs(stiff / hertz - 1) < 2e-4
     assert abs(stiff / hertz - 1) < abs(soft / hertz - 1)
+
+
+def _scene(scenario):
+    """Nodes, influence matrix, profile and layer of a scenario's solve."""
+    r = radial_grid(scenario)
+    layer = _layer(scenario)
+    return r, gt.influence_matrix(r, layer.e_star), indenter_profile(scenario, r), layer
+
+
+def test_stiffness_against_a_central_difference_of_fine_steps(small):
+    """K = -dF/d delta from the linearised system equals (F(delta - e) - F(delta + e)) / 2e."""
+    r, m, z, layer = _scene(small)
+    deltas = np.asarray(small.deltas)
+    stiffness = gt.stiffness(m, z, deltas, layer, gt.solve(m, z, deltas, layer), r)
+    e = 1e-4 * layer.sigma
+
+    def force(delta):
+        (sol,) = gt.solve(m, z, [delta], layer, tolerance=1e-14)
+        assert sol.converged
+        return gt.force_weights(r) @ asperity_pressure(delta + z + sol.displacement, layer.sigma,
+                                                       layer.eta, layer.beta, layer.e_star)
+
+    difference = np.array([(force(d - e) - force(d + e)) / (2 * e) for d in deltas])
+    assert np.all(stiffness > 0)
+    np.testing.assert_allclose(stiffness, difference, rtol=1e-6)
+
+
+def test_stiffness_of_a_stiff_smooth_layer_is_hertz():
+    """As the layer stiffens K -> dF_Hertz/d delta = 2 E* a, a = sqrt(R |delta|)."""
+    radius, e_star, delta = 10e-3, 1.15e11, -20e-6
+    r = gt.radial_nodes(400, 1e-3)
+    m, z = gt.influence_matrix(r, e_star), profile(r, radius=radius)
+    errors = []
+    for stiffening in (1e2, 1e6):
+        layer = gt.Layer(sigma=1e-9, eta=2e8 * stiffening, beta=30e-6, e_star=e_star)
+        (k,) = gt.stiffness(m, z, [delta], layer, gt.solve(m, z, [delta], layer), r)
+        errors.append(abs(k / (2 * e_star * math.sqrt(-radius * delta)) - 1))
+    assert errors[1] < 1e-3 < errors[0]
+
+
+def test_stiffness_needs_one_solution_per_approach():
+    layer = gt.Layer(1, 1, 1, 1)
+    with pytest.raises(ValueError, match="1 solutions for 2 approaches"):
+        gt.stiffness(np.eye(2), np.zeros(2), [0.0, 1.0], layer,
+                     gt.solve(np.eye(2), np.zeros(2), [0.0], layer), np.array([0.0, 1.0]))

@@ -45,7 +45,7 @@ def test_paper_scene_fits_and_plan_prints_every_stage(capsys):
     assert [e.stage for e in estimates] == ["contact", "oxide", "cube", "fits", "surrogate"]
     assert main(["plan"]) == 0
     out = capsys.readouterr().out
-    assert "55 x 55 cells" in out
+    assert "49 x 49 cells" in out
     for stage in ("contact", "oxide", "cube", "fits", "surrogate"):
         assert f"\n{stage}" in out
 

@@ -240,7 +240,7 @@ def test_distributed_futures_draw_the_same_line_with_the_same_result(monkeypatch
 # ------------------------------------------------------------------ the cube's rounds
 def test_cube_labels_each_round_with_the_cells_still_open(monkeypatch, small) -> None:
     from pipeline.stages import contact as contact_stage
-    from pipeline.stages import cube
+    from pipeline.stages import cube, cube_rounds
     from pipeline.stages import oxide as oxide_stage
     from tests.test_ensemble import _adaptive
 
@@ -252,7 +252,7 @@ def test_cube_labels_each_round_with_the_cells_still_open(monkeypatch, small) ->
         labels.append(label)
         return compute(*collections, options=options, label=label)
 
-    monkeypatch.setattr(cube, "compute", spy)
+    monkeypatch.setattr(cube_rounds, "compute", spy)
     counts = cube.build(scenario, contact, oxide, ComputeOptions(progress=False))["n_realizations"].values
     ox, cells = scenario.oxide, counts.size
     assert labels[0] == f"cube round 1 ({cells} cells, {ox.min_realizations} realizations each)"

@@ -24,7 +24,8 @@ from pipeline.store import atomic_path
 __all__ = ["BENCHMARKS", "run_benchmarks", "summary_lines"]
 
 BENCHMARKS: tuple[str, ...] = (
-    "contact", "oxide", "cube", "point", "scaling", "predict", "convergence", "stability", "frontier",
+    "contact", "oxide", "cube", "point", "scaling", "predict", "convergence", "stability", "frontier", "spots",
+    "biases",
 )
 
 

@@ -15,7 +15,7 @@ Three sweeps, each against a reference computed in the same process:
   the width of the bootstrap intervals of alpha and gamma per (xi, lambda), and the time
   (oxide and cube prorated to n from one timed run of N, plus the timed fits).
 * prefix (from an existing adaptive ``<data_dir>/cube.nc``, else skipped with a note): per
-  (xi, lambda), the fast rule's half-widths of alpha and gamma (:func:`pipeline.stages.cube.half_widths`)
+  (xi, lambda), the fast rule's half-widths of alpha and gamma (:func:`pipeline.stages.cube_rounds.half_widths`)
   at log-spaced prefixes n = 50 .. the cell's count, and the cube time prorated to n.
 
 ``make bench`` writes ``<data_dir>/bench/frontier.nc`` (:func:`write`) and its figures
@@ -224,9 +224,9 @@ def prefix_curve(scenario: Scenario, cube_ds: xr.Dataset, cube_seconds: float) -
         (absolute) and ``prefix_seconds``, each (cube_xi, cube_lambda, prefix_step); the last
         step is the cell's count, where the half-widths equal the cube's ``rule_*_half_width``.
     """
-    from pipeline.stages import cube
+    from pipeline.stages import cube_rounds
 
-    rule = cube._rule(scenario, cube_ds["force"].values, cube_ds["force_normalized"].values)
+    rule = cube_rounds.stopping_rule(scenario, cube_ds["force"].values, cube_ds["force_normalized"].values)
     resistance = cube_ds["resistance"].transpose("xi", "lambda", "delta", "realization").values
     counts = cube_ds["n_realizations"].transpose("xi", "lambda").values.astype(np.int64)
     per_realization = cube_seconds / counts.sum()
@@ -235,7 +235,7 @@ def prefix_curve(scenario: Scenario, cube_ds: xr.Dataset, cube_seconds: float) -
     alpha, gamma = np.full(shape, np.nan), np.full(shape, np.nan)
     for i, j in np.ndindex(counts.shape):
         n[i, j] = prefix_counts(int(counts[i, j]))
-        a, g = cube.half_widths(resistance[i, j][None, :, : counts[i, j]], rule)
+        a, g = cube_rounds.half_widths(resistance[i, j][None, :, : counts[i, j]], rule)
         alpha[i, j], gamma[i, j] = a[0, n[i, j] - 1], g[0, n[i, j] - 1]
     dims = ("cube_xi", "cube_lambda", "prefix_step")
     return xr.Dataset(

@@ -389,9 +389,17 @@ def _path(size: int, method: str) -> str:
     return auto_method(size) if method == "auto" else method
 
 
+def _map_weights(weights: np.ndarray, k: int, c: slice, groups: np.ndarray | None) -> np.ndarray:
+    """Load step ``k``'s cropped weights of a block's maps: (1, size, size) shared by every map
+    (``groups`` None), else (maps, size, size), map ``b`` taking group ``groups[b]``."""
+    if groups is None:
+        return weights[k, c, c][None]
+    return weights[groups, k, c, c]
+
+
 def _block_pair_sums(
     masks: np.ndarray, weights: np.ndarray, crops: np.ndarray, steps: list[int],
-    pitch: float, method: str, out: np.ndarray,
+    pitch: float, method: str, out: np.ndarray, groups: np.ndarray | None,
 ) -> None:
     """Cropped interaction sums of one block at the load steps ``steps``, into ``out[:, k]``.
 
@@ -400,17 +408,17 @@ def _block_pair_sums(
     """
     n = masks.shape[-1]
     columns = np.ascontiguousarray(masks.transpose(2, 1, 0))
-    weights_xy = weights.transpose(0, 2, 1)
     for k in steps:
         size = int(crops[k])
         c = crop_slice(n, size)
-        u = np.multiply(columns[c, c], weights_xy[k, c, c, None], out=scratch("weights", (size, size, masks.shape[0])))
+        w = _map_weights(weights, k, c, groups).transpose(2, 1, 0)
+        u = np.multiply(columns[c, c], w, out=scratch("weights", (size, size, masks.shape[0])))
         out[:, k] = interaction_sum(u.transpose(2, 1, 0), pitch, method)
 
 
 def _fft_pair_sums(
     masks: np.ndarray, weights: np.ndarray, crops: np.ndarray, steps: list[int],
-    pitch: float, size: int, out: np.ndarray,
+    pitch: float, size: int, out: np.ndarray, groups: np.ndarray | None,
 ) -> None:
     """Cropped interaction sums by the FFT path at the load steps ``steps``, into ``out[:, k]``.
 
@@ -425,24 +433,62 @@ def _fft_pair_sums(
         u = fft_weights(size, crop)
         for start in range(0, batch, size):
             block = masks[start : start + size, c, c]
-            np.multiply(block, weights[k, c, c], out=u[: block.shape[0]])
+            chosen = None if groups is None else groups[start : start + size]
+            np.multiply(block, _map_weights(weights, k, c, chosen), out=u[: block.shape[0]])
             u[block.shape[0] :] = 0.0
             out[start : start + size, k] = np.maximum(interaction_fft_filled(u, pitch), 0.0)
 
 
 def _recompute_uncropped(
     masks: np.ndarray, weights: np.ndarray, pair_sum: np.ndarray, redo: np.ndarray,
-    pitch: float, method: str,
+    pitch: float, method: str, groups: np.ndarray | None,
 ) -> None:
     """Overwrite ``pair_sum[b, k]`` for the flagged entries with whole-window sums, in place."""
     size = block_size(masks.shape[-1])
+    whole = slice(None)
     for k in np.flatnonzero(redo.any(axis=0)):
         rows = np.flatnonzero(redo[:, k])
         for start in range(0, rows.size, size):
             chosen = rows[start : start + size]
-            block = np.zeros((size,) + masks.shape[1:], dtype=bool)
-            block[: chosen.size] = masks[chosen]
-            pair_sum[chosen, k] = interaction_sum(block * weights[k], pitch, method)[: chosen.size]
+            block = np.zeros((size,) + masks.shape[1:])
+            block[: chosen.size] = masks[chosen] * _map_weights(weights, k, whole, None if groups is None else groups[chosen])
+            pair_sum[chosen, k] = interaction_sum(block, pitch, method)[: chosen.size]
+
+
+def _spot_sums(
+    masks: np.ndarray, radius: np.ndarray, weights: np.ndarray, crops: np.ndarray,
+    groups: np.ndarray | None,
+) -> tuple[Callable[[np.ndarray, np.ndarray, np.ndarray], None], int]:
+    """The spot sums of a block of masks, and the most maps a block of them should hold.
+
+    Returns a function ``fill(block, rows, out)`` writing the conducting count, ``sum a``,
+    ``sum w`` and the weight outside the crop of each map of ``block`` (flattened (maps, n^2)
+    float masks) into ``out[:, rows]`` (each (maps, n_delta)). Shared spots take one GEMM per
+    table; per-map spots (``groups``) one GEMV per map over the stacked tables of its group,
+    whose result does not depend on the block.
+    """
+    n = masks.shape[-1]
+    lead = radius.shape[:-3]
+    n_delta = radius.shape[-3]
+    outside = np.ones((n_delta, n, n))
+    for k, size in enumerate(crops):
+        c = crop_slice(n, int(size))
+        outside[k, c, c] = 0.0
+    tables = np.stack([(radius > 0).astype(np.float64), radius, weights, weights * outside], axis=-4)
+    tables = tables.reshape(lead + (4, n_delta, n * n))
+    if groups is None:
+        def fill(block: np.ndarray, rows: slice, out: np.ndarray) -> None:
+            for i, table in enumerate(tables):
+                out[i, rows] = block @ table.T
+        # The shared tables are read once per block: up to BLOCK maps within SUMS_WORK_BYTES.
+        return fill, max(1, min(BLOCK, SUMS_WORK_BYTES // (8 * n * n)))
+    stacked = tables.reshape(tables.shape[0], 4 * n_delta, n * n)
+
+    def fill_each(block: np.ndarray, rows: slice, out: np.ndarray) -> None:
+        mine = groups[rows]
+        for b in range(min(block.shape[0], mine.size)):
+            out[:, rows.start + b] = (stacked[mine[b]] @ block[b]).reshape(4, n_delta)
+    return fill_each, block_size(n)
 
 
 def resistance(
@@ -454,6 +500,8 @@ def resistance(
     crops: np.ndarray,
     tolerance: float,
     method: str = "auto",
+    *,
+    groups: np.ndarray | None = None,
 ) -> ChunkResult:
     """Greenwood's resistance of every (mask, load step) pair.
 
@@ -462,7 +510,8 @@ def resistance(
     masks
         Cells whose spot centre is free of oxide, bool, shape (batch, n, n) as (y, x).
     radius
-        Spot radii ``a_i`` per load step, shape (n_delta, n, n), in m; 0 means no spot.
+        Spot radii ``a_i`` per load step, shape (n_delta, n, n), in m; 0 means no spot. With
+        ``groups``: one such set per group, shape (n_groups, n_delta, n, n).
     weights
         Interaction weights per load step, same shape: ``radius`` or the cell contact areas.
     pitch
@@ -475,6 +524,10 @@ def resistance(
         Entries whose crop bound exceeds this are recomputed on the whole window.
     method
         Interaction algorithm (see :func:`interaction_sum`).
+    groups
+        Which set of spots each map has, int (batch,), for spots that differ between maps (the
+        ``asperities`` discretization draws them per realization); None: one set for all. A
+        map's result is the same whatever other maps share its batch.
 
     Returns
     -------
@@ -482,34 +535,25 @@ def resistance(
         Arrays of shape (batch, n_delta).
     """
     batch, n = masks.shape[0], masks.shape[-1]
-    n_delta = radius.shape[0]
-    spots = (radius > 0).reshape(n_delta, n * n).astype(np.float64)
-    a_flat = radius.reshape(n_delta, n * n)
-    w_flat = weights.reshape(n_delta, n * n)
-    outside = np.ones((n_delta, n, n))
-    for k, size in enumerate(crops):
-        c = crop_slice(n, int(size))
-        outside[k, c, c] = 0.0
-    w_out = (weights * outside).reshape(n_delta, n * n)
+    n_delta = radius.shape[-3]
     size = block_size(n)
-    # The spot sums read four (n_delta, n^2) tables per block: in blocks of whole pair-sum
-    # blocks, up to BLOCK maps within SUMS_WORK_BYTES, whatever the (small) FFT blocks.
-    sums_size = size * max(1, min(BLOCK, SUMS_WORK_BYTES // (8 * n * n)) // size)
+    fill, per_block = _spot_sums(masks, radius, weights, crops, groups)
+    sums_size = size * max(1, per_block // size)
     padded_batch = -(-batch // sums_size) * sums_size
     sums = np.empty((4, padded_batch, n_delta))
     pair = np.empty((padded_batch, n_delta))
     fft_steps = [k for k, crop in enumerate(crops) if _path(int(crop), method) == "fft"]
     other_steps = [k for k in range(n_delta) if k not in fft_steps]
+    padded_groups = None if groups is None else np.concatenate([groups, np.zeros(padded_batch - batch, int)])
     for start, block in zip(range(0, padded_batch, sums_size), _blocks(masks, sums_size)):
         m = scratch("masks", (sums_size, n * n))
         np.copyto(m, block.reshape(sums_size, n * n))
-        rows = slice(start, start + sums_size)
-        for i, table in enumerate((spots, a_flat, w_flat, w_out)):
-            sums[i, rows] = m @ table.T
+        fill(m, slice(start, start + sums_size), sums)
         for sub in range(0, sums_size, size) if other_steps else ():
             part = slice(start + sub, start + sub + size)
-            _block_pair_sums(block[sub : sub + size], weights, crops, other_steps, pitch, method, pair[part])
-    _fft_pair_sums(masks, weights, crops, fft_steps, pitch, size, pair)
+            chosen = None if groups is None else padded_groups[part]
+            _block_pair_sums(block[sub : sub + size], weights, crops, other_steps, pitch, method, pair[part], chosen)
+    _fft_pair_sums(masks, weights, crops, fft_steps, pitch, size, pair, groups)
     count, s_a, s_w, eps = sums[:, :batch]
     pair = pair[:batch]
     n_cond = np.rint(count).astype(np.int32)
@@ -517,7 +561,7 @@ def resistance(
     bound = crop_error_bound(s_a, s_w, eps, r_crop, pitch, rho)
     redo = bound > tolerance
     if redo.any():
-        _recompute_uncropped(masks, weights, pair, redo, pitch, method)
+        _recompute_uncropped(masks, weights, pair, redo, pitch, method, groups)
         bound = np.where(redo, 0.0, bound)
     r, r_self, r_int = greenwood_terms(s_a, s_w, pair, n_cond, rho)
     return ChunkResult(r, r_self, r_int, n_cond, bound, int(redo.sum()))

@@ -14,79 +14,34 @@ import xarray as xr
 
 from pipeline.compute import ComputeOptions
 from pipeline.config import AUTO, ConfigError, Scenario
+from pipeline.contact_solution import indenter_profile, radial_grid, solve, solve_with_stiffness
 from pipeline.domains import resolve
 from pipeline.physics import greenwood_tripp as gt
-from pipeline.physics import hertz, spots
+from pipeline.physics import hertz, spot_models, spots
 from pipeline.physics.asperity import area_fraction, asperity_pressure
 from pipeline.physics.grid import cell_centres
-from pipeline.physics.indenter import profile
 from pipeline.store import write_dataset
 
 __all__ = ["build", "run", "radial_grid", "indenter_profile", "solve_scenario", "fields"]
 
-#: Rigid gap (units of sigma) beyond which the graded grid coarsens: F_{3/2}(4) / F_{3/2}(0) ~ 1e-5.
-_FINE_GAP = 4.0
 _FIELD = ("delta", "r")
+_RADIUS_NAMES = {
+    "mean_area": "spot radius sqrt(A_i / pi) (mean_area spots)",
+    "expected": "spot radius sqrt(beta) F_1/2(h): expected sum of asperity radii in the cell (expected spots)",
+    "asperities": "mean spot radius sqrt(beta) F_1/2(h) over realizations (asperity spots are drawn in the cube)",
+}
 _SPOTS = ("delta", "y", "x")
-
-
-def indenter_profile(scenario: Scenario, r: np.ndarray) -> np.ndarray:
-    """The scenario's indenter profile z(r), m."""
-    ind = scenario.indenter
-    return profile(
-        r,
-        ind.shape,
-        radius=ind.radius,
-        cone_angle=ind.cone_angle,
-        punch_radius=ind.punch_radius,
-        edge_radius=ind.edge_radius,
-    )
-
-
-def radial_grid(scenario: Scenario, n_radial: int | None = None) -> np.ndarray:
-    """Radial nodes of the solve, m (``contact.radial_grid``, ``n_radial`` overrides the scenario)."""
-    c = scenario.contact
-    n = c.n_radial if n_radial is None else n_radial
-    r_max = c.r_max * scenario.indenter.radius
-    if c.radial_grid == "uniform":
-        return gt.radial_nodes(n, r_max)
-    probe = np.linspace(0.0, r_max, 4097)
-    gap = min(scenario.deltas) + indenter_profile(scenario, probe)
-    reach = gap < _FINE_GAP * scenario.roughness.sigma
-    r_fine = probe[np.nonzero(reach)[0][-1]] + probe[1] if reach.any() else probe[1]
-    return gt.graded_nodes(n, r_max, r_fine)
-
-
-def _layer(scenario: Scenario) -> gt.Layer:
-    rough = scenario.roughness
-    return gt.Layer(rough.sigma, rough.eta, rough.beta, scenario.material.E_star)
 
 
 def solve_scenario(
     scenario: Scenario, *, solver: str | None = None, n_radial: int | None = None,
     tolerance: float | None = None,
 ) -> tuple[np.ndarray, list[gt.Solution]]:
-    """Radial nodes (m) and the Greenwood–Tripp solution of every approach.
-
-    ``solver``, ``n_radial`` and ``tolerance`` override the scenario (used by the benchmark).
-    """
+    """Radial nodes (m) and the Greenwood–Tripp solution of every approach, ``auto`` domains
+    resolved first (see :func:`pipeline.contact_solution.solve`)."""
     if scenario.contact.r_max == AUTO:
         scenario = resolve(scenario)
-    c = scenario.contact
-    r = radial_grid(scenario, n_radial)
-    matrix = gt.influence_matrix(r, scenario.material.E_star)
-    sols = gt.solve(
-        matrix,
-        indenter_profile(scenario, r),
-        scenario.deltas,
-        _layer(scenario),
-        solver=solver or c.solver,
-        tolerance=tolerance or c.tolerance,
-        max_iterations=c.max_iterations,
-        relaxation=c.relaxation,
-        fixed_point_tolerance=c.fixed_point_tolerance,
-    )
-    return r, sols
+    return solve(scenario, solver=solver, n_radial=n_radial, tolerance=tolerance)
 
 
 def fields(scenario: Scenario, r: np.ndarray, sols: list[gt.Solution]) -> dict[str, np.ndarray]:
@@ -104,20 +59,33 @@ def fields(scenario: Scenario, r: np.ndarray, sols: list[gt.Solution]) -> dict[s
     }
 
 
-def _cell_area_fraction(scenario: Scenario, r: np.ndarray, u: np.ndarray, nodal_area: np.ndarray,
-                        r_cells: np.ndarray) -> np.ndarray:
-    """A* at the cell centres, (delta, y, x), by the scenario's interpolation rule."""
+def _cell_spots(scenario: Scenario, r: np.ndarray, u: np.ndarray, nodal_area: np.ndarray,
+                r_cells: np.ndarray) -> dict[str, np.ndarray]:
+    """Separation (m), spot area (m^2) and spot radius (m) at the cell centres, (delta, y, x).
+
+    The separation is the spline of the displacement at the cells; the area is A* dx^2 with A*
+    by ``contact.area_interpolation``; the radius by ``contact.spots``
+    (:func:`pipeline.physics.spot_models.cell_radius`; ``mean_area`` keeps ``sqrt(A / pi)`` of
+    the interpolated area).
+    """
     rough = scenario.roughness
     try:
         spots.check_inside(r, r_cells)
     except ValueError as exc:
         raise ConfigError(f"contact.window = {scenario.contact.window!r}: {exc}") from None
-    if scenario.contact.area_interpolation == "area_fraction":
-        return spots.interpolate_linear(r, nodal_area, r_cells)
     u_cells = spots.interpolate_smooth(r, u, r_cells)
     deltas = np.asarray(scenario.deltas)[:, None, None]
     h_cells = deltas + indenter_profile(scenario, r_cells)[None] + u_cells
-    return area_fraction(h_cells, rough.sigma, rough.eta, rough.beta)
+    if scenario.contact.area_interpolation == "area_fraction":
+        fraction = spots.interpolate_linear(r, nodal_area, r_cells)
+    else:
+        fraction = area_fraction(h_cells, rough.sigma, rough.eta, rough.beta)
+    area = spots.spot_areas(fraction, scenario.cell_size)
+    if scenario.contact.spots == "mean_area":
+        radius = spots.spot_radii(area)
+    else:
+        radius = spot_models.cell_radius(h_cells, scenario.contact.spots, rough.sigma, rough.eta, rough.beta)
+    return {"separation": h_cells, "area": area, "radius": radius}
 
 
 def _hertz(scenario: Scenario, r: np.ndarray, force: np.ndarray) -> dict[str, np.ndarray]:
@@ -147,25 +115,30 @@ def build(scenario: Scenario) -> xr.Dataset:
         Coordinates delta (m), delta_sigma, r (m), y, x (m); fields over (delta, r):
         pressure, displacement, separation, area_fraction, hertz_pressure,
         hertz_displacement, hertz_separation; over delta: force, force_normalized,
-        hertz_radius, holm_radius, roughness_parameter, iterations, residual, converged;
-        over (delta, y, x): spot_area, spot_radius; over r: profile. ``auto`` domains are
+        hertz_radius, holm_radius, roughness_parameter, iterations, residual, converged,
+        stiffness (N/m) and barber_conductance (S);
+        over (delta, y, x): spot_area, spot_radius (by ``contact.spots``), spot_separation; over r: profile. ``auto`` domains are
         resolved first (:func:`pipeline.domains.resolve`).
     """
     scenario = resolve(scenario)
-    r, sols = solve_scenario(scenario)
+    r, sols, stiffness = solve_with_stiffness(scenario)
     failed = [d / scenario.roughness.sigma for d, s in zip(scenario.deltas, sols) if not s.converged]
     if failed:
         warnings.warn(f"contact: the {scenario.contact.solver} solver did not converge for "
                       f"delta/sigma = {', '.join(f'{v:.3g}' for v in failed)}", stacklevel=2)
     f = fields(scenario, r, sols)
     x = cell_centres(scenario.n_cells, scenario.cell_size)
-    cells = _cell_area_fraction(scenario, r, f["u"], f["area"], spots.cell_radii(x, x))
-    spot_area = spots.spot_areas(cells, scenario.cell_size)
+    cells = _cell_spots(scenario, r, f["u"], f["area"], spots.cell_radii(x, x))
     data_vars = {
         **_continuous_vars(scenario, r, f),
         **_scalar_vars(scenario, f["force"], sols),
-        "spot_area": _var(_SPOTS, spot_area, "spot contact area A*(r_i) dx^2", "m2"),
-        "spot_radius": _var(_SPOTS, spots.spot_radii(spot_area), "spot radius sqrt(A_i / pi)", "m"),
+        "stiffness": _var(("delta",), stiffness, "contact stiffness K = -dF/d delta (exact linearisation of the "
+                          "discretised Greenwood-Tripp system)", "N m-1"),
+        "barber_conductance": _var(("delta",), stiffness / (scenario.material.E_star * scenario.material.rho),
+                                   "Barber's conductance K / (E* rho*) of the clean elastic contact (Eq. 1)", "S"),
+        "spot_area": _var(_SPOTS, cells["area"], "cell contact area A*(r_i) dx^2", "m2"),
+        "spot_radius": _var(_SPOTS, cells["radius"], _RADIUS_NAMES[scenario.contact.spots], "m"),
+        "spot_separation": _var(_SPOTS, cells["separation"], "separation of the mean planes at the cell centre", "m"),
     }
     data_vars["holm_radius"] = _var(
         ("delta",), spots.holm_greenwood_radius(data_vars["spot_radius"][1], scenario.cell_size),
@@ -180,7 +153,8 @@ def build(scenario: Scenario) -> xr.Dataset:
         "y": ("y", x, {"long_name": "cell centre y", "units": "m"}),
         "x": ("x", x, {"long_name": "cell centre x", "units": "m"}),
     }
-    attrs = {"cell_size": scenario.cell_size, "hertz_reference": "sphere only (NaN otherwise)"}
+    attrs = {"cell_size": scenario.cell_size, "hertz_reference": "sphere only (NaN otherwise)",
+             "spots": scenario.contact.spots}
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 

@@ -1,8 +1,14 @@
-"""Stage 4: reductions over realizations and power-law fits R' = alpha F'^-gamma (Eq. 25).
+"""Stage 4: reductions over realizations, power-law fits R' = alpha F'^-gamma (Eq. 25) and curves.
 
 Reads ``cube.nc``, writes ``fits.nc``. For every (xi, lambda) the chosen reduction
 (``fits.reduction``, geometric mean by default) of R' is fitted by least squares in log-log
-over the load steps with F >= ``fits.min_force``; the clean surface is fitted the same way.
+over the fitted load steps, F >= ``fits.min_force`` (N) or, with ``fits.fit_range =
+"force_normalized"``, F' >= ``fits.min_force_normalized``; the clean surface is fitted the same way.
+
+Curve model (:mod:`pipeline.physics.curve_model`): on the same steps, ln R' of the reduction is
+also fitted by the lowest-order polynomial in ln F' (up to ``fits.curve_max_order``) that lies
+within ``fits.curve_tolerance`` at every fitted step or, failing that, within max(tolerance,
+the step's bootstrap interval of the reduction); the clean curve has no interval.
 
 Uncertainty: percentile bootstrap over realizations (``fits.n_bootstrap`` resamples, seed
 ``fits.seed``, level ``fits.confidence``): each resample redraws the realizations with
@@ -21,6 +27,7 @@ from __future__ import annotations
 
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -28,6 +35,7 @@ from scipy import stats
 
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
+from pipeline.physics.curve_model import CurveFit, fit_curve
 from pipeline.physics.powerlaw import (
     bootstrap_log_mean,
     bootstrap_median,
@@ -43,28 +51,46 @@ __all__ = ["build", "run"]
 GRID = ("xi", "lambda")
 
 
-def fitted_steps(scenario: Scenario, force: xr.DataArray) -> xr.DataArray:
-    """Boolean mask (delta) of the load steps with F >= fits.min_force.
+def fit_range(scenario: Scenario, force: Any, force_normalized: Any) -> tuple[str, float, Any, str]:
+    """What selects the fitted load steps: the parameter's key, its threshold, the loads it is
+    compared with (``force`` in N or ``force_normalized``, as given) and their unit."""
+    f = scenario.fits
+    if f.fit_range == "force":
+        return "min_force", f.min_force, force, " N"
+    return "min_force_normalized", f.min_force_normalized, force_normalized, ""
+
+
+def fitted_steps(scenario: Scenario, force: xr.DataArray, force_normalized: xr.DataArray) -> xr.DataArray:
+    """Boolean mask (delta) of the fitted load steps: F >= fits.min_force (N) or, with
+    ``fits.fit_range = "force_normalized"``, F' >= fits.min_force_normalized.
 
     Raises
     ------
     ConfigError
         If fewer than two steps qualify.
     """
-    mask = force >= scenario.fits.min_force
+    key, threshold, values, unit = fit_range(scenario, force, force_normalized)
+    mask = values >= threshold
     if int(mask.sum()) < 2:
         raise ConfigError(
-            f"fits.min_force = {scenario.fits.min_force:g} is out of range: only "
-            f"{int(mask.sum())} load step(s) reach it (forces {force.min().item():.3g}.."
-            f"{force.max().item():.3g} N); a fit needs >= 2"
+            f"fits.{key} = {threshold:g} is out of range: only "
+            f"{int(mask.sum())} load step(s) reach it (forces {values.min().item():.3g}.."
+            f"{values.max().item():.3g}{unit}); a fit needs >= 2"
         )
     return mask
 
 
+def _range_label(scenario: Scenario) -> str:
+    """The fitted steps' rule in words."""
+    f = scenario.fits
+    return f"F >= {f.min_force:g} N" if f.fit_range == "force" else f"F' >= {f.min_force_normalized:g}"
+
+
 def _bootstrap(
     scenario: Scenario, normalized: np.ndarray, force_n: np.ndarray, counts: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Bootstrap alpha and gamma, each shaped (xi, lambda, resample).
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Bootstrap alpha and gamma, each shaped (xi, lambda, resample), and the interval of the
+    reduction at every fitted step, (xi, lambda, step, bound).
 
     ``normalized`` holds R' on the fitted steps, shape (xi, lambda, step, realization); cell
     (xi, lambda) uses its first ``counts[xi, lambda]`` realizations.
@@ -72,25 +98,27 @@ def _bootstrap(
     rng = np.random.default_rng(scenario.fits.seed)
     alpha = np.empty(counts.shape + (scenario.fits.n_bootstrap,))
     gamma = np.empty_like(alpha)
+    band = np.empty(counts.shape + (normalized.shape[2], 2))
     for n in np.unique(counts):  # ascending
         table = resample_counts(int(n), scenario.fits.n_bootstrap, rng)
         if np.all(counts == n):  # one count (a fixed ensemble): the whole grid at once
             return _bootstrap_fit(scenario, normalized[..., :n], force_n, table)
         cells = np.nonzero(counts == n)
-        alpha[cells], gamma[cells] = _bootstrap_fit(scenario, normalized[..., :n][cells], force_n, table)
-    return alpha, gamma
+        alpha[cells], gamma[cells], band[cells] = _bootstrap_fit(scenario, normalized[..., :n][cells], force_n, table)
+    return alpha, gamma, band
 
 
 def _bootstrap_fit(
     scenario: Scenario, values: np.ndarray, force_n: np.ndarray, table: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """alpha and gamma (..., resample) of the resamples ``table`` of ``values`` (..., step, realization)."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """alpha and gamma (..., resample) of the resamples ``table`` of ``values`` (..., step,
+    realization), and the interval of the reduction at every step (..., step, bound)."""
     if scenario.fits.reduction == "median":
         reduced = bootstrap_median(values, table)
     else:
         reduced = bootstrap_log_mean(values, table, scenario.fits.reduction == "geometric_mean")
     fit = fit_power_law(force_n, np.moveaxis(reduced, -1, -2))
-    return fit.alpha, fit.gamma
+    return fit.alpha, fit.gamma, _interval(reduced, scenario.fits.confidence)
 
 
 def _counts(cube: xr.Dataset) -> np.ndarray:
@@ -220,13 +248,14 @@ def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     scale = scenario.resistance_scale
     counts = _counts(cube)
     ds = _reduce(resistance, counts, scale)
-    mask = fitted_steps(scenario, cube["force"])
+    mask = fitted_steps(scenario, cube["force"], cube["force_normalized"])
     force_n = cube["force_normalized"].values
     center = ds[f"{scenario.fits.reduction}_normalized"]
 
     fit = fit_power_law(force_n, center.values, mask.values)
     steps = np.flatnonzero(mask.values)
-    boot_alpha, boot_gamma = _bootstrap(scenario, resistance.values[:, :, steps, :] / scale, force_n[steps], counts)
+    boot_alpha, boot_gamma, step_band = _bootstrap(
+        scenario, resistance.values[:, :, steps, :] / scale, force_n[steps], counts)
     bound = ("bound", ["lower", "upper"])
     level = f"{100 * scenario.fits.confidence:g} % percentile bootstrap over realizations"
 
@@ -242,19 +271,51 @@ def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     ds["fit_residual_rms"] = (GRID, fit.residual_rms, {"units": "1", "long_name": "RMS of the log residuals"})
     ds["n_fitted"] = (GRID, fit.n_points, {"units": "1", "long_name": "finite fitted steps"})
     ds["fitted"] = mask.astype("int8").assign_attrs(
-        units="1", long_name=f"1 where the step was fitted (F >= {scenario.fits.min_force:g} N)"
+        units="1", long_name=f"1 where the step was fitted ({_range_label(scenario)})"
     )
+    interval = np.full(center.shape + (2,), np.nan)
+    interval[:, :, steps] = step_band
+    ds[f"{scenario.fits.reduction}_normalized_ci"] = (GRID + ("delta", "bound"), interval, {
+        "units": "1", "long_name": f"confidence interval of the {scenario.fits.reduction} of R' at each fitted step",
+        "method": level})
+    _curve_vars(ds, fit_curve(force_n, center.values, scenario.fits.curve_tolerance, interval, mask.values,
+                              scenario.fits.curve_max_order), "", f"the {scenario.fits.reduction} of R'")
 
     clean = cube["resistance_clean"]
     ds["resistance_clean"] = clean.assign_attrs(units="ohm", long_name="clean-surface resistance")
     ds["resistance_clean_normalized"] = (clean / scale).assign_attrs(units="1", long_name="clean-surface R'")
     for name, value in _clean_fit(scenario, (clean / scale).values, force_n, mask.values).items():
         ds[name] = value
+    _curve_vars(ds, fit_curve(force_n, (clean / scale).values, scenario.fits.curve_tolerance, None, mask.values,
+                              scenario.fits.curve_max_order), "_clean", "the clean-surface R'")
     ds["resistance_scale"] = ((), scale, {"units": "ohm", "long_name": "2 rho*/sqrt(R* sigma): R' = R / resistance_scale"})
     _label_coords(ds)
     ds.attrs["reduction"] = scenario.fits.reduction
+    ds.attrs["fit_range"] = _range_label(scenario)
+    ds.attrs["curve_model"] = (
+        f"ln R' = sum_k curve_coefficients[k] (ln F')^k; order: the lowest of 1..{scenario.fits.curve_max_order} "
+        f"within {100 * scenario.fits.curve_tolerance:g} % at every fitted step, else within "
+        f"max({100 * scenario.fits.curve_tolerance:g} %, the step's interval)")
     ds.attrs["normalization"] = "R' = R sqrt(R* sigma)/(2 rho*); F' = 2F/(E* sqrt(R* sigma^3)) (Eq. 25)"
     return ds
+
+
+def _curve_vars(ds: xr.Dataset, curve: CurveFit, suffix: str, what: str) -> None:
+    """Store a :class:`CurveFit` of ``what`` in ``ds`` as ``curve_*<suffix>`` (and the ``power`` coordinate)."""
+    dims = GRID if curve.order.ndim == 2 else ()
+    ds.coords["power"] = ("power", np.arange(curve.coefficients.shape[-1]),
+                          {"units": "1", "long_name": "power k of ln F' in the curve model"})
+    ds[f"curve_coefficients{suffix}"] = (dims + ("power",), curve.coefficients, {
+        "units": "1", "long_name": f"coefficients c_k of ln R' = sum_k c_k (ln F')^k fitted to {what}"})
+    ds[f"curve_order{suffix}"] = (dims, curve.order.astype(np.int32), {
+        "units": "1", "long_name": f"order of the curve model of {what} (0: not fitted)"})
+    ds[f"curve_max_error{suffix}"] = (dims, curve.max_error, {
+        "units": "1", "long_name": f"largest relative error |R'_curve / R' - 1| over the fitted steps of {what}"})
+    ds[f"curve_within{suffix}"] = (dims, curve.within, {
+        "units": "1", "long_name": f"where the curve of {what} is at every fitted step: 1 within the relative "
+                                   "tolerance, 2 within max(tolerance, the step's interval) only, 0 neither"})
+    ds[f"curve_residual{suffix}"] = (dims + ("delta",), curve.residual, {
+        "units": "1", "long_name": f"ln R'_curve - ln R' of {what} on the fitted steps"})
 
 
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:

@@ -1,0 +1,53 @@
+"""Barber's check of every spot discretization: kappa / kappa_Barber against F.
+
+Reads ``<data_dir>/bench/spots.json`` (``g2tom bench --only spots``, part of ``make run``) and
+draws, for mean_area, expected and asperities spots, the clean conductance of Greenwood's form,
+the point model and the point model with the lattice term over Barber's K / (E* rho*). Writes
+nothing when the benchmark has not run.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from pipeline.config import Scenario
+
+__all__ = ["write"]
+
+STYLES = {"greenwood": "-", "point": "--", "point_lattice": ":"}
+COLOURS = {"mean_area": "tab:red", "expected": "tab:blue", "asperities": "tab:green"}
+
+
+def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
+    """``barber_spots.png`` from the spots benchmark, or nothing without it."""
+    path = Path(data_dir) / "bench" / "spots.json"
+    if not path.is_file():
+        return []
+    result = json.loads(path.read_text())
+    fig, (full, near) = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
+    for spots, colour in COLOURS.items():
+        entry = result[spots]
+        for model, ratio in entry["barber_ratio"].items():
+            values = np.asarray(ratio, float)
+            if not np.isfinite(values).any():
+                continue
+            for ax in (full, near):
+                ax.plot(entry["force_N"], values, STYLES[model], color=colour, marker=".",
+                        label=f"{spots}, {model.replace('_', ' + ')}")
+    for ax in (full, near):
+        ax.axhline(1.0, color="k", lw=0.8)
+        ax.set_xscale("log")
+        ax.set_xlabel("F (N)")
+    full.set_yscale("log")
+    full.set_ylabel("kappa / kappa_Barber (clean)")
+    near.set_ylim(0.9, 1.1)
+    near.set_title("near 1 (expected and asperities)")
+    full.legend(fontsize=7)
+    target = out_dir / "barber_spots.png"
+    fig.savefig(target, dpi=120)
+    plt.close(fig)
+    return [target]

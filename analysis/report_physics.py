@@ -1,0 +1,80 @@
+"""Report sections on the physics: Barber's check of the clean surface, and how g2tom's numbers
+differ from the paper's (the chain of biases measured by ``g2tom bench --only biases``)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from analysis.report_blocks import Block, table
+from pipeline.config import Scenario
+from pipeline.store import StaleInputError, read_stage
+
+__all__ = ["barber_blocks", "bias_blocks"]
+
+
+def bias_blocks(data_dir: Path) -> list[Block]:
+    """Section "How g2tom's numbers differ from the paper's, and why", from ``bench/biases.json``."""
+    blocks = [Block("h2", "How g2tom's numbers differ from the paper's, and why")]
+    path = Path(data_dir) / "bench" / "biases.json"
+    if not path.is_file():
+        return blocks + [Block("p", "Not available: run `g2tom bench --only biases` (part of `make run`).")]
+    result = json.loads(path.read_text())
+    chain = result["chain"] + [result["side"]]
+    loads = chain[0]["loads_N"]
+    study = result["study"]
+    blocks.append(Block("p", (
+        "From the published study's conventions to today's default, one change at a time, every run on the same "
+        f"oxide fields ({study['oxide.n_realizations']} fixed realizations per (xi, lambda), seeds shared; the "
+        "spectral period changes the fields' lattice by design). alpha and gamma: the geometric-mean power law over "
+        f"the steps with F >= {study['fits.min_force']:g} N; R: geometric mean (mOhm) at the load steps nearest "
+        f"{', '.join(f'{f:.4g}' for f in loads)} N. The last row replaces expected spots by asperities drawn per "
+        "realization.")))
+    rows = [[r["step"], r["n_cells"], r["clean"]["alpha"], r["clean"]["gamma"],
+             *[1e3 * v for v in r["clean"]["resistance"]]] for r in chain]
+    blocks.append(table(["step (clean surface)", "cells", "alpha", "gamma",
+                         *[f"R at {f:.4g} N" for f in loads]], rows))
+    cells = [(c["xi"], c["lambda"]) for c in chain[0]["cells"]]
+    rows = [[r["step"], *[f"{c['alpha']:.4g} / {c['gamma']:.3g}" for c in r["cells"]],
+             *[1e3 * v for v in r["cells"][-1]["resistance"]]] for r in chain]
+    last = cells[-1]
+    blocks.append(table(["step (oxidized)", *[f"alpha / gamma at xi {x:g}, lambda {lam:g}" for x, lam in cells],
+                         *[f"R at {f:.4g} N (xi {last[0]:g}, lambda {last[1]:g})" for f in loads]], rows))
+    return blocks
+
+
+def barber_blocks(data_dir: Path, scenario: Scenario) -> list[Block]:
+    """Section "Barber's theorem": the clean conductance of each model over K / (E* rho*) at every step."""
+    blocks = [Block("h2", "Barber's theorem: the clean surface's check")]
+    try:
+        contact = read_stage(data_dir, "contact", scenario)
+        cube = read_stage(data_dir, "cube", scenario)
+    except (FileNotFoundError, StaleInputError, OSError) as exc:
+        return blocks + [Block("p", f"Not available: {exc}")]
+    barber = contact["barber_conductance"].values
+    names = [n for n in cube.data_vars if n.startswith("conductance_clean_")]
+    ratios = {n.removeprefix("conductance_clean_"): cube[n].values / barber for n in names}
+    spots = contact.attrs.get("spots", "mean_area")
+    blocks.append(Block("p", (
+        f"Barber's theorem is exact for a clean elastic contact: conductance = K / (E* rho*), with K = -dF/d delta "
+        f"the exact linearisation of the discretised Greenwood-Tripp system. With this run's spots ({spots}), the "
+        "clean conductance over Barber's, worst step: " + "; ".join(
+            f"{name.replace('_', ' + ')} {_worst(r)}" for name, r in ratios.items()) + ".")))
+    if spots == "asperities":
+        blocks.append(Block("p", "Asperity spots: the mean conductance over the drawn surfaces; a surface with no "
+                                 "touching asperity conducts nothing (open circuit), counted at 0."))
+    force = contact["force"].values
+    rows = [[f"{force[k]:.4g}", *[f"{r[k]:.4f}" for r in ratios.values()]] for k in range(force.size)]
+    blocks.append(table(["F (N)", *[f"{n.replace('_', ' + ')} / Barber" for n in ratios]], rows))
+    return blocks
+
+
+def _worst(ratio: np.ndarray) -> str:
+    """The ratio farthest from 1, as text ('not applicable' when all NaN)."""
+    finite = ratio[np.isfinite(ratio)]
+    if finite.size == 0:
+        return "not applicable"
+    worst = finite[np.argmax(np.abs(finite - 1.0))]
+    return f"{worst:.4f} ({100 * (worst - 1):+.2f} %)"

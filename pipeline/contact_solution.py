@@ -1,0 +1,101 @@
+"""The Greenwood–Tripp solve of a scenario: its indenter profile, radial grid and solution.
+
+The glue between a :class:`pipeline.config.Scenario` and :mod:`pipeline.physics.greenwood_tripp`,
+shared by the contact stage and by :mod:`pipeline.domains` (which sizes the domains from a fast
+solve before any stage runs); no I/O. :func:`solve` needs numeric domains
+(:func:`pipeline.domains.resolve` resolves ``auto``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.config import AUTO, Scenario
+from pipeline.physics import greenwood_tripp as gt
+from pipeline.physics.indenter import profile
+
+__all__ = ["indenter_profile", "radial_grid", "layer", "solve", "solve_with_stiffness"]
+
+#: Rigid gap (units of sigma) beyond which the graded grid coarsens: F_{3/2}(4) / F_{3/2}(0) ~ 1e-5.
+_FINE_GAP = 4.0
+
+
+def indenter_profile(scenario: Scenario, r: np.ndarray) -> np.ndarray:
+    """The scenario's indenter profile z(r), m."""
+    ind = scenario.indenter
+    return profile(
+        r,
+        ind.shape,
+        radius=ind.radius,
+        cone_angle=ind.cone_angle,
+        punch_radius=ind.punch_radius,
+        edge_radius=ind.edge_radius,
+    )
+
+
+def radial_grid(scenario: Scenario, n_radial: int | None = None) -> np.ndarray:
+    """Radial nodes of the solve, m (``contact.radial_grid``, ``n_radial`` overrides the scenario)."""
+    c = scenario.contact
+    n = c.n_radial if n_radial is None else n_radial
+    r_max = c.r_max * scenario.indenter.radius
+    if c.radial_grid == "uniform":
+        return gt.radial_nodes(n, r_max)
+    probe = np.linspace(0.0, r_max, 4097)
+    gap = min(scenario.deltas) + indenter_profile(scenario, probe)
+    reach = gap < _FINE_GAP * scenario.roughness.sigma
+    r_fine = probe[np.nonzero(reach)[0][-1]] + probe[1] if reach.any() else probe[1]
+    return gt.graded_nodes(n, r_max, r_fine)
+
+
+def layer(scenario: Scenario) -> gt.Layer:
+    """The asperity layer and modulus of ``scenario``."""
+    rough = scenario.roughness
+    return gt.Layer(rough.sigma, rough.eta, rough.beta, scenario.material.E_star)
+
+
+def _solve(
+    scenario: Scenario, solver: str | None, n_radial: int | None, tolerance: float | None,
+) -> tuple[np.ndarray, np.ndarray, list[gt.Solution]]:
+    """Radial nodes (m), influence matrix (m/Pa) and the solution of every approach."""
+    c = scenario.contact
+    if c.r_max == AUTO:
+        raise ValueError("contact.r_max = 'auto' must be resolved first (pipeline.domains.resolve)")
+    r = radial_grid(scenario, n_radial)
+    matrix = gt.influence_matrix(r, scenario.material.E_star)
+    sols = gt.solve(
+        matrix,
+        indenter_profile(scenario, r),
+        scenario.deltas,
+        layer(scenario),
+        solver=solver or c.solver,
+        tolerance=tolerance or c.tolerance,
+        max_iterations=c.max_iterations,
+        relaxation=c.relaxation,
+        fixed_point_tolerance=c.fixed_point_tolerance,
+    )
+    return r, matrix, sols
+
+
+def solve(
+    scenario: Scenario, *, solver: str | None = None, n_radial: int | None = None,
+    tolerance: float | None = None,
+) -> tuple[np.ndarray, list[gt.Solution]]:
+    """Radial nodes (m) and the Greenwood–Tripp solution of every approach.
+
+    ``solver``, ``n_radial`` and ``tolerance`` override the scenario (used by the benchmark).
+
+    Raises
+    ------
+    ValueError
+        If ``contact.r_max`` is still ``auto``.
+    """
+    r, _, sols = _solve(scenario, solver, n_radial, tolerance)
+    return r, sols
+
+
+def solve_with_stiffness(scenario: Scenario) -> tuple[np.ndarray, list[gt.Solution], np.ndarray]:
+    """:func:`solve` and the contact stiffness ``K = -dF/d delta`` of every approach (N/m), by the
+    exact linearisation of the discretised system (:func:`pipeline.physics.greenwood_tripp.stiffness`)."""
+    r, matrix, sols = _solve(scenario, None, None, None)
+    stiffness = gt.stiffness(matrix, indenter_profile(scenario, r), scenario.deltas, layer(scenario), sols, r)
+    return r, sols, stiffness

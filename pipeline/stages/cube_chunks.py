@@ -1,0 +1,129 @@
+"""The cube's unit of work: the resistance terms of a chunk of oxide fields at every load step.
+
+A dask task regenerates a chunk of fields of one lambda from their seeds
+(:class:`pipeline.stages.oxide.FieldSource`), thresholds them at each oxide fraction and runs
+the scenario's resistance model (:func:`model`) on the conducting masks: Greenwood's closed
+form, Greenwood's form with films, or the point model. With ``asperities`` spots each
+realization brings its own drawn spots (:func:`asperity_spots`).
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import numpy as np
+
+from pipeline.physics import constriction, point_model, spot_models
+
+__all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "field_chunk"]
+
+TERMS = ("resistance", "resistance_self", "resistance_interaction", "n_conducting", "crop_bound")
+#: Extra terms of the point model's iterative solve.
+SOLVER_TERMS = ("iterations", "residual", "error_estimate")
+def model(settings: dict[str, Any]) -> Any:
+    """The resistance function of ``settings["model"]`` with the calling convention of
+    :func:`constriction.resistance`: the point solve, Greenwood with films, or Greenwood."""
+    film = settings["film_resistance"]
+    if settings["model"] == "point":
+        return functools.partial(
+            point_model.resistance, film_resistance=film,
+            solver_tolerance=settings["solver_tolerance"], max_iterations=settings["max_iterations"],
+            criterion=settings["solver_criterion"], lattice_constant=settings["lattice_constant"],
+        )
+    if np.isfinite(film):
+        return functools.partial(point_model.greenwood_resistance, film_resistance=film)
+    return constriction.resistance
+
+
+def terms(settings: dict[str, Any]) -> tuple[str, ...]:
+    """The per-entry terms the model of ``settings`` returns."""
+    return TERMS + SOLVER_TERMS if settings["model"] == "point" else TERMS
+
+
+def _resistance(masks: np.ndarray, radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
+                groups: np.ndarray | None = None) -> constriction.ChunkResult:
+    """Resistance terms of a batch of conducting masks (batch, y, x) at every load step (map
+    ``b`` with the spots ``radius[groups[b]]`` when ``groups`` is given)."""
+    extra = {} if groups is None else {"groups": groups}
+    return model(settings)(
+        masks, radius, weights, settings["pitch"], settings["rho"],
+        settings["crops"], settings["tolerance"], settings["method"], **extra,
+    )
+
+
+def asperity_spots(settings: dict[str, Any], realizations: np.ndarray) -> np.ndarray:
+    """The ``asperities`` discretization's spot radii of ``realizations``, (realization, delta, y, x), m.
+
+    Realization ``k`` draws its asperity heights from its own stream
+    (:func:`pipeline.physics.spot_models.heights`), held over every load step and shared by
+    every (xi, lambda): the surface is one, the oxide fields vary.
+    """
+    seed, sigma, beta = settings["asperities"]
+    separation = settings["separation"]
+    n = separation.shape[-1]
+    return np.stack([
+        spot_models.asperity_radius(spot_models.heights(seed, int(k), n, sigma)[None], separation, beta)
+        for k in realizations
+    ])
+
+
+def _chunk(
+    psi: np.ndarray,
+    threshold: np.ndarray,
+    radius: np.ndarray,
+    weights: np.ndarray,
+    settings: dict[str, Any],
+    realizations: np.ndarray | None = None,
+) -> dict[str, Any]:
+    """Greenwood terms of a chunk of fields.
+
+    Parameters
+    ----------
+    psi
+        Fields, float32, shape (lambda, realization, y, x).
+    threshold
+        Thresholds, float32, shape (xi, lambda, realization).
+    radius, weights
+        Spot radii (m) and interaction weights, shape (delta, y, x).
+    settings
+        ``pitch``, ``rho``, ``crops``, ``tolerance``, ``method`` (and for ``asperities`` spots
+        what :func:`asperity_spots` needs).
+    realizations
+        The realization indices of the fields, for ``asperities`` spots (which then replace
+        ``radius`` and ``weights``); None for spots shared by every realization.
+
+    Returns
+    -------
+    dict
+        The arrays of :data:`TERMS`, shape (xi, lambda, delta, realization), and
+        ``n_uncropped``.
+    """
+    n_xi, n_lam, n_real = threshold.shape
+    n = psi.shape[-1]
+    masks = psi[None] < threshold[..., None, None]
+    groups = None
+    if realizations is not None:  # per-realization spots: map (xi, lambda, r) takes group r
+        radius = weights = asperity_spots(settings, realizations)
+        groups = np.tile(np.arange(n_real), n_xi * n_lam)
+    res = _resistance(masks.reshape(-1, n, n), radius, weights, settings, groups)
+    out: dict[str, Any] = {
+        name: getattr(res, name).reshape(n_xi, n_lam, n_real, -1).transpose(0, 1, 3, 2)
+        for name in terms(settings)
+    }
+    out["n_uncropped"] = res.n_uncropped
+    return out
+
+
+def field_chunk(
+    source: FieldSource, index: int, realizations: np.ndarray, xi_index: np.ndarray,
+    radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
+) -> dict[str, Any]:
+    """Regenerate the fields of ``realizations`` at lambda number ``index`` and run :func:`_chunk`.
+
+    Only the fractions ``xi_index`` are evaluated; returns the terms shaped (xi, delta, realization).
+    """
+    psi, threshold = source.fields(index, realizations)
+    drawn = realizations if settings["spots"] == "asperities" else None
+    out = _chunk(psi[None], threshold[xi_index][:, None], radius, weights, settings, drawn)
+    return {k: (v[:, 0] if k in terms(settings) else v) for k, v in out.items()}
