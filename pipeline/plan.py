@@ -33,27 +33,29 @@ BASE_BYTES = 150 * 2**20
 #: Longest estimated run time accepted (s): beyond it a run is refused before work.
 MAX_SECONDS = 7 * 24 * 3600.0
 #: Seconds per flop-like unit of the models below (measured on the reference machine, one thread).
-_FOLDED_S = 1.35e-10  # per n^3 of one folded map (fixed 400-realization cube of the paper's 55^2 scene,
-                      # --workers 1: 26.1 s for 864,000 maps, 2.85e-5 s each with _MAP_S, fields apart)
+_FOLDED_S = 1.35e-10  # per n^3 of one folded map (fixed 400-realization cubes of the paper's scene on one
+                      # thread: 864,000 maps in 26.1 s at 55^2 cells, 18.7 s at 49^2, fields apart)
 _FFT_S = 3.2e-10      # per P^2 log2 P of one FFT map (ducc0, blocks of 2; fitted to the 229^2 study's
                       # cube, 410 s on two threads: 0.76 ms per map and thread with _MAP_S)
 _MAP_S = 2.0e-9       # per cell of one map (masking, sums), any path
 _LU_S = 5.0e-11       # per n_radial^3 and approach (Newton factorizations and solves)
 _MODE_S = 4.0e-8      # per mode and realization of the oxide coefficients
 _CELL_FFT_S = 5.0e-9  # per n^2 log2 n of one oxide field
-#: Mean realizations per (xi, lambda) of the adaptive ensemble on the paper's scene, measured:
-#: 183,125 over 9 xi x 12 lambda at target_half_width 0.025 (min 400, cap 30,000, batch 1000).
-TYPICAL_REALIZATIONS = 183_125 / 108
+#: Mean realizations per (xi, lambda) of the adaptive ensemble on the paper's scene, measured
+#: (expected spots, fit range F' >= 0.4, 49^2 cells): 361,115 over 9 xi x 12 lambda at
+#: target_half_width 0.025 (min 400, cap 30,000, batch 1000).
+TYPICAL_REALIZATIONS = 361_115 / 108
 TYPICAL_TARGET = 0.025
-#: What the same cube computed: a cell still open gets a whole batch, so 198,400 realizations
-#: (batches included) over the 108 cells, and it regenerated 115,000 fields over the 12 lambdas (a
-#: lambda's fields serve all its open fractions; 76 % of the cells stopped at the first batch).
-TYPICAL_COMPUTED = 198_400 / 108
-TYPICAL_FIELDS = 115_000 / 12
-#: Speed-up of the local threaded scheduler on folded maps (small windows), measured on 2 cores:
-#: the GIL-bound Python of small maps makes two threads slower than one (fixed 400-realization
-#: cube of the paper's scene: 30.4 s on two threads, 26.1 s on one).
-THREADED_FOLDED_SPEEDUP = 26.1 / 30.4
+#: What the same cube computed: a cell still open gets a whole batch, so 386,200 realizations
+#: (batches included) over the 108 cells, and it regenerated 171,200 fields over the 12 lambdas (a
+#: lambda's fields serve all its open fractions; 56 % of the cells stopped at the first batch).
+TYPICAL_COMPUTED = 386_200 / 108
+TYPICAL_FIELDS = 171_200 / 12
+#: Speed-up of the local threaded scheduler over one thread on folded maps (small windows),
+#: measured on 2 cores on the paper's scene (49^2 cells): a fixed 400-realization cube took 18.7 s
+#: on one thread and 12.1 s on two; the adaptive default 164.5 s for 196.5 s of CPU (its late
+#: rounds hold few tasks and end in a serial decision). Beyond two threads it is not measured.
+THREADED_FOLDED_SPEEDUP = {"fixed": 18.71 / 12.09, "adaptive": 196.5 / 164.5}
 #: Commands that need no resolved domains nor resource checks.
 _NO_DOMAINS = ("params", "predict", "roughness")
 #: Stages whose estimate is printed when they are expected to take longer than this (s).
@@ -165,9 +167,10 @@ def _threads(workers: int | None) -> int:
     return max(1, workers or os.cpu_count() or 1)
 
 
-def _map_speedup(n: int, workers: int | None) -> float:
-    """Speed-up of the cube's maps over one thread: local processes scale; the threaded
-    scheduler does on FFT maps (whose constant was fitted on two threads) but not on folded ones."""
+def _map_speedup(n: int, workers: int | None, ensemble: str) -> float:
+    """Speed-up of the cube's maps over one thread: local processes and the threaded scheduler
+    on FFT maps (whose constant was fitted on two threads) scale with the workers; the threaded
+    scheduler on folded maps by :data:`THREADED_FOLDED_SPEEDUP` (measured)."""
     from pipeline.compute import _distributed_available
     from pipeline.physics.constriction import auto_method
 
@@ -176,7 +179,7 @@ def _map_speedup(n: int, workers: int | None) -> float:
     processes = workers is not None and workers > 1 and _distributed_available()  # as pipeline.compute
     if processes or auto_method(n) != "folded":
         return float(_threads(workers))
-    return THREADED_FOLDED_SPEEDUP
+    return min(float(_threads(workers)), THREADED_FOLDED_SPEEDUP[ensemble])
 
 
 def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstimate]:
@@ -232,7 +235,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     spot_maps = 8.0 * n_delta * cells
     cube_mem = psi + t * (task_cube + 3 * spot_maps) + 4 * spot_maps + operators + 2.0 * results
     # the maps of every computed realization (whole batches) and the fields regenerated per lambda
-    speedup = _map_speedup(n, workers)
+    speedup = _map_speedup(n, workers, ox.ensemble)
     per_map = n_xi * n_lam * n_delta * _per_map_seconds(n) / speedup
     per_field = _field_seconds(scenario, n) / speedup
     per_realization = per_map + per_field

@@ -87,13 +87,14 @@ def test_memory_estimate_within_a_factor_2_of_measured_peak(tmp_path, eta):
 
 
 # The default scenario's adaptive cube measured on a quiet 2-core machine (`g2tom cube`, default
-# threaded scheduler, 2026-11-24): 183,125 realizations kept over the 108 (xi, lambda) cells (cube.nc
-# n_realizations), 198,400 computed in whole batches, 115,000 fields, 181.5 s (the plan said 87 s
-# before it counted whole batches, the regenerated fields and the threads' GIL-bound speed-up).
-MEASURED_REALIZATIONS = 183_125
-MEASURED_CUBE_SECONDS = 181.5
-# The same scene with a fixed ensemble of 400: 26.1 s on one thread, 30.4 s on two.
-MEASURED_FIXED_400 = {1: 26.1, None: 30.4}
+# threaded scheduler, 2026-11-24, expected spots, F' >= 0.4, 49^2 cells): 361,115 realizations kept
+# over the 108 (xi, lambda) cells (cube.nc n_realizations), 386,200 computed in whole batches,
+# 171,200 fields, 164.5 s (the plan said 125 s with the counts of the previous fit range, 87 s
+# before it counted whole batches and the regenerated fields).
+MEASURED_REALIZATIONS = 361_115
+MEASURED_CUBE_SECONDS = 164.5
+# The same scene with a fixed ensemble of 400: 18.7 s on one thread, 12.1 s on two.
+MEASURED_FIXED_400 = {1: 18.7, None: 12.1}
 
 
 def test_adaptive_plan_prints_a_range_containing_the_measured_run(capsys):
@@ -102,7 +103,7 @@ def test_adaptive_plan_prints_a_range_containing_the_measured_run(capsys):
     assert counts.adaptive and (counts.low, counts.high) == (400, 30_000)
     assert counts.low * 108 <= MEASURED_REALIZATIONS <= counts.high * 108
     assert counts.typical * 108 == pytest.approx(MEASURED_REALIZATIONS)
-    assert counts.computed * 108 == pytest.approx(198_400)
+    assert counts.computed * 108 == pytest.approx(386_200)
     cube = next(e for e in plan.estimate(scenario) if e.stage == "cube")
     low, high = cube.seconds_range
     assert low < cube.seconds < high and high / low == pytest.approx(30_000 / 400)
@@ -110,8 +111,8 @@ def test_adaptive_plan_prints_a_range_containing_the_measured_run(capsys):
     assert main(["plan"]) == 0
     out = capsys.readouterr().out
     assert "400 .. 30000 realizations per (xi, lambda) (adaptive)" in out
-    assert "43200 .. 3240000 realizations in all, typical 183125" in out
-    assert "computed in whole batches: typical 198400" in out
+    assert "43200 .. 3240000 realizations in all, typical 361115" in out
+    assert "computed in whole batches: typical 386200" in out
     assert f"({low:.3g} .. {high:.3g} s)" in out
 
 
