@@ -247,6 +247,14 @@ def _cmd_atlas(args: argparse.Namespace, scenario: Scenario) -> None:
         args.workers = os.cpu_count() or 1  # a local cluster, one single-threaded scene per core
     path = run_atlas(scenario, AtlasDesign(), args.data_dir, _options(args))
     print(f"atlas: wrote {path}", file=sys.stderr)
+    from pipeline.atlas_fit import write_atlas_surrogate
+
+    target, doc = write_atlas_surrogate(path)
+    held, worst = doc["heldout"], doc["heldout"]["worst"]
+    print(f"atlas: wrote {target}: alpha degree {doc['alpha']['degree']}, gamma degree {doc['gamma']['degree']}; "
+          f"held out: {held['cells_within']} of {held['cells']} cells within max(5 %, interval) at every step; worst "
+          f"{worst['scene']} (xi {worst['xi']:g}, lambda {worst['lambda']:g}, F' {worst['force_normalized']:.3g}): "
+          f"{worst['error']:.3g} vs {worst['allowed']:.3g}", file=sys.stderr)
 
 
 def _cmd_roughness(args: argparse.Namespace, scenario: Scenario) -> None:

@@ -98,3 +98,37 @@ def test_a_refused_scene_stops_the_atlas_before_work(tmp_path) -> None:
     with pytest.raises(ConfigError, match=r"atlas scene d00 \(mu 4, Pi 20\): fits.min_force"):
         atlas.run_atlas(bad, DESIGN, tmp_path)
     assert not (tmp_path / "atlas").exists()
+
+
+def test_atlas_surrogate_fitted_on_design_judged_on_heldout(tmp_path, base, uninterrupted) -> None:
+    from pipeline.atlas_fit import fit_atlas
+
+    doc, rows = fit_atlas(uninterrupted)
+    assert doc["alpha"]["degree"] == 1  # 8 design points: only degree 1 (5 terms) cross-validates
+    assert doc["heldout"]["cells"] == 2 and {r["scene"] for r in rows} == {"h00"}
+    assert doc["domain"]["mu"] == pytest.approx([4.0, 16.0])
+    # one row by hand: ln(alpha F'^-gamma) of the fitted polynomials against the scene's R'
+    from pipeline.physics.atlas_surrogate import AtlasModel
+
+    r = rows[0]
+    models = {p: AtlasModel(doc[p]["transform"], np.array(doc[p]["low"]), np.array(doc[p]["high"]),
+                            np.array(doc[p]["powers"]), np.array(doc[p]["coef"])) for p in ("alpha", "gamma")}
+    args = (np.array([r["xi"]]), np.array([r["lambda"]]), np.array([r["mu"]]), np.array([r["Pi"]]))
+    by_hand = abs(np.log(models["alpha"](*args)[0]) - models["gamma"](*args)[0] * np.log(r["force_normalized"])
+                  - np.log(r["resistance_normalized"]))
+    assert r["error"] == pytest.approx(by_hand, rel=1e-12)
+    assert r["within"] == (r["error"] <= max(0.05, r["allowed"]))
+    h = int(np.flatnonzero(uninterrupted["scene"].values == "h00")[0])
+    steps = int(uninterrupted["fitted"].values[h].sum())
+    assert doc["heldout"]["steps"] == 2 * steps
+
+
+def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
+    import json
+
+    from pipeline.atlas_fit import FORMAT, write_atlas_surrogate
+
+    target, doc = write_atlas_surrogate(atlas.run_atlas(base, DESIGN, tmp_path))
+    assert json.loads(target.read_text())["format"] == FORMAT == doc["format"]
+    lines = (tmp_path / "atlas" / "heldout.csv").read_text().splitlines()
+    assert lines[0].startswith("scene,mu,Pi,xi,lambda,force_normalized") and len(lines) == 1 + doc["heldout"]["steps"]
