@@ -16,13 +16,13 @@ SOURCES  := $(shell find pipeline -name '*.py' -o -name '*.toml')
 ANALYSIS := $(shell find analysis -name '*.py')
 STAMPS   := $(DATA)/.stamps
 
-.PHONY: all run test stress bench compare figures report contact oxide cube fits surrogate params atlas atlas-plan clean FORCE
+.PHONY: all run test stress bench compare figures report contact oxide cube fits surrogate params validate atlas atlas-plan clean FORCE
 all: run
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(VENV)/bin/pip install --quiet --upgrade pip
-	$(VENV)/bin/pip install --quiet -e '.[test]'
+	$(VENV)/bin/pip install --quiet -e '.[test,reference]'
 	touch $@
 
 # The stamps are rewritten only when a stage's parameters change, so make re-runs a stage
@@ -51,7 +51,15 @@ cube: $(DATA)/cube.nc
 fits: $(DATA)/fits.nc
 surrogate: $(DATA)/surrogate.nc
 
-$(DATA)/figures/.written: $(DATA)/surrogate.nc $(ANALYSIS) $(SOURCES) $(wildcard $(DATA)/compare/*/fits.nc) | $(VENV)/.installed
+# The physics benchmarks the report shows: Barber's check of every spot discretization and the
+# chain of biases from the published conventions (about a minute together).
+PHYSICS_BENCH := $(DATA)/bench/spots.json $(DATA)/bench/biases.json
+$(DATA)/bench/spots.json: $(STAMPS)/contact.json $(STAMPS)/cube.json $(SOURCES) | $(VENV)/.installed
+	$(G2TOM) bench $(ARGS) --only spots
+$(DATA)/bench/biases.json: $(SOURCES) | $(VENV)/.installed
+	$(G2TOM) bench $(ARGS) --only biases
+
+$(DATA)/figures/.written: $(DATA)/surrogate.nc $(PHYSICS_BENCH) $(ANALYSIS) $(SOURCES) $(wildcard $(DATA)/compare/*/fits.nc) | $(VENV)/.installed
 	$(G2TOM) figures $(ARGS)
 	touch $@
 $(DATA)/report.md: $(DATA)/figures/.written $(wildcard $(DATA)/bench/*.json) | $(VENV)/.installed
@@ -78,6 +86,13 @@ atlas: atlas-plan | $(VENV)/.installed
 
 bench: | $(VENV)/.installed
 	$(G2TOM) bench $(ARGS)
+
+# The full-field reference (tamaas, the `reference` extra) against g2tom; not part of `make run`.
+# VALIDATE="--quick" for the 256^2 check (a few minutes at most).
+VALIDATE ?=
+validate: | $(VENV)/.installed
+	$(VENV)/bin/pip install --quiet -e '.[reference]'
+	$(G2TOM) validate --data-dir $(DATA) $(VALIDATE)
 
 params: | $(VENV)/.installed
 	$(G2TOM) params $(ARGS)

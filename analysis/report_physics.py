@@ -12,7 +12,21 @@ from analysis.report_blocks import Block, table
 from pipeline.config import Scenario
 from pipeline.store import StaleInputError, read_stage
 
-__all__ = ["barber_blocks", "bias_blocks"]
+__all__ = ["barber_blocks", "bias_blocks", "validation_blocks"]
+
+
+def validation_blocks(data_dir: Path) -> list[Block]:
+    """Section "Against the full elastic contact": ``g2tom validate``'s section and figure, when it ran."""
+    folder = Path(data_dir) / "validate"
+    blocks = [Block("h2", "Against the full elastic contact (g2tom validate)")]
+    if not (folder / "validate.md").is_file():
+        return blocks + [Block("p", "Not available: run `make validate` (about 30 min; `make validate "
+                                    "VALIDATE=--quick` for a 256^2 check in a minute).")]
+    blocks.append(Block("pre", (folder / "validate.md").read_text()))
+    if (folder / "validate.png").is_file():
+        blocks.append(Block("img", "R' against F': the full-field reference (each realization) and g2tom's "
+                                   "discretizations and models", src="validate/validate.png"))
+    return blocks
 
 
 def bias_blocks(data_dir: Path) -> list[Block]:

@@ -263,6 +263,21 @@ def _cmd_roughness(args: argparse.Namespace, scenario: Scenario) -> None:
     roughness_cli(args)
 
 
+def _cmd_validate(args: argparse.Namespace, scenario: Scenario) -> None:
+    """The full-field reference against g2tom (pipeline.reference); the extra is checked first."""
+    from pipeline.reference import missing_extra
+
+    if args.overrides or args.config != "paper":
+        raise ConfigError("g2tom validate runs its own validation scene (the default set or --quick): "
+                          "--config and --set are not used by it; leave them out")
+    problem = missing_extra()
+    if problem:
+        raise ConfigError(problem)
+    from pipeline.reference.validate import chosen_set, run_validation
+
+    run_validation(chosen_set(args.quick), args.data_dir / "validate")
+
+
 def _version() -> str:
     from pipeline.store import git_commit
 
@@ -372,6 +387,10 @@ def _parser() -> argparse.ArgumentParser:
                          help="with --roughness: pixel size, m (for .npy, netCDF and text maps)")
     predict.add_argument("--surrogate", type=Path, default=None,
                          help="surrogate.json or surrogate.nc (default: <data-dir>/surrogate.json, else surrogate.nc)")
+    validate = add("validate", _cmd_validate,
+                   "the full-field elastic contact (tamaas) against g2tom: <data-dir>/validate/")
+    validate.add_argument("--quick", action="store_true",
+                          help="256^2 grid, one realization, two loads, clean and one oxidized case")
     rough = add("roughness", _cmd_roughness, "sigma, eta and beta from a measured height map")
     rough.add_argument("heightmap", type=Path, help=".npy, netCDF or text (heights in m), or an instrument file "
                        "(SurfaceTopography: pip install 'g2tom[topography]')")

@@ -655,12 +655,6 @@ def _check_spots(s: Scenario) -> None:
             f"cube.weights = {s.cube.weights!r} is not allowed with contact.spots = {s.contact.spots!r}: "
             "must be 'radius' (cell-area weights are the published code's convention for mean_area spots)"
         )
-    if s.contact.spots == "asperities" and (s.cube.model != "greenwood" or s.oxide.film != "insulating"):
-        raise ConfigError(
-            f"contact.spots = 'asperities' is not allowed with cube.model = {s.cube.model!r} and oxide.film = "
-            f"{s.oxide.film!r}: asperity spots drawn per realization need cube.model = 'greenwood' and "
-            "oxide.film = 'insulating' (use contact.spots = 'expected', their mean, with the point model or films)"
-        )
 
 
 def _cross_checks(s: Scenario) -> None:

@@ -57,7 +57,7 @@ TYPICAL_FIELDS = 171_200 / 12
 #: rounds hold few tasks and end in a serial decision). Beyond two threads it is not measured.
 THREADED_FOLDED_SPEEDUP = {"fixed": 18.71 / 12.09, "adaptive": 196.5 / 164.5}
 #: Commands that need no resolved domains nor resource checks.
-_NO_DOMAINS = ("params", "predict", "roughness")
+_NO_DOMAINS = ("params", "predict", "roughness", "validate")
 #: Stages whose estimate is printed when they are expected to take longer than this (s).
 ANNOUNCE_AFTER = 10.0
 

@@ -32,7 +32,8 @@ def test_expected_spots_obey_barber():
 def test_asperity_spots_obey_barber_on_average():
     ratios, _ = _ratios(**{"contact.spots": "asperities"})
     assert np.max(np.abs(ratios["greenwood"] - 1)) < 0.05  # the mean conductance over 200 drawn surfaces
-    assert np.all(np.isnan(ratios["point"]))  # the point model takes shared spots only
+    assert np.max(np.abs(ratios["point"] - 1)) < 0.06
+    assert np.all(ratios["greenwood"] <= ratios["point"] * (1 + 1e-9))  # Greenwood's form: a lower bound
 
 
 def test_mean_area_spots_break_barber_at_light_load():

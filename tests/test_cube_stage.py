@@ -12,7 +12,7 @@ from scipy.special import erfcinv
 from pipeline import store
 from pipeline.compute import ComputeOptions
 from pipeline.config import load_scenario
-from pipeline.physics import constriction, oxide_field, spot_models
+from pipeline.physics import constriction, oxide_field, point_model, spot_models
 from pipeline.stages import contact, cube
 from pipeline.stages import oxide as oxide_stage
 
@@ -288,3 +288,22 @@ def test_asperity_spots_are_the_drawn_surface(asperity_inputs):
     # the clean surface: the mean conductance over the first realizations, open circuits counted
     assert 0.0 < built["clean_open_probability"].values[0] < 1.0  # light load: some surfaces do not touch
     assert np.all(built["clean_open_probability"].values[1:] == 0.0)
+
+
+def test_asperity_spots_with_the_point_model(asperity_inputs):
+    """The point model solves each realization's drawn spots: entries against the dense solve."""
+    scenario, contact_ds, oxide_ds = asperity_inputs
+    point = dataclasses.replace(scenario, cube=dataclasses.replace(scenario.cube, model="point"))
+    built = cube.build(point, contact_ds, oxide_ds)
+    rough = scenario.roughness
+    separation = contact_ds["spot_separation"].values
+    psi, threshold = oxide_ds["psi"].values, oxide_ds["threshold"].values
+    k, a, z_i = 3, 1, 1
+    radius = spot_models.asperity_radius(
+        spot_models.heights(scenario.oxide.seed, k, separation.shape[-1], rough.sigma)[None], separation, rough.beta)
+    mask = psi[a, k] < threshold[z_i, a, k]
+    dense, _ = point_model.resistance_dense(mask[None], radius, scenario.cell_size, scenario.material.rho)
+    got = built["resistance"].values[z_i, a, :, k]
+    finite = np.isfinite(dense[0])
+    np.testing.assert_array_equal(np.isfinite(got), finite)
+    assert np.max(np.abs(got[finite] / dense[0][finite] - 1), initial=0.0) <= 1e-5

@@ -109,3 +109,23 @@ def test_expected_spots_with_the_lattice_term_obey_barber(paper):
 
     assert np.max(np.abs(conductance(SQUARE_LATTICE_CONSTANT) / barber - 1)) < 1e-4
     assert np.min(conductance(0.0) / barber - 1) > 4e-3
+
+
+@pytest.mark.parametrize("film", [np.inf, 1e-11])
+def test_per_map_spots_equal_one_solve_per_map(film):
+    """Groups (asperity spots drawn per realization): each map equals the dense solve of its own spots."""
+    rng = np.random.default_rng(8)
+    n, n_groups, batch = 9, 3, 7
+    base = np.exp(-((np.arange(n) - 4.0)[:, None] ** 2 + (np.arange(n) - 4.0)[None, :] ** 2) / 8.0)
+    radius = 2e-6 * base[None, None] * (rng.random((n_groups, 2, n, n)) < 0.6) * np.array([0.5, 1.0])[None, :, None, None]
+    masks = rng.random((batch, n, n)) < 0.7
+    groups = rng.integers(0, n_groups, batch)
+    whole = np.full(2, n)
+    got = point_model.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=film,
+                                 solver_tolerance=1e-13, groups=groups)
+    green = point_model.greenwood_resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=film,
+                                             groups=groups)
+    for b in range(batch):
+        dense, dense_green = point_model.resistance_dense(masks[b : b + 1], radius[groups[b]], PITCH, RHO, film)
+        np.testing.assert_allclose(got.resistance[b], dense[0], rtol=1e-9)
+        np.testing.assert_allclose(green.resistance[b], dense_green[0], rtol=1e-12)

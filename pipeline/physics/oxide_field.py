@@ -54,6 +54,7 @@ __all__ = [
     "coefficients",
     "cell_values",
     "centre_values",
+    "grid_values",
     "realize",
     "field_at_points",
     "fine_grid",
@@ -294,18 +295,48 @@ def centre_values(modes: Band, coeffs: np.ndarray, n_cells: int, cell_size: floa
     numpy.ndarray
         float64, shape (..., n_cells, n_cells), indexed ``[..., y, x]``.
     """
+    phase = 2.0 * np.pi * (np.arange(n_cells) - (n_cells - 1) / 2.0) * cell_size / modes.period
+    return _separable(modes, coeffs, phase, phase)
+
+
+def grid_values(modes: Band, coeffs: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Exact values of fields on any rectilinear grid of points (e.g. a finer image of the window).
+
+    The continuous field of :func:`field_at_points`, evaluated like :func:`centre_values` by
+    separable partial DFTs, so a fine grid costs two GEMMs instead of a sum per point.
+
+    Parameters
+    ----------
+    modes
+        The band (any period).
+    coeffs
+        Complex coefficients, shape (..., modes.size).
+    x, y
+        1-D point coordinates along x and y, in m, relative to the window centre.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, shape (..., y.size, x.size), indexed ``[..., y, x]``.
+    """
+    step = 2.0 * np.pi / modes.period
+    return _separable(modes, coeffs, step * np.asarray(x, float), step * np.asarray(y, float))
+
+
+def _separable(modes: Band, coeffs: np.ndarray, phase_x: np.ndarray, phase_y: np.ndarray) -> np.ndarray:
+    """Fields at the points ``(x, y)`` whose phases ``2 pi x / L`` and ``2 pi y / L`` are given."""
     lead = coeffs.shape[:-1]
     batch = int(np.prod(lead, dtype=int))
+    nx, ny = phase_x.size, phase_y.size
     top = int(max(np.abs(modes.i).max(), modes.j.max()))
     table = np.zeros((batch, top + 1, 2 * top + 1), dtype=complex)  # [field, j, i + top]
     table[:, modes.j, modes.i + top] = coeffs.reshape(batch, -1)
-    phase = 2.0 * np.pi * (np.arange(n_cells) - (n_cells - 1) / 2.0) * cell_size / modes.period
-    ex = np.exp(1j * np.outer(phase, np.arange(-top, top + 1)))  # (x, i)
-    ey = np.exp(1j * np.outer(phase, np.arange(0, top + 1)))  # (y, j)
-    partial = (table.reshape(-1, 2 * top + 1) @ ex.T).reshape(batch, top + 1, n_cells)  # (field, j, x)
-    partial = partial.transpose(1, 0, 2).reshape(top + 1, batch * n_cells)
+    ex = np.exp(1j * np.outer(phase_x, np.arange(-top, top + 1)))  # (x, i)
+    ey = np.exp(1j * np.outer(phase_y, np.arange(0, top + 1)))  # (y, j)
+    partial = (table.reshape(-1, 2 * top + 1) @ ex.T).reshape(batch, top + 1, nx)  # (field, j, x)
+    partial = partial.transpose(1, 0, 2).reshape(top + 1, batch * nx)
     values = ey.real @ partial.real - ey.imag @ partial.imag  # (y, field * x)
-    return values.reshape(n_cells, batch, n_cells).transpose(1, 0, 2).reshape(lead + (n_cells, n_cells))
+    return values.reshape(ny, batch, nx).transpose(1, 0, 2).reshape(lead + (ny, nx))
 
 
 def realize(

@@ -358,7 +358,7 @@ def _cg_round(
 
 def _solve_step(
     columns: np.ndarray,
-    radius: np.ndarray,
+    radius_xy: np.ndarray,
     size: int,
     previous: np.ndarray | None,
     settings: dict,
@@ -388,11 +388,12 @@ def _solve_step(
       below the tolerance.
 
     Maps that meet it are frozen, so every map's result is independent of its neighbours in the
-    batch.
+    batch. ``radius_xy`` holds the spot radii in the same layout: (x, y, 1) for spots shared by
+    every map, or (x, y, map).
     """
     n = columns.shape[0]
     c = crop_slice(n, size)
-    active_full, diag_full = _spot_states(columns, radius.T[:, :, None], settings)
+    active_full, diag_full = _spot_states(columns, radius_xy, settings)
     t_full = np.where(active_full, 1.0 / diag_full, 0.0)
     diag = np.ascontiguousarray(diag_full[c, c])
     system = _System(active_full[c, c].astype(np.float64), diag, settings["pitch"], OPERATORS[settings["method"]])
@@ -445,19 +446,23 @@ _RECORDS = ("total", "t_total", "count", "iterations", "residual", "error", "bre
 
 
 def _solve_block(
-    block: np.ndarray, radius: np.ndarray, crops: np.ndarray, tolerance: float, settings: dict
+    block: np.ndarray, radius: np.ndarray, crops: np.ndarray, tolerance: float, settings: dict,
+    groups: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """Every load step of one block of :func:`~pipeline.physics.constriction.block_size` masks, each warm-started from the previous one.
 
     Entries whose cropping bound exceeds ``tolerance`` are solved again on the whole window,
     gathered into padded blocks of exactly :data:`REDO_BLOCK` maps (a fixed shape, so results
-    never depend on the batch; small, because such entries are rare and scattered).
+    never depend on the batch; small, because such entries are rare and scattered). With
+    ``groups`` (one per map), map ``b`` has the spots ``radius[groups[b]]``.
     """
     n = block.shape[-1]
+    n_delta = radius.shape[-3]
     columns = np.ascontiguousarray(block.transpose(2, 1, 0))  # (x, y, map)
-    out = {name: np.zeros((block.shape[0], radius.shape[0])) for name in _RECORDS + ("bound", "uncropped")}
+    out = {name: np.zeros((block.shape[0], n_delta)) for name in _RECORDS + ("bound", "uncropped")}
     previous = None
-    for k, a in enumerate(radius):
+    for k in range(n_delta):
+        a = radius[k].T[:, :, None] if groups is None else radius[groups, k].transpose(2, 1, 0)
         step = _solve_step(columns, a, int(crops[k]), previous, settings)
         # no current inside the crop but some outside: the crop bound is infinite
         bound = np.divide(step.outside, step.total, out=np.where(step.outside > 0, np.inf, 0.0),
@@ -469,7 +474,11 @@ def _solve_block(
             again[..., : chosen.size] = columns[..., chosen]
             warm = np.zeros(again.shape)
             warm[..., : chosen.size] = step.shielding[..., chosen]
-            whole = _solve_step(again, a, n, warm, settings)
+            own = a
+            if groups is not None:
+                own = np.zeros(again.shape)
+                own[..., : chosen.size] = a[..., chosen]
+            whole = _solve_step(again, own, n, warm, settings)
             step.shielding[..., chosen] = whole.shielding[..., : chosen.size]
             for name in _RECORDS:
                 getattr(step, name)[chosen] = getattr(whole, name)[: chosen.size]
@@ -497,6 +506,7 @@ def resistance(
     max_iterations: int = 100,
     criterion: str = "error",
     lattice_constant: float = 0.0,
+    groups: np.ndarray | None = None,
 ) -> PointResult:
     """Point-interaction resistance of every (mask, load step) pair, by batched Jacobi-PCG.
 
@@ -535,6 +545,10 @@ def resistance(
         dimensionless, finite and >= 0; 0 (default) leaves the model as published,
         :data:`~pipeline.physics.lattice.SQUARE_LATTICE_CONSTANT` makes the spots of a smooth
         field (one per cell) reproduce the continuum.
+    groups
+        Which set of spots each map has, int (batch,), ``radius`` then (n_groups, n_delta, n, n)
+        (the ``asperities`` discretization); None: one set for all maps (see
+        :func:`pipeline.physics.constriction.resistance`).
 
     Returns
     -------
@@ -551,17 +565,21 @@ def resistance(
         raise ValueError(f"criterion = {criterion!r} is not allowed: must be one of {', '.join(CRITERIA)}")
     settings = {**_checked_settings(rho, pitch, film_resistance, lattice_constant), "method": method,
                 "solver_tolerance": solver_tolerance, "max_iterations": max_iterations, "criterion": criterion}
-    return _run(masks, radius, crops, tolerance, settings)
+    return _run(masks, radius, crops, tolerance, settings, groups)
 
 
-def _run(masks: np.ndarray, radius: np.ndarray, crops: np.ndarray, tolerance: float, settings: dict) -> PointResult:
+def _run(masks: np.ndarray, radius: np.ndarray, crops: np.ndarray, tolerance: float, settings: dict,
+         groups: np.ndarray | None = None) -> PointResult:
     """:func:`resistance` after validation (``max_iterations = 0`` stops at Greenwood's start)."""
     rho = settings["rho"]
     batch = masks.shape[0]
     size = min(POINT_BLOCK, block_size(masks.shape[-1]))
-    parts = [_solve_block(block, radius, crops, tolerance, settings) for block in _blocks(masks, size)]
+    padded = None if groups is None else np.concatenate([groups, np.zeros(-batch % size, int)])
+    parts = [_solve_block(block, radius, crops, tolerance, settings,
+                          None if padded is None else padded[start : start + size])
+             for start, block in zip(range(0, batch, size), _blocks(masks, size))]
     out = {
-        name: np.concatenate([p[name] for p in parts])[:batch] if parts else np.zeros((0, radius.shape[0]))
+        name: np.concatenate([p[name] for p in parts])[:batch] if parts else np.zeros((0, radius.shape[-3]))
         for name in _RECORDS + ("bound", "uncropped")
     }
 
@@ -589,6 +607,7 @@ def greenwood_resistance(
     method: str = "auto",
     *,
     film_resistance: float = np.inf,
+    groups: np.ndarray | None = None,
 ) -> ChunkResult:
     """Greenwood's closed form generalized to films: the Rayleigh quotient at ``t_i = 1 / M_ii``.
 
@@ -600,7 +619,7 @@ def greenwood_resistance(
 
     Parameters
     ----------
-    masks, radius, weights, pitch, rho, method, film_resistance
+    masks, radius, weights, pitch, rho, method, film_resistance, groups
         As for :func:`resistance`. There is no lattice term: the form stays Greenwood's (and
         equal to the insulating-film path of :mod:`~pipeline.physics.constriction`). With the
         term it would be the Rayleigh quotient of the corrected ``M``, a lower bound of that
@@ -625,6 +644,6 @@ def greenwood_resistance(
         raise ValueError("Greenwood's form with films takes the spot radii as weights")
     settings = {**_checked_settings(rho, pitch, film_resistance, 0.0), "method": method,
                 "solver_tolerance": 1.0, "max_iterations": 0, "criterion": "residual"}
-    res = _run(masks, radius, crops, tolerance, settings)
+    res = _run(masks, radius, crops, tolerance, settings, groups)
     return ChunkResult(res.resistance, res.resistance_self, res.resistance_interaction, res.n_conducting,
                        res.crop_bound, 0)

@@ -12,9 +12,10 @@ lets oxidized spots conduct through their film. The work is split over (lambda, 
 more when fewer fractions still need realizations); every entry's result is bit-identical
 whatever the chunk size or scheduler.
 
-The fields are not read from oxide.nc but regenerated inside each task from their seeds
-(:class:`pipeline.stages.oxide.FieldSource`, bit-identical to oxide.nc's record), so the task
-graph stays small and the ensemble can grow. ``oxide.ensemble = "fixed"`` computes
+The fields oxide.nc records (the fixed ensemble, or the adaptive ensemble's first batch) are
+served from the record when it is at most :data:`pipeline.stages.oxide.RECORD_BYTES`; every other
+field is regenerated inside its task from its seed (:class:`pipeline.stages.oxide.FieldSource`,
+bit-identical to the record), so memory stays bounded and the ensemble can grow. ``oxide.ensemble = "fixed"`` computes
 ``oxide.n_realizations`` fields per lambda. ``"adaptive"`` grows every (xi, lambda) cell in
 rounds (:mod:`pipeline.stages.cube_rounds`). The realization axis is padded to the largest count
 (NaN, ``n_conducting`` -1) and ``n_realizations`` (xi, lambda) says how many entries are real.
@@ -34,10 +35,10 @@ from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
 from pipeline.physics import constriction
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
-from pipeline.stages.cube_chunks import asperity_spots, field_chunk, model
+from pipeline.stages.cube_chunks import asperity_spots, chunk_terms, model
 from pipeline.stages.cube_dataset import dataset
 from pipeline.stages.cube_rounds import compute_cells, half_widths, padded, stopping_rule
-from pipeline.stages.oxide import FieldSource
+from pipeline.stages.oxide import FieldSource, RecordedFields
 
 __all__ = ["build", "run", "spot_maps", "work_settings", "clean_conductances", "CLEAN_MODELS"]
 
@@ -114,12 +115,12 @@ def _clean_models(radius: np.ndarray, weights: np.ndarray, settings: dict[str, A
                   known: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """The oxide-free conductance (S, over delta) of every model of :data:`CLEAN_MODELS` with the
     run's spots, solved tightly (NaN where the model does not apply: the point model needs radius
-    weights and shared spots); the models in ``known`` are taken from it."""
+    weights); the models in ``known`` are taken from it."""
     out = dict(known)
     for name, kind, constant in CLEAN_MODELS:
         if name in out:
             continue
-        if kind == "point" and (settings["spots"] == "asperities" or weights is not radius and not np.array_equal(weights, radius)):
+        if kind == "point" and weights is not radius and not np.array_equal(weights, radius):
             out[name] = np.full(radius.shape[0], np.nan)
             continue
         chosen = dict(settings, model=kind, lattice_constant=constant, film_resistance=np.inf,
@@ -136,11 +137,11 @@ def _measured_crop_error(
     n = radius.shape[-1]
     whole = dict(settings, crops=np.full(radius.shape[0], n), tolerance=0.0)
     first = np.arange(1)
-    exact = np.stack(
-        [field_chunk(source, a, first, np.arange(source.xi.size), radius, weights, whole)["resistance"]
-         for a in range(len(source.lambdas))],
-        axis=1,
-    )
+    fields = [source.fields(a, first) for a in range(len(source.lambdas))]
+    psi = np.stack([f[0] for f in fields])  # (lambda, 1, y, x): every lambda in one batch of masks
+    threshold = np.stack([f[1] for f in fields], axis=1)
+    drawn = first if settings["spots"] == "asperities" else None
+    exact = chunk_terms(psi, threshold, radius, weights, whole, drawn)["resistance"]
     finite = np.isfinite(exact)
     if not finite.any():
         return 0.0
@@ -213,8 +214,8 @@ def build(
     source
         Where the fields come from: anything with ``fields(lambda_index, realizations) ->
         (psi (r, y, x) float32, threshold (xi, r) float32)`` and ``lambdas``; default
-        :class:`pipeline.stages.oxide.FieldSource` of ``scenario`` (fields regenerated from
-        their seeds inside each task, never shipped in the task graph).
+        :class:`pipeline.stages.oxide.RecordedFields` of ``scenario`` and ``oxide`` (the record
+        where it holds the field, else regenerated from its seed inside the task).
 
     Returns
     -------
@@ -224,7 +225,7 @@ def build(
         (xi, lambda), the clean-surface terms and ``crop_cells`` (delta).
     """
     _check_grids(contact, oxide)
-    source = FieldSource.of(scenario) if source is None else source
+    source = RecordedFields.of(scenario, oxide) if source is None else source
     radius, weights, settings = work_settings(scenario, contact)
     rule = stopping_rule(scenario, contact["force"].values, contact["force_normalized"].values)
     cells, uncropped = compute_cells(scenario, source, radius, weights, settings, rule, options)

@@ -16,7 +16,7 @@ import numpy as np
 
 from pipeline.physics import constriction, point_model, spot_models
 
-__all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "field_chunk"]
+__all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "chunk_terms", "field_chunk"]
 
 TERMS = ("resistance", "resistance_self", "resistance_interaction", "n_conducting", "crop_bound")
 #: Extra terms of the point model's iterative solve.
@@ -68,7 +68,7 @@ def asperity_spots(settings: dict[str, Any], realizations: np.ndarray) -> np.nda
     ])
 
 
-def _chunk(
+def chunk_terms(
     psi: np.ndarray,
     threshold: np.ndarray,
     radius: np.ndarray,
@@ -119,11 +119,11 @@ def field_chunk(
     source: FieldSource, index: int, realizations: np.ndarray, xi_index: np.ndarray,
     radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
 ) -> dict[str, Any]:
-    """Regenerate the fields of ``realizations`` at lambda number ``index`` and run :func:`_chunk`.
+    """Regenerate the fields of ``realizations`` at lambda number ``index`` and run :func:`chunk_terms`.
 
     Only the fractions ``xi_index`` are evaluated; returns the terms shaped (xi, delta, realization).
     """
     psi, threshold = source.fields(index, realizations)
     drawn = realizations if settings["spots"] == "asperities" else None
-    out = _chunk(psi[None], threshold[xi_index][:, None], radius, weights, settings, drawn)
+    out = chunk_terms(psi[None], threshold[xi_index][:, None], radius, weights, settings, drawn)
     return {k: (v[:, 0] if k in terms(settings) else v) for k, v in out.items()}

@@ -112,6 +112,7 @@ def compute_cells(
     done = np.zeros(n_lam, int)
     want = np.full(n_lam, first)
     shared = dask.delayed(radius), dask.delayed(weights), dask.delayed(settings)
+    source_key = dask.delayed(source)  # one key, however many tasks read it (it may hold oxide.nc's record)
     uncropped = round_ = 0
     while open_cells := sum(k is None for row in kept for k in row):
         round_ += 1
@@ -127,7 +128,7 @@ def compute_cells(
             chunk = scenario.cube.chunk * -(-n_xi // active.size)
             for start in range(done[a], want[a], chunk):
                 block = np.arange(start, min(start + chunk, want[a]))
-                tasks.append(dask.delayed(field_chunk, pure=True)(source, a, block, active, *shared))
+                tasks.append(dask.delayed(field_chunk, pure=True)(source_key, a, block, active, *shared))
                 owner.append((a, active))
         for (a, active), piece in zip(owner, compute(*tasks, options=options, label=label)):
             pieces[a].append((active, piece))

@@ -32,7 +32,7 @@ from pipeline.config import Scenario
 from pipeline.physics import oxide_field
 from pipeline.physics.grid import cell_centres
 
-__all__ = ["build", "run", "bands", "FieldSource", "recorded_realizations"]
+__all__ = ["build", "run", "bands", "FieldSource", "RecordedFields", "recorded_realizations"]
 
 
 def bands(scenario: Scenario) -> list[oxide_field.Band]:
@@ -56,6 +56,11 @@ def recorded_realizations(scenario: Scenario) -> int:
     """Fields per lambda kept in oxide.nc: the fixed count, or the adaptive ensemble's first batch."""
     ox = scenario.oxide
     return ox.n_realizations if ox.ensemble == "fixed" else ox.min_realizations
+
+
+#: Largest record of fields (bytes) the cube serves from oxide.nc instead of regenerating them
+#: (a local cluster ships it to each worker once).
+RECORD_BYTES = 256 * 2**20
 
 
 @dataclass(frozen=True)
@@ -91,6 +96,41 @@ class FieldSource:
         """Fields (realization, y, x) and their float32 thresholds (xi, realization) at lambda ``index``."""
         psi = self.psi(index, realizations)
         return psi, _threshold_block(psi[None], xi=self.xi, rule=self.rule)[:, 0]
+
+
+@dataclass(frozen=True)
+class RecordedFields:
+    """oxide.nc's record in front of the :class:`FieldSource` that made it: the recorded
+    realizations are served as stored (bit-identical to regenerating them), later ones are
+    regenerated. Same interface as :class:`FieldSource` for the cube's tasks."""
+
+    source: FieldSource
+    psi: np.ndarray  # float32 (lambda, realization, y, x)
+    threshold: np.ndarray  # float32 (xi, lambda, realization)
+
+    @classmethod
+    def of(cls, scenario: Scenario, record: xr.Dataset, limit: int = RECORD_BYTES) -> "FieldSource | RecordedFields":
+        """The record of ``scenario``'s fields in front of its source, or the bare source when
+        the record exceeds ``limit`` bytes (tasks then regenerate every field, bounding memory)."""
+        source = FieldSource.of(scenario)
+        psi = record["psi"].transpose("lambda", "realization", "y", "x").values
+        if psi.nbytes > limit:
+            return source
+        return cls(source, psi, record["threshold"].transpose("xi", "lambda", "realization").values)
+
+    @property
+    def lambdas(self) -> tuple[float, ...]:
+        return self.source.lambdas
+
+    @property
+    def xi(self) -> np.ndarray:
+        return self.source.xi
+
+    def fields(self, index: int, realizations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`FieldSource.fields`: from the record when it holds every realization asked."""
+        if realizations.size and int(realizations.max()) < self.psi.shape[1]:
+            return self.psi[index, realizations], self.threshold[:, index, realizations]
+        return self.source.fields(index, realizations)
 
 
 #: Largest float32 fields of one chunk (all lambdas), bytes: bounds the stage's peak on large grids.

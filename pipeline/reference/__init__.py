@@ -1,0 +1,29 @@
+"""The full-field reference: elastic contact of the actual rough sphere on a grid (issue 22).
+
+Only this package imports the optional extra ``tamaas`` (``pip install -e '.[reference]'``),
+and only :mod:`pipeline.reference.elastic` touches it: everything else calls that module's
+free-surface operator and contact solver, so another array backend can replace them there.
+
+Modules: ``elastic`` (the non-periodic Boussinesq operator and the library's contact solver),
+``contact`` (load steps of a rough sphere), ``punch`` (conductance of a conducting set by
+Barber's analogy), ``surfaces`` (sphere, GW and random-process surfaces), ``oxide`` (g2tom's
+oxide field on the grid), ``scene`` (the validation scene and its g2tom counterpart),
+``validate`` (the ``g2tom validate`` driver) and ``summary`` (its figure and report section).
+"""
+
+from __future__ import annotations
+
+__all__ = ["INSTALL_HINT", "missing_extra"]
+
+#: The command that installs the reference's optional dependencies into the project's venv.
+INSTALL_HINT = ".venv/bin/pip install -e '.[reference]'  (or: make validate)"
+
+
+def missing_extra() -> str | None:
+    """Why the reference cannot run (the extra is not installed), or None when it can."""
+    try:
+        import tamaas  # noqa: F401
+    except ImportError as exc:
+        return (f"the full-field reference needs the optional extra 'reference' (tamaas), "
+                f"which is not installed ({exc}): install it with {INSTALL_HINT}")
+    return None

@@ -1,0 +1,155 @@
+"""One case of the validation: a surface realization at one load on one grid, solved and stored.
+
+A case solves the full-field contact of the realization's rough sphere at g2tom's force, then the
+conductance (Barber's analogy) of the contact set, clean and minus every oxide case's oxide set.
+Each finished case is one small JSON file under ``<out>/cases/``, written atomically and keyed by
+everything that shaped it, so a killed run continues where it stopped and a changed set recomputes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pipeline.reference import elastic, scene
+from pipeline.reference.contact import contact_at_force
+from pipeline.reference.oxide import oxide_on_grid
+from pipeline.reference.punch import punch_conductance
+from pipeline.stages.oxide import FieldSource
+from pipeline.store import atomic_path
+
+__all__ = ["Case", "plan_cases", "case_key", "load_case", "run_case", "estimate_seconds"]
+
+#: Seconds per N^2 log2(N) pixels of one contact solve and of one punch conductance, from runs on
+#: the shared 2-core machine (GW rough sphere, one thread; at 1024^2 a contact took 15-45 s and a
+#: punch 4-10 s, depending on the load and on the machine's other work): upper ends, rounded up.
+CONTACT_SECONDS = 5.5e-6
+PUNCH_SECONDS = 1.6e-6
+#: g2tom's side (contact, oxide and cube stages per model and discretization), seconds each.
+G2TOM_SECONDS = 4.0
+#: Relative force step of the two nearby loads whose dF/d(delta) checks Barber's theorem.
+BARBER_STEP = 0.01
+
+
+@dataclass(frozen=True)
+class Case:
+    """Realization ``realization`` at load step ``load`` on an ``n x n`` grid; ``oxide``: with the oxide cases."""
+
+    realization: int
+    load: int
+    n: int
+    oxide: bool
+
+    @property
+    def name(self) -> str:
+        """File stem of the case."""
+        return f"r{self.realization}_load{self.load}_n{self.n}"
+
+
+def plan_cases(vset: scene.ValidationSet) -> list[Case]:
+    """Every case of the set: all realizations and loads on the main grid (clean and oxidized), then
+    the first realization's loads on the convergence grid (clean, with the Barber check)."""
+    cases = [Case(r, k, vset.n_grid, True) for r in vset.realizations for k in range(len(vset.deltas))]
+    if vset.convergence_grid:
+        cases += [Case(vset.realizations[0], k, vset.convergence_grid, False) for k in range(len(vset.deltas))]
+    return cases
+
+
+def _seconds(n: int) -> tuple[float, float]:
+    size = n * n * np.log2(n)
+    return CONTACT_SECONDS * size, PUNCH_SECONDS * size
+
+
+def estimate_seconds(vset: scene.ValidationSet, cases: list[Case], g2tom: bool = True) -> float:
+    """The plan's wall-time estimate of ``cases`` (and of g2tom's side if ``g2tom``), s."""
+    punches = 1 + len(vset.xi) * len(vset.lambdas)
+    total = G2TOM_SECONDS * len(vset.models) * len(vset.discretizations) if g2tom else 0.0
+    for case in cases:
+        contact, punch = _seconds(case.n)
+        total += (contact + punch * punches) if case.oxide else (3 * contact + punch)
+    return total
+
+
+def case_key(vset: scene.ValidationSet, case: Case, force: float, source: FieldSource) -> str:
+    """Hash of everything that shapes a case's result (the scene, the oxide fields, the force)."""
+    shaping = {k: v for k, v in dataclasses.asdict(vset).items()
+               if k not in ("realizations", "models", "discretizations", "convergence_grid", "deltas")}
+    fields = [source.n_cells, source.cell_size, source.seed, source.amplitudes, source.rule,
+              [m.period for m in source.modes]]
+    text = json.dumps({"set": shaping, "case": dataclasses.asdict(case), "force": float(force).hex(),
+                       "fields": fields}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def load_case(path: Path, key: str) -> dict[str, Any] | None:
+    """The stored result at ``path`` if it exists, is readable and has this ``key``; else None."""
+    try:
+        record = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    return record if record.get("key") == key else None
+
+
+def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldSource, key: str,
+             path: Path) -> dict[str, Any]:
+    """Solve one case at ``force`` (N), store it atomically at ``path`` and return its record.
+
+    ``source`` is g2tom's oxide field source of the scene (the fields by seed and realization).
+
+    The record holds the force and approach of the full-field solution, its contact fraction,
+    the clean resistance and, for ``case.oxide``, the resistance (xi, lambda) with oxide, in ohm
+    (+inf where nothing conducts), and the wall times (s) of the contact and punch solves.
+    """
+    start = time.perf_counter()
+    pixel = vset.side / case.n
+    operator = elastic.free_surface(case.n, pixel, vset.e_star)
+    heights = scene.rough_sphere(vset, case.realization, case.n)
+    try:
+        state = contact_at_force(operator, heights, force)
+    except elastic.SolverFailure as exc:  # recorded (NaN results with the reason), not fatal to the set
+        return _store(path, {"key": key, **dataclasses.asdict(case), "error": str(exc), "force": np.nan,
+                             "delta": np.nan, "contact_fraction": np.nan, "gap_spread": np.nan,
+                             "barber_ratio": np.nan, "resistance_clean": np.nan,
+                             "resistance": np.full((len(vset.xi), len(vset.lambdas)), np.nan).tolist(),
+                             "seconds_contact": np.nan, "seconds_total": time.perf_counter() - start})
+    contact_seconds = time.perf_counter() - start
+    clean = punch_conductance(operator, state.contact, vset.rho)
+    barber = np.nan
+    if not case.oxide:  # the convergence grid also checks Barber's theorem: kappa = K / (E* rho*)
+        try:
+            low, high = (contact_at_force(operator, heights, force * (1.0 + s * BARBER_STEP)) for s in (-1, 1))
+            stiffness = -(high.force - low.force) / (high.delta - low.delta)
+            barber = clean.conductance / (stiffness / (vset.e_star * vset.rho))
+        except elastic.SolverFailure:
+            barber = np.nan
+    oxidized = np.full((len(vset.xi), len(vset.lambdas)), np.nan)
+    if case.oxide:
+        for a in range(len(vset.lambdas)):
+            masks = oxide_on_grid(source, a, case.realization, case.n, pixel)
+            for z in range(len(vset.xi)):
+                kappa = punch_conductance(operator, state.contact & ~masks[z], vset.rho).conductance
+                oxidized[z, a] = 1.0 / kappa if kappa > 0 else np.inf
+    record = {
+        "key": key, **dataclasses.asdict(case),
+        "force": state.force, "delta": state.delta, "contact_fraction": float(state.contact.mean()),
+        "gap_spread": state.gap_spread, "barber_ratio": barber,
+        "resistance_clean": 1.0 / clean.conductance if clean.conductance > 0 else np.inf,
+        "resistance": oxidized.tolist(),
+        "seconds_contact": contact_seconds,
+        "seconds_total": time.perf_counter() - start,
+    }
+    return _store(path, record)
+
+
+def _store(path: Path, record: dict[str, Any]) -> dict[str, Any]:
+    """Write ``record`` to ``path`` atomically (JSON; NaN and Infinity as Python writes them)."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(record, indent=1) + "\n")
+    return record

@@ -1,0 +1,72 @@
+"""One load step of the full-field contact of a rigid rough sphere on an elastic half-space.
+
+The rigid body's surface is ``heights(x, y)`` (m, e.g. :func:`surfaces.sphere` plus a rough
+surface): it touches where the elastic surface, displaced by ``u`` (positive into the
+half-space), reaches it. In contact ``u = heights - delta`` with one rigid approach ``delta``,
+in g2tom's convention: the separation of the sphere tip (height 0) from the reference plane
+(height 0 of the rough surface) before deformation, negative when they interpenetrate
+(design.md section 1). Check: a smooth sphere has ``delta = -a^2 / R`` (Hertz).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.reference.elastic import FreeSurface, solve_pressure
+
+__all__ = ["ContactState", "contact_at_force"]
+
+
+@dataclass(frozen=True)
+class ContactState:
+    """The solution of one load step.
+
+    Attributes
+    ----------
+    force
+        Total normal force, N.
+    delta
+        Rigid approach in g2tom's convention (see the module docstring), m.
+    contact
+        Contact set (p > 0), bool (n, n).
+    pressure
+        Contact pressure, Pa, (n, n).
+    gap_spread
+        Largest minus smallest ``heights - u`` over the contact set, m: how exactly the solver
+        closed the gap there (0 for an exact solution).
+    """
+
+    force: float
+    delta: float
+    contact: np.ndarray
+    pressure: np.ndarray
+    gap_spread: float
+
+
+def contact_at_force(operator: FreeSurface, heights: np.ndarray, force: float,
+                     tolerance: float = 1e-8) -> ContactState:
+    """Solve the contact of the rigid ``heights`` (m, (n, n)) pressed by ``force`` (N, > 0).
+
+    Raises
+    ------
+    ValueError
+        If the force is not positive or the contact reaches the grid's edge (the grid is too
+        small for this load: the non-periodic operator assumes no pressure outside it).
+    """
+    if not force > 0:
+        raise ValueError(f"force = {force} is out of range: must be > 0 (N)")
+    pressure = solve_pressure(operator, heights, force, tolerance)
+    contact = pressure > 0
+    edge = contact[0].any() or contact[-1].any() or contact[:, 0].any() or contact[:, -1].any()
+    if edge:
+        raise ValueError(f"force = {force:.4g} N: the contact reaches the edge of the grid; enlarge it")
+    offset = (heights - operator(pressure))[contact]  # = delta wherever p > 0
+    return ContactState(
+        force=float(pressure.sum() * operator.pixel**2),
+        delta=float(np.mean(offset)),
+        contact=contact,
+        pressure=pressure,
+        gap_spread=float(np.ptp(offset)),
+    )

@@ -1,0 +1,89 @@
+"""The elastic free-surface operator of a half-space on a grid (non-periodic), behind one function.
+
+Everything in :mod:`pipeline.reference` that needs elasticity calls :func:`free_surface` (the
+Boussinesq operator: surface pressure on square pixels -> normal surface displacement of an
+unbounded half-space, zero at infinity) or :func:`solve_pressure` (the library's constrained
+contact solver on the same operator). Both use ``tamaas`` today; an array backend (e.g. CuPy)
+would replace this module only.
+
+The half-space has the contact modulus ``E*`` (``tamaas``' Young modulus ``E*`` with Poisson
+ratio 0, so its ``E / (1 - nu^2)`` is ``E*``). Tamaas' trap: the modulus and the Poisson ratio
+must be set *before* the non-periodic operator is registered, which copies them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["FreeSurface", "free_surface", "solve_pressure", "SolverFailure"]
+
+_OPERATOR = "boussinesq_non_periodic"
+
+
+class SolverFailure(RuntimeError):
+    """The contact solver failed (e.g. tamaas' NaN on a contact of a single pixel) or did not converge."""
+
+
+@dataclass
+class FreeSurface:
+    """The non-periodic Boussinesq operator of an ``n x n`` grid of square pixels.
+
+    Attributes
+    ----------
+    n
+        Pixels along one side.
+    pixel
+        Pixel side, m.
+    e_star
+        Contact modulus E*, Pa.
+    model
+        The backend's model object (used by :func:`solve_pressure`).
+    """
+
+    n: int
+    pixel: float
+    e_star: float
+    model: Any
+
+    def __call__(self, pressure: np.ndarray) -> np.ndarray:
+        """Normal displacement (m, positive into the half-space) under ``pressure`` (Pa), (n, n)."""
+        out = np.zeros((self.n, self.n))
+        self.model.operators[_OPERATOR](np.ascontiguousarray(pressure, dtype=float), out)
+        return out
+
+
+def free_surface(n: int, pixel: float, e_star: float) -> FreeSurface:
+    """The free-surface operator of an ``n x n`` grid of pitch ``pixel`` (m) with modulus ``e_star`` (Pa)."""
+    import tamaas as tm
+
+    tm.set_log_level(tm.LogLevel.error)
+    side = n * pixel
+    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [side, side], [n, n])
+    model.E = float(e_star)  # before registerNonPeriodic, which copies them
+    model.nu = 0.0
+    tm.ModelFactory.registerNonPeriodic(model, _OPERATOR)
+    return FreeSurface(n=n, pixel=pixel, e_star=float(e_star), model=model)
+
+
+def solve_pressure(operator: FreeSurface, heights: np.ndarray, force: float, tolerance: float) -> np.ndarray:
+    """Contact pressure (Pa, (n, n)) of a rigid surface of ``heights`` (m) pressed by ``force`` (N).
+
+    Frictionless, non-adhesive: ``p >= 0``, and where ``p > 0`` the displacement equals the
+    heights plus one rigid approach. Polonsky and Keer's constrained conjugate gradients on the
+    free-surface operator, to the relative ``tolerance`` of the library's error measure.
+    """
+    import tamaas as tm
+
+    solver = tm.PolonskyKeerRey(operator.model, np.ascontiguousarray(heights, dtype=float), tolerance)
+    solver.setIntegralOperator(_OPERATOR)
+    solver.max_iter = 10000
+    try:
+        error = solver.solve(force / (operator.n * operator.pixel) ** 2)  # the mean pressure over the grid
+    except (tm.FloatingPointError, FloatingPointError) as exc:
+        raise SolverFailure(f"contact solver failed at F = {force:.4g} N: {str(exc).splitlines()[0]}") from None
+    if not error <= tolerance:
+        raise SolverFailure(f"contact solver stopped at error {error:.3g} > tolerance {tolerance:.3g}")
+    return np.array(operator.model.traction, dtype=float, copy=True)

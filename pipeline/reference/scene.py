@@ -1,0 +1,177 @@
+"""The validation scene: its parameters, its rough spheres on the grid, and g2tom on the same scene.
+
+A :class:`ValidationSet` fixes the scene (the paper's materials, sigma and eta; by default R*/2 and
+2 beta, which keep the paper's mu = (8/3) eta sigma sqrt(2 R* beta) = 8.26 with a contact that
+fits a 1024^2 grid at 16 pixels per asperity spacing), the loads (g2tom's approaches delta/sigma:
+the reference is solved at the force g2tom gives at each, so both are compared at equal F), the
+oxide cases (xi x lambda, g2tom's fields by seed and realization index) and the realizations.
+
+g2tom's side runs its stages in memory (contact, oxide, cube) for every spot discretization
+(``contact.spots`` when the scenario has that key; today's one-spot-per-cell ``mean_area``
+otherwise) and every ``cube.model``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from pipeline.config import Scenario, load_scenario
+from pipeline.domains import resolve
+from pipeline.reference import surfaces
+from pipeline.stages import contact as contact_stage
+from pipeline.stages import cube as cube_stage
+from pipeline.stages import oxide as oxide_stage
+
+__all__ = ["ValidationSet", "DEFAULT", "QUICK", "surface_stream", "rough_sphere", "g2tom_scenario",
+           "g2tom_resistances", "has_spots_key", "FLOOR_SIGMAS"]
+
+#: The GW surface's floor between asperities, in sigma below the reference plane: far below any
+#: contact of the loads used (the deepest touching tip lies near delta >= -3 sigma).
+FLOOR_SIGMAS = 8.0
+
+
+@dataclass(frozen=True)
+class ValidationSet:
+    """One validation study: scene, loads, oxide cases, realizations and grids.
+
+    Attributes
+    ----------
+    sigma, eta, beta
+        GW asperity heights' standard deviation (m), density (m^-2), tip radius (m).
+    radius, E, nu, rho
+        Sphere radius R* (m), Young's modulus (Pa) and Poisson ratio of both bodies, rho* (ohm m).
+    deltas
+        g2tom's approaches delta / sigma, lightest load first.
+    xi, lambdas
+        Oxide fractions and normalized correlation lengths: every pair is a case.
+    realizations
+        Surface and oxide realization indices.
+    n_grid, pixels_per_cell
+        Reference grid side (pixels) and pixels per asperity spacing 1/sqrt(eta).
+    convergence_grid
+        A second, coarser grid (same window) run on the first realization, clean, for the grid
+        convergence (halving the grid step), or 0 for none.
+    surface_seed, oxide_seed
+        Root seeds of the surfaces and of g2tom's oxide fields.
+    models, discretizations
+        g2tom's ``cube.model`` values and spot discretizations to compare.
+    """
+
+    sigma: float = 20e-6
+    eta: float = 2e8
+    beta: float = 60e-6
+    radius: float = 5e-3
+    E: float = 2.1e11
+    nu: float = 0.3
+    rho: float = 7.2e-7
+    deltas: tuple[float, ...] = (2.0, -0.5, -3.0)
+    xi: tuple[float, ...] = (0.5, 0.7)
+    lambdas: tuple[float, ...] = (1.0, 5.0)
+    realizations: tuple[int, ...] = (0, 1, 2, 3)
+    n_grid: int = 1024
+    pixels_per_cell: float = 16.0
+    convergence_grid: int = 512
+    surface_seed: int = 20261124
+    oxide_seed: int = 20240531
+    models: tuple[str, ...] = ("greenwood", "point")
+    discretizations: tuple[str, ...] = ("mean_area", "expected", "asperities")
+
+    @property
+    def pixel(self) -> float:
+        """Pixel side of the main grid, m."""
+        return 1.0 / math.sqrt(self.eta) / self.pixels_per_cell
+
+    @property
+    def side(self) -> float:
+        """Side of the grid's window, m (the same for every grid)."""
+        return self.n_grid * self.pixel
+
+    @property
+    def e_star(self) -> float:
+        """Contact modulus E* = E / (2 (1 - nu^2)) of two equal bodies, Pa."""
+        return self.E / (2.0 * (1.0 - self.nu**2))
+
+    @property
+    def mu(self) -> float:
+        """(8/3) eta sigma sqrt(2 R* beta): the Greenwood-Tripp group (design.md section 9)."""
+        return 8.0 / 3.0 * self.eta * self.sigma * math.sqrt(2.0 * self.radius * self.beta)
+
+
+DEFAULT = ValidationSet()
+#: ``--quick``: 256^2 at 8 pixels per asperity spacing (a window of 2.3 mm, which holds the
+#: contact of both loads), one realization, two loads, clean plus one oxidized case.
+QUICK = dataclasses.replace(DEFAULT, deltas=(1.0, -0.5), xi=(0.5,), lambdas=(5.0,), realizations=(0,),
+                            n_grid=256, pixels_per_cell=8.0, convergence_grid=128)
+
+
+def surface_stream(vset: ValidationSet, realization: int) -> np.random.Generator:
+    """The random stream of one surface: ``SeedSequence(surface_seed, spawn_key=(realization,))``."""
+    seq = np.random.SeedSequence(vset.surface_seed, spawn_key=(int(realization),))
+    return np.random.Generator(np.random.PCG64(seq))
+
+
+def rough_sphere(vset: ValidationSet, realization: int, n: int) -> np.ndarray:
+    """Heights (m, (n, n)) of the sphere plus the realization's GW surface on an n x n grid of the window.
+
+    The asperities are drawn once per realization over the window (independent of ``n``), so
+    the grids of the convergence study see the same surface.
+    """
+    pixel = vset.side / n
+    asperities = surfaces.gw_asperities(vset.side, vset.eta, vset.sigma, vset.beta, surface_stream(vset, realization))
+    rough = surfaces.gw_heights(asperities, n, pixel, floor=-FLOOR_SIGMAS * vset.sigma)
+    return rough + surfaces.sphere(n, pixel, vset.radius)
+
+
+def has_spots_key(scenario: Scenario) -> bool:
+    """Whether this g2tom knows ``contact.spots`` (issue 21)."""
+    return "contact.spots" in scenario.flat()
+
+
+def g2tom_scenario(vset: ValidationSet, model: str, spots: str) -> Scenario:
+    """The g2tom scenario of the validation scene, one ``cube.model`` and one spot discretization."""
+    lo, hi = min(vset.deltas), max(vset.deltas)
+    overrides = {
+        "material.E": vset.E, "material.nu": vset.nu, "material.rho": vset.rho,
+        "roughness.sigma": vset.sigma, "roughness.eta": vset.eta, "roughness.beta": vset.beta,
+        "indenter.radius": vset.radius,
+        "loading.delta_max": hi, "loading.delta_min": lo, "loading.n_delta": len(vset.deltas),
+        "oxide.xi": list(vset.xi), "oxide.lambda": list(vset.lambdas), "oxide.seed": vset.oxide_seed,
+        "oxide.ensemble": "fixed", "oxide.n_realizations": max(2, max(vset.realizations) + 1),
+        "cube.model": model,
+    }
+    scenario = load_scenario("paper", overrides)
+    if has_spots_key(scenario):
+        scenario = load_scenario("paper", {**overrides, "contact.spots": spots})
+    elif spots != "mean_area":
+        raise ValueError(f"spot discretization {spots!r} needs contact.spots (issue 21), which this g2tom lacks")
+    scenario = resolve(scenario)
+    expected = np.asarray(vset.deltas) * vset.sigma
+    if not np.allclose(scenario.deltas, expected, rtol=1e-12, atol=0):
+        raise ValueError(f"deltas = {vset.deltas} must be evenly spaced, lightest load first (g2tom's load steps)")
+    return scenario
+
+
+#: The contact's extent: the largest radius where GT's area fraction is at least this fraction of
+#: its peak; the reference grid's half side must reach it at every load.
+EXTENT_FRACTION = 1e-4
+
+
+def g2tom_resistances(vset: ValidationSet, model: str, spots: str) -> xr.Dataset:
+    """g2tom's cube of the scene: ``force`` (delta), ``resistance_clean`` (delta) and
+    ``resistance`` (xi, lambda, delta, realization) with the set's realizations, and
+    ``contact_extent`` (delta, m, see :data:`EXTENT_FRACTION`)."""
+    scenario = g2tom_scenario(vset, model, spots)
+    contact = contact_stage.build(scenario)
+    oxide = oxide_stage.build(scenario)
+    cube = cube_stage.build(scenario, contact, oxide).isel(realization=list(vset.realizations))
+    fraction = contact["area_fraction"].transpose("delta", "r").values
+    r = contact["r"].values
+    extent = [r[np.flatnonzero(a >= EXTENT_FRACTION * a.max())[-1]] for a in fraction]
+    cube["contact_extent"] = ("delta", np.asarray(extent), {
+        "units": "m", "long_name": f"largest radius where GT's area fraction >= {EXTENT_FRACTION:g} of its peak"})
+    return cube

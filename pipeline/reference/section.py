@@ -1,0 +1,147 @@
+"""The validation's figure (R' against F', full field and g2tom) and its report section (markdown)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from pipeline.reference.summary import ratios
+from pipeline.store import atomic_path
+
+__all__ = ["figure", "markdown", "CLEAN_LIMIT", "OXIDE_LIMIT"]
+
+#: Relative deviations of the default discretization that the section's first lines flag.
+CLEAN_LIMIT = 0.10
+OXIDE_LIMIT = 0.20
+
+
+def _panels(ds: xr.Dataset) -> list[tuple[str, xr.DataArray, xr.DataArray]]:
+    """(title, reference R (realization, load), g2tom R (discretization, model, realization?, load))."""
+    out = [("clean", ds["resistance_reference_clean"], ds["resistance_g2tom_clean"])]
+    for xi in ds["xi"].values:
+        for lam in ds["lambda"].values:
+            sel = {"xi": xi, "lambda": lam}
+            out.append((f"xi {xi:g}, lambda {lam:g}", ds["resistance_reference"].sel(sel),
+                        ds["resistance_g2tom"].sel(sel)))
+    return out
+
+
+def figure(ds: xr.Dataset, path: Path) -> Path:
+    """R' against F' per case: every realization of the full field, and g2tom's curves; written atomically."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    panels = _panels(ds)
+    cols = min(3, len(panels))
+    rows = -(-len(panels) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.6 * rows), squeeze=False)
+    f = ds["force_normalized"].values
+    scale = ds.attrs["resistance_scale"]
+    for ax, (title, ref, g2) in zip(axes.ravel(), panels):
+        ax.loglog(np.broadcast_to(f, ref.shape).ravel(), ref.values.ravel() / scale, "ko", ms=4,
+                  label="full field (each realization)")
+        for d in ds["discretization"].values:
+            for m in ds["model"].values:
+                curve = g2.sel(discretization=d, model=m)
+                if not np.isfinite(curve.values).any():  # a combination g2tom refuses
+                    continue
+                if "realization" in curve.dims:  # geometric mean over conducting realizations
+                    curve = ratios(curve.transpose("realization", "load").values)[0]
+                ax.loglog(f, np.asarray(curve) / scale, "-" if m == "greenwood" else "--", marker=".",
+                          label=f"g2tom {d}, {m}")
+        ax.set_title(title)
+        ax.set_xlabel("F' = 2F / (E* sqrt(R* sigma^3))")
+        ax.set_ylabel("R' = R sqrt(R* sigma) / (2 rho*)")
+        ax.grid(True, which="both", alpha=0.3)
+    for ax in axes.ravel()[len(panels):]:
+        ax.axis("off")
+    axes.ravel()[0].legend(fontsize=7)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _cell(gm: float, lo: float, hi: float, count: int, total: int) -> str:
+    if count == 0:
+        return "open"
+    open_note = f", {total - count} open" if count < total else ""
+    return f"{gm:.3f} [{lo:.3f}-{hi:.3f}{open_note}]"
+
+
+def _flags(ds: xr.Dataset) -> list[str]:
+    """The section's first lines: where the default discretization misses the limits, with numbers."""
+    spots = ds.attrs["default_discretization"]
+    f = ds["force"].values
+    lines = []
+    for model in ds["model"].values:
+        if f"{spots}/{model}:" in ds.attrs.get("skipped_g2tom", "none"):
+            continue
+        clean = ratios(ds["ratio_clean"].sel(discretization=spots, model=model).values)[0]
+        bad = np.flatnonzero(~(np.abs(clean - 1.0) <= CLEAN_LIMIT))
+        if bad.size:
+            where = ", ".join(f"{100 * (clean[k] - 1):+.1f} % at {f[k]:.4g} N" for k in bad)
+            lines.append(f"**Clean: g2tom's default discretization ({spots}, {model}) is off the full field by "
+                         f"more than ±{100 * CLEAN_LIMIT:.0f} %: {where}.**")
+        ox = ratios(ds["ratio"].sel(discretization=spots, model=model).values)[0]  # (xi, lambda, load)
+        bad = np.argwhere(~(np.abs(ox - 1.0) <= OXIDE_LIMIT))
+        if len(bad):
+            z, a, k = max(bad, key=lambda i: abs(np.log(ox[tuple(i)])) if np.isfinite(ox[tuple(i)]) else np.inf)
+            lines.append(f"**Oxidized: g2tom's default discretization ({spots}, {model}) is off the full field by "
+                         f"more than ±{100 * OXIDE_LIMIT:.0f} % in {len(bad)} of {ox.size} (case, load) pairs; worst "
+                         f"{100 * (ox[z, a, k] - 1):+.1f} % at xi {ds['xi'].values[z]:g}, lambda "
+                         f"{ds['lambda'].values[a]:g}, {f[k]:.4g} N.**")
+    if not lines:
+        lines.append(f"g2tom's default discretization ({spots}) is within ±{100 * CLEAN_LIMIT:.0f} % of the full "
+                     f"field clean and ±{100 * OXIDE_LIMIT:.0f} % oxidized at every load.")
+    return lines
+
+
+def markdown(ds: xr.Dataset) -> str:
+    """The report section: flags first, then the ratio tables, the grid convergence and the wall times."""
+    n_real = ds.sizes["realization"]
+    lines = ["## How right is the model? g2tom against the full-field reference", ""]
+    lines += _flags(ds)
+    if ds.attrs.get("failed_cases", "none") != "none":
+        lines.append(f"**Failed reference cases (NaN in the tables): {ds.attrs['failed_cases']}.**")
+    lines.append("")
+    lines += [
+        f"Scene: mu = {ds.attrs['mu']:.3f}, sigma {ds.attrs['scene_sigma']:g} m, eta {ds.attrs['scene_eta']:g} m^-2, "
+        f"beta {ds.attrs['scene_beta']:g} m, R* {ds.attrs['scene_radius']:g} m; GW surfaces on a "
+        f"{ds.attrs['scene_n_grid']}^2 grid ({ds.attrs['scene_pixels_per_cell']:g} pixels per asperity spacing), "
+        f"{n_real} realization(s); the reference is solved at g2tom's force. Ratio g2tom / full field: "
+        "geometric mean [min-max] over realizations.", "",
+    ]
+    skipped = ds.attrs.get("skipped_g2tom", "none")
+    if skipped != "none":
+        lines += [f"Not compared (g2tom refuses the combination): {skipped}", ""]
+    cases = ["clean"] + [f"xi {x:g}, lambda {lam:g}" for x in ds["xi"].values for lam in ds["lambda"].values]
+    for d in ds["discretization"].values:
+        for m in ds["model"].values:
+            if f"{d}/{m}:" in skipped:
+                continue
+            lines += [f"### {d}, {m}", "", "| F (N) | F' | " + " | ".join(cases) + " |",
+                      "|---|---|" + "---|" * len(cases)]
+            clean = ratios(ds["ratio_clean"].sel(discretization=d, model=m).values)
+            ox = ratios(ds["ratio"].sel(discretization=d, model=m).values)
+            for k in range(ds.sizes["load"]):
+                row = [_cell(*(v[k] for v in clean), n_real)]
+                row += [_cell(*(v[z, a, k] for v in ox), n_real)
+                        for z in range(ds.sizes["xi"]) for a in range(ds.sizes["lambda"])]
+                lines.append(f"| {ds['force'].values[k]:.4g} | {ds['force_normalized'].values[k]:.3g} | "
+                             + " | ".join(row) + " |")
+            lines.append("")
+    change = ds["convergence_change"].values
+    lines += [f"Grid convergence (first realization, clean): doubling the grid step ({ds['grid'].values[0]}^2 -> "
+              f"{ds['grid'].values[1]}^2) changes R by " + ", ".join(f"{100 * c:+.2f} %" for c in change) + " at the loads.",
+              "Barber's theorem on the full-field clean solution (convergence grid, first realization): punch "
+              "conductance / (K / (E* rho*)) = " + ", ".join(f"{b:.4f}" for b in ds["barber_ratio"].values) + ".",
+              f"Wall time: {float(np.nansum(ds['seconds_case'].values)):.0f} s for the main grid's cases "
+              f"(contact solves {float(np.nansum(ds['seconds_contact'].values)):.0f} s), "
+              f"{float(np.nansum(ds['seconds_convergence'].values)):.0f} s for the convergence grid.", ""]
+    return "\n".join(lines)

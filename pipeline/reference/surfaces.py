@@ -1,0 +1,136 @@
+"""Rigid surfaces on a grid: the sphere, GW surfaces and Gaussian random-process surfaces.
+
+Pixel centres lie at ``(i - (n - 1) / 2) * pixel`` along x and y (``grid.cell_centres``), so the
+sphere's axis is the grid's centre. Heights are in m, positive towards the elastic half-space.
+
+* GW surface (Greenwood and Williamson): asperities at the points of a Poisson process of
+  density eta, heights N(0, sigma^2), tips of curvature radius beta (paraboloids, as in Hertz's
+  and GW's analysis): exactly g2tom's input parameters. Between asperities the surface lies at a
+  ``floor`` far below any contact.
+* Random-process surface: an isotropic self-affine spectrum ``C(q) ~ q^-2(1+H)`` on
+  ``q_low <= |q| <= q_high``, synthesised with fixed amplitudes ``sqrt(C)`` and uniform random
+  phases (periodic over the grid): Gaussian in the limit of many modes, and its spectral moments
+  are those of the spectrum exactly (:func:`spectral_moments_closed_form`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.physics.grid import cell_centres
+
+__all__ = ["coordinates", "sphere", "Asperities", "gw_asperities", "gw_heights", "random_process",
+           "spectral_moments_closed_form"]
+
+
+def coordinates(n: int, pixel: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel-centre coordinates ``x, y`` (m), each (n, n), indexed ``[y, x]``."""
+    c = cell_centres(n, pixel)
+    return np.meshgrid(c, c, indexing="xy")
+
+
+def sphere(n: int, pixel: float, radius: float) -> np.ndarray:
+    """Heights of a sphere of ``radius`` (m) with its tip at height 0 on the axis (parabolic, Hertz)."""
+    x, y = coordinates(n, pixel)
+    return -(x**2 + y**2) / (2.0 * radius)
+
+
+@dataclass(frozen=True)
+class Asperities:
+    """The asperities of a GW surface: tip positions ``x``, ``y`` and heights ``z`` (m), radius ``beta`` (m)."""
+
+    x: np.ndarray
+    y: np.ndarray
+    z: np.ndarray
+    beta: float
+
+
+def gw_asperities(side: float, eta: float, sigma: float, beta: float, rng: np.random.Generator) -> Asperities:
+    """Asperities of a GW surface on the square ``[-side/2, side/2]^2``.
+
+    Parameters
+    ----------
+    side
+        Side of the square, m.
+    eta, sigma, beta
+        Asperity density (m^-2), standard deviation of the tip heights (m), tip radius (m).
+    rng
+        The surface's own random stream: count (Poisson, mean eta side^2), then positions, then heights.
+    """
+    count = int(rng.poisson(eta * side**2))
+    xy = rng.uniform(-side / 2.0, side / 2.0, size=(2, count))
+    z = rng.normal(0.0, sigma, size=count)
+    return Asperities(x=xy[0], y=xy[1], z=z, beta=float(beta))
+
+
+def gw_heights(asperities: Asperities, n: int, pixel: float, floor: float) -> np.ndarray:
+    """Heights (m, (n, n)) of the asperities: the highest tip ``z - d^2 / (2 beta)`` above each pixel, at least ``floor``."""
+    c = cell_centres(n, pixel)
+    heights = np.full((n, n), float(floor))
+    beta = asperities.beta
+    for x0, y0, z0 in zip(asperities.x, asperities.y, asperities.z):
+        if z0 <= floor:
+            continue
+        reach = np.sqrt(2.0 * beta * (z0 - floor))  # beyond it the tip lies below the floor
+        ix = np.flatnonzero(np.abs(c - x0) <= reach)
+        iy = np.flatnonzero(np.abs(c - y0) <= reach)
+        if ix.size == 0 or iy.size == 0:
+            continue
+        patch = z0 - ((c[ix][None, :] - x0) ** 2 + (c[iy][:, None] - y0) ** 2) / (2.0 * beta)
+        block = heights[iy[0]:iy[-1] + 1, ix[0]:ix[-1] + 1]
+        np.maximum(block, patch, out=block)
+    return heights
+
+
+def _band_modes(n: int, pixel: float, q_low: float, q_high: float) -> tuple[np.ndarray, np.ndarray]:
+    """Wave numbers |q| (rad/m) of the rfft2 lattice and the mask of the band."""
+    qx = 2.0 * np.pi * np.fft.rfftfreq(n, pixel)
+    qy = 2.0 * np.pi * np.fft.fftfreq(n, pixel)
+    q = np.hypot(qx[None, :], qy[:, None])
+    return q, (q >= q_low) & (q <= q_high)
+
+
+def random_process(n: int, pixel: float, hurst: float, q_low: float, q_high: float, rms: float,
+                   rng: np.random.Generator) -> np.ndarray:
+    """A self-affine surface (m, (n, n)), periodic over the grid, with rms height ``rms`` over its period.
+
+    Parameters
+    ----------
+    n, pixel
+        Grid side (pixels) and pitch (m).
+    hurst
+        Hurst exponent H in (0, 1): ``C(q) ~ q^-2(1+H)``.
+    q_low, q_high
+        Band of wave numbers, rad/m, ``2 pi / (n pixel) <= q_low < q_high <= pi / pixel``.
+    rms
+        Standard deviation of the heights, m.
+    rng
+        The surface's random stream (one uniform phase per rfft2 coefficient).
+    """
+    if not 0 < hurst < 1:
+        raise ValueError(f"hurst = {hurst} is out of range: must be in (0, 1)")
+    if not (2.0 * np.pi / (n * pixel) <= q_low < q_high <= np.pi / pixel):
+        raise ValueError(f"q_low = {q_low:g}, q_high = {q_high:g} rad/m: need 2 pi / (n pixel) <= q_low "
+                         f"< q_high <= pi / pixel for n = {n}, pixel = {pixel:g} m")
+    q, band = _band_modes(n, pixel, q_low, q_high)
+    amplitude = np.zeros(q.shape)
+    amplitude[band] = q[band] ** (-(1.0 + hurst))
+    spectrum = amplitude * np.exp(2j * np.pi * rng.random(q.shape))
+    heights = np.fft.irfft2(spectrum, s=(n, n))
+    return heights * (rms / np.sqrt(np.mean(heights**2)))
+
+
+def spectral_moments_closed_form(hurst: float, q_low: float, q_high: float, rms: float) -> tuple[float, float, float]:
+    """Profile moments m0 (m^2), m2 (1), m4 (m^-2) of the continuous isotropic band ``C(q) ~ q^-2(1+H)``.
+
+    ``m_2k = c_k int C(q) q^(2k+1) dq / int C(q) q dq * rms^2`` with the direction averages
+    ``c_1 = <cos^2> = 1/2`` and ``c_2 = <cos^4> = 3/8``.
+    """
+    def integral(power: float) -> float:  # int_{q_low}^{q_high} q^power dq
+        return (q_high ** (power + 1) - q_low ** (power + 1)) / (power + 1)
+
+    base = integral(-1.0 - 2.0 * hurst)
+    m0 = rms**2
+    return m0, 0.5 * m0 * integral(1.0 - 2.0 * hurst) / base, 0.375 * m0 * integral(3.0 - 2.0 * hurst) / base

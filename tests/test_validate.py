@@ -1,0 +1,116 @@
+"""`g2tom validate`: the plan, the outputs, resuming, and the refusal without the extra."""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import json
+import sys
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from pipeline.cli import main
+from pipeline.reference import cases, scene
+from pipeline.reference.validate import chosen_set, run_validation
+
+TINY = dataclasses.replace(scene.QUICK, radius=1e-3, deltas=(1.0, 0.0), realizations=(0, 1), n_grid=96,
+                           pixels_per_cell=4.0, convergence_grid=48, discretizations=("expected", "asperities"))
+
+
+def test_without_the_extra_validate_names_the_install_command_and_exits_2(tmp_path, monkeypatch, capsys) -> None:
+    monkeypatch.setitem(sys.modules, "tamaas", None)  # import tamaas raises ImportError
+    assert main(["validate", "--quick", "--data-dir", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "pip install -e '.[reference]'" in err and "Traceback" not in err
+    assert not (tmp_path / "validate").exists()  # refused before any work
+
+
+def test_validate_refuses_scenario_options_it_would_ignore(tmp_path, capsys) -> None:
+    assert main(["validate", "--quick", "--data-dir", str(tmp_path), "--set", "roughness.sigma=1e-5"]) == 2
+    assert "--config and --set are not used" in capsys.readouterr().err
+    assert not (tmp_path / "validate").exists()
+
+
+def test_default_and_quick_sets_meet_the_issue() -> None:
+    default, quick = chosen_set(False), chosen_set(True)
+    assert default.mu == pytest.approx(8.262, abs=0.01)  # the paper's mu
+    assert default.n_grid == 1024 and default.pixels_per_cell >= 16
+    assert len(default.deltas) >= 3 and max(default.deltas) >= 2.0 and min(default.deltas) <= -3.0  # F' 0.075..18.8
+    assert set(default.xi) == {0.5, 0.7} and set(default.lambdas) == {1.0, 5.0} and len(default.realizations) >= 4
+    assert cases.estimate_seconds(default, cases.plan_cases(default)) <= 45 * 60
+    assert quick.n_grid == 256 and len(quick.realizations) == 1 and len(quick.deltas) == 2
+    assert len(quick.xi) * len(quick.lambdas) == 1
+    assert cases.estimate_seconds(quick, cases.plan_cases(quick)) <= 180
+
+
+@pytest.fixture(scope="module")
+def tiny_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("validate")
+    log = io.StringIO()
+    run_validation(TINY, out, stream=log)
+    return out, log.getvalue()
+
+
+def test_outputs_are_labelled_and_consistent(tiny_run) -> None:
+    out, log = tiny_run
+    assert log.index("validate: 6 cases; estimated") < log.index("g2tom done; 0 of 6 cases already stored")
+    assert log.index("already stored") < log.index("case 1/6")  # the plan comes first, then g2tom, then the cases
+    ds = xr.open_dataset(out / "validate.nc")
+    for name, var in ds.variables.items():
+        assert var.attrs.get("units") is not None and var.attrs.get("long_name"), name
+    ref = ds["resistance_reference_clean"].values
+    assert np.all(np.isfinite(ref)) and np.all(ref > 0)
+    np.testing.assert_allclose(ds["force_reference"].values, np.broadcast_to(ds["force"].values, ref.shape), rtol=1e-9)
+    np.testing.assert_allclose(ds["ratio_clean"].values, ds["resistance_g2tom_clean"].values[:, :, None, :] / ref[None, None])
+    assert np.all(ref[:, 1] < ref[:, 0])  # heavier load, lower resistance
+    # oxide only removes conducting area: never a lower resistance than the clean contact's
+    assert np.all(ds["resistance_reference"].values >= ref[None, None] * (1 - 1e-9))
+    assert np.all(np.abs(ds["convergence_change"].values) < 0.5)
+    barber = ds["barber_ratio"].values  # the coarse grid's light load may fail (one-pixel contact): NaN
+    assert np.isfinite(barber).any() and np.nanmax(np.abs(barber - 1.0)) < 0.02
+    text = (out / "validate.md").read_text()
+    assert text.startswith("## How right is the model?")
+    first = text.splitlines()[2]
+    assert "g2tom's default discretization (expected" in first
+    assert ds.attrs["skipped_g2tom"] == "none" and "### asperities, point" in text
+    assert not np.isnan(ds["resistance_g2tom"].values).any()  # +inf where g2tom's own asperities all miss
+    assert (out / "validate.png").stat().st_size > 10_000
+
+
+def test_a_rerun_resumes_from_the_stored_cases(tiny_run) -> None:
+    out, _ = tiny_run
+    before = xr.open_dataset(out / "validate.nc").load()
+    damaged = out / "cases" / f"{cases.Case(1, 0, TINY.n_grid, True).name}.json"
+    damaged.write_text("{ truncated")
+    log = io.StringIO()
+    run_validation(TINY, out, stream=log)
+    text = log.getvalue()
+    assert "5 of 6 cases already stored, 1 to run" in text and "case 1/1 r1_load0_n96" in text
+    after = xr.open_dataset(out / "validate.nc").load()
+    np.testing.assert_allclose(after["resistance_reference"].values, before["resistance_reference"].values, rtol=1e-12)
+    assert json.loads(damaged.read_text())["key"]  # rewritten whole
+    # another force (another set) does not reuse the stored case
+    case = cases.Case(0, 0, TINY.n_grid, True)
+    source_key = json.loads((out / "cases" / f"{case.name}.json").read_text())["key"]
+    assert cases.load_case(out / "cases" / f"{case.name}.json", source_key) is not None
+    assert cases.load_case(out / "cases" / f"{case.name}.json", "0" * 16) is None
+
+
+def test_a_combination_g2tom_refuses_is_nan_and_named(monkeypatch) -> None:
+    from pipeline.config import ConfigError
+    from pipeline.reference import validate
+
+    real = scene.g2tom_resistances
+
+    def refusing(vset, model, spots):
+        if (spots, model) == ("asperities", "point"):
+            raise ConfigError("contact.spots = 'asperities' is not allowed with cube.model = 'point'")
+        return real(vset, model, spots)
+
+    monkeypatch.setattr(scene, "g2tom_resistances", refusing)
+    side = validate._g2tom_side(dataclasses.replace(TINY, realizations=(0,)))
+    assert np.isnan(side["resistance"][1, 1]).all() and np.isnan(side["clean"][1, 1]).all()
+    assert not np.isnan(side["clean"][0]).any() and not np.isnan(side["resistance"][1, 0]).any()
+    assert side["skipped"] == ["asperities/point: contact.spots = 'asperities' is not allowed with cube.model = 'point'"]
