@@ -16,7 +16,7 @@ SOURCES  := $(shell find pipeline -name '*.py' -o -name '*.toml')
 ANALYSIS := $(shell find analysis -name '*.py')
 STAMPS   := $(DATA)/.stamps
 
-.PHONY: all run test stress bench compare figures report contact oxide cube fits surrogate params validate atlas atlas-plan clean FORCE
+.PHONY: all run test stress bench compare figures report contact oxide cube fits surrogate params validate atlas atlas-plan run-check clean FORCE
 all: run
 
 $(VENV)/.installed: pyproject.toml
@@ -67,7 +67,10 @@ $(DATA)/report.md: $(DATA)/figures/.written $(wildcard $(DATA)/bench/*.json) | $
 
 figures: $(DATA)/figures/.written
 report: $(DATA)/report.md
-run: report
+# The checks of a whole run (e.g. a (xi, lambda) grid too small for the surrogate) before the first stage.
+run-check: | $(VENV)/.installed
+	$(G2TOM) run --check $(ARGS)
+run: run-check report
 
 # Greenwood's closed form against the exact point-interaction model on one modest ensemble
 # (both under $(DATA)/compare/<model>); `make report` includes the comparison when present.

@@ -119,6 +119,9 @@ def _cmd_stage(args: argparse.Namespace, scenario: Scenario) -> None:
 
 def _cmd_run(args: argparse.Namespace, scenario: Scenario) -> None:
     _preflight(args, scenario)
+    if args.check:
+        print("run: every check before work passed (configuration, surrogate grid, plan, scene)", file=sys.stderr)
+        return
     for name in STAGES:
         _run_stage(name, scenario, args)
     _cmd_figures(args, scenario)
@@ -360,7 +363,9 @@ def _parser() -> argparse.ArgumentParser:
 
     for stage in STAGES:
         add(stage, _cmd_stage, f"run the {stage} stage", compute=True)
-    add("run", _cmd_run, "run every stage, the figures and the report", compute=True)
+    run = add("run", _cmd_run, "run every stage, the figures and the report", compute=True)
+    run.add_argument("--check", action="store_true",
+                     help="only the checks a run makes before work (make run calls it before the first stage)")
     add("figures", _cmd_figures, "write the figures under <data-dir>/figures")
     add("report", _cmd_report, "write <data-dir>/report.md and report.html")
     bench = add("bench", _cmd_bench, "benchmarks: run time against error, printed and saved")

@@ -34,3 +34,11 @@ def test_paper_method_allows_a_2x2_grid_and_other_stages_any_grid() -> None:
     with pytest.raises(ConfigError, match="oxide.xi holds 2 value"):
         check_surrogate_grid(load_scenario("paper", two))
     assert main(["params", "--set", "oxide.xi=[0.3, 0.7]", "--set", "surrogate.rank=1000"]) == 0
+
+
+def test_run_check_does_no_work(tmp_path, capsys) -> None:
+    data = tmp_path / "data"
+    assert main(["run", "--check", "--data-dir", str(data), "--no-progress", *_SMALL]) == 0
+    assert "every check before work passed" in capsys.readouterr().err
+    assert not any(p.suffix == ".nc" for p in data.rglob("*"))
+    assert main(["run", "--check", "--data-dir", str(data), *_SMALL, *_GRID_2x2]) == 2
