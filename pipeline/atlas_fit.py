@@ -85,15 +85,24 @@ def fit_atlas(atlas: xr.Dataset, degrees: range = range(1, 5)) -> tuple[dict[str
         "domain": {"mu": [float(atlas["mu"].min()), float(atlas["mu"].max())],
                    "Pi": [float(atlas["Pi"].min()), float(atlas["Pi"].max())],
                    "xi": [float(atlas["xi"].min()), float(atlas["xi"].max())],
-                   "lambda": [float(atlas["lambda"].min()), float(atlas["lambda"].max())]},
+                   "lambda": [float(atlas["lambda"].min()), float(atlas["lambda"].max())],
+                   "force_normalized": _force_range(atlas)},
         "heldout": {"rule": f"|ln R'_surrogate - ln R'_scene| <= max({FLOOR:g}, the cell's relative half-width of "
                             "alpha) at every fitted F' step",
                     "cells": len({(r['scene'], r['xi'], r['lambda']) for r in rows}),
                     "steps": len(rows), "steps_within": int(sum(passing)),
-                    "cells_within": _cells_within(rows), "worst": worst},
+                    "cells_within": _cells_within(rows), "worst": worst,
+                    "rms_ln_error": float(np.sqrt(np.mean([r["error"] ** 2 for r in rows]))),
+                    "max_ln_error": float(max(r["error"] for r in rows))},
         "provenance": {"g2tom_commit": git_commit(), "atlas_config_hashes": atlas.attrs.get("scene_config_hashes", "")},
     })
     return doc, rows
+
+
+def _force_range(atlas: xr.Dataset) -> list[float]:
+    """F' fitted in every scene: from the largest of the scenes' lowest fitted F' to the smallest highest."""
+    force = np.where(atlas["fitted"].values.astype(bool), atlas["force_normalized"].values, np.nan)
+    return [float(np.nanmax(np.nanmin(force, axis=1))), float(np.nanmin(np.nanmax(force, axis=1)))]
 
 
 def _cells_within(rows: list[dict[str, Any]]) -> int:

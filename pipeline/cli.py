@@ -234,7 +234,7 @@ def _cmd_predict(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.store import stage_path, unreadable
 
     surrogate = args.surrogate or stage_path(args.data_dir, "surrogate")
-    problem = Path(surrogate).is_file() and unreadable(surrogate, "surrogate")
+    problem = Path(surrogate).suffix != ".json" and Path(surrogate).is_file() and unreadable(surrogate, "surrogate")
     if problem:
         raise StaleInputError(problem)
 

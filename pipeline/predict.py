@@ -532,6 +532,29 @@ def to_csv(ds: xr.Dataset) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
+    """The surrogate that answers: ``--surrogate`` (either kind), else the run's own when it is of
+    this surface, else the atlas's (``<data-dir>/atlas/surrogate.json``) when there is one."""
+    from pipeline.predict_atlas import is_atlas_document, load_atlas_surrogate
+
+    if args.surrogate is not None:
+        path = Path(args.surrogate)
+        if path.suffix == ".json" and path.is_file() and is_atlas_document(path.read_text()):
+            return load_atlas_surrogate(path)
+        return load_surrogate(path)
+    atlas = Path(args.data_dir) / "atlas" / "surrogate.json"
+    own = _default_surrogate(args.data_dir)
+    if atlas.is_file() and not own.is_file():
+        return load_atlas_surrogate(atlas)
+    tables = load_surrogate(own)
+    if atlas.is_file():
+        try:
+            check_surface(tables, scenario, extrapolate=False)
+        except ConfigError:
+            return load_atlas_surrogate(atlas)  # another surface: the atlas answers it
+    return tables
+
+
 def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
     """``g2tom predict``: CSV of R_el, its band and the band's components; warnings on stderr."""
     force, xi, lam = _cli_queries(args)
@@ -540,10 +563,15 @@ def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
         scenario = with_measured_roughness(scenario, args.roughness, args.pixel_size)
     elif args.pixel_size is not None:
         raise ConfigError("--pixel-size is only used with --roughness FILE")
-    tables = load_surrogate(args.surrogate if args.surrogate is not None else _default_surrogate(args.data_dir))
+    answer = _chosen_surrogate(args, scenario)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
-        result = predict(tables, scenario, force, xi, lam, extrapolate=args.extrapolate)
+        if isinstance(answer, SurrogateTables):
+            result = predict(answer, scenario, force, xi, lam, extrapolate=args.extrapolate)
+        else:
+            from pipeline.predict_atlas import predict_atlas
+
+            result = predict_atlas(answer, scenario, force, xi, lam, extrapolate=args.extrapolate)
     for w in caught:
         print(f"g2tom: warning: {w.message}", file=sys.stderr)
     print(f"g2tom: answered by {result.attrs['answered_by']}", file=sys.stderr)

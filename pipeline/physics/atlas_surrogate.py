@@ -58,8 +58,14 @@ class AtlasModel:
     coef: np.ndarray
 
     def _design(self, x: np.ndarray) -> np.ndarray:
+        """(n, terms) monomials of the mapped coordinates, from each coordinate's table of powers."""
         u = 2.0 * (x - self.low) / (self.high - self.low) - 1.0
-        return np.prod(u[:, None, :] ** self.powers[None, :, :], axis=-1)
+        top = int(self.powers.max(initial=0))
+        design = np.ones((u.shape[0], self.powers.shape[0]))
+        for i in range(u.shape[1]):
+            table = u[:, i : i + 1] ** np.arange(top + 1)  # (n, top + 1)
+            design *= table[:, self.powers[:, i]]
+        return design
 
     def transformed(self, xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray) -> np.ndarray:
         """T(p) at the points (arrays of equal size)."""
