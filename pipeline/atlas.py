@@ -12,7 +12,8 @@ dimension ``scene``.
 ``n_cells``, ``wall_seconds``; per (scene, xi, lambda): ``alpha``, ``gamma``, their intervals
 ``alpha_ci`` / ``gamma_ci`` (bound), ``n_realizations``; per (scene, xi, lambda, step): the fitted
 reduction ``resistance_normalized`` (R'); per (scene, step): ``force_normalized`` (F') and
-``fitted``; the clean fit ``alpha_clean`` / ``gamma_clean`` per scene.
+``fitted``; the clean fit ``alpha_clean`` / ``gamma_clean`` per scene; the fits stage's curve model
+``curve_coefficients`` (scene, xi, lambda, power), ``curve_order``, ``curve_max_error``, ``curve_within``.
 """
 
 from __future__ import annotations
@@ -62,6 +63,9 @@ def scene_dataset(base: Scenario, scene: Scene) -> xr.Dataset:
             **{name: take(name, grid) for name in ("alpha", "gamma", "n_realizations")},
             **{name: take(name, grid + ("bound",)) for name in ("alpha_ci", "gamma_ci")},
             **{name: take(name, ()) for name in ("alpha_clean", "gamma_clean")},
+            # the curve model of the fits stage (ln R' polynomial in ln F')
+            **{name: take(name, grid) for name in ("curve_order", "curve_max_error", "curve_within")},
+            "curve_coefficients": take("curve_coefficients", grid + ("power",)),
             "resistance_normalized": (grid + ("step",), reduced, {
                 "units": "1", "long_name": f"R' of the fitted reduction ({scenario.fits.reduction}) over realizations"}),
             "force_normalized": (("step",), k["force_normalized"].values, {
@@ -71,7 +75,8 @@ def scene_dataset(base: Scenario, scene: Scene) -> xr.Dataset:
         coords={name: (name, f[name].values, {"units": COORD_LABELS[name][0], "long_name": COORD_LABELS[name][1]})
                 for name in grid},
     )
-    ds = ds.assign_coords(bound=("bound", f["bound"].values, {"units": "1", "long_name": "end of the interval"}))
+    ds = ds.assign_coords(bound=("bound", f["bound"].values, {"units": "1", "long_name": "end of the interval"}),
+                          power=("power", f["power"].values, {"units": "1", "long_name": "power of ln F'"}))
     scalars = {"mu": (scene.mu, "(8/3) eta sigma sqrt(2 R* beta)"), "Pi": (scene.Pi, "eta R* sigma"),
                "heldout": (int(scene.heldout), "1: held out (never used in a fit)"),
                "n_cells": (scenario.n_cells, "cells along the window's side"),

@@ -16,7 +16,8 @@ BASE = {**SMALL_OVERRIDES, "oxide.xi": [0.5], "oxide.lambda": [1.0, 5.0], "fits.
 DESIGN = AtlasDesign(mu=(4.0, 16.0), Pi=(20.0, 40.0), n_mu=2, n_pi=2, n_heldout=1)
 #: Everything but the wall time must agree bit for bit.
 COMPARED = ("alpha", "gamma", "alpha_ci", "gamma_ci", "n_realizations", "resistance_normalized",
-            "force_normalized", "fitted", "mu", "Pi", "heldout", "n_cells", "alpha_clean", "gamma_clean")
+            "force_normalized", "fitted", "mu", "Pi", "heldout", "n_cells", "alpha_clean", "gamma_clean",
+            "curve_coefficients", "curve_order")
 
 
 def _load(path) -> xr.Dataset:
