@@ -84,8 +84,10 @@ compare: | $(VENV)/.installed
 # then one scene per core; a killed atlas continues with the scenes not written yet.
 atlas-plan: | $(VENV)/.installed
 	$(G2TOM) plan --atlas $(ARGS)
+# ... and ships its surrogate in the package (pipeline/atlas_surrogate.json: commit and config hash inside).
 atlas: atlas-plan | $(VENV)/.installed
 	$(G2TOM) atlas $(ARGS)
+	cp $(DATA)/atlas/surrogate.json pipeline/atlas_surrogate.json
 
 bench: | $(VENV)/.installed
 	$(G2TOM) bench $(ARGS)

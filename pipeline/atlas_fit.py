@@ -94,7 +94,8 @@ def fit_atlas(atlas: xr.Dataset, degrees: range = range(1, 5)) -> tuple[dict[str
                     "cells_within": _cells_within(rows), "worst": worst,
                     "rms_ln_error": float(np.sqrt(np.mean([r["error"] ** 2 for r in rows]))),
                     "max_ln_error": float(max(r["error"] for r in rows))},
-        "provenance": {"g2tom_commit": git_commit(), "atlas_config_hashes": atlas.attrs.get("scene_config_hashes", "")},
+        "provenance": {"g2tom_commit": git_commit(), "config_hash": atlas.attrs.get("config_hash", ""),
+                       "atlas_config_hashes": atlas.attrs.get("scene_config_hashes", "")},
     })
     return doc, rows
 

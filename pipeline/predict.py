@@ -534,25 +534,27 @@ def to_csv(ds: xr.Dataset) -> str:
 
 def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
     """The surrogate that answers: ``--surrogate`` (either kind), else the run's own when it is of
-    this surface, else the atlas's (``<data-dir>/atlas/surrogate.json``) when there is one."""
-    from pipeline.predict_atlas import is_atlas_document, load_atlas_surrogate
+    this surface, else the atlas's (``<data-dir>/atlas/surrogate.json``, else the one shipped in
+    the package) when there is one."""
+    from pipeline.predict_atlas import is_atlas_document, load_atlas_surrogate, shipped_path
 
     if args.surrogate is not None:
         path = Path(args.surrogate)
         if path.suffix == ".json" and path.is_file() and is_atlas_document(path.read_text()):
             return load_atlas_surrogate(path)
         return load_surrogate(path)
-    atlas = Path(args.data_dir) / "atlas" / "surrogate.json"
     own = _default_surrogate(args.data_dir)
-    if atlas.is_file() and not own.is_file():
-        return load_atlas_surrogate(atlas)
-    tables = load_surrogate(own)
-    if atlas.is_file():
+    data_atlas = Path(args.data_dir) / "atlas" / "surrogate.json"
+    atlas = data_atlas if data_atlas.is_file() else shipped_path()
+    if own.is_file():
+        tables = load_surrogate(own)
         try:
             check_surface(tables, scenario, extrapolate=False)
+            return tables
         except ConfigError:
-            return load_atlas_surrogate(atlas)  # another surface: the atlas answers it
-    return tables
+            if atlas is None:
+                return tables  # predict refuses the surface, naming the run's own surrogate
+    return load_atlas_surrogate(atlas) if atlas is not None else load_surrogate(own)
 
 
 def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:

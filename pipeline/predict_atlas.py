@@ -25,9 +25,12 @@ from pipeline.config import ConfigError, Scenario
 from pipeline.physics.atlas_surrogate import AtlasModel
 from pipeline.stages.surrogate import scene_groups
 
-__all__ = ["AtlasSurrogate", "is_atlas_document", "load_atlas_surrogate", "predict_atlas"]
+__all__ = ["AtlasSurrogate", "is_atlas_document", "load_atlas_surrogate", "predict_atlas", "shipped_path", "SHIPPED"]
 
 FORMAT = "g2tom-atlas-surrogate"
+#: The atlas surrogate shipped inside the package (``make atlas`` regenerates it), so that
+#: ``g2tom predict`` answers other surfaces on a fresh install.
+SHIPPED = "atlas_surrogate.json"
 _DOMAIN = ("mu", "Pi", "xi", "lambda", "force_normalized")
 
 
@@ -68,6 +71,14 @@ class AtlasSurrogate:
         mu, pi = self.domain["mu"], self.domain["Pi"]
         return (f"the atlas surrogate {self.source} (mu {mu[0]:.4g}..{mu[1]:.4g}, Pi {pi[0]:.4g}..{pi[1]:.4g}, "
                 f"held-out error {self.error:.3g} in ln R)")
+
+
+def shipped_path() -> Path | None:
+    """The package's atlas surrogate, or None when this installation ships none."""
+    from importlib import resources
+
+    path = Path(str(resources.files("pipeline").joinpath(SHIPPED)))
+    return path if path.is_file() else None
 
 
 def load_atlas_surrogate(path: str | Path) -> AtlasSurrogate:

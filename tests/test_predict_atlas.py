@@ -102,3 +102,20 @@ def test_cli_the_run_own_for_its_surface_the_atlas_for_others(tmp_path, capsys, 
     assert main(base + ["--surrogate", str(atlas_json)]) == 0
     assert "answered by the atlas surrogate" in capsys.readouterr().err
     assert json.loads(atlas_json.read_text())["format"] == "g2tom-atlas-surrogate"
+
+
+def test_fresh_install_answers_from_the_shipped_atlas(tmp_path, capsys, atlas_json, monkeypatch) -> None:
+    import pipeline.predict_atlas as pa
+
+    sur = load_atlas_surrogate(atlas_json)
+    scenario = _surface(1.5e8)
+    query = ["--force", f"{_force(sur, scenario):.6g}", "--xi", "0.5", "--lambda", "3"]
+    argv = ["predict", "--data-dir", str(tmp_path / "empty"), "--set", "roughness.eta=1.5e8",
+            *[a for k, v in BASE.items() for a in ("--set", f"{k}={v}")], *query]
+    monkeypatch.setattr(pa, "shipped_path", lambda: None)
+    assert main(argv) == 2 and "does not exist" in capsys.readouterr().err  # nothing to answer with
+    monkeypatch.setattr(pa, "shipped_path", lambda: atlas_json)
+    assert main(argv) == 0
+    assert f"answered by the atlas surrogate {atlas_json}" in capsys.readouterr().err
+    doc = json.loads(atlas_json.read_text())
+    assert doc["provenance"]["config_hash"] and "g2tom_commit" in doc["provenance"]
