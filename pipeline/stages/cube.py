@@ -115,12 +115,15 @@ def _clean_models(radius: np.ndarray, weights: np.ndarray, settings: dict[str, A
                   known: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """The oxide-free conductance (S, over delta) of every model of :data:`CLEAN_MODELS` with the
     run's spots, solved tightly (NaN where the model does not apply: the point model needs radius
-    weights); the models in ``known`` are taken from it."""
+    weights, the lattice term spots that stand for a continuum, not drawn asperities); the
+    models in ``known`` are taken from it."""
     out = dict(known)
     for name, kind, constant in CLEAN_MODELS:
         if name in out:
             continue
-        if kind == "point" and weights is not radius and not np.array_equal(weights, radius):
+        # the lattice term completes expected spots' continuum; drawn asperities have none to complete
+        lattice_off = constant > 0 and settings["spots"] == "asperities"
+        if lattice_off or kind == "point" and weights is not radius and not np.array_equal(weights, radius):
             out[name] = np.full(radius.shape[0], np.nan)
             continue
         chosen = dict(settings, model=kind, lattice_constant=constant, film_resistance=np.inf,
