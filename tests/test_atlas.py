@@ -133,3 +133,18 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     assert json.loads(target.read_text())["format"] == FORMAT == doc["format"]
     lines = (tmp_path / "atlas" / "heldout.csv").read_text().splitlines()
     assert lines[0].startswith("scene,mu,Pi,xi,lambda,force_normalized") and len(lines) == 1 + doc["heldout"]["steps"]
+
+
+def test_cli_runs_fits_and_summarizes(tmp_path, capsys, monkeypatch) -> None:
+    import pipeline.atlas_design as design_module
+    from pipeline.cli import main
+
+    monkeypatch.setattr(design_module, "AtlasDesign", lambda: DESIGN)  # the small design, not the default
+    sets = [a for k, v in BASE.items() for a in ("--set", f"{k}={v}")]
+    assert main(["atlas", "--data-dir", str(tmp_path), "--workers", "1", "--no-progress", *sets]) == 0
+    err = capsys.readouterr().err
+    assert err.count("atlas: scene ") == 5 and "held out: " in err and "cells within max(5 %, interval)" in err
+    assert (tmp_path / "atlas" / "atlas.nc").is_file() and (tmp_path / "atlas" / "surrogate.json").is_file()
+    # a second run has nothing left to compute
+    assert main(["atlas", "--data-dir", str(tmp_path), "--workers", "1", "--no-progress", *sets]) == 0
+    assert "atlas: scene " not in capsys.readouterr().err
