@@ -16,7 +16,7 @@ SOURCES  := $(shell find pipeline -name '*.py' -o -name '*.toml')
 ANALYSIS := $(shell find analysis -name '*.py')
 STAMPS   := $(DATA)/.stamps
 
-.PHONY: all run test stress bench compare figures report contact oxide cube fits surrogate params validate clean FORCE
+.PHONY: all run test stress bench compare figures report contact oxide cube fits surrogate params validate atlas atlas-plan run-check clean FORCE
 all: run
 
 $(VENV)/.installed: pyproject.toml
@@ -67,7 +67,10 @@ $(DATA)/report.md: $(DATA)/figures/.written $(wildcard $(DATA)/bench/*.json) | $
 
 figures: $(DATA)/figures/.written
 report: $(DATA)/report.md
-run: report
+# The checks of a whole run (e.g. a (xi, lambda) grid too small for the surrogate) before the first stage.
+run-check: | $(VENV)/.installed
+	$(G2TOM) run --check $(ARGS)
+run: run-check report
 
 # Greenwood's closed form against the exact point-interaction model on one modest ensemble
 # (both under $(DATA)/compare/<model>); `make report` includes the comparison when present.
@@ -76,6 +79,18 @@ compare: | $(VENV)/.installed
 	for m in greenwood point; do for s in contact oxide cube fits surrogate; do \
 	  $(G2TOM) $$s --config $(SCENARIO) --data-dir $(DATA)/compare/$$m $(foreach s,$(SET),--set $(s)) \
 	    --set oxide.n_realizations=$(COMPARE_N) --set cube.model=$$m || exit 1; done; done
+
+# The chain on every scene of the atlas's design over (mu, Pi) (pipeline/atlas.py): the plan first,
+# then one scene per core; a killed atlas continues with the scenes not written yet.
+# Its base scene is the bundled scenario `atlas` (5 xi x 6 lambda, 5 % target): ATLAS_SCENARIO=... to change.
+ATLAS_SCENARIO ?= atlas
+ATLAS_ARGS := --config $(ATLAS_SCENARIO) --data-dir $(DATA) $(foreach s,$(SET),--set '$(s)')
+atlas-plan: | $(VENV)/.installed
+	$(G2TOM) plan --atlas $(ATLAS_ARGS)
+# ... and ships its surrogate in the package (pipeline/atlas_surrogate.json: commit and config hash inside).
+atlas: atlas-plan | $(VENV)/.installed
+	$(G2TOM) atlas $(ATLAS_ARGS)
+	cp $(DATA)/atlas/surrogate.json pipeline/atlas_surrogate.json
 
 bench: | $(VENV)/.installed
 	$(G2TOM) bench $(ARGS)

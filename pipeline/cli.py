@@ -19,7 +19,8 @@ from pathlib import Path  # noqa: E402
 from typing import TYPE_CHECKING, Callable, NoReturn, Sequence  # noqa: E402
 
 from pipeline import __version__  # noqa: E402
-from pipeline.config import STAGE_INPUTS, ConfigError, Scenario, load_scenario, parameter_table  # noqa: E402
+from pipeline.config import (  # noqa: E402
+    STAGE_INPUTS, ConfigError, Scenario, check_surrogate_grid, load_scenario, parameter_table)
 from pipeline.errors import StaleInputError  # noqa: E402
 from pipeline.plan import prepare  # noqa: E402
 
@@ -36,6 +37,10 @@ STAGES: dict[str, str] = {
     "fits": "pipeline.stages.fits",
     "surrogate": "pipeline.stages.surrogate",
 }
+
+
+#: Commands that run the surrogate stage: its limits on the oxide grid are checked before any stage.
+_REACH_SURROGATE = ("run", "surrogate")
 
 
 def _scenario_args(p: argparse.ArgumentParser) -> None:
@@ -114,6 +119,9 @@ def _cmd_stage(args: argparse.Namespace, scenario: Scenario) -> None:
 
 def _cmd_run(args: argparse.Namespace, scenario: Scenario) -> None:
     _preflight(args, scenario)
+    if args.check:
+        print("run: every check before work passed (configuration, surrogate grid, plan, scene)", file=sys.stderr)
+        return
     for name in STAGES:
         _run_stage(name, scenario, args)
     _cmd_figures(args, scenario)
@@ -211,6 +219,13 @@ def _cmd_params(args: argparse.Namespace, scenario: Scenario) -> None:
 def _cmd_plan(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.plan import format_plan
 
+    if args.atlas:
+        from pipeline.atlas_design import AtlasDesign, format_atlas_plan, plan_atlas
+
+        # one single-threaded scene per worker
+        parallel = max(1, args.workers or os.cpu_count() or 1)
+        print("\n".join(format_atlas_plan(plan_atlas(scenario, AtlasDesign()), parallel)))
+        return
     print("\n".join(format_plan(scenario, getattr(args, "workers", None))))
 
 
@@ -219,11 +234,30 @@ def _cmd_predict(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.store import stage_path, unreadable
 
     surrogate = args.surrogate or stage_path(args.data_dir, "surrogate")
-    problem = Path(surrogate).is_file() and unreadable(surrogate, "surrogate")
+    problem = Path(surrogate).suffix != ".json" and Path(surrogate).is_file() and unreadable(surrogate, "surrogate")
     if problem:
         raise StaleInputError(problem)
 
     predict_cli(args, scenario)
+
+
+def _cmd_atlas(args: argparse.Namespace, scenario: Scenario) -> None:
+    from pipeline.atlas import run_atlas
+    from pipeline.atlas_design import AtlasDesign
+
+    _preflight(args, scenario, scene=False)
+    if args.workers is None and args.scheduler is None:
+        args.workers = os.cpu_count() or 1  # a local cluster, one single-threaded scene per core
+    path = run_atlas(scenario, AtlasDesign(), args.data_dir, _options(args))
+    print(f"atlas: wrote {path}", file=sys.stderr)
+    from pipeline.atlas_fit import write_atlas_surrogate
+
+    target, doc = write_atlas_surrogate(path)
+    held, worst = doc["heldout"], doc["heldout"]["worst"]
+    print(f"atlas: wrote {target}: alpha degree {doc['alpha']['degree']}, gamma degree {doc['gamma']['degree']}; "
+          f"held out: {held['cells_within']} of {held['cells']} cells within max(5 %, interval) at every step; worst "
+          f"{worst['scene']} (xi {worst['xi']:g}, lambda {worst['lambda']:g}, F' {worst['force_normalized']:.3g}): "
+          f"{worst['error']:.3g} vs {worst['allowed']:.3g}", file=sys.stderr)
 
 
 def _cmd_roughness(args: argparse.Namespace, scenario: Scenario) -> None:
@@ -329,14 +363,20 @@ def _parser() -> argparse.ArgumentParser:
 
     for stage in STAGES:
         add(stage, _cmd_stage, f"run the {stage} stage", compute=True)
-    add("run", _cmd_run, "run every stage, the figures and the report", compute=True)
+    run = add("run", _cmd_run, "run every stage, the figures and the report", compute=True)
+    run.add_argument("--check", action="store_true",
+                     help="only the checks a run makes before work (make run calls it before the first stage)")
     add("figures", _cmd_figures, "write the figures under <data-dir>/figures")
     add("report", _cmd_report, "write <data-dir>/report.md and report.html")
     bench = add("bench", _cmd_bench, "benchmarks: run time against error, printed and saved")
     bench.add_argument("--only", action="append", default=None, help="run only this benchmark")
     add("stamp", _cmd_stamp, "update per-stage configuration stamps (used by make)")
-    add("plan", _cmd_plan, "estimate each stage's peak memory and run time; refuse what cannot fit",
-        compute=True)
+    plan = add("plan", _cmd_plan, "estimate each stage's peak memory and run time; refuse what cannot fit",
+               compute=True)
+    plan.add_argument("--atlas", action="store_true",
+                      help="plan the atlas's default design over (mu, Pi) on this scenario (one scene per worker)")
+    add("atlas", _cmd_atlas, "run the chain on every scene of the atlas's design over (mu, Pi), one scene per "
+        "task, resumable (<data-dir>/atlas/)", compute=True)
     add("params", _cmd_params, "list every parameter with its value, unit and range")
     predict = add("predict", _cmd_predict, "predict R_el with the surrogate (Eq. 27)")
     predict.add_argument("--force", default=None, help="normal force F, N: a number or a comma-separated list")
@@ -347,6 +387,11 @@ def _parser() -> argparse.ArgumentParser:
     predict.add_argument("--extrapolate", action="store_true", help="allow queries outside the fitted ranges (with a warning)")
     predict.add_argument("--model", choices=("curve", "power_law"), default="curve",
                          help="curve: each cell's ln R'(ln F') curve, interpolated (default); power_law: Eq. 27")
+    predict.add_argument("--roughness", type=Path, default=None,
+                         help="a measured topography (see `g2tom roughness`): its summit sigma, eta and beta "
+                              "replace roughness.*")
+    predict.add_argument("--pixel-size", type=float, default=None,
+                         help="with --roughness: pixel size, m (for .npy, netCDF and text maps)")
     predict.add_argument("--surrogate", type=Path, default=None,
                          help="surrogate.json or surrogate.nc (default: <data-dir>/surrogate.json, else surrogate.nc)")
     validate = add("validate", _cmd_validate,
@@ -354,8 +399,16 @@ def _parser() -> argparse.ArgumentParser:
     validate.add_argument("--quick", action="store_true",
                           help="256^2 grid, one realization, two loads, clean and one oxidized case")
     rough = add("roughness", _cmd_roughness, "sigma, eta and beta from a measured height map")
-    rough.add_argument("heightmap", type=Path, help=".npy, netCDF or whitespace-separated text")
-    rough.add_argument("--pixel-size", type=float, required=True, help="pixel size, m")
+    rough.add_argument("heightmap", type=Path, help=".npy, netCDF or text (heights in m), or an instrument file "
+                       "(SurfaceTopography: pip install 'g2tom[topography]')")
+    rough.add_argument("--pixel-size", type=float, default=None,
+                       help="pixel size, m (required for .npy, netCDF and text; overrides an instrument file's)")
+    rough.add_argument("--cutoff", type=float, default=None,
+                       help="shortest wavelength in the moments, m (default: 4 pixels)")
+    rough.add_argument("--periodic", action="store_true", help="the map is one period (no window, mean removed)")
+    rough.add_argument("--beta-rule", choices=("paper", "nayak"), default="paper",
+                       help="beta = 0.737/sqrt(m4) (paper, default) or 0.375 sqrt(pi/m4) (nayak)")
+    rough.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
     return parser
 
 
@@ -372,6 +425,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning
     try:
         scenario = _load(args)
+        if args.command in _REACH_SURROGATE:
+            check_surrogate_grid(scenario)
         if getattr(args, "workers", None) is not None:
             _options(args)  # --workers is checked before the plan is announced
         with warnings.catch_warnings():

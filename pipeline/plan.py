@@ -33,17 +33,29 @@ BASE_BYTES = 150 * 2**20
 #: Longest estimated run time accepted (s): beyond it a run is refused before work.
 MAX_SECONDS = 7 * 24 * 3600.0
 #: Seconds per flop-like unit of the models below (measured on the reference machine, one thread).
-_FOLDED_S = 2.5e-10   # per n^3 of one folded map
+_FOLDED_S = 1.35e-10  # per n^3 of one folded map (fixed 400-realization cubes of the paper's scene on one
+                      # thread: 864,000 maps in 26.1 s at 55^2 cells, 18.7 s at 49^2, fields apart)
 _FFT_S = 3.2e-10      # per P^2 log2 P of one FFT map (ducc0, blocks of 2; fitted to the 229^2 study's
                       # cube, 410 s on two threads: 0.76 ms per map and thread with _MAP_S)
 _MAP_S = 2.0e-9       # per cell of one map (masking, sums), any path
 _LU_S = 5.0e-11       # per n_radial^3 and approach (Newton factorizations and solves)
 _MODE_S = 4.0e-8      # per mode and realization of the oxide coefficients
 _CELL_FFT_S = 5.0e-9  # per n^2 log2 n of one oxide field
-#: Mean realizations per (xi, lambda) of the adaptive ensemble on the paper's scene, measured:
-#: 183,125 over 9 xi x 12 lambda at target_half_width 0.025 (min 400, cap 30,000; cube 117 s).
-TYPICAL_REALIZATIONS = 183_125 / 108
+#: Mean realizations per (xi, lambda) of the adaptive ensemble on the paper's scene, measured
+#: (expected spots, fit range F' >= 0.4, 49^2 cells): 361,115 over 9 xi x 12 lambda at
+#: target_half_width 0.025 (min 400, cap 30,000, batch 1000).
+TYPICAL_REALIZATIONS = 361_115 / 108
 TYPICAL_TARGET = 0.025
+#: What the same cube computed: a cell still open gets a whole batch, so 386,200 realizations
+#: (batches included) over the 108 cells, and it regenerated 171,200 fields over the 12 lambdas (a
+#: lambda's fields serve all its open fractions; 56 % of the cells stopped at the first batch).
+TYPICAL_COMPUTED = 386_200 / 108
+TYPICAL_FIELDS = 171_200 / 12
+#: Speed-up of the local threaded scheduler over one thread on folded maps (small windows),
+#: measured on 2 cores on the paper's scene (49^2 cells): a fixed 400-realization cube took 18.7 s
+#: on one thread and 12.1 s on two; the adaptive default 164.5 s for 196.5 s of CPU (its late
+#: rounds hold few tasks and end in a serial decision). Beyond two threads it is not measured.
+THREADED_FOLDED_SPEEDUP = {"fixed": 18.71 / 12.09, "adaptive": 196.5 / 164.5}
 #: Commands that need no resolved domains nor resource checks.
 _NO_DOMAINS = ("params", "predict", "roughness", "validate")
 #: Stages whose estimate is printed when they are expected to take longer than this (s).
@@ -63,12 +75,19 @@ class StageEstimate:
 
 @dataclass(frozen=True)
 class Realizations:
-    """Realizations per (xi, lambda): the fewest, the most and the central (typical) count."""
+    """Realizations per (xi, lambda): the fewest, the most and the central (typical) count.
+
+    ``computed`` is the typical count the cube evaluates per (xi, lambda) (whole batches) and
+    ``fields`` the typical count of fields it generates per lambda; both are ``low`` and
+    ``high`` at the ends of the range.
+    """
 
     low: int
     typical: float
     high: int
     adaptive: bool
+    computed: float
+    fields: float
 
 
 def realizations(scenario: Scenario) -> Realizations:
@@ -82,10 +101,15 @@ def realizations(scenario: Scenario) -> Realizations:
     """
     ox = scenario.oxide
     if ox.ensemble != "adaptive":
-        return Realizations(ox.n_realizations, float(ox.n_realizations), ox.n_realizations, False)
-    typical = TYPICAL_REALIZATIONS * (TYPICAL_TARGET / ox.target_half_width) ** 2
-    return Realizations(ox.min_realizations, min(max(typical, ox.min_realizations), ox.max_realizations),
-                        ox.max_realizations, True)
+        n = ox.n_realizations
+        return Realizations(n, float(n), n, False, float(n), float(n))
+    scale = (TYPICAL_TARGET / ox.target_half_width) ** 2
+
+    def clip(value: float) -> float:
+        return min(max(value * scale, ox.min_realizations), ox.max_realizations)
+
+    return Realizations(ox.min_realizations, clip(TYPICAL_REALIZATIONS), ox.max_realizations, True,
+                        clip(TYPICAL_COMPUTED), clip(TYPICAL_FIELDS))
 
 
 def available_memory() -> float:
@@ -109,10 +133,24 @@ def _cells(scenario: Scenario) -> int:
     return estimate_cells(scenario)
 
 
-def _max_modes(scenario: Scenario, n: int) -> float:
-    """Lattice wave vectors of the largest oxide band (half plane, k1 = n / (2 lambda))."""
-    k1 = n / (2.0 * min(scenario.oxide.lambda_))
+def _modes(scenario: Scenario, n: int, lam: float) -> float:
+    """Lattice wave vectors of the oxide band of ``lam`` (half plane, k1 = n / (2 lambda), at
+    least oxide.spectral_resolution with the spectral period)."""
+    k1 = n / (2.0 * lam)
+    if scenario.oxide.period == "spectral":
+        k1 = max(k1, scenario.oxide.spectral_resolution)
     return 0.5 * math.pi * k1 * k1 * (scenario.oxide.ks_ratio**2 - 1.0) + 4.0 * k1 * scenario.oxide.ks_ratio
+
+
+def _max_modes(scenario: Scenario, n: int) -> float:
+    """Lattice wave vectors of the largest oxide band."""
+    return _modes(scenario, n, min(scenario.oxide.lambda_))
+
+
+def _field_seconds(scenario: Scenario, n: int) -> float:
+    """One thread's time for one field of each lambda in turn (s)."""
+    fft = _CELL_FFT_S * n * n * math.log2(max(n, 2))
+    return sum(_MODE_S * _modes(scenario, n, lam) + fft for lam in scenario.oxide.lambda_)
 
 
 def _per_map_seconds(n: int) -> float:
@@ -127,6 +165,21 @@ def _per_map_seconds(n: int) -> float:
 
 def _threads(workers: int | None) -> int:
     return max(1, workers or os.cpu_count() or 1)
+
+
+def _map_speedup(n: int, workers: int | None, ensemble: str) -> float:
+    """Speed-up of the cube's maps over one thread: local processes and the threaded scheduler
+    on FFT maps (whose constant was fitted on two threads) scale with the workers; the threaded
+    scheduler on folded maps by :data:`THREADED_FOLDED_SPEEDUP` (measured)."""
+    from pipeline.compute import _distributed_available
+    from pipeline.physics.constriction import auto_method
+
+    if _threads(workers) == 1:
+        return 1.0
+    processes = workers is not None and workers > 1 and _distributed_available()  # as pipeline.compute
+    if processes or auto_method(n) != "folded":
+        return float(_threads(workers))
+    return min(float(_threads(workers)), THREADED_FOLDED_SPEEDUP[ensemble])
 
 
 def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstimate]:
@@ -181,8 +234,12 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     # contact's spot maps: read (radius, area) and as float64 maps, and three per-task copies
     spot_maps = 8.0 * n_delta * cells
     cube_mem = psi + t * (task_cube + 3 * spot_maps) + 4 * spot_maps + operators + 2.0 * results
-    per_realization = n_xi * n_lam * n_delta * _per_map_seconds(n) / t
-    cube_s = per_realization * counts.typical
+    # the maps of every computed realization (whole batches) and the fields regenerated per lambda
+    speedup = _map_speedup(n, workers, ox.ensemble)
+    per_map = n_xi * n_lam * n_delta * _per_map_seconds(n) / speedup
+    per_field = _field_seconds(scenario, n) / speedup
+    per_realization = per_map + per_field
+    cube_s = per_map * counts.computed + per_field * counts.fields
     # fits: the cube's terms, the bootstrap's resample counts and means.
     boot = scenario.fits.n_bootstrap
     fits_mem = 3.0 * results + 8.0 * boot * (n_cube + 3 * n_xi * n_lam * n_delta)
@@ -206,6 +263,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
 _DRIVERS: tuple[str, ...] = (
     "roughness.eta", "contact.window", "oxide.lambda", "oxide.ks_ratio", "oxide.n_realizations",
     "oxide.max_realizations", "oxide.target_half_width", "oxide.min_realizations", "oxide.ensemble",
+    "oxide.spectral_resolution", "oxide.period",
     "oxide.xi", "loading.n_delta", "contact.n_radial", "oxide.chunk", "cube.chunk",
     "fits.n_bootstrap", "indenter.radius", "indenter.shape", "roughness.sigma",
 )
@@ -336,7 +394,8 @@ def format_plan(scenario: Scenario, workers: int | None = None) -> list[str]:
         lines.append(
             f"adaptive ensemble: {counts.low * n_cells} .. {counts.high * n_cells} realizations in all, typical "
             f"{counts.typical * n_cells:.0f} (the paper's scene: {TYPICAL_REALIZATIONS * 108:.0f} at "
-            f"target_half_width {TYPICAL_TARGET:g}, scaled by (target ratio)^2); times below are typical "
+            f"target_half_width {TYPICAL_TARGET:g}, scaled by (target ratio)^2), computed in whole batches: "
+            f"typical {counts.computed * n_cells:.0f}; times below are typical "
             f"(range: every cell at oxide.min_realizations .. at oxide.max_realizations); memory is for the cap")
     lines.append(f"{'stage':10s} {'peak memory':>14s} {'time':>12s}")
     total, low, high = 0.0, 0.0, 0.0

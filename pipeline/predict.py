@@ -54,6 +54,8 @@ from scipy.interpolate import RegularGridInterpolator
 from pipeline.config import ConfigError, Scenario
 from pipeline.physics.curve_model import evaluate_curve
 from pipeline.physics.surrogate import evaluate, to_w, to_z
+from pipeline.predict_domain import answered_by, check_surface, with_measured_roughness
+from pipeline.stages.surrogate import scene_groups
 
 __all__ = [
     "ExtrapolationWarning",
@@ -223,7 +225,7 @@ class SurrogateTables:
 
 
 _INFO_KEYS = (
-    "scenario", "config_hash", "method", "reduction", "fit_confidence",
+    "scenario", "config_hash", "method", "reduction", "fit_confidence", "mu", "Pi", "indenter_shape",
     *(f"{p}_{k}" for p in PARAMETERS for k in ("transform", "rank", "order_w", "order_z", "free_parameters", "cv_rms", "formula")),
 )
 
@@ -359,6 +361,8 @@ OUTPUT_COLUMNS: dict[str, tuple[str, str]] = {
     "open_probability": ("1", "interpolated share of open-circuit realizations"),
     "resistance_curve": ("ohm", "R_el of the curve model (ln R' polynomial in ln F' per cell, interpolated)"),
     "resistance_power_law": ("ohm", "R_el of Eq. 27 with the surrogate's alpha and gamma"),
+    "mu": ("1", "the surface's (8/3) eta sigma sqrt(2 R* beta)"),
+    "Pi": ("1", "the surface's eta R* sigma"),
 }
 
 
@@ -389,7 +393,8 @@ def predict(
         Normal force F (N, > 0), oxide fraction (in (0, 1)) and l_O sqrt(eta) (> 0): numbers,
         arrays that broadcast together, or xarray.DataArrays (broadcast by dimension name).
     extrapolate
-        Allow queries outside the fitted ranges (with a warning) instead of refusing them.
+        Allow queries outside the fitted ranges, or a surface other than the surrogate's (with a
+        warning), instead of refusing them.
     warn_error
         Threshold on ``surrogate_error``; default ``scenario.surrogate.warn_error``.
     model
@@ -407,7 +412,10 @@ def predict(
     ------
     ConfigError
         If an input is non-finite or out of range, the inputs do not broadcast, or a query lies
-        outside the fitted ranges and ``extrapolate`` is False.
+        outside the fitted ranges and ``extrapolate`` is False, or the surface's (mu, Pi) differ
+        from the surrogate's scene by more than
+        :data:`pipeline.predict_domain.GROUP_TOLERANCE` (relative) and
+        ``extrapolate`` is False.
 
     Warns
     -----
@@ -418,6 +426,7 @@ def predict(
     tables = surrogate if isinstance(surrogate, SurrogateTables) else SurrogateTables.from_dataset(surrogate)
     (f, x, lm), label = _queries(force, xi, lam)
     _check_values(f, x, lm)
+    check_surface(tables, scenario, extrapolate)
     force_n = f / scenario.force_scale
     _check_ranges(tables, {"xi": x, "lambda": lm, "force_normalized": force_n}, extrapolate)
     alpha = tables.parameter("alpha", lm, x)
@@ -449,6 +458,7 @@ def predict(
         "spread_lower": spread_lower, "spread_upper": spread_upper, "fit_error": fit_error,
         "surrogate_error": surrogate_error, "total_lower": total_lower, "total_upper": total_upper,
         "open_probability": open_p, "resistance_curve": curve, "resistance_power_law": power_law,
+        "mu": np.full(f.size, scene_groups(scenario).mu), "Pi": np.full(f.size, scene_groups(scenario).Pi),
     }
     ds = xr.Dataset({name: label(values) for name, values in columns.items()})
     for name, (units, long_name) in OUTPUT_COLUMNS.items():
@@ -456,6 +466,7 @@ def predict(
     ds.attrs["band"] = "total = sqrt(spread^2 + fit_error^2 + surrogate_error^2) per side; lower = R exp(-total_lower), upper = R exp(total_upper)"
     ds.attrs["surrogate_method"] = str(tables.info.get("method", "unknown"))
     ds.attrs["model"] = model
+    ds.attrs["answered_by"] = answered_by(tables)
     return ds
 
 
@@ -550,16 +561,52 @@ def to_csv(ds: xr.Dataset) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
+    """The surrogate that answers: ``--surrogate`` (either kind), else the run's own when it is of
+    this surface, else the atlas's (``<data-dir>/atlas/surrogate.json``, else the one shipped in
+    the package) when there is one."""
+    from pipeline.predict_atlas import is_atlas_document, load_atlas_surrogate, shipped_path
+
+    if args.surrogate is not None:
+        path = Path(args.surrogate)
+        if path.suffix == ".json" and path.is_file() and is_atlas_document(path.read_text()):
+            return load_atlas_surrogate(path)
+        return load_surrogate(path)
+    own = _default_surrogate(args.data_dir)
+    data_atlas = Path(args.data_dir) / "atlas" / "surrogate.json"
+    atlas = data_atlas if data_atlas.is_file() else shipped_path()
+    if own.is_file():
+        tables = load_surrogate(own)
+        try:
+            check_surface(tables, scenario, extrapolate=False)
+            return tables
+        except ConfigError:
+            if atlas is None:
+                return tables  # predict refuses the surface, naming the run's own surrogate
+    return load_atlas_surrogate(atlas) if atlas is not None else load_surrogate(own)
+
+
 def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
     """``g2tom predict``: CSV of R_el, its band and the band's components; warnings on stderr."""
     force, xi, lam = _cli_queries(args)
     _check_values(force, xi, lam)
-    tables = load_surrogate(args.surrogate if args.surrogate is not None else _default_surrogate(args.data_dir))
+    if args.roughness is not None:
+        scenario = with_measured_roughness(scenario, args.roughness, args.pixel_size)
+    elif args.pixel_size is not None:
+        raise ConfigError("--pixel-size is only used with --roughness FILE")
+    answer = _chosen_surrogate(args, scenario)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
-        result = predict(tables, scenario, force, xi, lam, extrapolate=args.extrapolate, model=args.model)
+        if isinstance(answer, SurrogateTables):
+            result = predict(answer, scenario, force, xi, lam, extrapolate=args.extrapolate,
+                             model=args.model)
+        else:
+            from pipeline.predict_atlas import predict_atlas
+
+            result = predict_atlas(answer, scenario, force, xi, lam, extrapolate=args.extrapolate)
     for w in caught:
         print(f"g2tom: warning: {w.message}", file=sys.stderr)
+    print(f"g2tom: answered by {result.attrs['answered_by']}", file=sys.stderr)
     text = to_csv(result)
     if args.output is None:
         sys.stdout.write(text)

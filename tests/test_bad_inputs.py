@@ -111,6 +111,12 @@ def _hand_cases() -> list[Case]:
         Case("fits.min_force_normalized beyond every load",
              ("contact", *_SMALL, "--set", "fits.fit_range=force_normalized", "--set", "fits.min_force_normalized=1e6"),
              ("fits.min_force_normalized = 1e+06", "load step", "must be <=")),
+        Case("surrogate.rank = 1000 at run", ("run", *_SMALL, "--set", "surrogate.rank=1000"),
+             ("surrogate.rank = 1000", "<= 3", "oxide.xi")),
+        Case("2 x 2 grid at run (joint surrogate)", ("run", *_SMALL, "--set", "oxide.xi=[0.3, 0.7]", "--set",
+             "oxide.lambda=[3.0, 9.0]"), ("oxide.xi holds 2", ">= 3", "surrogate.method")),
+        Case("2 lambdas at surrogate (joint)", ("surrogate", *_SMALL, "--set", "oxide.lambda=[3.0, 9.0]"),
+             ("oxide.lambda holds 2", ">= 3")),
         Case("sigma 1e-9: no two cells touch", ("contact", *_SMALL, "--set", "roughness.sigma=1e-9"),
              ("roughness.sigma = 1e-09", "Holm radius")),
         Case("sigma 1e-9 at oxide stage too", ("oxide", *_SMALL, "--set", "roughness.sigma=1e-9"), ("roughness.sigma",)),
@@ -222,7 +228,8 @@ def _hand_cases() -> list[Case]:
     c += [
         Case("unknown option", ("contact", "--bogus"), ("unrecognized arguments: --bogus",)),
         Case("--workers not a number", ("oxide", "--workers", "two"), ("--workers", "invalid int value")),
-        Case("missing --pixel-size", ("roughness", f"{outside}none.npy"), ("--pixel-size",)),
+        Case("missing --pixel-size for a .npy", ("roughness", f"{outside}nopix.npy"), ("no pixel size", "--pixel-size"),
+             setup=_npy("nopix.npy", _SURFACE)),
         Case("--force not a number", ("predict", "--force", "lots", "--xi", "0.3", "--lambda", "5"), ("--force",)),
         Case("unknown command", ("bogus",), ("invalid choice: 'bogus'",)),
     ]

@@ -62,8 +62,11 @@ def test_cli_reads_every_format(tmp_path, capsys, suffix: str) -> None:
     assert main(["roughness", str(path), "--pixel-size", str(PIXEL)]) == 0
     out = capsys.readouterr().out
     assert "sigma" in out and "eta" in out and "beta" in out
-    sigma = float(out.split("sigma =")[1].split()[0])
-    assert sigma == pytest.approx(np.sqrt(m0), rel=0.05)
+    rms = float(out.split("rms_height =")[1].split()[0])
+    assert rms == pytest.approx(np.sqrt(m0), rel=0.05)
+    alpha = float(out.split("alpha =")[1].split()[0])
+    sigma = float(out.split("sigma =")[1].split()[0])  # the summits' std, below the surface's
+    assert sigma == pytest.approx(np.sqrt(1 - 0.8968 / alpha) * rms, rel=0.05)
 
 
 def test_cli_bad_input(tmp_path, capsys) -> None:

@@ -19,6 +19,7 @@ import numpy as np
 from pipeline.bench.timing import median_time
 from pipeline.config import Scenario
 from pipeline.predict import CURVE_TABLE, GRID_TABLES, STEP_TABLES, SurrogateTables, predict
+from pipeline.stages.surrogate import scene_groups
 
 __all__ = ["run"]
 
@@ -43,7 +44,8 @@ def _tables(scenario: Scenario) -> SurrogateTables:
         "gamma": (np.array([[-1.2]]), np.array([[1.2, -0.26]]), "log"),
     }
     ranges = {"xi": (xi.min(), xi.max()), "lambda": (lam.min(), lam.max()), "force_normalized": (force_n[0], force_n[-1])}
-    return SurrogateTables(coef, lam, xi, force_n, ranges, tables, {"method": "bench"})
+    scene = scene_groups(scenario)  # tables of the scenario's own surface
+    return SurrogateTables(coef, lam, xi, force_n, ranges, tables, {"method": "bench", "mu": scene.mu, "Pi": scene.Pi})
 
 
 def run(scenario: Scenario) -> dict[str, Any]:

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["RoughnessParameters", "detrend", "spectral_moments", "roughness_parameters"]
+__all__ = ["RoughnessParameters", "detrend", "spectral_moments", "roughness_parameters", "validated_heights"]
 
 
 @dataclass(frozen=True)
@@ -92,6 +92,29 @@ def spectral_moments(heights: ArrayLike, pixel_size: float) -> tuple[float, floa
     return m0, m2, m4
 
 
+def validated_heights(heights: ArrayLike) -> np.ndarray:
+    """A height map as a float array, checked: real, numeric, 2-D, at least 3 x 3, finite.
+
+    Raises
+    ------
+    ValueError
+        Naming what is wrong with the map.
+    """
+    raw = np.asarray(heights)
+    if np.iscomplexobj(raw):
+        raise ValueError(f"height map is complex-valued ({raw.dtype}): heights must be real numbers (m)")
+    if raw.dtype.kind not in "biuf":
+        raise ValueError(f"height map holds {raw.dtype} values: heights must be real numbers (m)")
+    z = raw.astype(float)
+    if z.ndim != 2:
+        raise ValueError(f"height map has shape {z.shape}: must be a 2-D array")
+    if min(z.shape) < 3:
+        raise ValueError(f"height map has shape {z.shape}: must be at least 3 x 3 pixels")
+    if not np.all(np.isfinite(z)):
+        raise ValueError(f"height map holds {int(np.sum(~np.isfinite(z)))} non-finite values")
+    return z
+
+
 def roughness_parameters(heights: ArrayLike, pixel_size: float) -> RoughnessParameters:
     """sigma, m2, m4, eta and beta of a height map (Sect. 3.2).
 
@@ -108,18 +131,7 @@ def roughness_parameters(heights: ArrayLike, pixel_size: float) -> RoughnessPara
         If the map is complex-valued, not numeric, not 2-D, too small, not finite or flat
         (after detrending), or the pixel size is not positive.
     """
-    raw = np.asarray(heights)
-    if np.iscomplexobj(raw):
-        raise ValueError(f"height map is complex-valued ({raw.dtype}): heights must be real numbers (m)")
-    if raw.dtype.kind not in "biuf":
-        raise ValueError(f"height map holds {raw.dtype} values: heights must be real numbers (m)")
-    z = raw.astype(float)
-    if z.ndim != 2:
-        raise ValueError(f"height map has shape {z.shape}: must be a 2-D array")
-    if min(z.shape) < 3:
-        raise ValueError(f"height map has shape {z.shape}: must be at least 3 x 3 pixels")
-    if not np.all(np.isfinite(z)):
-        raise ValueError(f"height map holds {int(np.sum(~np.isfinite(z)))} non-finite values")
+    z = validated_heights(heights)
     if not (np.isfinite(pixel_size) and pixel_size > 0):
         raise ValueError(f"pixel size = {pixel_size} is out of range: must be > 0 (m)")
     m0, m2, m4 = spectral_moments(z, pixel_size)

@@ -33,6 +33,8 @@ Two methods (``surrogate.method``):
   ``{p}_cv_rank``, ``{p}_cv_order_w``, ``{p}_cv_order_z``, ``{p}_cv_free_parameters``;
 * the clean fit (``alpha_clean``, ``gamma_clean`` and intervals) and the fitted ranges
   (``xi_range``, ``lambda_range``, ``force_normalized_range``, dim ``end``);
+* the scene's dimensionless groups in the attributes ``mu`` and ``Pi`` (and ``indenter_shape``):
+  the surrogate is of that surface only, and the predictor refuses others;
 * the realization band: ``band_ratio_lower`` = R'_16 / R'_c and ``band_ratio_upper`` =
   R'_c / R'_84 (lambda, xi, step), R'_c the fitted reduction, on the fitted load steps
   (coordinate ``force_normalized`` on ``step``), and ``open_probability`` on the same grid;
@@ -52,10 +54,11 @@ from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
 from pipeline.physics import surrogate as sg
 from pipeline.physics.curve_model import evaluate_curve, interpolation_error
+from pipeline.physics.groups import Groups, groups
 from pipeline.stages.fits import COORD_LABELS
 from pipeline.store import atomic_path, read_stage, write_dataset
 
-__all__ = ["build", "run", "table3_rows", "table3_csv", "table3_markdown", "PARAMETERS"]
+__all__ = ["build", "run", "scene_groups", "table3_rows", "table3_csv", "table3_markdown", "PARAMETERS"]
 
 PARAMETERS = ("alpha", "gamma")
 #: Highest orders tried by the paper method's cross-validation scan.
@@ -275,6 +278,12 @@ def _curve(scenario: Scenario, fits: xr.Dataset) -> dict[str, xr.DataArray]:
     }
 
 
+def scene_groups(scenario: Scenario) -> Groups:
+    """(mu, Pi) of a scenario's surface and sphere (:mod:`pipeline.physics.groups`)."""
+    rough = scenario.roughness
+    return groups(rough.sigma, rough.eta, rough.beta, scenario.indenter.radius)
+
+
 def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
     """The surrogate dataset of a fits dataset (see the module docstring)."""
     ds = xr.Dataset(coords={"lambda": fits["lambda"].values, "xi": fits["xi"].values})
@@ -305,6 +314,10 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
         ds[key] = fits[key]
     ds.attrs["reduction"] = fits.attrs["reduction"]
     ds.attrs["method"] = scenario.surrogate.method
+    # the scene's dimensionless groups: the predictor answers only surfaces with these (design notes, Sect. 9)
+    scene = scene_groups(scenario)
+    ds.attrs["mu"], ds.attrs["Pi"] = scene.mu, scene.Pi
+    ds.attrs["indenter_shape"] = scenario.indenter.shape
     ds.attrs["fit_confidence"] = scenario.fits.confidence
     ds.attrs["model"] = "T(p)(lambda, xi) = sum_k P_k(log lambda) Q_k(-log(1 - xi)), T = log or identity (Eq. 26)"
     ds.attrs["predictor"] = ("R_el = 2 rho*/sqrt(R* sigma) exp(sum_k c_k(xi, lambda) (ln F')^k), the curve model "

@@ -1,0 +1,179 @@
+"""``g2tom atlas``: the chain contact -> oxide -> cube -> fits on every scene of the design.
+
+One scene is one task: on a ``dask.distributed`` cluster (a local one of ``--workers``
+single-threaded processes, or ``--scheduler ADDRESS``) each worker runs whole scenes, each
+single-threaded inside, so the results do not depend on the cluster (the same bits on one
+process or many). Every finished scene is written at once, atomically, to
+``<data>/atlas/scenes/<name>.nc`` with its configuration hash: a killed atlas continues with the
+scenes not written yet. When all are there, ``<data>/atlas/atlas.nc`` gathers them over the
+dimension ``scene``.
+
+``atlas.nc`` holds, per scene: ``mu``, ``Pi``, ``heldout`` (1: never used in a fit),
+``n_cells``, ``wall_seconds``; per (scene, xi, lambda): ``alpha``, ``gamma``, their intervals
+``alpha_ci`` / ``gamma_ci`` (bound), ``n_realizations``; per (scene, xi, lambda, step): the fitted
+reduction ``resistance_normalized`` (R'); per (scene, step): ``force_normalized`` (F') and
+``fitted``; the clean fit ``alpha_clean`` / ``gamma_clean`` per scene; the fits stage's curve model
+``curve_coefficients`` (scene, xi, lambda, power), ``curve_order``, ``curve_max_error``, ``curve_within``.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from contextlib import ExitStack
+from pathlib import Path
+
+import xarray as xr
+
+from pipeline.atlas_design import AtlasDesign, Scene, design_scenes, plan_atlas, scene_scenario
+from pipeline.compute import ComputeOptions
+from pipeline.config import ConfigError, Scenario
+from pipeline.store import atomic_path, provenance
+
+__all__ = ["scene_dataset", "scene_path", "run_atlas", "ATLAS_FILE"]
+
+ATLAS_FILE = "atlas.nc"
+_ONE = ComputeOptions(workers=1, progress=False)
+
+
+def scene_path(data_dir: str | Path, scene: Scene) -> Path:
+    """Where a scene's result lives."""
+    return Path(data_dir) / "atlas" / "scenes" / f"{scene.name}.nc"
+
+
+def scene_dataset(base: Scenario, scene: Scene) -> xr.Dataset:
+    """Run the chain on one scene in memory, single-threaded; its slice of ``atlas.nc``."""
+    from pipeline.domains import resolve
+    from pipeline.stages import contact, cube, fits, oxide
+    from pipeline.stages.fits import COORD_LABELS
+
+    start = time.perf_counter()
+    scenario = resolve(scene_scenario(base, scene))
+    c = contact.build(scenario)
+    k = cube.build(scenario, c, oxide.build(scenario, _ONE), _ONE)
+    f = fits.build(scenario, k)
+    grid = ("xi", "lambda")
+
+    def take(name: str, dims: tuple[str, ...]) -> tuple:
+        return dims, f[name].transpose(*dims).values, dict(f[name].attrs)
+
+    reduced = f[f"{scenario.fits.reduction}_normalized"].transpose("xi", "lambda", "delta").values
+    ds = xr.Dataset(
+        {
+            **{name: take(name, grid) for name in ("alpha", "gamma", "n_realizations")},
+            **{name: take(name, grid + ("bound",)) for name in ("alpha_ci", "gamma_ci")},
+            **{name: take(name, ()) for name in ("alpha_clean", "gamma_clean")},
+            # the curve model of the fits stage (ln R' polynomial in ln F')
+            **{name: take(name, grid) for name in ("curve_order", "curve_max_error", "curve_within")},
+            "curve_coefficients": take("curve_coefficients", grid + ("power",)),
+            "resistance_normalized": (grid + ("step",), reduced, {
+                "units": "1", "long_name": f"R' of the fitted reduction ({scenario.fits.reduction}) over realizations"}),
+            "force_normalized": (("step",), k["force_normalized"].values, {
+                "units": "1", "long_name": "F' = 2F/(E* sqrt(R* sigma^3))"}),
+            "fitted": (("step",), f["fitted"].values, {"units": "1", "long_name": "1 where the step was fitted"}),
+        },
+        coords={name: (name, f[name].values, {"units": COORD_LABELS[name][0], "long_name": COORD_LABELS[name][1]})
+                for name in grid},
+    )
+    ds = ds.assign_coords(bound=("bound", f["bound"].values, {"units": "1", "long_name": "end of the interval"}),
+                          power=("power", f["power"].values, {"units": "1", "long_name": "power of ln F'"}))
+    scalars = {"mu": (scene.mu, "(8/3) eta sigma sqrt(2 R* beta)"), "Pi": (scene.Pi, "eta R* sigma"),
+               "heldout": (int(scene.heldout), "1: held out (never used in a fit)"),
+               "n_cells": (scenario.n_cells, "cells along the window's side"),
+               "wall_seconds": (time.perf_counter() - start, "wall time of the scene's chain (s)")}
+    for name, (value, long_name) in scalars.items():
+        ds[name] = xr.DataArray(value, attrs={"units": "s" if name == "wall_seconds" else "1", "long_name": long_name})
+    ds.attrs.update(provenance(scene_scenario(base, scene), "fits"))
+    ds.attrs.update(scene=scene.name, title=f"g2tom atlas scene {scene.name}", stage="atlas scene")
+    return ds
+
+
+def _done(base: Scenario, scene: Scene, data_dir: Path) -> bool:
+    """Whether the scene's file is there, readable and of this configuration."""
+    path = scene_path(data_dir, scene)
+    if not path.is_file():
+        return False
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            return ds.attrs.get("config_hash") == scene_scenario(base, scene).config_hash("fits")
+    except (OSError, ValueError, RuntimeError):
+        return False
+
+
+def _run_scene(base: Scenario, scene: Scene, data_dir: Path) -> tuple[str, float]:
+    """The task: one scene, written atomically; its name and wall time."""
+    ds = scene_dataset(base, scene)
+    with atomic_path(scene_path(data_dir, scene)) as tmp:
+        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4")
+    return scene.name, float(ds["wall_seconds"])
+
+
+def _gather(base: Scenario, scenes: list[Scene], data_dir: Path) -> Path:
+    """``atlas.nc`` from the scene files, over the dimension ``scene``."""
+    parts = []
+    for scene in scenes:
+        with xr.open_dataset(scene_path(data_dir, scene), engine="netcdf4") as ds:
+            parts.append(ds.load())
+    atlas = xr.concat(parts, dim="scene", combine_attrs="drop_conflicts").assign_coords(scene=[s.name for s in scenes])
+    atlas["scene"].attrs = {"units": "1", "long_name": "scene name (d: design, h: held out)"}
+    atlas.attrs.update(provenance(base, "fits"))
+    atlas.attrs.update(title="g2tom atlas over the groups (mu, Pi)", stage="atlas",
+                       base_scenario="the scenario every scene starts from (sigma and R* kept, eta and beta "
+                                     "from the scene's groups); its parameters follow")
+    atlas.attrs["scene_config_hashes"] = " ".join(p.attrs["config_hash"] for p in parts)
+    target = Path(data_dir) / "atlas" / ATLAS_FILE
+    with atomic_path(target) as tmp:
+        atlas.to_netcdf(tmp, format="NETCDF4", engine="netcdf4")
+    return target
+
+
+def _line(done: int, total: int, name: str, seconds: float, scene: Scene) -> None:
+    print(f"atlas: scene {name} (mu {scene.mu:.4g}, Pi {scene.Pi:.4g}) in {seconds:.1f} s [{done}/{total}]",
+          file=sys.stderr)
+
+
+def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
+              options: ComputeOptions = _ONE) -> Path:
+    """Every scene not yet written, one per task, then ``atlas.nc``.
+
+    Parameters
+    ----------
+    base
+        The scenario every scene starts from (its sigma and R* are the reference lengths).
+    design
+        Where the scenes lie in (mu, Pi).
+    data_dir
+        The data directory (``atlas/`` is made under it).
+    options
+        ``scheduler`` or ``workers`` > 1: a dask.distributed cluster, one scene per task;
+        otherwise the scenes run one after the other in this process.
+
+    Raises
+    ------
+    ConfigError
+        Before any work, if the plan or the preflight refuses a scene (naming it).
+    """
+    from pipeline.compute import _client
+
+    data_dir = Path(data_dir)
+    scenes = design_scenes(design)
+    pending = [s for s in scenes if not _done(base, s, data_dir)]
+    refused = [e for e in plan_atlas(base, design) if e.problem and e.scene in pending]
+    if refused:
+        e = refused[0]
+        raise ConfigError(f"atlas scene {e.scene.name} (mu {e.scene.mu:.4g}, Pi {e.scene.Pi:.4g}): {e.problem}")
+    by_name = {s.name: s for s in scenes}
+    with ExitStack() as stack:
+        client = _client(stack, options) if pending else None
+        if client is None:
+            for k, scene in enumerate(pending, 1):
+                _line(k, len(pending), *_run_scene(base, scene, data_dir), scene)
+        else:
+            from distributed import as_completed
+
+            futures = [client.submit(_run_scene, base, s, data_dir, key=f"atlas-{s.name}", pure=False) for s in pending]
+            for k, future in enumerate(as_completed(futures), 1):
+                name, seconds = future.result()
+                _line(k, len(pending), name, seconds, by_name[name])
+    return _gather(base, scenes, data_dir)
+

@@ -1,0 +1,148 @@
+"""Eq. 27 for any surface inside the atlas: alpha and gamma from the atlas surrogate over (xi, lambda, mu, Pi).
+
+The atlas surrogate (``<data>/atlas/surrogate.json``, :mod:`pipeline.atlas_fit`) gives alpha and
+gamma at the query's (xi, lambda) and the surface's groups (mu, Pi) (:mod:`pipeline.physics.groups`);
+R_el = alpha 2 rho*/sqrt(R* sigma) F'^-gamma as for a single scene. Its band is the held-out error:
+one standard deviation of ln R' taken as the RMS of |ln R'_surrogate - ln R'_scene| over every
+held-out (scene, xi, lambda, step), so ``lower`` / ``upper`` = R exp(-/+ that); the single-scene
+band's components (realization spread, fit interval, open-circuit share) are not in the atlas
+and are NaN. A query outside the atlas's domain (mu, Pi, xi, lambda, or F' beyond the steps fitted
+in every scene) is refused unless ``extrapolate`` (then an ExtrapolationWarning).
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from pipeline.config import ConfigError, Scenario
+from pipeline.physics.atlas_surrogate import AtlasModel
+from pipeline.stages.surrogate import scene_groups
+
+__all__ = ["AtlasSurrogate", "is_atlas_document", "load_atlas_surrogate", "predict_atlas", "shipped_path", "SHIPPED"]
+
+FORMAT = "g2tom-atlas-surrogate"
+#: The atlas surrogate shipped inside the package (``make atlas`` regenerates it), so that
+#: ``g2tom predict`` answers other surfaces on a fresh install.
+SHIPPED = "atlas_surrogate.json"
+_DOMAIN = ("mu", "Pi", "xi", "lambda", "force_normalized")
+
+
+def is_atlas_document(text: str) -> bool:
+    """Whether a JSON text is an atlas surrogate."""
+    try:
+        return json.loads(text).get("format") == FORMAT
+    except (ValueError, AttributeError):
+        return False
+
+
+@dataclass(frozen=True)
+class AtlasSurrogate:
+    """The atlas surrogate's models, domain and held-out error (one sigma of ln R')."""
+
+    models: dict[str, AtlasModel]
+    domain: dict[str, tuple[float, float]]
+    error: float
+    source: str
+
+    @classmethod
+    def from_json(cls, text: str, source: str) -> "AtlasSurrogate":
+        """Parse ``surrogate.json`` of the atlas; ConfigError if it is not one."""
+        try:
+            doc = json.loads(text)
+            if doc.get("format") != FORMAT:
+                raise ValueError(f"format is {doc.get('format')!r}, not {FORMAT!r}")
+            models = {p: AtlasModel(doc[p]["transform"], np.array(doc[p]["low"], float), np.array(doc[p]["high"], float),
+                                    np.array(doc[p]["powers"], int), np.array(doc[p]["coef"], float))
+                      for p in ("alpha", "gamma")}
+            domain = {k: (float(doc["domain"][k][0]), float(doc["domain"][k][1])) for k in _DOMAIN}
+            return cls(models, domain, float(doc["heldout"]["rms_ln_error"]), source)
+        except (ValueError, KeyError, TypeError, AttributeError) as exc:
+            raise ConfigError(f"--surrogate {source!r} is not a g2tom atlas surrogate.json ({exc})") from None
+
+    def describe(self) -> str:
+        """Which surrogate answers, for the user."""
+        mu, pi = self.domain["mu"], self.domain["Pi"]
+        return (f"the atlas surrogate {self.source} (mu {mu[0]:.4g}..{mu[1]:.4g}, Pi {pi[0]:.4g}..{pi[1]:.4g}, "
+                f"held-out error {self.error:.3g} in ln R)")
+
+
+def shipped_path() -> Path | None:
+    """The package's atlas surrogate, or None when this installation ships none."""
+    from importlib import resources
+
+    path = Path(str(resources.files("pipeline").joinpath(SHIPPED)))
+    return path if path.is_file() else None
+
+
+def load_atlas_surrogate(path: str | Path) -> AtlasSurrogate:
+    """Load the atlas's ``surrogate.json``; ConfigError if missing or not one."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"--surrogate {str(path)!r} does not exist: run `g2tom atlas` (or `make atlas`) first")
+    return AtlasSurrogate.from_json(path.read_text(), str(path))
+
+
+def _check_domain(surrogate: AtlasSurrogate, values: dict[str, np.ndarray], extrapolate: bool) -> None:
+    for name, v in values.items():
+        lo, hi = surrogate.domain[name]
+        outside = np.flatnonzero((v < lo * (1 - 1e-12)) | (v > hi * (1 + 1e-12)))
+        if not outside.size:
+            continue
+        i = outside[0]
+        label = "F'" if name == "force_normalized" else name
+        where = f" (query {i + 1} of {v.size}; {outside.size} outside)" if v.size > 1 else ""
+        text = f"{label} = {v[i]:.6g}{where} lies outside the domain [{lo:.6g}, {hi:.6g}] of {surrogate.describe()}"
+        if not extrapolate:
+            raise ConfigError(f"{text}; pass --extrapolate (extrapolate=True) to predict anyway")
+        from pipeline.predict import ExtrapolationWarning
+
+        warnings.warn(f"{text}: the prediction is an extrapolation", ExtrapolationWarning, stacklevel=3)
+
+
+def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi: Any, lam: Any,
+                  extrapolate: bool = False) -> xr.Dataset:
+    """R_el of Eq. 27 from the atlas surrogate, with the held-out band; columns of :data:`pipeline.predict.OUTPUT_COLUMNS`.
+
+    Raises
+    ------
+    ConfigError
+        If an input is out of range, or a query (or the surface's mu, Pi) lies outside the
+        atlas's domain and ``extrapolate`` is False.
+    """
+    from pipeline.predict import OUTPUT_COLUMNS, _check_values, _queries
+
+    (f, x, lm), label = _queries(force, xi, lam)
+    _check_values(f, x, lm)
+    groups = scene_groups(scenario)
+    mu, pi = np.full(f.size, groups.mu), np.full(f.size, groups.Pi)
+    force_n = f / scenario.force_scale
+    _check_domain(surrogate, {"mu": mu[:1], "Pi": pi[:1], "xi": x, "lambda": lm, "force_normalized": force_n},
+                  extrapolate)
+    alpha = surrogate.models["alpha"](x, lm, mu, pi)
+    gamma = surrogate.models["gamma"](x, lm, mu, pi)
+    resistance = alpha * scenario.resistance_scale * np.exp(-gamma * np.log(force_n))
+    error = np.full(f.size, surrogate.error)
+    unknown = np.full(f.size, np.nan)
+    columns = {
+        "force": f, "xi": x, "lambda": lm, "force_normalized": force_n, "alpha": alpha, "gamma": gamma,
+        "resistance": resistance, "lower": resistance * np.exp(-error), "upper": resistance * np.exp(error),
+        "realization_lower": unknown, "realization_upper": unknown, "spread_lower": unknown,
+        "spread_upper": unknown, "fit_error": unknown, "surrogate_error": error, "total_lower": error,
+        "total_upper": error, "open_probability": unknown, "resistance_curve": unknown,
+        "resistance_power_law": resistance, "mu": mu, "Pi": pi,
+    }
+    ds = xr.Dataset({name: label(values) for name, values in columns.items()})
+    for name, (units, long_name) in OUTPUT_COLUMNS.items():
+        ds[name].attrs = {"units": units, "long_name": long_name}
+    ds.attrs["band"] = "held-out error of the atlas surrogate: lower, upper = R exp(-/+ rms |ln R'_surrogate - ln R'_scene|)"
+    ds.attrs["surrogate_method"] = "atlas"
+    ds.attrs["model"] = "power_law"  # the atlas surrogate fits alpha and gamma over (xi, lambda, mu, Pi)
+    ds.attrs["answered_by"] = surrogate.describe()
+    return ds

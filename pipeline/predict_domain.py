@@ -1,0 +1,93 @@
+"""The domain of a surrogate: the surface it answers, and surfaces measured on topographies.
+
+A single-scene surrogate (``make run``'s) was fitted on one surface: its ``surrogate.json`` and
+``surrogate.nc`` record the scene's dimensionless groups (mu, Pi) (:mod:`pipeline.physics.groups`),
+and :func:`check_surface` refuses a query surface whose groups differ by more than
+:data:`GROUP_TOLERANCE`, unless the caller extrapolates (then a warning). E*, rho*, and the
+dimensions at equal groups only scale F and R, so such surfaces are answered.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from pipeline.config import ConfigError, Scenario
+from pipeline.stages.surrogate import scene_groups
+
+if TYPE_CHECKING:
+    from pipeline.predict import SurrogateTables
+
+__all__ = ["GROUP_TOLERANCE", "answered_by", "check_surface", "with_measured_roughness"]
+
+#: Relative difference of mu or Pi within which a single-scene surrogate answers a surface.
+GROUP_TOLERANCE = 1e-3
+
+
+def answered_by(tables: "SurrogateTables") -> str:
+    """Which surrogate answers: the run's own single-scene one, with its scene and groups."""
+    info = tables.info
+    scene = f"scenario {info['scenario']!r}, " if info.get("scenario") else ""
+    groups = (f"mu = {info['mu']:.6g}, Pi = {info['Pi']:.6g}" if info.get("mu") is not None and info.get("Pi") is not None
+              else "groups not recorded")
+    return f"the run's own single-scene surrogate ({scene}{groups})"
+
+
+def check_surface(tables: "SurrogateTables", scenario: Scenario, extrapolate: bool) -> None:
+    """Refuse (or, extrapolating, warn about) a surface whose (mu, Pi) the surrogate was not fitted on.
+
+    Raises
+    ------
+    ConfigError
+        Unless ``extrapolate``: naming the group, its value and the covered range, and the
+        surrogate; also when the surrogate records no groups or another indenter shape.
+
+    Warns
+    -----
+    pipeline.predict.ExtrapolationWarning
+        With ``extrapolate``, for the same cases.
+    """
+    query = scene_groups(scenario)
+    info = tables.info
+    problems = []
+    if info.get("mu") is None or info.get("Pi") is None:
+        problems.append("the surrogate records no (mu, Pi) of its scene (made by an older g2tom): re-run "
+                        "`g2tom surrogate`")
+    else:
+        for name, value in (("mu", query.mu), ("Pi", query.Pi)):
+            ref = float(info[name])
+            if abs(value / ref - 1.0) > GROUP_TOLERANCE:
+                lo, hi = ref * (1 - GROUP_TOLERANCE), ref * (1 + GROUP_TOLERANCE)
+                problems.append(f"{name} = {value:.6g} of this surface lies outside the domain [{lo:.6g}, {hi:.6g}] "
+                                f"of {answered_by(tables)}")
+    shape = info.get("indenter_shape")
+    if shape is not None and shape != scenario.indenter.shape:
+        problems.append(f"indenter.shape = {scenario.indenter.shape!r} differs from the surrogate's {shape!r}")
+    if not problems:
+        return
+    if not extrapolate:
+        raise ConfigError(f"{problems[0]}: it would answer one surface with another surface's coefficients; "
+                          "pass --extrapolate (extrapolate=True) to predict anyway")
+    from pipeline.predict import ExtrapolationWarning
+
+    warnings.warn(f"{problems[0]}: the prediction uses another surface's coefficients", ExtrapolationWarning,
+                  stacklevel=3)
+
+
+def with_measured_roughness(scenario: Scenario, path: Path, pixel_size: float | None) -> Scenario:
+    """``scenario`` with sigma (of the summits), eta and beta measured on a topography file.
+
+    Raises
+    ------
+    ConfigError
+        If the file cannot be read or measured (see :func:`pipeline.roughness_cli.measure`).
+    """
+    from pipeline.roughness_cli import measure
+
+    measured = measure(path, pixel_size)
+    roughness = dataclasses.replace(scenario.roughness, sigma=measured["sigma"], eta=measured["eta"],
+                                    beta=measured["beta"])
+    return dataclasses.replace(scenario, roughness=roughness)
+

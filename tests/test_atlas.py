@@ -1,0 +1,150 @@
+"""The atlas over scenes: one scene per task, resumable, the same bits on any cluster."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from pipeline import atlas
+from pipeline.atlas_design import AtlasDesign, design_scenes
+from pipeline.compute import ComputeOptions
+from pipeline.config import ConfigError, load_scenario
+from tests.conftest import SMALL_OVERRIDES
+
+BASE = {**SMALL_OVERRIDES, "oxide.xi": [0.5], "oxide.lambda": [1.0, 5.0], "fits.n_bootstrap": 20}
+DESIGN = AtlasDesign(mu=(4.0, 16.0), Pi=(20.0, 40.0), n_mu=2, n_pi=2, n_heldout=1)
+#: Everything but the wall time must agree bit for bit.
+COMPARED = ("alpha", "gamma", "alpha_ci", "gamma_ci", "n_realizations", "resistance_normalized",
+            "force_normalized", "fitted", "mu", "Pi", "heldout", "n_cells", "alpha_clean", "gamma_clean",
+            "curve_coefficients", "curve_order")
+
+
+def _load(path) -> xr.Dataset:
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        return ds.load()
+
+
+def _same(a: xr.Dataset, b: xr.Dataset) -> None:
+    for name in COMPARED:
+        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+    assert list(a["scene"].values) == list(b["scene"].values)
+
+
+@pytest.fixture(scope="module")
+def base():
+    return load_scenario("paper", BASE)
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory, base):
+    return _load(atlas.run_atlas(base, DESIGN, tmp_path_factory.mktemp("atlas")))
+
+
+def test_atlas_holds_every_scene_labelled(uninterrupted, base) -> None:
+    scenes = design_scenes(DESIGN)
+    assert list(uninterrupted["scene"].values) == [s.name for s in scenes]
+    np.testing.assert_allclose(uninterrupted["mu"].values, [s.mu for s in scenes], rtol=1e-15)
+    assert uninterrupted["heldout"].values.tolist() == [0, 0, 0, 0, 1]
+    assert np.all(np.isfinite(uninterrupted["alpha"].values)) and np.all(uninterrupted["alpha"].values > 0)
+    # more cells per R* sigma, a wider window
+    assert uninterrupted["n_cells"].values[2] > uninterrupted["n_cells"].values[0]
+    for name, var in uninterrupted.variables.items():
+        if var.dtype.kind not in "OSU":
+            assert var.attrs.get("units") is not None and var.attrs.get("long_name"), name
+    # the scene's slice is the chain run on its own
+    alone = atlas.scene_dataset(base, scenes[3])
+    np.testing.assert_array_equal(uninterrupted["alpha"].values[3], alone["alpha"].values)
+
+
+def test_a_resumed_atlas_equals_an_uninterrupted_one(tmp_path, base, uninterrupted, monkeypatch) -> None:
+    real = atlas._run_scene
+    calls = []
+
+    def dies_at_the_third(*args):
+        if len(calls) == 2:
+            raise KeyboardInterrupt("killed")
+        calls.append(args[1].name)
+        return real(*args)
+
+    monkeypatch.setattr(atlas, "_run_scene", dies_at_the_third)
+    with pytest.raises(KeyboardInterrupt):
+        atlas.run_atlas(base, DESIGN, tmp_path)
+    monkeypatch.setattr(atlas, "_run_scene", real)
+    written = sorted(p.name for p in (tmp_path / "atlas" / "scenes").glob("*.nc"))
+    assert written == ["d00.nc", "d01.nc"] and not (tmp_path / "atlas" / "atlas.nc").exists()
+    stamps = {p: p.stat().st_mtime_ns for p in (tmp_path / "atlas" / "scenes").glob("*.nc")}
+    ran = []
+    monkeypatch.setattr(atlas, "_run_scene", lambda *a: (ran.append(a[1].name), real(*a))[1])
+    _same(_load(atlas.run_atlas(base, DESIGN, tmp_path)), uninterrupted)
+    assert ran == ["d02", "d03", "h00"]  # only the scenes not written
+    assert all(p.stat().st_mtime_ns == t for p, t in stamps.items())
+
+
+def test_another_configuration_reruns_its_scenes(tmp_path, base) -> None:
+    atlas.run_atlas(base, DESIGN, tmp_path)
+    other = load_scenario("paper", {**BASE, "oxide.seed": 3})
+    assert not atlas._done(other, design_scenes(DESIGN)[0], tmp_path)
+    assert atlas._done(base, design_scenes(DESIGN)[0], tmp_path)
+
+
+def test_two_worker_cluster_gives_the_same_bits(tmp_path, base, uninterrupted) -> None:
+    pytest.importorskip("distributed")
+    path = atlas.run_atlas(base, DESIGN, tmp_path, ComputeOptions(workers=2, progress=False))
+    _same(_load(path), uninterrupted)
+
+
+def test_a_refused_scene_stops_the_atlas_before_work(tmp_path) -> None:
+    bad = load_scenario("paper", {**BASE, "fits.fit_range": "force", "fits.min_force": 1e9})
+    with pytest.raises(ConfigError, match=r"atlas scene d00 \(mu 4, Pi 20\): fits.min_force"):
+        atlas.run_atlas(bad, DESIGN, tmp_path)
+    assert not (tmp_path / "atlas").exists()
+
+
+def test_atlas_surrogate_fitted_on_design_judged_on_heldout(tmp_path, base, uninterrupted) -> None:
+    from pipeline.atlas_fit import fit_atlas
+
+    doc, rows = fit_atlas(uninterrupted)
+    assert doc["alpha"]["degree"] == 1  # 8 design points: only degree 1 (5 terms) cross-validates
+    assert doc["heldout"]["cells"] == 2 and {r["scene"] for r in rows} == {"h00"}
+    assert doc["domain"]["mu"] == pytest.approx([4.0, 16.0])
+    # one row by hand: ln(alpha F'^-gamma) of the fitted polynomials against the scene's R'
+    from pipeline.physics.atlas_surrogate import AtlasModel
+
+    r = rows[0]
+    models = {p: AtlasModel(doc[p]["transform"], np.array(doc[p]["low"]), np.array(doc[p]["high"]),
+                            np.array(doc[p]["powers"]), np.array(doc[p]["coef"])) for p in ("alpha", "gamma")}
+    args = (np.array([r["xi"]]), np.array([r["lambda"]]), np.array([r["mu"]]), np.array([r["Pi"]]))
+    by_hand = abs(np.log(models["alpha"](*args)[0]) - models["gamma"](*args)[0] * np.log(r["force_normalized"])
+                  - np.log(r["resistance_normalized"]))
+    assert r["error"] == pytest.approx(by_hand, rel=1e-12)
+    assert r["within"] == (r["error"] <= max(0.05, r["allowed"]))
+    h = int(np.flatnonzero(uninterrupted["scene"].values == "h00")[0])
+    steps = int(uninterrupted["fitted"].values[h].sum())
+    assert doc["heldout"]["steps"] == 2 * steps
+
+
+def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
+    import json
+
+    from pipeline.atlas_fit import FORMAT, write_atlas_surrogate
+
+    target, doc = write_atlas_surrogate(atlas.run_atlas(base, DESIGN, tmp_path))
+    assert json.loads(target.read_text())["format"] == FORMAT == doc["format"]
+    lines = (tmp_path / "atlas" / "heldout.csv").read_text().splitlines()
+    assert lines[0].startswith("scene,mu,Pi,xi,lambda,force_normalized") and len(lines) == 1 + doc["heldout"]["steps"]
+
+
+def test_cli_runs_fits_and_summarizes(tmp_path, capsys, monkeypatch) -> None:
+    import pipeline.atlas_design as design_module
+    from pipeline.cli import main
+
+    monkeypatch.setattr(design_module, "AtlasDesign", lambda: DESIGN)  # the small design, not the default
+    sets = [a for k, v in BASE.items() for a in ("--set", f"{k}={v}")]
+    assert main(["atlas", "--data-dir", str(tmp_path), "--workers", "1", "--no-progress", *sets]) == 0
+    err = capsys.readouterr().err
+    assert err.count("atlas: scene ") == 5 and "held out: " in err and "cells within max(5 %, interval)" in err
+    assert (tmp_path / "atlas" / "atlas.nc").is_file() and (tmp_path / "atlas" / "surrogate.json").is_file()
+    # a second run has nothing left to compute
+    assert main(["atlas", "--data-dir", str(tmp_path), "--workers", "1", "--no-progress", *sets]) == 0
+    assert "atlas: scene " not in capsys.readouterr().err

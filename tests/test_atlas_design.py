@@ -1,0 +1,81 @@
+"""The atlas's design over (mu, Pi): scenes, held-out draws, scene scenarios and the plan."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from pipeline.atlas_design import AtlasDesign, design_scenes, format_atlas_plan, plan_atlas, scene_scenario
+from pipeline.config import AUTO, ConfigError, load_scenario
+from pipeline.physics.groups import groups
+from tests.conftest import SMALL_OVERRIDES
+
+
+def test_default_design_covers_engineering_surfaces() -> None:
+    scenes = design_scenes(AtlasDesign())
+    design = [s for s in scenes if not s.heldout]
+    held = [s for s in scenes if s.heldout]
+    assert len(design) == 25 and len(held) == 6
+    assert sorted({s.mu for s in design}) == pytest.approx(np.geomspace(1.0, 50.0, 5), rel=1e-12)
+    assert sorted({s.Pi for s in design}) == pytest.approx(np.geomspace(5.0, 320.0, 5), rel=1e-12)
+    step = np.log([50.0, 320.0 / 5.0]) / 4
+    for h in held:
+        assert 1.0 <= h.mu <= 50.0 and 5.0 <= h.Pi <= 320.0
+        gaps = np.abs(np.log([[h.mu / d.mu, h.Pi / d.Pi] for d in design])) / step
+        assert np.all(np.any(gaps >= 0.25 - 1e-12, axis=1)), h  # no design node within a quarter step
+
+
+def test_heldout_draws_follow_the_seed() -> None:
+    a, b = design_scenes(AtlasDesign()), design_scenes(AtlasDesign())
+    c = design_scenes(AtlasDesign(seed=1))
+    assert a == b
+    assert [s for s in a if s.heldout] != [s for s in c if s.heldout]
+    assert [s for s in a if not s.heldout] == [s for s in c if not s.heldout]
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"n_mu": 0}, "atlas n_mu = 0 is out of range: must be an integer >= 2"),
+    ({"n_pi": 1}, "atlas n_pi = 1 is out of range"),
+    ({"n_heldout": 0}, "atlas n_heldout = 0 is out of range"),
+    ({"mu": (5.0, 1.0)}, "atlas mu = (5.0, 1.0) is out of range"),
+    ({"Pi": (0.0, 10.0)}, "atlas Pi = (0.0, 10.0) is out of range"),
+    ({"mu": (1.0, math.inf)}, "atlas mu"),
+])
+def test_bad_designs_are_refused(kwargs, message) -> None:
+    with pytest.raises(ConfigError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        AtlasDesign(**kwargs)
+
+
+def test_scene_scenario_has_the_scene_groups() -> None:
+    base = load_scenario("paper")
+    for scene in design_scenes(AtlasDesign())[::5]:
+        s = scene_scenario(base, scene)
+        g = groups(s.roughness.sigma, s.roughness.eta, s.roughness.beta, s.indenter.radius)
+        assert (g.mu, g.Pi) == pytest.approx((scene.mu, scene.Pi), rel=1e-12)
+        assert s.roughness.sigma == base.roughness.sigma and s.indenter.radius == base.indenter.radius
+        assert s.contact.window == AUTO and s.material == base.material
+
+
+def test_plan_grows_with_pi_and_reports_refusals() -> None:
+    base = load_scenario("paper", SMALL_OVERRIDES)
+    design = AtlasDesign(mu=(2.0, 20.0), Pi=(10.0, 40.0), n_mu=2, n_pi=2, n_heldout=1)
+    est = {e.scene.name: e for e in plan_atlas(base, design)}
+    assert all(e.problem is None for e in est.values())
+    assert est["d02"].n_cells > est["d00"].n_cells and est["d02"].seconds > est["d00"].seconds
+    lines = format_atlas_plan(list(est.values()), parallel=2)
+    assert lines[-1].startswith("5 of 5 scenes runnable")
+    refused = plan_atlas(load_scenario("paper", {**SMALL_OVERRIDES, "fits.fit_range": "force", "fits.min_force": 1e9}),
+                         design)
+    assert all(e.problem and "fits.min_force" in e.problem for e in refused)
+    assert "refused: fits.min_force" in format_atlas_plan(refused)[1]
+
+
+def test_cli_plans_the_atlas(capsys) -> None:
+    from pipeline.cli import main
+
+    assert main(["plan", "--atlas", "--workers", "2", *[a for k, v in SMALL_OVERRIDES.items()
+                                                        for a in ("--set", f"{k}={v}")]]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert len(out) == 1 + 31 + 1 and out[-1].startswith("31 of 31 scenes runnable") and "on 2 concurrent" in out[-1]

@@ -1,0 +1,121 @@
+"""Eq. 27 for any surface inside the atlas: the atlas surrogate answers, knows its domain, says so."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import shutil
+import warnings
+
+import numpy as np
+import pytest
+
+from pipeline import atlas
+from pipeline.atlas_fit import write_atlas_surrogate
+from pipeline.cli import main
+from pipeline.config import ConfigError, load_scenario
+from pipeline.predict import ExtrapolationWarning
+from pipeline.predict_atlas import load_atlas_surrogate, predict_atlas
+from pipeline.stages import fits, surrogate
+from pipeline.stages.surrogate import scene_groups
+from pipeline.store import write_dataset
+from tests.conftest import SMALL_OVERRIDES
+from tests.test_atlas import BASE, DESIGN
+from tests.test_fits_stage import cli_overrides, synthetic_cube
+from tests.test_predict import _rows
+
+
+@pytest.fixture(scope="module")
+def atlas_json(tmp_path_factory):
+    data = tmp_path_factory.mktemp("atlas")
+    target, _ = write_atlas_surrogate(atlas.run_atlas(load_scenario("paper", BASE), DESIGN, data))
+    return target
+
+
+def _surface(eta: float):
+    """The paper surface with another eta: mu and Pi both scale with eta."""
+    paper = load_scenario("paper", BASE)
+    return dataclasses.replace(paper, roughness=dataclasses.replace(paper.roughness, eta=eta))
+
+
+def _force(sur, scenario) -> float:
+    lo, hi = sur.domain["force_normalized"]
+    return math.sqrt(lo * hi) * scenario.force_scale
+
+
+def test_answers_inside_the_domain_by_the_formula(atlas_json) -> None:
+    sur = load_atlas_surrogate(atlas_json)
+    scenario = _surface(1.5e8)  # mu 6.2, Pi 30: inside (4..16, 20..40)
+    g = scene_groups(scenario)
+    force = _force(sur, scenario)
+    result = predict_atlas(sur, scenario, force, 0.5, 3.0)
+    args = (np.array([0.5]), np.array([3.0]), np.array([g.mu]), np.array([g.Pi]))
+    alpha, gamma = sur.models["alpha"](*args)[0], sur.models["gamma"](*args)[0]
+    by_hand = alpha * scenario.resistance_scale * (force / scenario.force_scale) ** -gamma
+    assert float(result["resistance"]) == pytest.approx(by_hand, rel=1e-12)
+    assert float(result["upper"]) == pytest.approx(by_hand * math.exp(sur.error), rel=1e-12)
+    assert float(result["mu"]) == pytest.approx(g.mu) and "atlas surrogate" in result.attrs["answered_by"]
+    # another surface inside the domain gets other coefficients
+    other = predict_atlas(sur, _surface(1.9e8), _force(sur, _surface(1.9e8)), 0.5, 3.0)
+    assert float(other["alpha"]) != pytest.approx(float(result["alpha"]), rel=1e-3)
+
+
+def test_refuses_outside_the_domain_naming_the_group(atlas_json) -> None:
+    sur = load_atlas_surrogate(atlas_json)
+    scenario = _surface(6e8)  # mu 24.8, Pi 120
+    with pytest.raises(ConfigError, match=r"mu = 24.78\d* lies outside the domain \[4, 16\] of the atlas surrogate"):
+        predict_atlas(sur, scenario, _force(sur, scenario), 0.5, 3.0)
+    with pytest.warns(ExtrapolationWarning, match="mu = "):
+        predict_atlas(sur, scenario, _force(sur, scenario), 0.5, 3.0, extrapolate=True)
+
+
+def test_cli_the_run_own_for_its_surface_the_atlas_for_others(tmp_path, capsys, atlas_json) -> None:
+    from pipeline.domains import resolve
+    from pipeline.predict import load_surrogate
+
+    small = resolve(load_scenario("paper", SMALL_OVERRIDES))  # the run's own: a 3 x 3 grid
+    write_dataset(fits.build(small, synthetic_cube(small, noise=0.2)), tmp_path, "fits", small)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        surrogate.run(small, tmp_path, None)
+    (tmp_path / "atlas").mkdir()
+    shutil.copy(atlas_json, tmp_path / "atlas" / "surrogate.json")
+    sur = load_atlas_surrogate(atlas_json)
+    own_range = load_surrogate(tmp_path / "surrogate.json").ranges["force_normalized"]
+    lo, hi = max(own_range[0], sur.domain["force_normalized"][0]), min(own_range[1], sur.domain["force_normalized"][1])
+    assert lo < hi
+    query = ["--force", f"{math.sqrt(lo * hi) * small.force_scale:.6g}", "--xi", "0.5", "--lambda", "3"]
+    base = ["predict", "--data-dir", str(tmp_path), *cli_overrides(small), *query]
+    assert main(base) == 0
+    own = capsys.readouterr()
+    assert "answered by the run's own single-scene surrogate" in own.err
+    assert main(base + ["--set", "roughness.eta=1.5e8"]) == 0
+    other = capsys.readouterr()
+    assert "answered by the atlas surrogate" in other.err
+    assert other.out.splitlines()[0] == own.out.splitlines()[0]  # the same columns
+    assert _rows(other.out)[0]["mu"] == pytest.approx(scene_groups(_surface(1.5e8)).mu, rel=1e-9)
+    # outside both: refused, naming the atlas's range
+    assert main(base + ["--set", "roughness.eta=6e8"]) == 2
+    assert "lies outside the domain [4, 16] of the atlas surrogate" in capsys.readouterr().err
+    # --surrogate picks the atlas explicitly, by its format
+    assert main(base + ["--surrogate", str(atlas_json)]) == 0
+    assert "answered by the atlas surrogate" in capsys.readouterr().err
+    assert json.loads(atlas_json.read_text())["format"] == "g2tom-atlas-surrogate"
+
+
+def test_fresh_install_answers_from_the_shipped_atlas(tmp_path, capsys, atlas_json, monkeypatch) -> None:
+    import pipeline.predict_atlas as pa
+
+    sur = load_atlas_surrogate(atlas_json)
+    scenario = _surface(1.5e8)
+    query = ["--force", f"{_force(sur, scenario):.6g}", "--xi", "0.5", "--lambda", "3"]
+    argv = ["predict", "--data-dir", str(tmp_path / "empty"), "--set", "roughness.eta=1.5e8",
+            *[a for k, v in BASE.items() for a in ("--set", f"{k}={v}")], *query]
+    monkeypatch.setattr(pa, "shipped_path", lambda: None)
+    assert main(argv) == 2 and "does not exist" in capsys.readouterr().err  # nothing to answer with
+    monkeypatch.setattr(pa, "shipped_path", lambda: atlas_json)
+    assert main(argv) == 0
+    assert f"answered by the atlas surrogate {atlas_json}" in capsys.readouterr().err
+    doc = json.loads(atlas_json.read_text())
+    assert doc["provenance"]["config_hash"] and "g2tom_commit" in doc["provenance"]

@@ -1,0 +1,44 @@
+"""The surrogate's limits on the oxide grid are refused before any stage writes."""
+
+from __future__ import annotations
+
+import pytest
+
+from pipeline.cli import main
+from pipeline.config import ConfigError, check_surrogate_grid, load_scenario
+from tests.conftest import SMALL_OVERRIDES
+
+_SMALL = [a for k, v in SMALL_OVERRIDES.items() for a in ("--set", f"{k}={v}")]
+_GRID_2x2 = ["--set", "oxide.xi=[0.3, 0.7]", "--set", "oxide.lambda=[3.0, 9.0]"]
+
+
+@pytest.mark.parametrize("extra", [_GRID_2x2, ["--set", "surrogate.rank=1000"]])
+def test_run_refuses_before_writing(tmp_path, capsys, extra) -> None:
+    data = tmp_path / "data"
+    status = main(["run", "--data-dir", str(data), "--no-progress", *_SMALL, *extra])
+    err = capsys.readouterr().err
+    assert status == 2
+    assert err.count("\n") == 1 and err.startswith("g2tom: error: ")
+    assert not data.exists() or not any(data.rglob("*"))
+
+
+def test_rank_range_follows_the_grid() -> None:
+    check_surrogate_grid(load_scenario("paper", {"surrogate.rank": 9}))  # 9 x 12 grid: 9 modes
+    with pytest.raises(ConfigError, match=r"surrogate.rank = 10 is out of range: must be >= 1 and <= 9"):
+        check_surrogate_grid(load_scenario("paper", {"surrogate.rank": 10}))
+
+
+def test_paper_method_allows_a_2x2_grid_and_other_stages_any_grid() -> None:
+    two = {"oxide.xi": [0.3, 0.7], "oxide.lambda": [3.0, 9.0]}
+    check_surrogate_grid(load_scenario("paper", {**two, "surrogate.method": "paper"}))
+    with pytest.raises(ConfigError, match="oxide.xi holds 2 value"):
+        check_surrogate_grid(load_scenario("paper", two))
+    assert main(["params", "--set", "oxide.xi=[0.3, 0.7]", "--set", "surrogate.rank=1000"]) == 0
+
+
+def test_run_check_does_no_work(tmp_path, capsys) -> None:
+    data = tmp_path / "data"
+    assert main(["run", "--check", "--data-dir", str(data), "--no-progress", *_SMALL]) == 0
+    assert "every check before work passed" in capsys.readouterr().err
+    assert not any(p.suffix == ".nc" for p in data.rglob("*"))
+    assert main(["run", "--check", "--data-dir", str(data), *_SMALL, *_GRID_2x2]) == 2
