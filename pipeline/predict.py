@@ -324,19 +324,22 @@ def _check_values(force: np.ndarray, xi: np.ndarray, lam: np.ndarray) -> None:
             raise ConfigError(f"{name} = {float(values[bad[0]])!r}{where} is out of range: {allowed}")
 
 
-def _check_ranges(tables: SurrogateTables, values: dict[str, np.ndarray], extrapolate: bool) -> None:
+def check_ranges(ranges: dict[str, tuple[float, float]], values: dict[str, np.ndarray], extrapolate: bool,
+                 span: str = "the fitted range", owner: str = "") -> None:
+    """Refuse (ConfigError) queries outside ``ranges``, or with ``extrapolate`` warn
+    (:class:`ExtrapolationWarning`): ``"<name> = <value> lies outside <span> [lo, hi]<owner>"``."""
     for name, v in values.items():
-        lo, hi = tables.ranges[name]
+        lo, hi = ranges[name]
         outside = np.flatnonzero((v < lo * (1 - 1e-12)) | (v > hi * (1 + 1e-12)))
         if not outside.size:
             continue
         i = outside[0]
         label = "F'" if name == "force_normalized" else name
         where = f" (query {i + 1} of {v.size}; {outside.size} outside)" if v.size > 1 else ""
-        text = f"{label} = {v[i]:.6g}{where} lies outside the fitted range [{lo:.6g}, {hi:.6g}]"
+        text = f"{label} = {v[i]:.6g}{where} lies outside {span} [{lo:.6g}, {hi:.6g}]{owner}"
         if not extrapolate:
             raise ConfigError(f"{text}: the surrogate is not valid there; pass --extrapolate (extrapolate=True) to predict anyway")
-        warnings.warn(f"{text}: the prediction is an extrapolation (band tables clamped to the grid)", ExtrapolationWarning, stacklevel=3)
+        warnings.warn(f"{text}: the prediction is an extrapolation", ExtrapolationWarning, stacklevel=3)
 
 
 #: Output variables of :func:`predict`: name -> (units, long_name).
@@ -428,7 +431,7 @@ def predict(
     _check_values(f, x, lm)
     check_surface(tables, scenario, extrapolate)
     force_n = f / scenario.force_scale
-    _check_ranges(tables, {"xi": x, "lambda": lm, "force_normalized": force_n}, extrapolate)
+    check_ranges(tables.ranges, {"xi": x, "lambda": lm, "force_normalized": force_n}, extrapolate)
     alpha = tables.parameter("alpha", lm, x)
     gamma = tables.parameter("gamma", lm, x)
     if np.any(~(alpha > 0)):

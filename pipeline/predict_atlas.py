@@ -13,7 +13,6 @@ in every scene) is refused unless ``extrapolate`` (then an ExtrapolationWarning)
 from __future__ import annotations
 
 import json
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -90,20 +89,9 @@ def load_atlas_surrogate(path: str | Path) -> AtlasSurrogate:
 
 
 def _check_domain(surrogate: AtlasSurrogate, values: dict[str, np.ndarray], extrapolate: bool) -> None:
-    for name, v in values.items():
-        lo, hi = surrogate.domain[name]
-        outside = np.flatnonzero((v < lo * (1 - 1e-12)) | (v > hi * (1 + 1e-12)))
-        if not outside.size:
-            continue
-        i = outside[0]
-        label = "F'" if name == "force_normalized" else name
-        where = f" (query {i + 1} of {v.size}; {outside.size} outside)" if v.size > 1 else ""
-        text = f"{label} = {v[i]:.6g}{where} lies outside the domain [{lo:.6g}, {hi:.6g}] of {surrogate.describe()}"
-        if not extrapolate:
-            raise ConfigError(f"{text}; pass --extrapolate (extrapolate=True) to predict anyway")
-        from pipeline.predict import ExtrapolationWarning
+    from pipeline.predict import check_ranges
 
-        warnings.warn(f"{text}: the prediction is an extrapolation", ExtrapolationWarning, stacklevel=3)
+    check_ranges(surrogate.domain, values, extrapolate, "the domain", f" of {surrogate.describe()}")
 
 
 def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi: Any, lam: Any,
