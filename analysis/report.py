@@ -20,7 +20,7 @@ import xarray as xr
 from scipy.stats import norm
 
 from analysis.report_blocks import Block, table as _table
-from analysis.report_physics import barber_blocks, bias_blocks, validation_blocks
+from analysis.report_physics import barber_blocks, bias_blocks, curve_blocks, validation_blocks
 from pipeline import __version__
 from pipeline.config import STAGE_INPUTS, Scenario, parameter_table
 from pipeline.physics import surrogate as sg
@@ -413,7 +413,7 @@ def build_blocks(scenario: Scenario, data_dir: str | Path, started: float | None
         Block("p", f"{scenario.description} (g2tom {__version__}, configuration hash {scenario.config_hash()})."),
     ]
     fits, missing = _load(data_dir, "fits", scenario)
-    blocks += missing if fits is None else _fit_blocks(fits, scenario) + _ensemble_blocks(fits, scenario)
+    blocks += missing if fits is None else _fit_blocks(fits, scenario) + _ensemble_blocks(fits, scenario) + curve_blocks(fits)
     sur, missing = _load(data_dir, "surrogate", scenario)
     blocks += missing if sur is None else _surrogate_blocks(sur)
     blocks += bias_blocks(data_dir) + barber_blocks(data_dir, scenario) + validation_blocks(data_dir)

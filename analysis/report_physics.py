@@ -7,12 +7,34 @@ import json
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
 
 from analysis.report_blocks import Block, table
 from pipeline.config import Scenario
 from pipeline.store import StaleInputError, read_stage
 
-__all__ = ["barber_blocks", "bias_blocks", "validation_blocks"]
+__all__ = ["barber_blocks", "bias_blocks", "curve_blocks", "validation_blocks"]
+
+
+def curve_blocks(fits: xr.Dataset) -> list[Block]:
+    """Section "The curve model": ln R'(ln F') per cell, what the predictor answers with by default."""
+    blocks = [Block("h2", "The curve model (the predictor's default)")]
+    if "curve_order" not in fits:
+        return blocks + [Block("p", "Not available: fits.nc has no curve model (re-run `g2tom fits`).")]
+    order = fits["curve_order"].values
+    within = fits["curve_within"].values
+    error = fits["curve_max_error"].values
+    orders = ", ".join(f"{int(o)}: {int(np.sum(order == o))}" for o in np.unique(order) if o > 0)
+    residual = fits["fit_residual_rms"].values
+    blocks.append(Block("p", (
+        f"ln R' = sum_k c_k (ln F')^k per (xi, lambda) cell, fitted to the {fits.attrs.get('reduction', 'reduction')} "
+        f"over the steps {fits.attrs.get('fit_range', '')}, the lowest order within 3 % of every fitted step "
+        f"(else within the step's interval). Cells by order: {orders}. Within 3 %: {int(np.sum(within == 1))} "
+        f"of {within.size}; within the interval only: {int(np.sum(within == 2))}; neither: {int(np.sum(within == 0))}. "
+        f"Largest error over cells and steps: {100 * float(np.nanmax(error)):.2f} %. The power law of Eq. 25 "
+        f"(kept, `--model power_law`) leaves an RMS log residual of {100 * float(np.nanmin(residual)):.1f}-"
+        f"{100 * float(np.nanmax(residual)):.1f} %: Barber's curve bends over the paper's range.")))
+    return blocks
 
 
 def validation_blocks(data_dir: Path) -> list[Block]:

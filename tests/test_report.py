@@ -104,3 +104,15 @@ def test_report_parameters_carry_units(run_dir: Path, small: Scenario) -> None:
     md = (run_dir / "report.md").read_text()
     assert "| roughness.sigma | 2e-05 | m | standard deviation of asperity heights |" in md
     assert "| material.rho | 7.2e-07 | ohm m |" in md
+
+
+def test_curve_section_counts_the_cells(small) -> None:
+    from analysis.report_physics import curve_blocks
+    from pipeline.stages import fits
+    from tests.test_fits_stage import synthetic_cube
+
+    ds = fits.build(small, synthetic_cube(small, noise=0.0))
+    text = curve_blocks(ds)[1].text
+    n = ds["curve_order"].size
+    assert f"Within 3 %: {int((ds['curve_within'] == 1).sum())} of {n}" in text
+    assert "F' >= 0.4" in text and "--model power_law" in text
