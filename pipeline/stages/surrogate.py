@@ -53,9 +53,9 @@ from scipy.stats import norm
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
 from pipeline.physics import surrogate as sg
-from pipeline.physics.curve_model import evaluate_curve, interpolation_error
 from pipeline.physics.groups import Groups, groups
 from pipeline.stages.fits import COORD_LABELS
+from pipeline.stages.surrogate_tables import band_tables, curve_tables
 from pipeline.store import atomic_path, read_stage, write_dataset
 
 __all__ = ["build", "run", "scene_groups", "table3_rows", "table3_csv", "table3_markdown", "PARAMETERS"]
@@ -237,47 +237,6 @@ def _parameter(scenario: Scenario, fits: xr.Dataset, name: str) -> tuple[dict[st
     return variables, attrs
 
 
-def _band(fits: xr.Dataset) -> dict[str, xr.DataArray]:
-    """Band ratios and open probability on the fitted steps, dims (lambda, xi, step)."""
-    steps = fits["fitted"].values.astype(bool)
-    center = fits[f"{fits.attrs['reduction']}_normalized"]
-    quant = fits["resistance_quantile_normalized"]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        lower = quant.sel(quantile=0.16) / center
-        upper = center / quant.sel(quantile=0.84)
-    out = {}
-    for name, value in {"band_ratio_lower": lower, "band_ratio_upper": upper, "open_probability": fits["open_probability"]}.items():
-        value = value.isel(delta=steps).transpose("lambda", "xi", "delta")
-        out[name] = xr.DataArray(value.values, dims=("lambda", "xi", "step"))
-    out["band_ratio_lower"].attrs = {"units": "1", "long_name": "R'_16 / R'_center"}
-    out["band_ratio_upper"].attrs = {"units": "1", "long_name": "R'_center / R'_84 (0: R_84 = inf)"}
-    out["open_probability"].attrs = {"units": "1", "long_name": "share of open-circuit realizations"}
-    return out
-
-
-def _curve(scenario: Scenario, fits: xr.Dataset) -> dict[str, xr.DataArray]:
-    """The curve model of every cell for the predictor (its default): coefficients (lambda, xi,
-    power), the one-sigma error of ln R' from each fitted step's interval (lambda, xi, step) and
-    the grid's leave-one-out interpolation error of ln R' (lambda, xi)."""
-    steps = fits["fitted"].values.astype(bool)
-    coef = fits["curve_coefficients"].transpose("lambda", "xi", "power").values
-    ln_r = evaluate_curve(coef, fits["force_normalized"].values[steps])
-    ci = fits[f"{fits.attrs['reduction']}_normalized_ci"].isel(delta=steps).transpose("lambda", "xi", "delta", "bound")
-    z = norm.ppf(0.5 + scenario.fits.confidence / 2.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sigma = (np.log(ci.sel(bound="upper").values) - np.log(ci.sel(bound="lower").values)) / (2.0 * z)
-    error = interpolation_error(ln_r, sg.to_w(fits["lambda"].values), sg.to_z(fits["xi"].values))
-    return {
-        "curve_coefficients": xr.DataArray(coef, dims=("lambda", "xi", "power"), attrs={
-            "units": "1", "long_name": "curve model: ln R' = sum_k c_k (ln F')^k of each cell (fits.nc)"}),
-        "curve_fit_error": xr.DataArray(sigma, dims=("lambda", "xi", "step"), attrs={
-            "units": "1", "long_name": "one standard deviation of ln R' of the cell's mean curve at each fitted step"}),
-        "curve_interpolation_error": xr.DataArray(error, dims=("lambda", "xi"), attrs={
-            "units": "1", "long_name": "leave-one-out error of ln R' interpolated linearly in (ln lambda, -ln(1 - xi))",
-            "method": "largest over the fitted steps; RMS of the two axes; edge cells take the nearest interior value"}),
-    }
-
-
 def scene_groups(scenario: Scenario) -> Groups:
     """(mu, Pi) of a scenario's surface and sphere (:mod:`pipeline.physics.groups`)."""
     rough = scenario.roughness
@@ -292,8 +251,8 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
         for key, value in variables.items():
             ds[key] = value
         ds.attrs.update(attrs)
-    ds.update(_band(fits))
-    ds.update(_curve(scenario, fits))
+    ds.update(band_tables(fits))
+    ds.update(curve_tables(scenario, fits))
     steps = fits["fitted"].values.astype(bool)
     force_n = fits["force_normalized"].values[steps]
     ds = ds.assign_coords(force_normalized=("step", force_n), force=("step", fits["force"].values[steps]))
