@@ -1,8 +1,10 @@
-"""Eq. 27 for any surface inside the atlas: alpha and gamma from the atlas surrogate over (xi, lambda, mu, Pi).
+"""Any surface inside the atlas: R' from the atlas surrogate over (xi, lambda, mu, Pi, F').
 
-The atlas surrogate (``<data>/atlas/surrogate.json``, :mod:`pipeline.atlas_fit`) gives alpha and
-gamma at the query's (xi, lambda) and the surface's groups (mu, Pi) (:mod:`pipeline.physics.groups`);
-R_el = alpha 2 rho*/sqrt(R* sigma) F'^-gamma as for a single scene. Its band is the held-out error:
+The atlas surrogate (``<data>/atlas/surrogate.json``, :mod:`pipeline.atlas_fit`) gives ln R' at
+the query's (xi, lambda, F') and the surface's groups (mu, Pi) (:mod:`pipeline.physics.groups`)
+by its curve model (the default, ``resistance``), and alpha and gamma of Eq. 27
+(``resistance_power_law`` = alpha 2 rho*/sqrt(R* sigma) F'^-gamma). Its band is the held-out error
+of the curve model:
 one standard deviation of ln R' taken as the RMS of |ln R'_surrogate - ln R'_scene| over every
 held-out (scene, xi, lambda, step), so ``lower`` / ``upper`` = R exp(-/+ that); the single-scene
 band's components (realization spread, fit interval, open-circuit share) are not in the atlas
@@ -20,6 +22,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from pipeline.atlas_fit import CURVE
 from pipeline.config import ConfigError, Scenario
 from pipeline.physics.atlas_surrogate import AtlasModel
 from pipeline.stages.surrogate import scene_groups
@@ -59,7 +62,7 @@ class AtlasSurrogate:
                 raise ValueError(f"format is {doc.get('format')!r}, not {FORMAT!r}")
             models = {p: AtlasModel(doc[p]["transform"], np.array(doc[p]["low"], float), np.array(doc[p]["high"], float),
                                     np.array(doc[p]["powers"], int), np.array(doc[p]["coef"], float))
-                      for p in ("alpha", "gamma")}
+                      for p in ("alpha", "gamma", CURVE)}
             domain = {k: (float(doc["domain"][k][0]), float(doc["domain"][k][1])) for k in _DOMAIN}
             return cls(models, domain, float(doc["heldout"]["rms_ln_error"]), source)
         except (ValueError, KeyError, TypeError, AttributeError) as exc:
@@ -115,7 +118,8 @@ def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi:
                   extrapolate)
     alpha = surrogate.models["alpha"](x, lm, mu, pi)
     gamma = surrogate.models["gamma"](x, lm, mu, pi)
-    resistance = alpha * scenario.resistance_scale * np.exp(-gamma * np.log(force_n))
+    power_law = alpha * scenario.resistance_scale * np.exp(-gamma * np.log(force_n))
+    resistance = surrogate.models[CURVE](x, lm, mu, pi, force_n) * scenario.resistance_scale
     error = np.full(f.size, surrogate.error)
     unknown = np.full(f.size, np.nan)
     columns = {
@@ -123,14 +127,14 @@ def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi:
         "resistance": resistance, "lower": resistance * np.exp(-error), "upper": resistance * np.exp(error),
         "realization_lower": unknown, "realization_upper": unknown, "spread_lower": unknown,
         "spread_upper": unknown, "fit_error": unknown, "surrogate_error": error, "total_lower": error,
-        "total_upper": error, "open_probability": unknown, "resistance_curve": unknown,
-        "resistance_power_law": resistance, "mu": mu, "Pi": pi,
+        "total_upper": error, "open_probability": unknown, "resistance_curve": resistance,
+        "resistance_power_law": power_law, "mu": mu, "Pi": pi,
     }
     ds = xr.Dataset({name: label(values) for name, values in columns.items()})
     for name, (units, long_name) in OUTPUT_COLUMNS.items():
         ds[name].attrs = {"units": units, "long_name": long_name}
     ds.attrs["band"] = "held-out error of the atlas surrogate: lower, upper = R exp(-/+ rms |ln R'_surrogate - ln R'_scene|)"
     ds.attrs["surrogate_method"] = "atlas"
-    ds.attrs["model"] = "power_law"  # the atlas surrogate fits alpha and gamma over (xi, lambda, mu, Pi)
+    ds.attrs["model"] = "curve"  # ln R' over (xi, lambda, mu, Pi, F'); the power law beside it
     ds.attrs["answered_by"] = surrogate.describe()
     return ds

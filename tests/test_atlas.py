@@ -102,7 +102,7 @@ def test_a_refused_scene_stops_the_atlas_before_work(tmp_path) -> None:
 
 
 def test_atlas_surrogate_fitted_on_design_judged_on_heldout(tmp_path, base, uninterrupted) -> None:
-    from pipeline.atlas_fit import fit_atlas
+    from pipeline.atlas_fit import CURVE, fit_atlas
 
     doc, rows = fit_atlas(uninterrupted)
     assert doc["alpha"]["degree"] == 1  # 8 design points: only degree 1 (5 terms) cross-validates
@@ -113,11 +113,13 @@ def test_atlas_surrogate_fitted_on_design_judged_on_heldout(tmp_path, base, unin
 
     r = rows[0]
     models = {p: AtlasModel(doc[p]["transform"], np.array(doc[p]["low"]), np.array(doc[p]["high"]),
-                            np.array(doc[p]["powers"]), np.array(doc[p]["coef"])) for p in ("alpha", "gamma")}
+                            np.array(doc[p]["powers"]), np.array(doc[p]["coef"])) for p in ("alpha", "gamma", CURVE)}
     args = (np.array([r["xi"]]), np.array([r["lambda"]]), np.array([r["mu"]]), np.array([r["Pi"]]))
     by_hand = abs(np.log(models["alpha"](*args)[0]) - models["gamma"](*args)[0] * np.log(r["force_normalized"])
                   - np.log(r["resistance_normalized"]))
-    assert r["error"] == pytest.approx(by_hand, rel=1e-12)
+    assert r["power_law_error"] == pytest.approx(by_hand, rel=1e-12)
+    curve = models[CURVE].transformed(*args, np.array([r["force_normalized"]]))[0]
+    assert r["error"] == pytest.approx(abs(curve - np.log(r["resistance_normalized"])), rel=1e-12)
     assert r["within"] == (r["error"] <= max(0.05, r["allowed"]))
     h = int(np.flatnonzero(uninterrupted["scene"].values == "h00")[0])
     steps = int(uninterrupted["fitted"].values[h].sum())

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from pipeline import atlas
-from pipeline.atlas_fit import write_atlas_surrogate
+from pipeline.atlas_fit import CURVE, write_atlas_surrogate
 from pipeline.cli import main
 from pipeline.config import ConfigError, load_scenario
 from pipeline.predict import ExtrapolationWarning
@@ -53,8 +53,11 @@ def test_answers_inside_the_domain_by_the_formula(atlas_json) -> None:
     args = (np.array([0.5]), np.array([3.0]), np.array([g.mu]), np.array([g.Pi]))
     alpha, gamma = sur.models["alpha"](*args)[0], sur.models["gamma"](*args)[0]
     by_hand = alpha * scenario.resistance_scale * (force / scenario.force_scale) ** -gamma
-    assert float(result["resistance"]) == pytest.approx(by_hand, rel=1e-12)
-    assert float(result["upper"]) == pytest.approx(by_hand * math.exp(sur.error), rel=1e-12)
+    assert float(result["resistance_power_law"]) == pytest.approx(by_hand, rel=1e-12)
+    curve = float(np.exp(sur.models[CURVE].transformed(*args, np.array([force / scenario.force_scale]))[0]))
+    assert result.attrs["model"] == "curve"
+    assert float(result["resistance"]) == pytest.approx(curve * scenario.resistance_scale, rel=1e-12)
+    assert float(result["upper"]) == pytest.approx(float(result["resistance"]) * math.exp(sur.error), rel=1e-12)
     assert float(result["mu"]) == pytest.approx(g.mu) and "atlas surrogate" in result.attrs["answered_by"]
     # another surface inside the domain gets other coefficients
     other = predict_atlas(sur, _surface(1.9e8), _force(sur, _surface(1.9e8)), 0.5, 3.0)

@@ -1,9 +1,10 @@
-"""A surrogate of a fitted parameter over (xi, lambda, mu, Pi): one polynomial in log coordinates.
+"""A surrogate of a fitted quantity over (xi, lambda, mu, Pi[, F']): one polynomial in log coordinates.
 
-The coordinates are z = -ln(1 - xi), w = ln(lambda), m = ln(mu), q = ln(Pi), each mapped
-affinely onto [-1, 1] over the fitted data (for conditioning); the model is
+The coordinates are z = -ln(1 - xi), w = ln(lambda), m = ln(mu), q = ln(Pi) (and L = ln F' for a
+quantity that varies with the load, e.g. R' itself), each mapped affinely onto [-1, 1] over the
+fitted data (for conditioning); the model is
 
-    T(p) = sum over i + j + k + l <= D of c_ijkl z^i w^j m^k q^l,
+    T(p) = sum over i + j + k + l (+ n) <= D of c_ijkl(n) z^i w^j m^k q^l (L^n),
 
 T = ln for alpha (positive) and the identity for gamma, fitted by weighted least squares
 (weights 1 / sigma^2, sigma one standard deviation of T(p) per point). The total degree D is
@@ -24,9 +25,14 @@ __all__ = ["AtlasModel", "coordinates", "fit_atlas_model", "select_degree", "exp
 TRANSFORMS = ("log", "identity")
 
 
-def coordinates(xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray) -> np.ndarray:
-    """(n, 4) log coordinates z = -ln(1 - xi), w = ln(lambda), m = ln(mu), q = ln(Pi)."""
-    return np.column_stack([-np.log1p(-np.asarray(xi, float)), np.log(lam), np.log(mu), np.log(pi)])
+def coordinates(xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray,
+                force_n: np.ndarray | None = None) -> np.ndarray:
+    """(n, 4) log coordinates z = -ln(1 - xi), w = ln(lambda), m = ln(mu), q = ln(Pi); (n, 5) with
+    L = ln F' when ``force_n`` is given."""
+    columns = [-np.log1p(-np.asarray(xi, float)), np.log(lam), np.log(mu), np.log(pi)]
+    if force_n is not None:
+        columns.append(np.log(force_n))
+    return np.column_stack(columns)
 
 
 def exponents(degree: int, n_vars: int = 4) -> np.ndarray:
@@ -67,13 +73,15 @@ class AtlasModel:
             design *= table[:, self.powers[:, i]]
         return design
 
-    def transformed(self, xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray) -> np.ndarray:
-        """T(p) at the points (arrays of equal size)."""
-        return self._design(coordinates(xi, lam, mu, pi)) @ self.coef
+    def transformed(self, xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray,
+                    force_n: np.ndarray | None = None) -> np.ndarray:
+        """T(p) at the points (arrays of equal size; ``force_n`` for a model over F' too)."""
+        return self._design(coordinates(xi, lam, mu, pi, force_n)) @ self.coef
 
-    def __call__(self, xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray) -> np.ndarray:
-        """The parameter at the points (arrays of equal size)."""
-        t = self.transformed(xi, lam, mu, pi)
+    def __call__(self, xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray,
+                 force_n: np.ndarray | None = None) -> np.ndarray:
+        """The quantity at the points (arrays of equal size)."""
+        t = self.transformed(xi, lam, mu, pi, force_n)
         return np.exp(t) if self.transform == "log" else t
 
 
@@ -89,7 +97,8 @@ def _transformed(values: np.ndarray, transform: str) -> np.ndarray:
 
 def fit_atlas_model(xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray, values: np.ndarray,
                     sigma: np.ndarray, degree: int, transform: str = "log",
-                    bounds: tuple[np.ndarray, np.ndarray] | None = None) -> AtlasModel:
+                    bounds: tuple[np.ndarray, np.ndarray] | None = None,
+                    force_n: np.ndarray | None = None) -> AtlasModel:
     """Weighted least-squares fit of total degree ``degree``.
 
     Parameters
@@ -104,16 +113,18 @@ def fit_atlas_model(xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndar
         ``log`` or ``identity``.
     bounds
         (low, high) of the log coordinates to map to [-1, 1] (default: the points' own).
+    force_n
+        F' of each point, for a quantity that varies with the load (a fifth coordinate).
 
     Raises
     ------
     ValueError
         If there are no more points than terms, or values do not suit the transform.
     """
-    x = coordinates(xi, lam, mu, pi)
+    x = coordinates(xi, lam, mu, pi, force_n)
     low, high = bounds if bounds is not None else (x.min(axis=0), x.max(axis=0))
     high = np.where(high > low, high, low + 1.0)  # a coordinate held fixed maps to -1
-    powers = exponents(degree)
+    powers = exponents(degree, x.shape[1])
     if x.shape[0] <= powers.shape[0]:
         raise ValueError(f"{x.shape[0]} points cannot fit degree {degree} ({powers.shape[0]} terms)")
     model = AtlasModel(transform, np.asarray(low, float), np.asarray(high, float), powers, np.zeros(powers.shape[0]))
@@ -125,13 +136,13 @@ def fit_atlas_model(xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndar
 
 def select_degree(xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray, values: np.ndarray,
                   sigma: np.ndarray, groups: np.ndarray, degrees: range, transform: str = "log",
-                  tolerance: float = 0.05) -> tuple[int, dict[int, float]]:
+                  tolerance: float = 0.05, force_n: np.ndarray | None = None) -> tuple[int, dict[int, float]]:
     """The degree chosen by leave-one-group-out cross-validation, and every degree's CV RMS.
 
     The score is the RMS over all points of T(prediction) - T(value), each point predicted by
     the model fitted without its group; degrees that cannot be fitted without a group score inf.
     """
-    x_all = coordinates(xi, lam, mu, pi)
+    x_all = coordinates(xi, lam, mu, pi, force_n)
     bounds = (x_all.min(axis=0), x_all.max(axis=0))
     target = _transformed(values, transform)
     scores: dict[int, float] = {}
@@ -140,9 +151,10 @@ def select_degree(xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarra
         try:
             for g in np.unique(groups):
                 out = groups == g
+                f_in, f_out = (None, None) if force_n is None else (force_n[~out], force_n[out])
                 model = fit_atlas_model(xi[~out], lam[~out], mu[~out], pi[~out], values[~out], sigma[~out],
-                                        degree, transform, bounds)
-                errors[out] = model.transformed(xi[out], lam[out], mu[out], pi[out]) - target[out]
+                                        degree, transform, bounds, f_in)
+                errors[out] = model.transformed(xi[out], lam[out], mu[out], pi[out], f_out) - target[out]
         except ValueError:
             scores[degree] = np.inf
             continue
