@@ -55,3 +55,27 @@ def test_identity_transform_and_refusals() -> None:
         fit_atlas_model(xi, lam, mu, pi, gamma - 1.0, np.full(xi.size, 0.01), 1, "log")
     with pytest.raises(ValueError, match="cannot fit degree 4"):
         fit_atlas_model(xi[:40], lam[:40], mu[:40], pi[:40], gamma[:40], np.full(40, 0.01), 4, "identity")
+
+
+def test_design_by_parents_equals_the_products_of_powers():
+    """The monomial table built term by term from a parent equals prod_i u_i^p_i (5 coordinates)."""
+    from pipeline.physics.atlas_surrogate import AtlasModel
+
+    rng = np.random.default_rng(3)
+    powers = exponents(4, 5)
+    model = AtlasModel("log", np.zeros(5), np.ones(5), powers, rng.standard_normal(powers.shape[0]))
+    x = rng.uniform(0.0, 1.0, (50, 5))
+    u = 2.0 * x - 1.0
+    direct = np.prod(u[:, None, :] ** powers[None, :, :], axis=-1)
+    np.testing.assert_allclose(model._design(x), direct, rtol=1e-13, atol=1e-15)
+
+
+def test_curve_over_the_load_recovers_a_bending_law():
+    """ln R' with a quadratic term in ln F' (a Barber-like bend) over (xi, lambda, mu, Pi, F')."""
+    rng = np.random.default_rng(5)
+    n = 3000
+    xi, lam = rng.uniform(0.1, 0.9, n), rng.uniform(1.0, 23.0, n)
+    mu, pi, f = np.exp(rng.uniform(0, 4, n)), np.exp(rng.uniform(1.6, 5.8, n)), np.exp(rng.uniform(-1, 3, n))
+    ln_r = -0.5 - 0.6 * np.log(f) + 0.04 * np.log(f) ** 2 + 0.3 * -np.log1p(-xi) - 0.1 * np.log(mu) + 0.02 * np.log(lam)
+    model = fit_atlas_model(xi, lam, mu, pi, np.exp(ln_r), np.full(n, 0.01), 2, "log", force_n=f)
+    np.testing.assert_allclose(model.transformed(xi, lam, mu, pi, f), ln_r, atol=1e-10)

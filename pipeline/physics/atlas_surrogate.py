@@ -64,14 +64,20 @@ class AtlasModel:
     coef: np.ndarray
 
     def _design(self, x: np.ndarray) -> np.ndarray:
-        """(n, terms) monomials of the mapped coordinates, from each coordinate's table of powers."""
-        u = 2.0 * (x - self.low) / (self.high - self.low) - 1.0
-        top = int(self.powers.max(initial=0))
-        design = np.ones((u.shape[0], self.powers.shape[0]))
-        for i in range(u.shape[1]):
-            table = u[:, i : i + 1] ** np.arange(top + 1)  # (n, top + 1)
-            design *= table[:, self.powers[:, i]]
-        return design
+        """(n, terms) monomials of the mapped coordinates: each monomial is a lower one (its
+        parent) times one coordinate, so the table costs one product per term and point."""
+        u = (2.0 * (x - self.low) / (self.high - self.low) - 1.0).T  # (vars, n)
+        rows = np.empty((self.powers.shape[0], u.shape[1]))
+        index = {tuple(p): k for k, p in enumerate(self.powers.tolist())}
+        for k, p in enumerate(self.powers.tolist()):
+            if not any(p):
+                rows[k] = 1.0
+                continue
+            i = next(j for j, e in enumerate(p) if e)
+            parent = list(p)
+            parent[i] -= 1
+            np.multiply(rows[index[tuple(parent)]], u[i], out=rows[k])
+        return rows.T
 
     def transformed(self, xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray,
                     force_n: np.ndarray | None = None) -> np.ndarray:
