@@ -20,7 +20,7 @@ import xarray as xr
 from scipy.stats import norm
 
 from analysis.report_blocks import Block, table as _table
-from analysis.report_physics import barber_blocks, bias_blocks, curve_blocks, validation_blocks
+from analysis.report_physics import atlas_blocks, barber_blocks, bias_blocks, curve_blocks, validation_blocks
 from pipeline import __version__
 from pipeline.config import STAGE_INPUTS, Scenario, parameter_table
 from pipeline.physics import surrogate as sg
@@ -417,6 +417,7 @@ def build_blocks(scenario: Scenario, data_dir: str | Path, started: float | None
     sur, missing = _load(data_dir, "surrogate", scenario)
     blocks += missing if sur is None else _surrogate_blocks(sur)
     blocks += bias_blocks(data_dir) + barber_blocks(data_dir, scenario) + validation_blocks(data_dir)
+    blocks += atlas_blocks(data_dir)
     blocks += _point_blocks(data_dir)
     blocks.append(Block("h2", "Figures"))
     figures = sorted((p for p in (data_dir / "figures").glob("*.png") if p.stem not in FRONTIER_FIGURES),

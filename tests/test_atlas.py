@@ -135,6 +135,13 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     assert json.loads(target.read_text())["format"] == FORMAT == doc["format"]
     lines = (tmp_path / "atlas" / "heldout.csv").read_text().splitlines()
     assert lines[0].startswith("scene,mu,Pi,xi,lambda,force_normalized") and len(lines) == 1 + doc["heldout"]["steps"]
+    from analysis.report_physics import atlas_blocks
+
+    blocks = atlas_blocks(tmp_path)
+    held = doc["heldout"]
+    assert f"{held['cells_within']} of {held['cells']} held-out" in blocks[1].text
+    assert [row[0] for row in blocks[2].rows[1:]] == ["h00"]
+    assert blocks[2].rows[1][-1] == f"{held['steps_within']} of {held['steps']}"
 
 
 def test_cli_runs_fits_and_summarizes(tmp_path, capsys, monkeypatch) -> None:
