@@ -32,6 +32,13 @@ def atlas_blocks(data_dir: Path) -> list[Block]:
         f"{worst['mu']:.3g}, Pi {worst['Pi']:.3g}, xi {worst['xi']:g}, lambda {worst['lambda']:g}, F' "
         f"{worst['force_normalized']:.3g}): {worst['error']:.3g} against {worst['allowed']:.3g} allowed. Eq. 25's power "
         f"law: {held['power_law_cells_within']} of {held['cells']} cells (RMS {held['power_law_rms_ln_error']:.3g}).")))
+    atlas_file = folder / "atlas.nc"
+    if atlas_file.is_file():
+        with xr.open_dataset(atlas_file) as atlas:
+            if "invariance_pair" in atlas.attrs:
+                blocks.append(Block("p", (
+                    f"Invariance of the groups: scenes {atlas.attrs['invariance_pair']} give R' equal within "
+                    f"{float(atlas.attrs['invariance_max_ln_error']):.2g} in ln R' at every cell and fitted step.")))
     lines = (folder / "heldout.csv").read_text().splitlines()
     header = lines[0].split(",")
     rows: dict[str, list[list[str]]] = {}

@@ -108,8 +108,41 @@ def _run_scene(base: Scenario, scene: Scene, data_dir: Path) -> tuple[str, float
     return scene.name, float(ds["wall_seconds"])
 
 
+#: The invariance check's twin: the middle design scene again with sigma x TWIN_SCALE and
+#: R* / TWIN_SCALE (equal mu and Pi, other dimensions); never fitted.
+TWIN_SCALE = 2.0
+
+
+def twin_base(base: Scenario) -> Scenario:
+    """``base`` with sigma x :data:`TWIN_SCALE` and R* / :data:`TWIN_SCALE`: a scene of it has the
+    same (mu, Pi) as the scene of ``base`` but other dimensions."""
+    import dataclasses
+
+    return dataclasses.replace(
+        base, roughness=dataclasses.replace(base.roughness, sigma=base.roughness.sigma * TWIN_SCALE),
+        indenter=dataclasses.replace(base.indenter, radius=base.indenter.radius / TWIN_SCALE))
+
+
+def _twin(scenes: list[Scene]) -> tuple[Scene, Scene]:
+    """The design scene checked for invariance (the middle one) and its twin's name."""
+    design = [s for s in scenes if not s.heldout]
+    scene = design[len(design) // 2]
+    return scene, Scene(f"t{scene.name}", scene.mu, scene.Pi, True)
+
+
+def _invariance(scene_ds: xr.Dataset, twin_ds: xr.Dataset) -> float:
+    """Largest |ln R'_twin - ln R'_scene| over the cells and fitted steps of two scenes of equal groups."""
+    import numpy as np
+
+    fitted = scene_ds["fitted"].values.astype(bool)
+    a = scene_ds["resistance_normalized"].values[..., fitted]
+    b = twin_ds["resistance_normalized"].values[..., fitted]
+    return float(np.max(np.abs(np.log(b) - np.log(a))))
+
+
 def _gather(base: Scenario, scenes: list[Scene], data_dir: Path) -> Path:
-    """``atlas.nc`` from the scene files, over the dimension ``scene``."""
+    """``atlas.nc`` from the scene files, over the dimension ``scene``, with the invariance check
+    of the twin scene in its attributes."""
     parts = []
     for scene in scenes:
         with xr.open_dataset(scene_path(data_dir, scene), engine="netcdf4") as ds:
@@ -121,6 +154,12 @@ def _gather(base: Scenario, scenes: list[Scene], data_dir: Path) -> Path:
                        base_scenario="the scenario every scene starts from (sigma and R* kept, eta and beta "
                                      "from the scene's groups); its parameters follow")
     atlas.attrs["scene_config_hashes"] = " ".join(p.attrs["config_hash"] for p in parts)
+    scene, twin = _twin(scenes)
+    with xr.open_dataset(scene_path(data_dir, twin), engine="netcdf4") as twin_ds:
+        error = _invariance(parts[scenes.index(scene)], twin_ds.load())
+    atlas.attrs.update(invariance_pair=f"{scene.name} and {twin.name} (sigma x {TWIN_SCALE:g}, R* / {TWIN_SCALE:g}: "
+                                       f"mu {scene.mu:.4g}, Pi {scene.Pi:.4g})",
+                       invariance_max_ln_error=error)
     target = Path(data_dir) / "atlas" / ATLAS_FILE
     with atomic_path(target) as tmp:
         atlas.to_netcdf(tmp, format="NETCDF4", engine="netcdf4")
@@ -158,6 +197,8 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
     data_dir = Path(data_dir)
     scenes = design_scenes(design)
     pending = [s for s in scenes if not _done(base, s, data_dir)]
+    _, twin = _twin(scenes)
+    twin_pending = not _done(twin_base(base), twin, data_dir)
     refused = [e for e in plan_atlas(base, design) if e.problem and e.scene in pending]
     if refused:
         e = refused[0]
@@ -175,5 +216,7 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
             for k, future in enumerate(as_completed(futures), 1):
                 name, seconds = future.result()
                 _line(k, len(pending), name, seconds, by_name[name])
+    if twin_pending:  # the invariance check: equal (mu, Pi), other dimensions
+        _line(1, 1, *_run_scene(twin_base(base), twin, data_dir), twin)
     return _gather(base, scenes, data_dir)
 

@@ -77,7 +77,7 @@ def test_a_resumed_atlas_equals_an_uninterrupted_one(tmp_path, base, uninterrupt
     ran = []
     monkeypatch.setattr(atlas, "_run_scene", lambda *a: (ran.append(a[1].name), real(*a))[1])
     _same(_load(atlas.run_atlas(base, DESIGN, tmp_path)), uninterrupted)
-    assert ran == ["d02", "d03", "h00"]  # only the scenes not written
+    assert ran == ["d02", "d03", "h00", "td02"]  # only the scenes not written, then the invariance twin
     assert all(p.stat().st_mtime_ns == t for p, t in stamps.items())
 
 
@@ -137,7 +137,12 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     assert lines[0].startswith("scene,mu,Pi,xi,lambda,force_normalized") and len(lines) == 1 + doc["heldout"]["steps"]
     from analysis.report_physics import atlas_blocks
 
+    with xr.open_dataset(tmp_path / "atlas" / atlas.ATLAS_FILE) as ds:  # the twin: equal groups, other sizes
+        assert ds.attrs["invariance_pair"].startswith("d") and ds.attrs["invariance_max_ln_error"] <= 2e-6
+    assert (tmp_path / "atlas" / "scenes" / f"t{ds.attrs['invariance_pair'].split()[0]}.nc").is_file()
     blocks = atlas_blocks(tmp_path)
+    assert "Invariance of the groups" in blocks[2].text
+    blocks = [blocks[0], blocks[1], blocks[3]]
     held = doc["heldout"]
     assert f"{held['cells_within']} of {held['cells']} held-out" in blocks[1].text
     assert [row[0] for row in blocks[2].rows[1:]] == ["h00"]
@@ -152,7 +157,7 @@ def test_cli_runs_fits_and_summarizes(tmp_path, capsys, monkeypatch) -> None:
     sets = [a for k, v in BASE.items() for a in ("--set", f"{k}={v}")]
     assert main(["atlas", "--data-dir", str(tmp_path), "--workers", "1", "--no-progress", *sets]) == 0
     err = capsys.readouterr().err
-    assert err.count("atlas: scene ") == 5 and "held out: " in err and "cells within max(5 %, interval)" in err
+    assert err.count("atlas: scene ") == 6 and "held out: " in err and "cells within max(5 %, interval)" in err
     assert (tmp_path / "atlas" / "atlas.nc").is_file() and (tmp_path / "atlas" / "surrogate.json").is_file()
     # a second run has nothing left to compute
     assert main(["atlas", "--data-dir", str(tmp_path), "--workers", "1", "--no-progress", *sets]) == 0
