@@ -33,7 +33,9 @@ def data_dir(tmp_path_factory, small: Scenario):
 
 
 def _predict(data_dir, small, capsys, *extra: str) -> tuple[int, str, str]:
-    status = main(["predict", "--data-dir", str(data_dir), *cli_overrides(small), *QUERY, *extra])
+    """The run's own single-scene surrogate answers (``--surrogate``: not the atlas the package ships)."""
+    status = main(["predict", "--data-dir", str(data_dir), *cli_overrides(small), *QUERY,
+                   "--surrogate", str(data_dir / "surrogate.json"), *extra])
     captured = capsys.readouterr()
     return status, captured.out, captured.err
 
@@ -106,3 +108,16 @@ def test_measured_roughness_feeds_the_groups(tmp_path, data_dir, small: Scenario
     assert _rows(out)[0]["mu"] == pytest.approx(expected.mu, rel=1e-9)
     status, out, err = _predict(data_dir, small, capsys, "--pixel-size", "1e-6")
     assert status == 2 and "--pixel-size is only used with --roughness" in err
+
+
+def test_another_surface_in_the_atlas_domain_is_answered_by_the_atlas(data_dir, small: Scenario, capsys) -> None:
+    """Without --surrogate, a surface other than the run's is answered by the atlas surrogate the
+    package ships (never by the run's coefficients), and the run's own surface by the run's."""
+    query = ["predict", "--data-dir", str(data_dir), *cli_overrides(small), *QUERY]
+    assert main(query) == 0
+    own = capsys.readouterr()
+    assert "answered by the run's own single-scene surrogate" in own.err
+    assert main([*query, "--set", "roughness.beta=3e-4"]) == 0
+    other = capsys.readouterr()
+    assert "answered by the atlas surrogate" in other.err and "atlas_surrogate.json" in other.err
+    assert _rows(other.out)[0]["resistance_ohm"] != pytest.approx(_rows(own.out)[0]["resistance_ohm"], rel=1e-3)
