@@ -8,20 +8,8 @@ import pytest
 from pipeline.physics import constriction, point_model
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
 from pipeline.stages import contact
+from tests.test_point_model import PITCH, RHO, _random_case, _whole
 
-RHO = 7.2e-7  # ohm m
-PITCH = 7.07e-5  # m
-
-
-def _whole(radius: np.ndarray) -> np.ndarray:
-    return np.full(radius.shape[0], radius.shape[-1])
-
-
-def _random_case(seed: int, n: int = 9, n_delta: int = 3, batch: int = 5):
-    rng = np.random.default_rng(seed)
-    radius = rng.uniform(0.0, 0.3 * PITCH, (n_delta, n, n)) * (rng.random((n_delta, n, n)) > 0.3)
-    masks = rng.random((batch, n, n)) > rng.uniform(0.1, 0.9)
-    return masks, radius
 
 
 @pytest.mark.parametrize("film", [np.inf, 3e-11])

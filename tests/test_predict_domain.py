@@ -13,23 +13,11 @@ from pipeline.config import ConfigError, Scenario, load_scenario
 from pipeline.physics.groups import groups, surface_from_groups
 from pipeline.predict import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
 from pipeline.roughness_cli import measure
-from pipeline.stages import fits, surrogate
-from pipeline.store import write_dataset
-from tests.test_fits_stage import cli_overrides, synthetic_cube
-from tests.test_predict import _quiet, _rows
+from tests.test_fits_stage import cli_overrides
+from tests.test_predict import _quiet, _rows, data_dir  # noqa: F401 (the fixture: fits.nc and the surrogate stage run)
 from tests.test_roughness import PIXEL, wave_surface
 
 QUERY = ["--force", "1500", "--xi", "0.4", "--lambda", "4"]
-
-
-@pytest.fixture(scope="module")
-def data_dir(tmp_path_factory, small: Scenario):
-    path = tmp_path_factory.mktemp("domain")
-    write_dataset(fits.build(small, synthetic_cube(small, noise=0.2)), path, "fits", small)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        surrogate.run(small, path, None)
-    return path
 
 
 def _predict(data_dir, small, capsys, *extra: str) -> tuple[int, str, str]:
