@@ -101,6 +101,7 @@ VALIDATE ?=
 validate: | $(VENV)/.installed
 	$(VENV)/bin/pip install --quiet -e '.[reference]'
 	$(G2TOM) validate --data-dir $(DATA) $(VALIDATE)
+	$(G2TOM) validate --data-dir $(DATA) --surface random_process $(VALIDATE)
 
 params: | $(VENV)/.installed
 	$(G2TOM) params $(ARGS)

@@ -77,16 +77,20 @@ def curve_blocks(fits: xr.Dataset) -> list[Block]:
 
 
 def validation_blocks(data_dir: Path) -> list[Block]:
-    """Section "Against the full elastic contact": ``g2tom validate``'s section and figure, when it ran."""
-    folder = Path(data_dir) / "validate"
+    """Section "Against the full elastic contact": ``g2tom validate``'s sections and figures (the GW
+    surface, and the random-process surface), when they ran."""
     blocks = [Block("h2", "Against the full elastic contact (g2tom validate)")]
-    if not (folder / "validate.md").is_file():
-        return blocks + [Block("p", "Not available: run `make validate` (about 30 min; `make validate "
-                                    "VALIDATE=--quick` for a 256^2 check in a minute).")]
-    blocks.append(Block("pre", (folder / "validate.md").read_text()))
-    if (folder / "validate.png").is_file():
-        blocks.append(Block("img", "R' against F': the full-field reference (each realization) and g2tom's "
-                                   "discretizations and models", src="validate/validate.png"))
+    folders = [(Path(data_dir) / name, label) for name, label in
+               (("validate", "GW surface"), ("validate_random_process", "Gaussian self-affine surface"))]
+    ran = [(f, label) for f, label in folders if (f / "validate.md").is_file()]
+    if not ran:
+        return blocks + [Block("p", "Not available: run `make validate` (about 30 min per surface; `make validate "
+                                    "VALIDATE=--quick` for 256^2 checks in a minute).")]
+    for folder, label in ran:
+        blocks.append(Block("pre", (folder / "validate.md").read_text()))
+        if (folder / "validate.png").is_file():
+            blocks.append(Block("img", f"R' against F' ({label}): the full-field reference (each realization) and "
+                                       "g2tom's discretizations and models", src=f"{folder.name}/validate.png"))
     return blocks
 
 

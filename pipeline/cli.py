@@ -276,9 +276,9 @@ def _cmd_validate(args: argparse.Namespace, scenario: Scenario) -> None:
     problem = missing_extra()
     if problem:
         raise ConfigError(problem)
-    from pipeline.reference.validate import chosen_set, run_validation
+    from pipeline.reference.validate import chosen_set, output_folder, run_validation
 
-    run_validation(chosen_set(args.quick), args.data_dir / "validate")
+    run_validation(chosen_set(args.quick, args.surface), output_folder(args.data_dir, args.surface))
 
 
 def _version() -> str:
@@ -398,6 +398,9 @@ def _parser() -> argparse.ArgumentParser:
                    "the full-field elastic contact (tamaas) against g2tom: <data-dir>/validate/")
     validate.add_argument("--quick", action="store_true",
                           help="256^2 grid, one realization, two loads, clean and one oxidized case")
+    validate.add_argument("--surface", choices=("gw", "random_process"), default="gw",
+                          help="gw: asperities with g2tom's own parameters (<data-dir>/validate/); random_process: a "
+                               "Gaussian self-affine surface, g2tom fed its summit statistics (<data-dir>/validate_random_process/)")
     rough = add("roughness", _cmd_roughness, "sigma, eta and beta from a measured height map")
     rough.add_argument("heightmap", type=Path, help=".npy, netCDF or text (heights in m), or an instrument file "
                        "(SurfaceTopography: pip install 'g2tom[topography]')")

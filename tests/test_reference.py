@@ -122,3 +122,14 @@ def test_only_the_reference_package_imports_the_extra() -> None:
     importers = {p.relative_to(root).as_posix() for folder in ("pipeline", "analysis")
                  for p in (root / folder).rglob("*.py") if "import tamaas" in p.read_text()}
     assert importers == {"pipeline/reference/__init__.py", "pipeline/reference/elastic.py"}
+
+
+def test_random_process_is_one_surface_on_every_grid() -> None:
+    """Grids of pitch p and p/3 over one period sample the same continuous surface: every third
+    pixel centre of the fine grid (offset 1) is a centre of the coarse grid."""
+    period, hurst, rms = 64e-6, 0.8, 1e-6
+    q_low, q_high = 2 * np.pi / (32e-6), 2 * np.pi / (8e-6)
+    coarse = surfaces.random_process(64, 1e-6, hurst, q_low, q_high, rms, np.random.default_rng(4), period)
+    fine = surfaces.random_process(192, 1e-6 / 3, hurst, q_low, q_high, rms, np.random.default_rng(4), period)
+    np.testing.assert_allclose(fine[1::3, 1::3], coarse, rtol=0, atol=1e-12 * rms)
+    assert np.std(coarse) == pytest.approx(rms, rel=1e-9)  # a whole period: the continuous variance

@@ -12,6 +12,7 @@ import pytest
 import xarray as xr
 
 from pipeline.cli import main
+from pipeline.config import ConfigError
 from pipeline.reference import cases, scene
 from pipeline.reference.validate import chosen_set, run_validation
 
@@ -114,3 +115,30 @@ def test_a_combination_g2tom_refuses_is_nan_and_named(monkeypatch) -> None:
     assert np.isnan(side["resistance"][1, 1]).all() and np.isnan(side["clean"][1, 1]).all()
     assert not np.isnan(side["clean"][0]).any() and not np.isnan(side["resistance"][1, 0]).any()
     assert side["skipped"] == ["asperities/point: contact.spots = 'asperities' is not allowed with cube.model = 'point'"]
+
+
+def test_random_process_set_feeds_g2tom_its_summit_statistics() -> None:
+    from pipeline.physics.surface_spectrum import summit_parameters
+    from pipeline.reference import surfaces
+
+    vset = chosen_set(False, "random_process")
+    q_high = 2 * np.pi / vset.short_wavelength
+    summits = summit_parameters(*surfaces.spectral_moments_closed_form(vset.hurst, q_high / vset.bandwidth_ratio,
+                                                                       q_high, vset.rms))
+    assert (vset.sigma, vset.eta, vset.beta) == pytest.approx((summits.sigma, summits.eta, summits.beta), rel=1e-12)
+    assert vset.eta == pytest.approx(chosen_set(False).eta, rel=1e-9)  # as dense as the GW set's asperities
+    assert 2 * np.pi / q_high >= 2 * vset.side / vset.convergence_grid  # the band is resolved on both grids
+    with pytest.raises(ConfigError, match="--surface 'fractal'"):
+        chosen_set(False, "fractal")
+
+
+def test_a_tiny_random_process_run(tmp_path) -> None:
+    from pipeline.reference.scene import random_process_set
+
+    vset = dataclasses.replace(random_process_set(TINY, rms=20e-6), convergence_grid=0)  # 48^2 cannot hold the band
+    paths = run_validation(vset, tmp_path, stream=io.StringIO())
+    text = paths[2].read_text()
+    assert "self-affine" in text and "summit statistics" in text
+    with xr.open_dataset(paths[0]) as ds:
+        assert ds.attrs["scene_surface"] == "random_process"
+        assert np.isfinite(ds["resistance_reference_clean"].values).any()

@@ -27,7 +27,7 @@ from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube as cube_stage
 from pipeline.stages import oxide as oxide_stage
 
-__all__ = ["ValidationSet", "DEFAULT", "QUICK", "surface_stream", "rough_sphere", "g2tom_scenario",
+__all__ = ["ValidationSet", "DEFAULT", "QUICK", "RANDOM", "random_process_set", "surface_stream", "rough_sphere", "g2tom_scenario",
            "g2tom_resistances", "has_spots_key", "FLOOR_SIGMAS"]
 
 #: The GW surface's floor between asperities, in sigma below the reference plane: far below any
@@ -60,6 +60,12 @@ class ValidationSet:
         Root seeds of the surfaces and of g2tom's oxide fields.
     models, discretizations
         g2tom's ``cube.model`` values and spot discretizations to compare.
+    surface
+        ``gw`` (asperities of the GW model with sigma, eta, beta) or ``random_process`` (a Gaussian
+        self-affine surface, :func:`random_process_set`: sigma, eta, beta are then its summits').
+    hurst, rms, short_wavelength, bandwidth_ratio
+        The random process: Hurst exponent, height std (m), shortest wavelength (m) and the ratio
+        of the longest to the shortest.
     """
 
     sigma: float = 20e-6
@@ -80,6 +86,11 @@ class ValidationSet:
     oxide_seed: int = 20240531
     models: tuple[str, ...] = ("greenwood", "point")
     discretizations: tuple[str, ...] = ("mean_area", "expected", "asperities")
+    surface: str = "gw"
+    hurst: float = 0.8
+    rms: float = 0.0
+    short_wavelength: float = 0.0
+    bandwidth_ratio: float = 8.0
 
     @property
     def pixel(self) -> float:
@@ -102,11 +113,34 @@ class ValidationSet:
         return 8.0 / 3.0 * self.eta * self.sigma * math.sqrt(2.0 * self.radius * self.beta)
 
 
+def random_process_set(base: ValidationSet, rms: float, hurst: float = 0.8, bandwidth_ratio: float = 8.0) -> ValidationSet:
+    """``base`` on a Gaussian self-affine surface instead of GW asperities, with g2tom's parameters
+    from its spectrum: the closed-form moments m0, m2, m4 of the band and Nayak's summit statistics
+    (:func:`pipeline.physics.surface_spectrum.summit_parameters`: summit sigma, eta, and beta by the
+    paper's 0.737 / sqrt(m4)). The shortest wavelength is chosen so that the summit density is
+    ``base.eta`` (the grid keeps its pixels per asperity spacing)."""
+    from pipeline.physics.surface_spectrum import summit_parameters
+
+    def summits(short: float):
+        q_high = 2.0 * np.pi / short
+        return summit_parameters(*surfaces.spectral_moments_closed_form(hurst, q_high / bandwidth_ratio, q_high, rms))
+
+    short = math.sqrt(summits(1.0).eta / base.eta)  # eta scales as 1 / short^2
+    s = summits(short)
+    return dataclasses.replace(base, surface="random_process", sigma=s.sigma, eta=s.eta, beta=s.beta, hurst=hurst,
+                               rms=rms, short_wavelength=short, bandwidth_ratio=bandwidth_ratio)
+
+
 DEFAULT = ValidationSet()
 #: ``--quick``: 256^2 at 8 pixels per asperity spacing (a window of 2.3 mm, which holds the
 #: contact of both loads), one realization, two loads, clean plus one oxidized case.
 QUICK = dataclasses.replace(DEFAULT, deltas=(1.0, -0.5), xi=(0.5,), lambdas=(5.0,), realizations=(0,),
                             n_grid=256, pixels_per_cell=8.0, convergence_grid=128)
+#: The random-process surface (``--surface random_process``): the default set's loads, oxide
+#: cases, realizations and grid on a Gaussian self-affine surface (H 0.8, rms 20 um, a band of 8),
+#: its summits as dense as the GW set's asperities (mu = 3.5: the summits are sharper).
+RANDOM = random_process_set(DEFAULT, rms=20e-6)
+
 
 
 def surface_stream(vset: ValidationSet, realization: int) -> np.random.Generator:
@@ -122,6 +156,16 @@ def rough_sphere(vset: ValidationSet, realization: int, n: int) -> np.ndarray:
     the grids of the convergence study see the same surface.
     """
     pixel = vset.side / n
+    if vset.surface == "random_process":
+        from pipeline.physics.surface_spectrum import summit_parameters
+
+        q_high = 2.0 * np.pi / vset.short_wavelength
+        q_low = q_high / vset.bandwidth_ratio
+        rough = surfaces.random_process(n, pixel, vset.hurst, q_low, q_high, vset.rms,
+                                        surface_stream(vset, realization), period=vset.side)
+        # heights from the summits' mean plane, g2tom's reference (Nayak: 4 sqrt(m0 / (pi alpha)) above the surface's)
+        moments = surfaces.spectral_moments_closed_form(vset.hurst, q_low, q_high, vset.rms)
+        return rough - summit_parameters(*moments).summit_mean_height + surfaces.sphere(n, pixel, vset.radius)
     asperities = surfaces.gw_asperities(vset.side, vset.eta, vset.sigma, vset.beta, surface_stream(vset, realization))
     rough = surfaces.gw_heights(asperities, n, pixel, floor=-FLOOR_SIGMAS * vset.sigma)
     return rough + surfaces.sphere(n, pixel, vset.radius)

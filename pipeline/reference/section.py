@@ -112,7 +112,10 @@ def markdown(ds: xr.Dataset) -> str:
     lines.append("")
     lines += [
         f"Scene: mu = {ds.attrs['mu']:.3f}, sigma {ds.attrs['scene_sigma']:g} m, eta {ds.attrs['scene_eta']:g} m^-2, "
-        f"beta {ds.attrs['scene_beta']:g} m, R* {ds.attrs['scene_radius']:g} m; GW surfaces on a "
+        f"beta {ds.attrs['scene_beta']:g} m, R* {ds.attrs['scene_radius']:g} m; "
+        + ("GW surfaces" if ds.attrs.get("scene_surface", "gw") == "gw" else
+           f"Gaussian self-affine surfaces (H {ds.attrs['scene_hurst']:g}, rms {ds.attrs['scene_rms']:g} m; g2tom fed "
+           "their summit statistics)") + " on a "
         f"{ds.attrs['scene_n_grid']}^2 grid ({ds.attrs['scene_pixels_per_cell']:g} pixels per asperity spacing), "
         f"{n_real} realization(s); the reference is solved at g2tom's force. Ratio g2tom / full field: "
         "geometric mean [min-max] over realizations.", "",

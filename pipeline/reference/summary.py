@@ -93,9 +93,9 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "seconds_convergence": ("load", ref["coarse"]["seconds_total"], _a("s", "wall time of the convergence-grid case")),
     }
     attrs = {f"scene_{k}": v for k, v in dataclasses.asdict(vset).items()
-             if isinstance(v, (int, float)) and not isinstance(v, bool)}
+             if isinstance(v, (int, float, str)) and not isinstance(v, bool)}
     attrs.update({
-        "title": "g2tom against the full-field elastic contact of a GW rough sphere (Barber's analogy)",
+        "title": f"g2tom against the full-field elastic contact of a rough sphere ({vset.surface} surface; Barber's analogy)",
         "g2tom_version": __version__, "git_commit": git_commit() or "unknown",
         "default_discretization": default_spots, "default_model": "greenwood",
         "reference": "tamaas non-periodic Boussinesq operator; Polonsky-Keer contact; punch conductance by CG",

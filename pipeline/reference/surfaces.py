@@ -84,17 +84,26 @@ def gw_heights(asperities: Asperities, n: int, pixel: float, floor: float) -> np
     return heights
 
 
-def _band_modes(n: int, pixel: float, q_low: float, q_high: float) -> tuple[np.ndarray, np.ndarray]:
-    """Wave numbers |q| (rad/m) of the rfft2 lattice and the mask of the band."""
-    qx = 2.0 * np.pi * np.fft.rfftfreq(n, pixel)
-    qy = 2.0 * np.pi * np.fft.fftfreq(n, pixel)
-    q = np.hypot(qx[None, :], qy[:, None])
-    return q, (q >= q_low) & (q <= q_high)
+def _band_modes(period: float, q_low: float, q_high: float) -> tuple[np.ndarray, np.ndarray]:
+    """Integer wave vectors (kx, ky) of the periodic lattice (q = 2 pi k / period) in the band, one
+    per +-pair (ky > 0, or ky = 0 and kx > 0), in a fixed order: (n_modes,) each."""
+    top = int(np.ceil(q_high * period / (2.0 * np.pi)))
+    kx, ky = np.meshgrid(np.arange(-top, top + 1), np.arange(0, top + 1), indexing="xy")
+    kx, ky = kx.ravel(), ky.ravel()
+    q = 2.0 * np.pi / period * np.hypot(kx, ky)
+    keep = (q >= q_low) & (q <= q_high) & ((ky > 0) | (kx > 0))
+    return kx[keep], ky[keep]
 
 
 def random_process(n: int, pixel: float, hurst: float, q_low: float, q_high: float, rms: float,
-                   rng: np.random.Generator) -> np.ndarray:
-    """A self-affine surface (m, (n, n)), periodic over the grid, with rms height ``rms`` over its period.
+                   rng: np.random.Generator, period: float | None = None) -> np.ndarray:
+    """A self-affine surface (m, (n, n)) at the pixel centres, periodic over ``period``.
+
+    The surface is one continuous function: a sum over the band's lattice modes
+    ``q = 2 pi k / period`` with amplitudes ``q^-(1+H)`` and uniform random phases drawn in a
+    fixed order of the modes, scaled to the variance ``rms^2`` of the continuous spectrum. So grids
+    of any pixel over the same period sample the same surface (the validation's grid-convergence
+    check relies on it), evaluated exactly by two separable partial DFTs.
 
     Parameters
     ----------
@@ -103,23 +112,32 @@ def random_process(n: int, pixel: float, hurst: float, q_low: float, q_high: flo
     hurst
         Hurst exponent H in (0, 1): ``C(q) ~ q^-2(1+H)``.
     q_low, q_high
-        Band of wave numbers, rad/m, ``2 pi / (n pixel) <= q_low < q_high <= pi / pixel``.
+        Band of wave numbers, rad/m, ``2 pi / period <= q_low < q_high <= pi / pixel``.
     rms
-        Standard deviation of the heights, m.
+        Standard deviation of the heights (of the continuous spectrum), m.
     rng
-        The surface's random stream (one uniform phase per rfft2 coefficient).
+        The surface's random stream (one uniform phase per mode).
+    period
+        Period of the surface, m (default: the grid's side ``n pixel``).
     """
+    period = n * pixel if period is None else period
     if not 0 < hurst < 1:
         raise ValueError(f"hurst = {hurst} is out of range: must be in (0, 1)")
-    if not (2.0 * np.pi / (n * pixel) <= q_low < q_high <= np.pi / pixel):
-        raise ValueError(f"q_low = {q_low:g}, q_high = {q_high:g} rad/m: need 2 pi / (n pixel) <= q_low "
-                         f"< q_high <= pi / pixel for n = {n}, pixel = {pixel:g} m")
-    q, band = _band_modes(n, pixel, q_low, q_high)
-    amplitude = np.zeros(q.shape)
-    amplitude[band] = q[band] ** (-(1.0 + hurst))
-    spectrum = amplitude * np.exp(2j * np.pi * rng.random(q.shape))
-    heights = np.fft.irfft2(spectrum, s=(n, n))
-    return heights * (rms / np.sqrt(np.mean(heights**2)))
+    if not (2.0 * np.pi / period <= q_low < q_high <= np.pi / pixel):
+        raise ValueError(f"q_low = {q_low:g}, q_high = {q_high:g} rad/m: need 2 pi / period <= q_low "
+                         f"< q_high <= pi / pixel for period = {period:g} m, pixel = {pixel:g} m")
+    kx, ky = _band_modes(period, q_low, q_high)
+    q = 2.0 * np.pi / period * np.hypot(kx, ky)
+    amplitude = q ** (-(1.0 + hurst))
+    amplitude *= rms / np.sqrt(0.5 * np.sum(amplitude**2))
+    coeff = amplitude * np.exp(2j * np.pi * rng.random(kx.size))
+    top = int(max(np.abs(kx).max(), ky.max()))
+    table = np.zeros((top + 1, 2 * top + 1), complex)  # [ky, kx + top]
+    table[ky, kx + top] = coeff
+    c = cell_centres(n, pixel)
+    e_x = np.exp(2j * np.pi / period * np.outer(c, np.arange(-top, top + 1)))  # (n, 2 top + 1)
+    e_y = np.exp(2j * np.pi / period * np.outer(c, np.arange(0, top + 1)))  # (n, top + 1)
+    return np.real(e_y @ table @ e_x.T)
 
 
 def spectral_moments_closed_form(hurst: float, q_low: float, q_high: float, rms: float) -> tuple[float, float, float]:

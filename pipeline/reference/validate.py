@@ -27,7 +27,8 @@ from pipeline.store import atomic_path
 #: (their auto domains differ); the reference is solved at the first one's.
 FORCE_AGREEMENT = 1e-4
 
-__all__ = ["available_discretizations", "default_discretization", "plan_lines", "run_validation"]
+__all__ = ["available_discretizations", "default_discretization", "plan_lines", "run_validation", "chosen_set",
+           "output_folder", "SURFACES"]
 
 
 def available_discretizations() -> tuple[str, ...]:
@@ -48,7 +49,10 @@ def plan_lines(vset: scene.ValidationSet, everything: list[cases_mod.Case]) -> l
     seconds = cases_mod.estimate_seconds(vset, everything)
     oxide = ", ".join(f"xi {x:g}/lambda {lam:g}" for x in vset.xi for lam in vset.lambdas)
     return [
-        f"validate: scene sigma {vset.sigma:g} m, eta {vset.eta:g} m^-2, beta {vset.beta:g} m, "
+        f"validate: {vset.surface} surface" + (f" (self-affine, H {vset.hurst:g}, rms {vset.rms:g} m, wavelengths "
+                                              f"{vset.short_wavelength:.3g} .. {vset.short_wavelength * vset.bandwidth_ratio:.3g} m; "
+                                              "g2tom's parameters are its summits')" if vset.surface == "random_process" else "")
+        + f": sigma {vset.sigma:g} m, eta {vset.eta:g} m^-2, beta {vset.beta:g} m, "
         f"R* {vset.radius:g} m, E* {vset.e_star:.4g} Pa, rho* {vset.rho:g} ohm m (mu = {vset.mu:.3f})",
         f"validate: grid {vset.n_grid}^2 of {vset.pixel * 1e6:.3g} um ({vset.pixels_per_cell:g} pixels per "
         f"asperity spacing), window {vset.side * 1e3:.3g} mm; convergence grid "
@@ -131,7 +135,20 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
     return paths
 
 
-def chosen_set(quick: bool) -> scene.ValidationSet:
-    """The default or the quick set, with every discretization this g2tom offers."""
+#: ``--surface`` values: the GW surface of g2tom's own parameters, or a Gaussian self-affine one.
+SURFACES = ("gw", "random_process")
+
+
+def chosen_set(quick: bool, surface: str = "gw") -> scene.ValidationSet:
+    """The default or the quick set on the chosen surface, with every discretization this g2tom offers."""
+    if surface not in SURFACES:
+        raise ConfigError(f"--surface {surface!r} is not allowed: must be one of {', '.join(SURFACES)}")
     base = scene.QUICK if quick else scene.DEFAULT
+    if surface == "random_process":
+        base = scene.random_process_set(base, rms=scene.RANDOM.rms)
     return dataclasses.replace(base, discretizations=available_discretizations())
+
+
+def output_folder(data_dir: Path, surface: str) -> Path:
+    """Where a validation writes: ``<data>/validate`` (GW surface) or ``<data>/validate_random_process``."""
+    return Path(data_dir) / ("validate" if surface == "gw" else f"validate_{surface}")
