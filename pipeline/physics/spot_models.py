@@ -32,7 +32,8 @@ from numpy.typing import ArrayLike
 from pipeline.physics.asperity import area_fraction, asperity_integral
 from pipeline.physics.spots import spot_areas, spot_radii
 
-__all__ = ["DISCRETIZATIONS", "HEIGHTS_TAG", "expected_radius", "cell_radius", "heights", "asperity_radius"]
+__all__ = ["DISCRETIZATIONS", "HEIGHTS_TAG", "expected_radius", "cell_radius", "heights", "asperity_radius",
+           "nearest_cells", "placed_radius"]
 
 #: The values of ``contact.spots``.
 DISCRETIZATIONS = ("mean_area", "expected", "asperities")
@@ -135,3 +136,70 @@ def asperity_radius(z: ArrayLike, h: ArrayLike, beta: float) -> np.ndarray:
     """
     interference = np.asarray(z, float) - np.asarray(h, float)
     return np.sqrt(beta * np.maximum(interference, 0.0))
+
+
+def nearest_cells(x: ArrayLike, y: ArrayLike, centres: np.ndarray) -> np.ndarray:
+    """Flat index ``iy * n + ix`` of the cell whose centre is nearest to each point, or -1 outside the window.
+
+    Parameters
+    ----------
+    x, y
+        Point coordinates, m, same shape.
+    centres
+        The evenly spaced cell centres along one axis (the same for x and y), m, shape (n,).
+
+    Returns
+    -------
+    numpy.ndarray
+        int64, shape of ``x``; -1 where a point lies more than half a pitch beyond the outer centres.
+    """
+    pitch = centres[1] - centres[0]
+    n = centres.size
+    ix = np.rint((np.asarray(x, float) - centres[0]) / pitch).astype(np.int64)
+    iy = np.rint((np.asarray(y, float) - centres[0]) / pitch).astype(np.int64)
+    inside = (ix >= 0) & (ix < n) & (iy >= 0) & (iy < n)
+    return np.where(inside, iy * n + ix, -1)
+
+
+def placed_radius(z: ArrayLike, cells: np.ndarray, separation: np.ndarray, beta: float) -> np.ndarray:
+    """Spot radii of given asperities placed in their cells: per cell, the sum of their contact radii, m.
+
+    The discretization of a surface whose asperities are known (a GW surface's own tips): asperity
+    ``j`` of height ``z_j`` in cell ``c_j`` touches where ``z_j > h(c_j)``, with radius
+    ``sqrt(beta (z_j - h(c_j)))`` (:func:`asperity_radius`, at the separation of its cell's
+    centre). A cell's spot carries the sum of its asperities' radii, so that its
+    self-conductance ``2 a / rho*`` is the sum of theirs (their interaction within the cell is
+    neglected, as in the ``expected`` spot, whose radius is this sum's expectation); a cell
+    without a touching asperity has no spot.
+
+    Parameters
+    ----------
+    z
+        Asperity heights above the mean plane of heights, m, shape (m,).
+    cells
+        Flat cell index of each asperity (:func:`nearest_cells`), shape (m,); -1 drops it.
+    separation
+        Separations of the mean planes at the cell centres, m, shape (..., n, n).
+    beta
+        Asperity tip radius, m.
+
+    Returns
+    -------
+    numpy.ndarray
+        Radii, m, shape of ``separation``.
+    """
+    z = np.asarray(z, float)
+    cells = np.asarray(cells, np.int64)
+    if z.shape != cells.shape or z.ndim != 1:
+        raise ValueError(f"z {z.shape} and cells {cells.shape} must be one-dimensional and of one length")
+    h = np.asarray(separation, float)
+    n_cells = h.shape[-2] * h.shape[-1]
+    keep = cells >= 0
+    if np.any(cells >= n_cells):
+        raise ValueError(f"cell index {int(cells.max())} is beyond the {n_cells} cells of the separation map")
+    flat = h.reshape(-1, n_cells)
+    radii = asperity_radius(z[keep][None], flat[:, cells[keep]], beta)  # (maps, asperities)
+    out = np.zeros_like(flat)
+    for m in range(flat.shape[0]):
+        out[m] = np.bincount(cells[keep], weights=radii[m], minlength=n_cells)
+    return out.reshape(h.shape)

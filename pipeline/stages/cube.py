@@ -23,7 +23,6 @@ rounds (:mod:`pipeline.stages.cube_rounds`). The realization axis is padded to t
 
 from __future__ import annotations
 
-import functools
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +34,7 @@ from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
 from pipeline.physics import constriction
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
-from pipeline.stages.cube_chunks import asperity_spots, chunk_terms, model
+from pipeline.stages.cube_chunks import asperity_spots, chunk_terms, clean_terms, spots_of
 from pipeline.stages.cube_dataset import dataset
 from pipeline.stages.cube_rounds import compute_cells, half_widths, padded, stopping_rule
 from pipeline.stages.oxide import FieldSource, RecordedFields
@@ -88,16 +87,13 @@ def _clean(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any], n_
     resistance of the mean conductance (open circuits conduct nothing), the self term of the
     mean self-conductance, and the probability of an open circuit.
     """
-    n, n_delta = radius.shape[-1], radius.shape[0]
-    whole = np.full(n_delta, n)
-    call = functools.partial(model(settings), pitch=settings["pitch"], rho=settings["rho"], crops=whole,
-                             tolerance=0.0, method=settings["method"])
+    n_delta = radius.shape[0]
     if settings["spots"] != "asperities":
-        res = call(np.ones((1, n, n), dtype=bool), radius, weights)
+        res = clean_terms(radius, weights, settings)
         return {"resistance": res.resistance[0], "self": res.resistance_self[0],
                 "interaction": res.resistance_interaction[0], "open": np.zeros(n_delta), "n_drawn": 0}
     drawn = asperity_spots(settings, np.arange(n_drawn))
-    res = call(np.ones((n_drawn, n, n), dtype=bool), drawn, drawn, groups=np.arange(n_drawn))
+    res = clean_terms(drawn, drawn, settings)
     rho = settings["rho"]
     with np.errstate(divide="ignore"):
         total = rho / np.mean(rho / res.resistance, axis=0)
@@ -143,8 +139,7 @@ def _measured_crop_error(
     fields = [source.fields(a, first) for a in range(len(source.lambdas))]
     psi = np.stack([f[0] for f in fields])  # (lambda, 1, y, x): every lambda in one batch of masks
     threshold = np.stack([f[1] for f in fields], axis=1)
-    drawn = first if settings["spots"] == "asperities" else None
-    exact = chunk_terms(psi, threshold, radius, weights, whole, drawn)["resistance"]
+    exact = chunk_terms(psi, threshold, *spots_of(settings, first, radius, weights), whole)["resistance"]
     finite = np.isfinite(exact)
     if not finite.any():
         return 0.0

@@ -16,7 +16,8 @@ import numpy as np
 
 from pipeline.physics import constriction, point_model, spot_models
 
-__all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "chunk_terms", "field_chunk"]
+__all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "spots_of", "chunk_terms", "clean_terms",
+           "field_chunk"]
 
 TERMS = ("resistance", "resistance_self", "resistance_interaction", "n_conducting", "crop_bound")
 #: Extra terms of the point model's iterative solve.
@@ -74,7 +75,6 @@ def chunk_terms(
     radius: np.ndarray,
     weights: np.ndarray,
     settings: dict[str, Any],
-    realizations: np.ndarray | None = None,
 ) -> dict[str, Any]:
     """Greenwood terms of a chunk of fields.
 
@@ -85,13 +85,11 @@ def chunk_terms(
     threshold
         Thresholds, float32, shape (xi, lambda, realization).
     radius, weights
-        Spot radii (m) and interaction weights, shape (delta, y, x).
+        Spot radii (m) and interaction weights, shape (delta, y, x) when every realization
+        shares its spots, or (realization, delta, y, x) when each brings its own (``asperities``
+        spots, :func:`asperity_spots`).
     settings
-        ``pitch``, ``rho``, ``crops``, ``tolerance``, ``method`` (and for ``asperities`` spots
-        what :func:`asperity_spots` needs).
-    realizations
-        The realization indices of the fields, for ``asperities`` spots (which then replace
-        ``radius`` and ``weights``); None for spots shared by every realization.
+        ``pitch``, ``rho``, ``crops``, ``tolerance``, ``method`` and the model's settings.
 
     Returns
     -------
@@ -103,8 +101,7 @@ def chunk_terms(
     n = psi.shape[-1]
     masks = psi[None] < threshold[..., None, None]
     groups = None
-    if realizations is not None:  # per-realization spots: map (xi, lambda, r) takes group r
-        radius = weights = asperity_spots(settings, realizations)
+    if radius.ndim == 4:  # per-realization spots: map (xi, lambda, r) takes group r
         groups = np.tile(np.arange(n_real), n_xi * n_lam)
     res = _resistance(masks.reshape(-1, n, n), radius, weights, settings, groups)
     out: dict[str, Any] = {
@@ -113,6 +110,29 @@ def chunk_terms(
     }
     out["n_uncropped"] = res.n_uncropped
     return out
+
+
+def clean_terms(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any]) -> constriction.ChunkResult:
+    """The oxide-free surface, every spot conducting, on the whole window (exact), at every load step.
+
+    ``radius`` and ``weights`` as in :func:`chunk_terms`: (delta, y, x) gives one map,
+    (realization, delta, y, x) one map per realization.
+    """
+    n, n_delta = radius.shape[-1], radius.shape[-3]
+    maps = radius.shape[0] if radius.ndim == 4 else 1
+    extra = {"groups": np.arange(maps)} if radius.ndim == 4 else {}
+    return model(settings)(np.ones((maps, n, n), dtype=bool), radius, weights, settings["pitch"], settings["rho"],
+                           np.full(n_delta, n), 0.0, settings["method"], **extra)
+
+
+def spots_of(settings: dict[str, Any], realizations: np.ndarray, radius: np.ndarray,
+             weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The spot radii and weights the fields of ``realizations`` meet: drawn per realization for
+    ``asperities`` spots (:func:`asperity_spots`), else the shared ``radius`` and ``weights``."""
+    if settings["spots"] == "asperities":
+        drawn = asperity_spots(settings, realizations)
+        return drawn, drawn
+    return radius, weights
 
 
 def field_chunk(
@@ -124,6 +144,6 @@ def field_chunk(
     Only the fractions ``xi_index`` are evaluated; returns the terms shaped (xi, delta, realization).
     """
     psi, threshold = source.fields(index, realizations)
-    drawn = realizations if settings["spots"] == "asperities" else None
-    out = chunk_terms(psi[None], threshold[xi_index][:, None], radius, weights, settings, drawn)
+    radius, weights = spots_of(settings, realizations, radius, weights)
+    out = chunk_terms(psi[None], threshold[xi_index][:, None], radius, weights, settings)
     return {k: (v[:, 0] if k in terms(settings) else v) for k, v in out.items()}
