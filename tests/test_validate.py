@@ -17,7 +17,8 @@ from pipeline.reference import cases, scene
 from pipeline.reference.validate import chosen_set, run_validation
 
 TINY = dataclasses.replace(scene.QUICK, radius=1e-3, deltas=(1.0, 0.0), realizations=(0, 1), n_grid=96,
-                           pixels_per_cell=4.0, convergence_grid=48, discretizations=("expected", "asperities"))
+                           pixels_per_cell=4.0, convergence_grid=48,
+                           discretizations=("expected", "asperities", "surface_asperities"))
 
 
 def test_without_the_extra_validate_names_the_install_command_and_exits_2(tmp_path, monkeypatch, capsys) -> None:
@@ -64,7 +65,12 @@ def test_outputs_are_labelled_and_consistent(tiny_run) -> None:
     ref = ds["resistance_reference_clean"].values
     assert np.all(np.isfinite(ref)) and np.all(ref > 0)
     np.testing.assert_allclose(ds["force_reference"].values, np.broadcast_to(ds["force"].values, ref.shape), rtol=1e-9)
-    np.testing.assert_allclose(ds["ratio_clean"].values, ds["resistance_g2tom_clean"].values[:, :, None, :] / ref[None, None])
+    np.testing.assert_allclose(ds["ratio_clean"].values, ds["resistance_g2tom_clean"].values / ref[None, None])
+    g2_clean = ds["resistance_g2tom_clean"]
+    shared = g2_clean.sel(discretization="expected").values
+    np.testing.assert_array_equal(shared[:, 0], shared[:, 1])  # one value over the realizations
+    own = g2_clean.sel(discretization="surface_asperities").values  # each surface its own
+    assert np.all(np.isfinite(own)) and np.all(own[:, 0] != own[:, 1]) and np.all(own[:, :, 1] < own[:, :, 0])
     assert np.all(ref[:, 1] < ref[:, 0])  # heavier load, lower resistance
     # oxide only removes conducting area: never a lower resistance than the clean contact's
     assert np.all(ds["resistance_reference"].values >= ref[None, None] * (1 - 1e-9))
@@ -76,6 +82,7 @@ def test_outputs_are_labelled_and_consistent(tiny_run) -> None:
     first = text.splitlines()[2]
     assert "g2tom's default discretization (expected" in first
     assert ds.attrs["skipped_g2tom"] == "none" and "### asperities, point" in text
+    assert "### surface_asperities, greenwood" in text
     assert not np.isnan(ds["resistance_g2tom"].values).any()  # +inf where g2tom's own asperities all miss
     assert (out / "validate.png").stat().st_size > 10_000
 
@@ -135,10 +142,33 @@ def test_random_process_set_feeds_g2tom_its_summit_statistics() -> None:
 def test_a_tiny_random_process_run(tmp_path) -> None:
     from pipeline.reference.scene import random_process_set
 
-    vset = dataclasses.replace(random_process_set(TINY, rms=20e-6), convergence_grid=0)  # 48^2 cannot hold the band
+    vset = dataclasses.replace(random_process_set(TINY, rms=20e-6), convergence_grid=0,  # 48^2 cannot hold the band
+                               discretizations=("expected", "asperities"))  # its asperities are not known
     paths = run_validation(vset, tmp_path, stream=io.StringIO())
     text = paths[2].read_text()
     assert "self-affine" in text and "summit statistics" in text
     with xr.open_dataset(paths[0]) as ds:
         assert ds.attrs["scene_surface"] == "random_process"
         assert np.isfinite(ds["resistance_reference_clean"].values).any()
+
+
+def test_surface_asperities_are_the_reference_surfaces_own_tips() -> None:
+    from pipeline.reference import surface_spots, surfaces
+
+    vset = dataclasses.replace(TINY, realizations=(1,))
+    tips = surfaces.gw_asperities(vset.side, vset.eta, vset.sigma, vset.beta, scene.surface_stream(vset, 1))
+    # the reference's rough sphere peaks at those tips: the pixel under the highest tip holds its height
+    n = 4 * vset.n_grid
+    rough = scene.rough_sphere(vset, 1, n) - surfaces.sphere(n, vset.side / n, vset.radius)
+    top = int(np.argmax(tips.z))
+    centres = (np.arange(n) - (n - 1) / 2) * vset.side / n
+    iy, ix = np.argmin(np.abs(centres - tips.y[top])), np.argmin(np.abs(centres - tips.x[top]))
+    assert rough[iy, ix] == pytest.approx(tips.z[top], abs=(vset.side / n) ** 2 / vset.beta)
+    # g2tom's spots of that surface: with every tip touching, each cell carries its tips' summed radii
+    cells = (np.arange(9) - 4) / np.sqrt(vset.eta)
+    deep = np.full((1, 9, 9), -10 * vset.sigma)
+    radii = surface_spots.spot_radii(vset, 1, cells, deep)
+    inside = (np.abs(tips.x) < 4.5 / np.sqrt(vset.eta)) & (np.abs(tips.y) < 4.5 / np.sqrt(vset.eta))
+    assert radii.sum() == pytest.approx(np.sqrt(vset.beta * (tips.z[inside] + 10 * vset.sigma)).sum(), rel=1e-12)
+    with pytest.raises(ValueError, match="needs the GW surface"):
+        surface_spots.spot_radii(dataclasses.replace(vset, surface="random_process"), 1, cells, deep)

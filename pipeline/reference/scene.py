@@ -28,7 +28,7 @@ from pipeline.stages import cube as cube_stage
 from pipeline.stages import oxide as oxide_stage
 
 __all__ = ["ValidationSet", "DEFAULT", "QUICK", "RANDOM", "random_process_set", "surface_stream", "rough_sphere", "g2tom_scenario",
-           "g2tom_resistances", "has_spots_key", "FLOOR_SIGMAS"]
+           "g2tom_resistances", "contact_extent", "has_spots_key", "FLOOR_SIGMAS"]
 
 #: The GW surface's floor between asperities, in sigma below the reference plane: far below any
 #: contact of the loads used (the deepest touching tip lies near delta >= -3 sigma).
@@ -205,17 +205,22 @@ def g2tom_scenario(vset: ValidationSet, model: str, spots: str) -> Scenario:
 EXTENT_FRACTION = 1e-4
 
 
+def contact_extent(contact: xr.Dataset) -> xr.DataArray:
+    """The Greenwood–Tripp contact's extent per load step (delta), m (see :data:`EXTENT_FRACTION`)."""
+    fraction = contact["area_fraction"].transpose("delta", "r").values
+    r = contact["r"].values
+    extent = [r[np.flatnonzero(a >= EXTENT_FRACTION * a.max())[-1]] for a in fraction]
+    return xr.DataArray(np.asarray(extent), dims="delta", attrs={
+        "units": "m", "long_name": f"largest radius where GT's area fraction >= {EXTENT_FRACTION:g} of its peak"})
+
+
 def g2tom_resistances(vset: ValidationSet, model: str, spots: str) -> xr.Dataset:
     """g2tom's cube of the scene: ``force`` (delta), ``resistance_clean`` (delta) and
     ``resistance`` (xi, lambda, delta, realization) with the set's realizations, and
-    ``contact_extent`` (delta, m, see :data:`EXTENT_FRACTION`)."""
+    ``contact_extent`` (delta, m, :func:`contact_extent`)."""
     scenario = g2tom_scenario(vset, model, spots)
     contact = contact_stage.build(scenario)
     oxide = oxide_stage.build(scenario)
     cube = cube_stage.build(scenario, contact, oxide).isel(realization=list(vset.realizations))
-    fraction = contact["area_fraction"].transpose("delta", "r").values
-    r = contact["r"].values
-    extent = [r[np.flatnonzero(a >= EXTENT_FRACTION * a.max())[-1]] for a in fraction]
-    cube["contact_extent"] = ("delta", np.asarray(extent), {
-        "units": "m", "long_name": f"largest radius where GT's area fraction >= {EXTENT_FRACTION:g} of its peak"})
+    cube["contact_extent"] = contact_extent(contact)
     return cube

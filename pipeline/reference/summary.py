@@ -67,8 +67,9 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "force_normalized": ("load", g2tom["force"] / scale_f, _a("1", "normalized force F' = 2F / (E* sqrt(R* sigma^3))")),
         "delta_g2tom": ("load", np.asarray(vset.deltas) * vset.sigma, _a("m", "g2tom's approach delta at the force")),
     }
-    clean_ratio = g2tom["clean"][:, :, None, :] / ref["resistance_clean"][None, None]
-    ox_ratio = g2tom["resistance"] / ref["resistance"][None, None]
+    with np.errstate(invalid="ignore"):  # both open circuits (inf / inf): no ratio, NaN
+        clean_ratio = g2tom["clean"] / ref["resistance_clean"][None, None]
+        ox_ratio = g2tom["resistance"] / ref["resistance"][None, None]
     fine = ref["resistance_clean"][0]
     data = {
         "force_reference": (rl, ref["force"], _a("N", "normal force of the full-field solution")),
@@ -77,11 +78,13 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "resistance_reference_clean": (rl, ref["resistance_clean"], _a("ohm", "full-field clean resistance (Barber's analogy)")),
         "resistance_reference": (ox, ref["resistance"], _a("ohm", "full-field resistance with the oxide removed from the contact set",
                                                            comment="+inf: open circuit")),
-        "resistance_g2tom_clean": (dm + ("load",), g2tom["clean"], _a("ohm", "g2tom's clean resistance")),
+        "resistance_g2tom_clean": (dm + rl, g2tom["clean"], _a("ohm", "g2tom's clean resistance (one value over the "
+                                                               "realizations unless the spots are the surface's own)")),
         "resistance_g2tom": (dm + ox, g2tom["resistance"], _a("ohm", "g2tom's resistance on the same oxide field",
                                                              comment="+inf: open circuit")),
         "ratio_clean": (dm + rl, clean_ratio, _a("1", "g2tom / full-field clean resistance at equal force")),
-        "ratio": (dm + ox, ox_ratio, _a("1", "g2tom / full-field oxidized resistance at equal force")),
+        "ratio": (dm + ox, ox_ratio, _a("1", "g2tom / full-field oxidized resistance at equal force",
+                                          comment="+inf: only g2tom open; 0: only the full field open; NaN: both")),
         "resistance_convergence": (("grid", "load"), np.stack([fine, ref["coarse"]["resistance_clean"]]),
                                    _a("ohm", "clean full-field resistance of the first realization on each grid")),
         "convergence_change": ("load", ref["coarse"]["resistance_clean"] / fine - 1.0,
@@ -102,7 +105,8 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "resistance_scale": scale_r, "force_scale": scale_f, "mu": vset.mu,
         "failed_cases": "; ".join(ref["failed"]) or "none",
         "skipped_g2tom": "; ".join(g2tom["skipped"]) or "none",
-        "g2tom_clean": "asperities: 1 / (g2tom's mean clean conductance over its own asperity draws); others: "
+        "g2tom_clean": "asperities: 1 / (g2tom's mean clean conductance over its own asperity draws); "
+                       "surface_asperities: each realization's surface asperities in g2tom's cells (exact); others: "
                        "the clean cube entry",
         "surface": "GW: Poisson asperities of density eta, heights N(0, sigma^2), paraboloidal tips of radius beta",
     })

@@ -19,7 +19,7 @@ import numpy as np
 from pipeline.config import ConfigError, load_scenario
 from pipeline.progress import format_duration
 from pipeline.reference import cases as cases_mod
-from pipeline.reference import scene, section, summary
+from pipeline.reference import scene, section, summary, surface_spots
 from pipeline.stages.oxide import FieldSource
 from pipeline.store import atomic_path
 
@@ -31,11 +31,13 @@ __all__ = ["available_discretizations", "default_discretization", "plan_lines", 
            "output_folder", "SURFACES"]
 
 
-def available_discretizations() -> tuple[str, ...]:
-    """The spot discretizations this g2tom offers (``contact.spots``, issue 21; else today's one)."""
-    if scene.has_spots_key(load_scenario("paper")):
-        return ("mean_area", "expected", "asperities")
-    return ("mean_area",)
+def available_discretizations(surface: str = "gw") -> tuple[str, ...]:
+    """The spot discretizations this g2tom offers (``contact.spots``, issue 21; else today's one),
+    and on the GW surface its own asperities (:data:`surface_spots.SURFACE_ASPERITIES`)."""
+    if not scene.has_spots_key(load_scenario("paper")):
+        return ("mean_area",)
+    own = (surface_spots.SURFACE_ASPERITIES,) if surface == "gw" else ()
+    return ("mean_area", "expected", "asperities") + own
 
 
 def default_discretization() -> str:
@@ -65,12 +67,13 @@ def plan_lines(vset: scene.ValidationSet, everything: list[cases_mod.Case]) -> l
 
 
 def _g2tom_side(vset: scene.ValidationSet) -> dict:
-    """g2tom's forces and resistances of the set, stacked (discretization, model, ...).
+    """g2tom's forces and resistances of the set, stacked (discretization, model, ...): clean
+    (realization, load), one value over the realizations unless the discretization takes each
+    surface's own asperities, and oxidized (xi, lambda, realization, load).
 
-    A combination g2tom refuses (``asperities`` spots with the point model) is NaN, and named in
-    ``skipped`` with g2tom's reason.
+    A combination g2tom refuses is NaN, and named in ``skipped`` with g2tom's reason.
     """
-    shape_clean = (len(vset.deltas),)
+    shape_clean = (len(vset.realizations), len(vset.deltas))
     shape = (len(vset.xi), len(vset.lambdas), len(vset.realizations), len(vset.deltas))
     clean = np.full((len(vset.discretizations), len(vset.models)) + shape_clean, np.nan)
     oxidized = np.full((len(vset.discretizations), len(vset.models)) + shape, np.nan)
@@ -78,11 +81,14 @@ def _g2tom_side(vset: scene.ValidationSet) -> dict:
     for d, spots in enumerate(vset.discretizations):
         for m, model in enumerate(vset.models):
             try:
-                cube = scene.g2tom_resistances(vset, model, spots)
+                if spots == surface_spots.SURFACE_ASPERITIES:
+                    cube = surface_spots.g2tom_resistances(vset, model)
+                else:
+                    cube = scene.g2tom_resistances(vset, model, spots)
             except ConfigError as exc:
                 skipped.append(f"{spots}/{model}: {exc}")
                 continue
-            clean[d, m] = cube["resistance_clean"].values
+            clean[d, m] = cube["resistance_clean"].transpose(..., "delta").values
             oxidized[d, m] = cube["resistance"].transpose("xi", "lambda", "realization", "delta").values
             forces.append(cube["force"].values)
             extent = float(cube["contact_extent"].max())
@@ -146,7 +152,7 @@ def chosen_set(quick: bool, surface: str = "gw") -> scene.ValidationSet:
     base = scene.QUICK if quick else scene.DEFAULT
     if surface == "random_process":
         base = scene.random_process_set(base, rms=scene.RANDOM.rms)
-    return dataclasses.replace(base, discretizations=available_discretizations())
+    return dataclasses.replace(base, discretizations=available_discretizations(surface))
 
 
 def output_folder(data_dir: Path, surface: str) -> Path:
