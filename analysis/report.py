@@ -24,7 +24,7 @@ from analysis.report_physics import atlas_blocks, barber_blocks, bias_blocks, cu
 from pipeline import __version__
 from pipeline.config import STAGE_INPUTS, Scenario, parameter_table
 from pipeline.physics import surrogate as sg
-from pipeline.stages.surrogate import PARAMETERS, table3_rows
+from pipeline.stages.table3 import PARAMETERS, table3_rows
 from pipeline.store import StaleInputError, atomic_path, read_stage
 
 __all__ = ["Block", "build_blocks", "to_markdown", "to_html", "write_report"]

@@ -45,7 +45,7 @@ def scene_dataset(base: Scenario, scene: Scene) -> xr.Dataset:
     """Run the chain on one scene in memory, single-threaded; its slice of ``atlas.nc``."""
     from pipeline.domains import resolve
     from pipeline.stages import contact, cube, fits, oxide
-    from pipeline.stages.fits import COORD_LABELS
+    from pipeline.stages.labels import COORD_LABELS
 
     start = time.perf_counter()
     scenario = resolve(scene_scenario(base, scene))

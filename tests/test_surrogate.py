@@ -10,7 +10,7 @@ from scipy.optimize import least_squares
 from pipeline.config import ConfigError, load_scenario
 from pipeline.domains import resolve
 from pipeline.physics import surrogate as sg
-from pipeline.stages import fits, surrogate
+from pipeline.stages import fits, surrogate, table3
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import assert_labelled, synthetic_cube, true_alpha
 
@@ -85,11 +85,11 @@ def test_paper_stage_builds_table3_and_cv(tmp_path, small) -> None:
     lam, xi = np.asarray(small.oxide.lambda_), np.asarray(small.oxide.xi)
     # small grid (3 x 3): orders are reduced to 2 in w, and alpha is quadratic there
     np.testing.assert_allclose(ds["alpha_fit"], true_alpha(lam, xi), rtol=1e-9)
-    rows = surrogate.table3_rows(ds)
+    rows = table3.table3_rows(ds)
     assert len(rows) == 9 and {"alpha_error_percent", "gamma_surrogate"} <= set(rows[0])
-    md = surrogate.table3_markdown(ds)
+    md = table3.table3_markdown(ds)
     assert md.count("\n") == 11 and "alpha fit" in md
-    assert surrogate.table3_csv(ds).splitlines()[0].startswith("xi,lambda,alpha_fit")
+    assert table3.table3_csv(ds).splitlines()[0].startswith("xi,lambda,alpha_fit")
     # the reduced orders (w 2) cannot be cross-validated on 3 lambdas: say so, not "best (nan)"
     assert "cannot be cross-validated" in ds["alpha_loo"].attrs["verdict"]
     assert "nan" not in ds["alpha_loo"].attrs["verdict"]

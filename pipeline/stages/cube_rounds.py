@@ -4,7 +4,7 @@
 ``"adaptive"`` grows every (xi, lambda) cell in rounds: first ``oxide.min_realizations``, then
 ``oxide.batch`` more while the cell's fast-rule 95 % half-width of alpha
 (:mod:`pipeline.physics.ensemble`, exact for the geometric-mean fit on the steps with
-steps the fits stage fits, :func:`pipeline.stages.fits.fit_range`) exceeds :data:`RULE_MARGIN` x ``oxide.target_half_width``, up to
+steps the fits stage fits, :func:`pipeline.stages.fit_steps.fit_range`) exceeds :data:`RULE_MARGIN` x ``oxide.target_half_width``, up to
 ``oxide.max_realizations``. A cell keeps the first prefix of realizations that meets the
 target, so the result does not depend on the batch.
 """
@@ -20,7 +20,7 @@ from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
 from pipeline.physics import ensemble
 from pipeline.stages.cube_chunks import field_chunk, terms
-from pipeline.stages.fits import fit_range
+from pipeline.stages.fit_steps import fit_range
 from pipeline.stages.oxide import FieldSource
 
 __all__ = ["RULE_MARGIN", "stopping_rule", "half_widths", "compute_cells", "padded"]

@@ -27,14 +27,13 @@ from __future__ import annotations
 
 import warnings
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import xarray as xr
 from scipy import stats
 
 from pipeline.compute import ComputeOptions
-from pipeline.config import ConfigError, Scenario
+from pipeline.config import Scenario
 from pipeline.physics.curve_model import CurveFit, fit_curve
 from pipeline.physics.powerlaw import (
     bootstrap_log_mean,
@@ -44,46 +43,13 @@ from pipeline.physics.powerlaw import (
     resample_counts,
 )
 from pipeline.reductions import DIM, reduce_realizations
+from pipeline.stages.fit_steps import fitted_steps, range_label
+from pipeline.stages.labels import label_coords
 from pipeline.store import read_stage, write_dataset
 
 __all__ = ["build", "run"]
 
 GRID = ("xi", "lambda")
-
-
-def fit_range(scenario: Scenario, force: Any, force_normalized: Any) -> tuple[str, float, Any, str]:
-    """What selects the fitted load steps: the parameter's key, its threshold, the loads it is
-    compared with (``force`` in N or ``force_normalized``, as given) and their unit."""
-    f = scenario.fits
-    if f.fit_range == "force":
-        return "min_force", f.min_force, force, " N"
-    return "min_force_normalized", f.min_force_normalized, force_normalized, ""
-
-
-def fitted_steps(scenario: Scenario, force: xr.DataArray, force_normalized: xr.DataArray) -> xr.DataArray:
-    """Boolean mask (delta) of the fitted load steps: F >= fits.min_force (N) or, with
-    ``fits.fit_range = "force_normalized"``, F' >= fits.min_force_normalized.
-
-    Raises
-    ------
-    ConfigError
-        If fewer than two steps qualify.
-    """
-    key, threshold, values, unit = fit_range(scenario, force, force_normalized)
-    mask = values >= threshold
-    if int(mask.sum()) < 2:
-        raise ConfigError(
-            f"fits.{key} = {threshold:g} is out of range: only "
-            f"{int(mask.sum())} load step(s) reach it (forces {values.min().item():.3g}.."
-            f"{values.max().item():.3g}{unit}); a fit needs >= 2"
-        )
-    return mask
-
-
-def _range_label(scenario: Scenario) -> str:
-    """The fitted steps' rule in words."""
-    f = scenario.fits
-    return f"F >= {f.min_force:g} N" if f.fit_range == "force" else f"F' >= {f.min_force_normalized:g}"
 
 
 def _bootstrap(
@@ -208,25 +174,6 @@ def _ensemble_summary(
     return out
 
 
-#: Units and long names of the coordinates, used where the input does not carry them.
-COORD_LABELS = {
-    "xi": ("1", "oxide fraction"),
-    "lambda": ("1", "normalized oxide correlation length l_O sqrt(eta)"),
-    "delta": ("m", "approach of the sphere tip to the mean plane"),
-    "force": ("N", "normal force"),
-    "force_normalized": ("1", "normalized force F' = 2F/(E* sqrt(R* sigma^3))"),
-    "quantile": ("1", "quantile over realizations"),
-}
-
-
-def _label_coords(ds: xr.Dataset) -> None:
-    """Give every known coordinate of ``ds`` units and a long name if it lacks them."""
-    for name, (units, long_name) in COORD_LABELS.items():
-        if name in ds.coords:
-            ds[name].attrs.setdefault("units", units)
-            ds[name].attrs.setdefault("long_name", long_name)
-
-
 def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     """Reductions and power-law fits of a resistance cube.
 
@@ -271,7 +218,7 @@ def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     ds["fit_residual_rms"] = (GRID, fit.residual_rms, {"units": "1", "long_name": "RMS of the log residuals"})
     ds["n_fitted"] = (GRID, fit.n_points, {"units": "1", "long_name": "finite fitted steps"})
     ds["fitted"] = mask.astype("int8").assign_attrs(
-        units="1", long_name=f"1 where the step was fitted ({_range_label(scenario)})"
+        units="1", long_name=f"1 where the step was fitted ({range_label(scenario)})"
     )
     interval = np.full(center.shape + (2,), np.nan)
     interval[:, :, steps] = step_band
@@ -289,9 +236,9 @@ def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     _curve_vars(ds, fit_curve(force_n, (clean / scale).values, scenario.fits.curve_tolerance, None, mask.values,
                               scenario.fits.curve_max_order), "_clean", "the clean-surface R'")
     ds["resistance_scale"] = ((), scale, {"units": "ohm", "long_name": "2 rho*/sqrt(R* sigma): R' = R / resistance_scale"})
-    _label_coords(ds)
+    label_coords(ds)
     ds.attrs["reduction"] = scenario.fits.reduction
-    ds.attrs["fit_range"] = _range_label(scenario)
+    ds.attrs["fit_range"] = range_label(scenario)
     ds.attrs["curve_model"] = (
         f"ln R' = sum_k curve_coefficients[k] (ln F')^k; order: the lowest of 1..{scenario.fits.curve_max_order} "
         f"within {100 * scenario.fits.curve_tolerance:g} % at every fitted step, else within "

@@ -54,13 +54,13 @@ from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
 from pipeline.physics import surrogate as sg
 from pipeline.physics.groups import Groups, groups
-from pipeline.stages.fits import COORD_LABELS
+from pipeline.stages.labels import COORD_LABELS
 from pipeline.stages.surrogate_tables import band_tables, curve_tables
+from pipeline.stages.table3 import PARAMETERS, table3_csv, table3_markdown
 from pipeline.store import atomic_path, read_stage, write_dataset
 
-__all__ = ["build", "run", "scene_groups", "table3_rows", "table3_csv", "table3_markdown", "PARAMETERS"]
+__all__ = ["build", "run", "scene_groups", "PARAMETERS"]
 
-PARAMETERS = ("alpha", "gamma")
 #: Highest orders tried by the paper method's cross-validation scan.
 MAX_ORDER_W = 4
 MAX_ORDER_Z = 3
@@ -283,41 +283,6 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
                              "interpolated linearly in (ln lambda, -ln(1 - xi)) (default); or alpha 2 rho*/sqrt(R* sigma) "
                              "F'^-gamma (Eq. 27, model = power_law)")
     return ds
-
-
-def table3_rows(ds: xr.Dataset) -> list[dict[str, float]]:
-    """One row per (xi, lambda): fitted value, surrogate value and relative error (%)."""
-    rows = []
-    for xi in ds["xi"].values:
-        for lam in ds["lambda"].values:
-            row: dict[str, float] = {"xi": float(xi), "lambda": float(lam)}
-            for p in PARAMETERS:
-                cell = {"lambda": lam, "xi": xi}
-                row[f"{p}_fit"] = float(ds[f"{p}_fit"].sel(cell))
-                row[f"{p}_surrogate"] = float(ds[f"{p}_surrogate"].sel(cell))
-                row[f"{p}_error_percent"] = 100.0 * float(ds[f"{p}_relative_error"].sel(cell))
-            rows.append(row)
-    return rows
-
-
-def table3_csv(ds: xr.Dataset) -> str:
-    """Table 3 as CSV text (header line first)."""
-    rows = table3_rows(ds)
-    lines = [",".join(rows[0])]
-    lines += [",".join(f"{v:.6g}" for v in row.values()) for row in rows]
-    return "\n".join(lines) + "\n"
-
-
-def table3_markdown(ds: xr.Dataset) -> str:
-    """Table 3 as a Markdown table."""
-    header = ["xi", "lambda", "alpha fit", "alpha surrogate", "err %", "gamma fit", "gamma surrogate", "err %"]
-    lines = ["| " + " | ".join(header) + " |", "|" + "---:|" * len(header)]
-    for row in table3_rows(ds):
-        cells = [f"{row['xi']:g}", f"{row['lambda']:g}"]
-        for p in PARAMETERS:
-            cells += [f"{row[f'{p}_fit']:.4f}", f"{row[f'{p}_surrogate']:.4f}", f"{row[f'{p}_error_percent']:+.2f}"]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
 
 
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
