@@ -230,7 +230,7 @@ def _cmd_plan(args: argparse.Namespace, scenario: Scenario) -> None:
 
 
 def _cmd_predict(args: argparse.Namespace, scenario: Scenario) -> None:
-    from pipeline.predict import predict_cli
+    from pipeline.predict_cli import predict_cli
     from pipeline.store import stage_path, unreadable
 
     surrogate = args.surrogate or stage_path(args.data_dir, "surrogate")

@@ -22,14 +22,14 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.atlas_fit import CURVE
+from pipeline.atlas_fit import CURVE, FORMAT
 from pipeline.config import ConfigError, Scenario
 from pipeline.physics.atlas_surrogate import AtlasModel
+from pipeline.predict_queries import OUTPUT_COLUMNS, check_ranges, check_values, queries
 from pipeline.stages.surrogate import scene_groups
 
 __all__ = ["AtlasSurrogate", "is_atlas_document", "load_atlas_surrogate", "predict_atlas", "shipped_path", "SHIPPED"]
 
-FORMAT = "g2tom-atlas-surrogate"
 #: The atlas surrogate shipped inside the package (``make atlas`` regenerates it), so that
 #: ``g2tom predict`` answers other surfaces on a fresh install.
 SHIPPED = "atlas_surrogate.json"
@@ -92,14 +92,13 @@ def load_atlas_surrogate(path: str | Path) -> AtlasSurrogate:
 
 
 def _check_domain(surrogate: AtlasSurrogate, values: dict[str, np.ndarray], extrapolate: bool) -> None:
-    from pipeline.predict import check_ranges
 
     check_ranges(surrogate.domain, values, extrapolate, "the domain", f" of {surrogate.describe()}")
 
 
 def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi: Any, lam: Any,
                   extrapolate: bool = False) -> xr.Dataset:
-    """R_el of Eq. 27 from the atlas surrogate, with the held-out band; columns of :data:`pipeline.predict.OUTPUT_COLUMNS`.
+    """R_el of Eq. 27 from the atlas surrogate, with the held-out band; columns of :data:`pipeline.predict_queries.OUTPUT_COLUMNS`.
 
     Raises
     ------
@@ -107,10 +106,9 @@ def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi:
         If an input is out of range, or a query (or the surface's mu, Pi) lies outside the
         atlas's domain and ``extrapolate`` is False.
     """
-    from pipeline.predict import OUTPUT_COLUMNS, _check_values, _queries
 
-    (f, x, lm), label = _queries(force, xi, lam)
-    _check_values(f, x, lm)
+    (f, x, lm), label = queries(force, xi, lam)
+    check_values(f, x, lm)
     groups = scene_groups(scenario)
     mu, pi = np.full(f.size, groups.mu), np.full(f.size, groups.Pi)
     force_n = f / scenario.force_scale

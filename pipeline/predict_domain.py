@@ -12,13 +12,10 @@ from __future__ import annotations
 import dataclasses
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING
-
 from pipeline.config import ConfigError, Scenario
+from pipeline.predict_queries import ExtrapolationWarning
 from pipeline.stages.surrogate import scene_groups
-
-if TYPE_CHECKING:
-    from pipeline.predict import SurrogateTables
+from pipeline.surrogate_file import SurrogateTables
 
 __all__ = ["GROUP_TOLERANCE", "answered_by", "check_surface", "with_measured_roughness"]
 
@@ -70,8 +67,6 @@ def check_surface(tables: "SurrogateTables", scenario: Scenario, extrapolate: bo
     if not extrapolate:
         raise ConfigError(f"{problems[0]}: it would answer one surface with another surface's coefficients; "
                           "pass --extrapolate (extrapolate=True) to predict anyway")
-    from pipeline.predict import ExtrapolationWarning
-
     warnings.warn(f"{problems[0]}: the prediction uses another surface's coefficients", ExtrapolationWarning,
                   stacklevel=3)
 

@@ -41,6 +41,7 @@ from pipeline.stages.oxide import FieldSource, RecordedFields
 
 __all__ = ["build", "run", "spot_maps", "work_settings", "clean_conductances", "CLEAN_MODELS"]
 
+
 def spot_maps(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, np.ndarray, float]:
     """Spot radii and interaction weights per load step, and the cell pitch.
 

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from pipeline.physics import constriction, point_model, spot_models
+from pipeline.stages.oxide import FieldSource
 
 __all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "spots_of", "chunk_terms", "clean_terms",
            "field_chunk"]
@@ -22,6 +23,8 @@ __all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "spots_o
 TERMS = ("resistance", "resistance_self", "resistance_interaction", "n_conducting", "crop_bound")
 #: Extra terms of the point model's iterative solve.
 SOLVER_TERMS = ("iterations", "residual", "error_estimate")
+
+
 def model(settings: dict[str, Any]) -> Any:
     """The resistance function of ``settings["model"]`` with the calling convention of
     :func:`constriction.resistance`: the point solve, Greenwood with films, or Greenwood."""

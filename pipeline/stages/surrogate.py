@@ -1,7 +1,7 @@
 """Stage 5: the surrogate of alpha and gamma (Eq. 26) and the predictor's tables.
 
 Reads ``fits.nc``; writes ``surrogate.nc``, ``surrogate.json`` (everything the predictor
-needs, see :mod:`pipeline.predict`), ``table3.csv`` and ``table3.md``.
+needs, see :mod:`pipeline.surrogate_file`), ``table3.csv`` and ``table3.md``.
 
 Two methods (``surrogate.method``):
 
@@ -58,6 +58,7 @@ from pipeline.stages.labels import COORD_LABELS
 from pipeline.stages.surrogate_tables import band_tables, curve_tables
 from pipeline.stages.table3 import PARAMETERS, table3_csv, table3_markdown
 from pipeline.store import atomic_path, read_stage, write_dataset
+from pipeline.surrogate_file import SurrogateTables
 
 __all__ = ["build", "run", "scene_groups", "PARAMETERS"]
 
@@ -290,7 +291,6 @@ def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Pa
 
     ``options`` is accepted for the stage interface; the work is small numpy linear algebra.
     """
-    from pipeline.predict import SurrogateTables  # the JSON format belongs to the predictor
 
     fits = read_stage(data_dir, "fits", scenario)
     ds = build(scenario, fits)

@@ -1,0 +1,149 @@
+"""``g2tom predict``: queries from the command line or a CSV file, the surrogate that answers
+(``--surrogate``, the run's own, or the atlas's), and the answer as CSV (warnings on stderr)."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import sys
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from pipeline.config import ConfigError, Scenario
+from pipeline.predict import predict
+from pipeline.predict_domain import check_surface, with_measured_roughness
+from pipeline.predict_queries import OUTPUT_COLUMNS, check_values
+from pipeline.surrogate_file import SurrogateTables, load_surrogate
+
+__all__ = ["predict_cli", "to_csv"]
+
+
+def _parse_list(option: str, text: str) -> np.ndarray:
+    items = [t.strip() for t in text.split(",")]
+    try:
+        return np.array([float(t) for t in items])
+    except ValueError:
+        raise ConfigError(f"{option} = {text!r} is not a number or a comma-separated list of numbers") from None
+
+
+def _cli_queries(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(force, xi, lambda) from --force/--xi/--lambda lists or --csv, checked."""
+    options = {"--force": args.force, "--xi": args.xi, "--lambda": args.lam}
+    if args.csv is not None:
+        if any(v is not None for v in options.values()):
+            raise ConfigError("--csv cannot be combined with --force, --xi or --lambda: give the queries one way")
+        return _read_csv(Path(args.csv))
+    missing = [k for k, v in options.items() if v is None]
+    if missing:
+        raise ConfigError(f"{', '.join(missing)} missing: give --force, --xi and --lambda (comma-separated lists) or --csv FILE")
+    values = [_parse_list(k, v) for k, v in options.items()]
+    sizes = {v.size for v in values} - {1}
+    if len(sizes) > 1:
+        counts = ", ".join(f"{k} {v.size}" for k, v in zip(options, values))
+        raise ConfigError(f"lists of different lengths ({counts}): give one value or the same number of values for each")
+    n = max(v.size for v in values)
+    return tuple(np.broadcast_to(v, (n,)).copy() for v in values)  # type: ignore[return-value]
+
+
+def _read_csv(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Columns force, xi, lambda of a CSV file with a header line (other columns ignored)."""
+    if not path.is_file():
+        raise ConfigError(f"--csv {str(path)!r} does not exist")
+    try:
+        rows = list(csv.reader(io.StringIO(path.read_text())))
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise ConfigError(f"--csv {str(path)!r} is not a readable CSV file ({exc})") from None
+    rows = [r for r in rows if any(c.strip() for c in r)]
+    if len(rows) < 2:
+        raise ConfigError(f"--csv {str(path)!r} needs a header line (force,xi,lambda) and at least one query")
+    header = [c.strip().lower() for c in rows[0]]
+    missing = [c for c in ("force", "xi", "lambda") if c not in header]
+    if missing:
+        raise ConfigError(f"--csv {str(path)!r}: header {rows[0]!r} lacks column(s) {', '.join(missing)} (need force, xi, lambda)")
+    index = [header.index(c) for c in ("force", "xi", "lambda")]
+    out = np.empty((3, len(rows) - 1))
+    for line, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise ConfigError(f"--csv {str(path)!r} line {line}: {len(row)} fields, the header has {len(header)}")
+        for k, (name, i) in enumerate(zip(("force", "xi", "lambda"), index)):
+            try:
+                out[k, line - 2] = float(row[i])
+            except ValueError:
+                raise ConfigError(f"--csv {str(path)!r} line {line}: {name} = {row[i]!r} is not a number") from None
+    return out[0], out[1], out[2]
+
+
+def _default_surrogate(data_dir: Path) -> Path:
+    json_path = Path(data_dir) / "surrogate.json"
+    return json_path if json_path.is_file() else Path(data_dir) / "surrogate.nc"
+
+
+def to_csv(ds: xr.Dataset) -> str:
+    """Prediction dataset as CSV text, one query per line, columns :data:`OUTPUT_COLUMNS`."""
+    names = list(OUTPUT_COLUMNS)
+    columns = [np.asarray(ds[n].values, dtype=float).ravel() for n in names]
+    header = [f"{n}_{OUTPUT_COLUMNS[n][0]}" if OUTPUT_COLUMNS[n][0] != "1" else n for n in names]
+    lines = [",".join(header)]
+    lines += [",".join(f"{v:.10g}" for v in row) for row in zip(*columns)]
+    return "\n".join(lines) + "\n"
+
+
+def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
+    """The surrogate that answers: ``--surrogate`` (either kind), else the run's own when it is of
+    this surface, else the atlas's (``<data-dir>/atlas/surrogate.json``, else the one shipped in
+    the package) when there is one."""
+    from pipeline.predict_atlas import is_atlas_document, load_atlas_surrogate, shipped_path
+
+    if args.surrogate is not None:
+        path = Path(args.surrogate)
+        if path.suffix == ".json" and path.is_file() and is_atlas_document(path.read_text()):
+            return load_atlas_surrogate(path)
+        return load_surrogate(path)
+    own = _default_surrogate(args.data_dir)
+    data_atlas = Path(args.data_dir) / "atlas" / "surrogate.json"
+    atlas = data_atlas if data_atlas.is_file() else shipped_path()
+    if own.is_file():
+        tables = load_surrogate(own)
+        try:
+            check_surface(tables, scenario, extrapolate=False)
+            return tables
+        except ConfigError:
+            if atlas is None:
+                return tables  # predict refuses the surface, naming the run's own surrogate
+    return load_atlas_surrogate(atlas) if atlas is not None else load_surrogate(own)
+
+
+def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
+    """``g2tom predict``: CSV of R_el, its band and the band's components; warnings on stderr."""
+    force, xi, lam = _cli_queries(args)
+    check_values(force, xi, lam)
+    if args.roughness is not None:
+        scenario = with_measured_roughness(scenario, args.roughness, args.pixel_size)
+    elif args.pixel_size is not None:
+        raise ConfigError("--pixel-size is only used with --roughness FILE")
+    answer = _chosen_surrogate(args, scenario)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserWarning)
+        if isinstance(answer, SurrogateTables):
+            result = predict(answer, scenario, force, xi, lam, extrapolate=args.extrapolate,
+                             model=args.model)
+        else:
+            from pipeline.predict_atlas import predict_atlas
+
+            result = predict_atlas(answer, scenario, force, xi, lam, extrapolate=args.extrapolate)
+    for w in caught:
+        print(f"g2tom: warning: {w.message}", file=sys.stderr)
+    print(f"g2tom: answered by {result.attrs['answered_by']}", file=sys.stderr)
+    text = to_csv(result)
+    if args.output is None:
+        sys.stdout.write(text)
+    else:
+        from pipeline.store import atomic_path
+
+        with atomic_path(args.output) as tmp:
+            tmp.write_text(text)
