@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from pipeline import cli
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, load_scenario
-from pipeline.physics import constriction, point_model
+from pipeline.physics import constriction, point_model, point_solve
 from pipeline.physics.interaction_fft import (
     interaction_apply,
     interaction_apply_columns,
@@ -122,7 +122,7 @@ def test_error_criterion_keeps_its_promise(tolerance):
 def test_single_precision_rounds_match_double_precision(monkeypatch):
     masks, radius = _cluster_case(4)
     single = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, solver_tolerance=1e-12)
-    monkeypatch.setattr(point_model, "SINGLE_PRECISION_DIAGONAL", 0.0)  # every round in float64
+    monkeypatch.setattr(point_solve, "SINGLE_PRECISION_DIAGONAL", 0.0)  # every round in float64
     double = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, solver_tolerance=1e-12)
     finite = np.isfinite(double.resistance)
     assert np.max(np.abs(single.resistance[finite] / double.resistance[finite] - 1)) <= 2e-12
