@@ -66,6 +66,9 @@ def test_outputs_are_labelled_and_consistent(tiny_run) -> None:
     assert np.all(np.isfinite(ref)) and np.all(ref > 0)
     np.testing.assert_allclose(ds["force_reference"].values, np.broadcast_to(ds["force"].values, ref.shape), rtol=1e-9)
     np.testing.assert_allclose(ds["ratio_clean"].values, ds["resistance_g2tom_clean"].values / ref[None, None])
+    sides = ds["window_side"].values  # fitted per case, at most the set's window; one window for both grids
+    assert np.all(sides <= TINY.side * (1 + 1e-12)) and sides[0, 0] < TINY.side
+    np.testing.assert_array_equal(ds["window_side_convergence"].values, sides[0])
     g2_clean = ds["resistance_g2tom_clean"]
     shared = g2_clean.sel(discretization="expected").values
     np.testing.assert_array_equal(shared[:, 0], shared[:, 1])  # one value over the realizations
@@ -172,3 +175,33 @@ def test_surface_asperities_are_the_reference_surfaces_own_tips() -> None:
     assert radii.sum() == pytest.approx(np.sqrt(vset.beta * (tips.z[inside] + 10 * vset.sigma)).sum(), rel=1e-12)
     with pytest.raises(ValueError, match="needs the GW surface"):
         surface_spots.spot_radii(dataclasses.replace(vset, surface="random_process"), 1, cells, deep)
+
+
+@pytest.mark.parametrize("surface", ["gw", "random_process"])
+def test_a_smaller_window_samples_the_same_surface(surface) -> None:
+    from pipeline.reference.scene import random_process_set
+
+    vset = TINY if surface == "gw" else random_process_set(TINY, rms=20e-6)
+    n = vset.n_grid
+    whole = scene.rough_sphere(vset, 1, n)
+    half = scene.rough_sphere(vset, 1, n // 2, vset.side / 2)  # the same pixels, the centre of the window
+    np.testing.assert_allclose(half, whole[n // 4: 3 * n // 4, n // 4: 3 * n // 4], rtol=0, atol=1e-12 * vset.sigma)
+    with pytest.raises(ValueError, match="side = .* is out of range"):
+        scene.rough_sphere(vset, 1, n, 1.01 * vset.side)
+
+
+def test_a_case_window_holds_its_contact_and_grows_when_too_small() -> None:
+    from pipeline.reference import window
+
+    force = float(scene.g2tom_resistances(TINY, "greenwood", "expected")["force"].values[0])
+    side, reach = window.fitted_side(TINY, 0, force)
+    assert side == pytest.approx(min(TINY.side, 2 * (window.MARGIN * reach + window.PAD_SPACINGS / np.sqrt(TINY.eta))))
+    assert side < TINY.side  # the light load's contact is small: finer pixels than the set's window
+    _, _, state, used = window.solve_in_window(TINY, 0, TINY.n_grid, force, side)
+    assert used == side and not state.contact[0].any() and state.force == pytest.approx(force, rel=1e-6)
+    # a window the contact overflows grows by GROWTH until it holds it
+    tight = reach  # half the probe's reach on each side
+    _, _, state, grown = window.solve_in_window(TINY, 0, TINY.n_grid, force, tight)
+    steps = np.log(grown / tight) / np.log(window.GROWTH)  # a whole number of growths, or capped at the set's window
+    assert grown > tight and (steps == pytest.approx(round(steps), abs=1e-9) or grown == TINY.side)
+    assert not (state.contact[0].any() or state.contact[-1].any() or state.contact[:, 0].any() or state.contact[:, -1].any())

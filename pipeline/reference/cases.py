@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.reference import elastic, scene
-from pipeline.reference.contact import contact_at_force
+from pipeline.reference import elastic, scene, window
+from pipeline.reference.contact import ContactReachesEdge, contact_at_force
 from pipeline.reference.oxide import oxide_on_grid
 from pipeline.reference.punch import punch_conductance
 from pipeline.stages.oxide import FieldSource
@@ -71,9 +71,10 @@ def estimate_seconds(vset: scene.ValidationSet, cases: list[Case], g2tom: bool =
     """The plan's wall-time estimate of ``cases`` (and of g2tom's side if ``g2tom``), s."""
     punches = 1 + len(vset.xi) * len(vset.lambdas)
     total = G2TOM_SECONDS * len(vset.models) * len(vset.discretizations) if g2tom else 0.0
+    probe, _ = _seconds(window.probe_grid(vset))
     for case in cases:
         contact, punch = _seconds(case.n)
-        total += (contact + punch * punches) if case.oxide else (3 * contact + punch)
+        total += probe + ((contact + punch * punches) if case.oxide else (3 * contact + punch))
     return total
 
 
@@ -81,6 +82,7 @@ def case_key(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
     """Hash of everything that shapes a case's result (the scene, the oxide fields, the force)."""
     shaping = {k: v for k, v in dataclasses.asdict(vset).items()
                if k not in ("realizations", "models", "discretizations", "convergence_grid", "deltas")}
+    shaping["window"] = [window.probe_grid(vset), window.MARGIN, window.PAD_SPACINGS, window.GROWTH]
     fields = [source.n_cells, source.cell_size, source.seed, source.amplitudes, source.rule,
               [m.period for m in source.modes]]
     text = json.dumps({"set": shaping, "case": dataclasses.asdict(case), "force": float(force).hex(),
@@ -103,22 +105,24 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
 
     ``source`` is g2tom's oxide field source of the scene (the fields by seed and realization).
 
-    The record holds the force and approach of the full-field solution, its contact fraction,
+    The case is solved on its own window (:mod:`pipeline.reference.window`: ``side``, m, fitted
+    to the probe's contact ``reach``, m). The record holds the force and approach of the
+    full-field solution, its contact area (m^2),
     the clean resistance and, for ``case.oxide``, the resistance (xi, lambda) with oxide, in ohm
     (+inf where nothing conducts), and the wall times (s) of the contact and punch solves.
     """
     start = time.perf_counter()
-    pixel = vset.side / case.n
-    operator = elastic.free_surface(case.n, pixel, vset.e_star)
-    heights = scene.rough_sphere(vset, case.realization, case.n)
     try:
-        state = contact_at_force(operator, heights, force)
-    except elastic.SolverFailure as exc:  # recorded (NaN results with the reason), not fatal to the set
+        side, reach = window.fitted_side(vset, case.realization, force)
+        operator, heights, state, side = window.solve_in_window(vset, case.realization, case.n, force, side)
+    except (elastic.SolverFailure, ContactReachesEdge) as exc:  # recorded (NaN results, the reason), not fatal
         return _store(path, {"key": key, **dataclasses.asdict(case), "error": str(exc), "force": np.nan,
-                             "delta": np.nan, "contact_fraction": np.nan, "gap_spread": np.nan,
+                             "delta": np.nan, "contact_area": np.nan, "gap_spread": np.nan,
                              "barber_ratio": np.nan, "resistance_clean": np.nan,
                              "resistance": np.full((len(vset.xi), len(vset.lambdas)), np.nan).tolist(),
+                             "side": np.nan, "reach": np.nan,
                              "seconds_contact": np.nan, "seconds_total": time.perf_counter() - start})
+    pixel = side / case.n
     contact_seconds = time.perf_counter() - start
     clean = punch_conductance(operator, state.contact, vset.rho)
     barber = np.nan
@@ -127,7 +131,7 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
             low, high = (contact_at_force(operator, heights, force * (1.0 + s * BARBER_STEP)) for s in (-1, 1))
             stiffness = -(high.force - low.force) / (high.delta - low.delta)
             barber = clean.conductance / (stiffness / (vset.e_star * vset.rho))
-        except elastic.SolverFailure:
+        except (elastic.SolverFailure, ContactReachesEdge):
             barber = np.nan
     oxidized = np.full((len(vset.xi), len(vset.lambdas)), np.nan)
     if case.oxide:
@@ -138,7 +142,8 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
                 oxidized[z, a] = 1.0 / kappa if kappa > 0 else np.inf
     record = {
         "key": key, **dataclasses.asdict(case),
-        "force": state.force, "delta": state.delta, "contact_fraction": float(state.contact.mean()),
+        "force": state.force, "delta": state.delta, "contact_area": float(state.contact.sum()) * pixel**2,
+        "side": side, "reach": reach,
         "gap_spread": state.gap_spread, "barber_ratio": barber,
         "resistance_clean": 1.0 / clean.conductance if clean.conductance > 0 else np.inf,
         "resistance": oxidized.tolist(),

@@ -16,7 +16,11 @@ import numpy as np
 
 from pipeline.reference.elastic import FreeSurface, solve_pressure
 
-__all__ = ["ContactState", "contact_at_force"]
+__all__ = ["ContactState", "ContactReachesEdge", "contact_at_force"]
+
+
+class ContactReachesEdge(ValueError):
+    """The contact reaches the grid's edge: the window is too small for this load."""
 
 
 @dataclass(frozen=True)
@@ -52,8 +56,10 @@ def contact_at_force(operator: FreeSurface, heights: np.ndarray, force: float,
     Raises
     ------
     ValueError
-        If the force is not positive or the contact reaches the grid's edge (the grid is too
-        small for this load: the non-periodic operator assumes no pressure outside it).
+        If the force is not positive.
+    ContactReachesEdge
+        If the contact reaches the grid's edge (the grid is too small for this load: the
+        non-periodic operator assumes no pressure outside it).
     """
     if not force > 0:
         raise ValueError(f"force = {force} is out of range: must be > 0 (N)")
@@ -61,7 +67,7 @@ def contact_at_force(operator: FreeSurface, heights: np.ndarray, force: float,
     contact = pressure > 0
     edge = contact[0].any() or contact[-1].any() or contact[:, 0].any() or contact[:, -1].any()
     if edge:
-        raise ValueError(f"force = {force:.4g} N: the contact reaches the edge of the grid; enlarge it")
+        raise ContactReachesEdge(f"force = {force:.4g} N: the contact reaches the edge of the grid; enlarge it")
     offset = (heights - operator(pressure))[contact]  # = delta wherever p > 0
     return ContactState(
         force=float(pressure.sum() * operator.pixel**2),

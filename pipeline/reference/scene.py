@@ -149,13 +149,18 @@ def surface_stream(vset: ValidationSet, realization: int) -> np.random.Generator
     return np.random.Generator(np.random.PCG64(seq))
 
 
-def rough_sphere(vset: ValidationSet, realization: int, n: int) -> np.ndarray:
-    """Heights (m, (n, n)) of the sphere plus the realization's GW surface on an n x n grid of the window.
+def rough_sphere(vset: ValidationSet, realization: int, n: int, side: float | None = None) -> np.ndarray:
+    """Heights (m, (n, n)) of the sphere plus the realization's rough surface on an n x n grid of
+    a centred window of ``side`` (m, at most and by default the set's window ``vset.side``).
 
-    The asperities are drawn once per realization over the window (independent of ``n``), so
-    the grids of the convergence study see the same surface.
+    The surface is one per realization over the set's window (GW asperities drawn once over it,
+    the random process periodic over it), independent of ``n`` and ``side``, so every grid and
+    window samples the same surface.
     """
-    pixel = vset.side / n
+    side = vset.side if side is None else side
+    if not 0 < side <= vset.side * (1 + 1e-12):
+        raise ValueError(f"side = {side:g} m is out of range: must be in (0, {vset.side:g}] (the set's window)")
+    pixel = side / n
     if vset.surface == "random_process":
         from pipeline.physics.surface_spectrum import summit_parameters
 

@@ -111,6 +111,17 @@ def _flags(ds: xr.Dataset) -> list[str]:
     return lines
 
 
+def _pixels(ds: xr.Dataset) -> str:
+    """The main grid's pixel sizes over the cases, and per asperity spacing."""
+    pixel = ds["window_side"].values / ds.attrs["scene_n_grid"]
+    spacing = 1.0 / np.sqrt(ds.attrs["scene_eta"])
+    if not np.isfinite(pixel).any():
+        return "no case solved"
+    lo, hi = np.nanmin(pixel), np.nanmax(pixel)
+    return (f"pixels {lo * 1e6:.3g}-{hi * 1e6:.3g} um, {spacing / hi:.3g}-{spacing / lo:.3g} per asperity spacing; "
+            f"windows {np.nanmin(ds['window_side'].values) * 1e3:.3g}-{np.nanmax(ds['window_side'].values) * 1e3:.3g} mm")
+
+
 def _isolation(ds: xr.Dataset) -> list[str]:
     """What the surface's own asperities leave of the clean error (Greenwood-Tripp's averaging and the
     model), beside the default discretization's, per model: geometric means and open circuits."""
@@ -144,7 +155,7 @@ def markdown(ds: xr.Dataset) -> str:
         + ("GW surfaces" if ds.attrs.get("scene_surface", "gw") == "gw" else
            f"Gaussian self-affine surfaces (H {ds.attrs['scene_hurst']:g}, rms {ds.attrs['scene_rms']:g} m; g2tom fed "
            "their summit statistics)") + " on a "
-        f"{ds.attrs['scene_n_grid']}^2 grid ({ds.attrs['scene_pixels_per_cell']:g} pixels per asperity spacing), "
+        f"{ds.attrs['scene_n_grid']}^2 grid on each case's window, fitted to its contact ({_pixels(ds)}), "
         f"{n_real} realization(s); the reference is solved at g2tom's force. Ratio g2tom / full field: "
         "geometric mean [min-max] over realizations.", "",
     ]

@@ -27,20 +27,20 @@ def _a(units: str, long_name: str, **extra: Any) -> dict[str, Any]:
 def _reference(vset: scene.ValidationSet, everything: list, done: dict) -> dict[str, np.ndarray]:
     """The main grid's records as arrays (realization, load) and (xi, lambda, realization, load)."""
     shape = (len(vset.realizations), len(vset.deltas))
-    out = {k: np.full(shape, np.nan) for k in ("force", "delta", "contact_fraction", "resistance_clean",
+    out = {k: np.full(shape, np.nan) for k in ("force", "delta", "contact_area", "resistance_clean", "side",
                                                 "seconds_contact", "seconds_total")}
     out["resistance"] = np.full((len(vset.xi), len(vset.lambdas)) + shape, np.nan)
-    coarse = {k: np.full(len(vset.deltas), np.nan) for k in ("resistance_clean", "seconds_total", "barber_ratio")}
+    coarse = {k: np.full(len(vset.deltas), np.nan) for k in ("resistance_clean", "seconds_total", "barber_ratio", "side")}
     out["failed"] = [f"{case.name}: {done[case]['error']}" for case in everything if "error" in done[case]]
     for case in everything:
         rec = done[case]
         if case.n != vset.n_grid:
             for k in coarse:
-                coarse[k][case.load] = rec[k]
+                coarse[k][case.load] = rec.get(k, np.nan)
             continue
         i = vset.realizations.index(case.realization)
-        for k in ("force", "delta", "contact_fraction", "resistance_clean", "seconds_contact", "seconds_total"):
-            out[k][i, case.load] = rec[k]
+        for k in ("force", "delta", "contact_area", "resistance_clean", "side", "seconds_contact", "seconds_total"):
+            out[k][i, case.load] = rec.get(k, np.nan)
         out["resistance"][:, :, i, case.load] = np.asarray(rec["resistance"], float)
     out["coarse"] = coarse
     return out
@@ -74,7 +74,9 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
     data = {
         "force_reference": (rl, ref["force"], _a("N", "normal force of the full-field solution")),
         "delta_reference": (rl, ref["delta"], _a("m", "approach delta of the full-field solution (g2tom's convention)")),
-        "contact_fraction": (rl, ref["contact_fraction"], _a("1", "fraction of the reference grid in contact")),
+        "contact_area": (rl, ref["contact_area"], _a("m2", "contact area of the full-field solution")),
+        "window_side": (rl, ref["side"], _a("m", "side of the case's window (fitted to its contact)")),
+        "window_side_convergence": ("load", ref["coarse"]["side"], _a("m", "side of the convergence case's window")),
         "resistance_reference_clean": (rl, ref["resistance_clean"], _a("ohm", "full-field clean resistance (Barber's analogy)")),
         "resistance_reference": (ox, ref["resistance"], _a("ohm", "full-field resistance with the oxide removed from the contact set",
                                                            comment="+inf: open circuit")),

@@ -19,7 +19,7 @@ import numpy as np
 from pipeline.config import ConfigError, load_scenario
 from pipeline.progress import format_duration
 from pipeline.reference import cases as cases_mod
-from pipeline.reference import scene, section, summary, surface_spots
+from pipeline.reference import scene, section, summary, surface_spots, window
 from pipeline.stages.oxide import FieldSource
 from pipeline.store import atomic_path
 
@@ -56,8 +56,9 @@ def plan_lines(vset: scene.ValidationSet, everything: list[cases_mod.Case]) -> l
                                               "g2tom's parameters are its summits')" if vset.surface == "random_process" else "")
         + f": sigma {vset.sigma:g} m, eta {vset.eta:g} m^-2, beta {vset.beta:g} m, "
         f"R* {vset.radius:g} m, E* {vset.e_star:.4g} Pa, rho* {vset.rho:g} ohm m (mu = {vset.mu:.3f})",
-        f"validate: grid {vset.n_grid}^2 of {vset.pixel * 1e6:.3g} um ({vset.pixels_per_cell:g} pixels per "
-        f"asperity spacing), window {vset.side * 1e3:.3g} mm; convergence grid "
+        f"validate: grid {vset.n_grid}^2 on each case's window, fitted to its contact by a {window.probe_grid(vset)}^2 "
+        f"probe (at most the set's {vset.side * 1e3:.3g} mm: pixels of at most {vset.pixel * 1e6:.3g} um, "
+        f"{vset.pixels_per_cell:g} per asperity spacing); convergence grid "
         + (f"{vset.convergence_grid}^2" if vset.convergence_grid else "none"),
         f"validate: loads delta/sigma {list(vset.deltas)}; realizations {list(vset.realizations)}; "
         f"clean + {oxide}",
