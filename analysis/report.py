@@ -437,8 +437,8 @@ def to_markdown(blocks: list[Block]) -> str:
     """Render blocks as Markdown."""
     out: list[str] = []
     for b in blocks:
-        if b.kind in ("h1", "h2"):
-            out.append(("#" if b.kind == "h1" else "##") + " " + b.text)
+        if b.kind in ("h1", "h2", "h3"):
+            out.append("#" * int(b.kind[1]) + " " + b.text)
         elif b.kind == "p":
             out.append(b.text)
         elif b.kind == "pre":
@@ -455,13 +455,18 @@ def to_markdown(blocks: list[Block]) -> str:
     return "\n\n".join(out) + "\n"
 
 
+def _strong(text: str) -> str:
+    """Markdown's ``**bold**`` spans as HTML ``<strong>``."""
+    return re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", text)
+
+
 def to_html(blocks: list[Block], title: str) -> str:
     """Render blocks as a standalone HTML page."""
     e = html.escape
     body: list[str] = []
     for b in blocks:
-        if b.kind in ("h1", "h2", "p"):
-            body.append(f"<{b.kind}>{e(b.text)}</{b.kind}>")
+        if b.kind in ("h1", "h2", "h3", "p"):
+            body.append(f"<{b.kind}>{_strong(e(b.text))}</{b.kind}>")
         elif b.kind == "pre":
             body.append(f"<pre>{e(b.text)}</pre>")
         elif b.kind == "img":

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from analysis.report_blocks import Block, table
+from analysis.report_blocks import Block, markdown_blocks, table
 from pipeline.config import Scenario
 from pipeline.store import StaleInputError, read_stage
 
@@ -87,7 +87,7 @@ def validation_blocks(data_dir: Path) -> list[Block]:
         return blocks + [Block("p", "Not available: run `make validate` (about 30 min per surface; `make validate "
                                     "VALIDATE=--quick` for 256^2 checks in a minute).")]
     for folder, label in ran:
-        blocks.append(Block("pre", (folder / "validate.md").read_text()))
+        blocks += markdown_blocks((folder / "validate.md").read_text(), label)
         if (folder / "validate.png").is_file():
             blocks.append(Block("img", f"R' against F' ({label}): the full-field reference (each realization) and "
                                        "g2tom's discretizations and models", src=f"{folder.name}/validate.png"))

@@ -116,3 +116,22 @@ def test_curve_section_counts_the_cells(small) -> None:
     n = ds["curve_order"].size
     assert f"Within 3 %: {int((ds['curve_within'] == 1).sum())} of {n}" in text
     assert "F' >= 0.4" in text and "--model power_law" in text
+
+
+def test_a_stage_markdown_section_becomes_headings_paragraphs_and_tables(tmp_path) -> None:
+    from analysis.report_blocks import markdown_blocks
+    from analysis.report_physics import validation_blocks
+
+    text = ("## How right is the model?\n\n**Clean: off by +40 %.**\nScene: mu = 8.26.\n\n### expected, greenwood\n\n"
+            "| F (N) | clean |\n|---|---|\n| 27.45 | 1.397 [1.2-1.9] |\n| 1768 | 1.024 |\n\nGrid convergence: -1.4 %.\n")
+    blocks = markdown_blocks(text, "GW surface")
+    assert [b.kind for b in blocks] == ["h3", "p", "p", "h3", "table", "p"]
+    assert blocks[0].text == "GW surface" and blocks[3].text == "expected, greenwood"
+    assert blocks[4].rows == (("F (N)", "clean"), ("27.45", "1.397 [1.2-1.9]"), ("1768", "1.024"))
+    html = to_html(blocks, "t")
+    assert "<strong>Clean: off by +40 %.</strong>" in html and "<td>1.397 [1.2-1.9]</td>" in html
+    assert to_markdown(blocks).count("| 27.45 | 1.397 [1.2-1.9] |") == 1
+    (tmp_path / "validate").mkdir()
+    (tmp_path / "validate" / "validate.md").write_text(text)
+    kinds = [b.kind for b in validation_blocks(tmp_path)]
+    assert kinds[:2] == ["h2", "h3"] and "pre" not in kinds and "table" in kinds
