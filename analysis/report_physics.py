@@ -84,7 +84,7 @@ def validation_blocks(data_dir: Path) -> list[Block]:
                (("validate", "GW surface"), ("validate_random_process", "Gaussian self-affine surface"))]
     ran = [(f, label) for f, label in folders if (f / "validate.md").is_file()]
     if not ran:
-        return blocks + [Block("p", "Not available: run `make validate` (about 30 min per surface; `make validate "
+        return blocks + [Block("p", "Not available: run `make validate` (about 15 min per surface; `make validate "
                                     "VALIDATE=--quick` for 256^2 checks in a minute).")]
     for folder, label in ran:
         blocks += markdown_blocks((folder / "validate.md").read_text(), label)
