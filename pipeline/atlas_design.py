@@ -37,7 +37,7 @@ _MAX_DRAWS = 10_000
 
 @dataclass(frozen=True)
 class AtlasDesign:
-    """Where the atlas's scenes lie in (mu, Pi).
+    """Where the atlas's scenes lie in (mu, Pi); a scenario's from its ``[atlas]`` section (:meth:`of`).
 
     Attributes
     ----------
@@ -57,6 +57,13 @@ class AtlasDesign:
     n_pi: int = 5
     n_heldout: int = 6
     seed: int = 20261124
+
+    @classmethod
+    def of(cls, scenario: Scenario) -> "AtlasDesign":
+        """The design of ``scenario``'s ``[atlas]`` section."""
+        a = scenario.atlas
+        return cls(mu=(a.mu_min, a.mu_max), Pi=(a.pi_min, a.pi_max), n_mu=a.n_mu, n_pi=a.n_pi,
+                   n_heldout=a.n_heldout, seed=a.seed)
 
     def __post_init__(self) -> None:
         for name in ("mu", "Pi"):

@@ -224,7 +224,7 @@ def _cmd_plan(args: argparse.Namespace, scenario: Scenario) -> None:
 
         # one single-threaded scene per worker
         parallel = max(1, args.workers or os.cpu_count() or 1)
-        print("\n".join(format_atlas_plan(plan_atlas(scenario, AtlasDesign()), parallel)))
+        print("\n".join(format_atlas_plan(plan_atlas(scenario, AtlasDesign.of(scenario)), parallel)))
         return
     print("\n".join(format_plan(scenario, getattr(args, "workers", None))))
 
@@ -248,7 +248,7 @@ def _cmd_atlas(args: argparse.Namespace, scenario: Scenario) -> None:
     _preflight(args, scenario, scene=False)
     if args.workers is None and args.scheduler is None:
         args.workers = os.cpu_count() or 1  # a local cluster, one single-threaded scene per core
-    path = run_atlas(scenario, AtlasDesign(), args.data_dir, _options(args))
+    path = run_atlas(scenario, AtlasDesign.of(scenario), args.data_dir, _options(args))
     print(f"atlas: wrote {path}", file=sys.stderr)
     from pipeline.atlas_fit import write_atlas_surrogate
 

@@ -374,6 +374,21 @@ class Surrogate:
     )
 
 
+@dataclass(frozen=True)
+class Atlas:
+    """The atlas's design over the groups mu and Pi (``g2tom atlas``, :mod:`pipeline.atlas_design`):
+    a log-spaced ``n_mu x n_pi`` grid over the box, plus held-out scenes drawn inside it."""
+
+    mu_min: float = _param(1.0, "1", "lowest mu = (8/3) eta sigma sqrt(2 R* beta) of the design", gt=0)
+    mu_max: float = _param(50.0, "1", "highest mu of the design (> atlas.mu_min)", gt=0)
+    pi_min: float = _param(5.0, "1", "lowest Pi = eta R* sigma of the design", gt=0)
+    pi_max: float = _param(320.0, "1", "highest Pi of the design (> atlas.pi_min)", gt=0)
+    n_mu: int = _param(5, "1", "design values of mu (log-spaced, ends included)", ge=2)
+    n_pi: int = _param(5, "1", "design values of Pi (log-spaced, ends included)", ge=2)
+    n_heldout: int = _param(6, "1", "held-out scenes drawn inside the box, never fitted", ge=1)
+    seed: int = _param(20261124, "1", "root seed of the held-out scenes' draws", ge=0)
+
+
 SECTIONS: dict[str, type] = {
     "material": Material,
     "roughness": Roughness,
@@ -384,6 +399,7 @@ SECTIONS: dict[str, type] = {
     "cube": Cube,
     "fits": Fits,
     "surrogate": Surrogate,
+    "atlas": Atlas,
 }
 
 #: Parameters each stage depends on (whole sections or single ``section.key`` entries);
@@ -444,6 +460,7 @@ class Scenario:
     cube: Cube = field(default_factory=Cube)
     fits: Fits = field(default_factory=Fits)
     surrogate: Surrogate = field(default_factory=Surrogate)
+    atlas: Atlas = field(default_factory=Atlas)
 
     # ----------------------------------------------------------------- derived values
     @property
@@ -678,6 +695,10 @@ def _cross_checks(s: Scenario) -> None:
             f"loading.delta_min = {s.loading.delta_min!r} must differ from loading.delta_max = "
             f"{s.loading.delta_max!r} when loading.n_delta = {s.loading.n_delta} > 1 (sigma)"
         )
+    for low, high in (("mu_min", "mu_max"), ("pi_min", "pi_max")):
+        if not getattr(s.atlas, low) < getattr(s.atlas, high):
+            raise ConfigError(f"atlas.{high} = {getattr(s.atlas, high)!r} is out of range: must be > "
+                              f"atlas.{low} = {getattr(s.atlas, low)!r}")
     if AUTO not in (s.contact.window, s.contact.r_max):
         check_domains(s)
 

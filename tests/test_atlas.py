@@ -149,12 +149,13 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     assert blocks[2].rows[1][-1] == f"{held['steps_within']} of {held['steps']}"
 
 
-def test_cli_runs_fits_and_summarizes(tmp_path, capsys, monkeypatch) -> None:
-    import pipeline.atlas_design as design_module
+def test_cli_runs_fits_and_summarizes(tmp_path, capsys) -> None:
     from pipeline.cli import main
 
-    monkeypatch.setattr(design_module, "AtlasDesign", lambda: DESIGN)  # the small design, not the default
-    sets = [a for k, v in BASE.items() for a in ("--set", f"{k}={v}")]
+    small = {"atlas.mu_min": DESIGN.mu[0], "atlas.mu_max": DESIGN.mu[1], "atlas.pi_min": DESIGN.Pi[0],
+             "atlas.pi_max": DESIGN.Pi[1], "atlas.n_mu": DESIGN.n_mu, "atlas.n_pi": DESIGN.n_pi,
+             "atlas.n_heldout": DESIGN.n_heldout}  # the small design, not the default
+    sets = [a for k, v in {**BASE, **small}.items() for a in ("--set", f"{k}={v}")]
     assert main(["atlas", "--data-dir", str(tmp_path), "--workers", "1", "--no-progress", *sets]) == 0
     err = capsys.readouterr().err
     assert err.count("atlas: scene ") == 6 and "held out: " in err and "cells within max(5 %, interval)" in err

@@ -79,3 +79,13 @@ def test_cli_plans_the_atlas(capsys) -> None:
                                                         for a in ("--set", f"{k}={v}")]]) == 0
     out = capsys.readouterr().out.splitlines()
     assert len(out) == 1 + 31 + 1 and out[-1].startswith("31 of 31 scenes runnable") and "on 2 concurrent" in out[-1]
+
+
+def test_the_design_is_the_scenarios_atlas_section() -> None:
+    assert AtlasDesign.of(load_scenario("paper")) == AtlasDesign()
+    scenario = load_scenario("paper", {"atlas.mu_max": 80.0, "atlas.pi_max": 640.0, "atlas.n_pi": 6, "atlas.seed": 7})
+    design = AtlasDesign.of(scenario)
+    assert design == AtlasDesign(mu=(1.0, 80.0), Pi=(5.0, 640.0), n_pi=6, seed=7)
+    assert max(s.Pi for s in design_scenes(design)) == pytest.approx(640.0)
+    with pytest.raises(ConfigError, match=r"atlas.mu_max = 0.5 is out of range: must be > atlas.mu_min = 1.0"):
+        load_scenario("paper", {"atlas.mu_max": 0.5})
