@@ -60,17 +60,10 @@ def g2tom_resistances(vset: scene.ValidationSet, model: str) -> xr.Dataset:
     scenario = scene.g2tom_scenario(vset, model, "asperities")
     contact = contact_stage.build(scenario)
     _, _, settings = cube_stage.work_settings(scenario, contact)
-    separation = settings["separation"]
-    n_delta, n = separation.shape[0], separation.shape[-1]
-    exact = dict(settings, crops=np.full(n_delta, n), tolerance=0.0)
     realizations = np.asarray(vset.realizations)
-    radius = np.stack([spot_radii(vset, int(k), contact["x"].values, separation) for k in realizations])
-    clean = cube_chunks.clean_terms(radius, radius, exact).resistance  # (realization, delta)
-    source = FieldSource.of(scenario)
-    fields = [source.fields(a, realizations) for a in range(len(source.lambdas))]
-    psi = np.stack([f[0] for f in fields])  # (lambda, realization, y, x)
-    threshold = np.stack([f[1] for f in fields], axis=1)  # (xi, lambda, realization)
-    oxidized = cube_chunks.chunk_terms(psi, threshold, radius, radius, exact)["resistance"]
+    radius = np.stack([spot_radii(vset, int(k), contact["x"].values, settings["separation"]) for k in realizations])
+    clean = cube_chunks.clean_terms(radius, radius, settings).resistance  # (realization, delta)
+    oxidized = cube_chunks.exact_terms(FieldSource.of(scenario), realizations, radius, radius, settings)["resistance"]
     return xr.Dataset({
         "force": contact["force"],
         "resistance_clean": (("realization", "delta"), clean, {"units": "ohm", "long_name": "clean resistance"}),

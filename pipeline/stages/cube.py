@@ -34,7 +34,7 @@ from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
 from pipeline.physics import constriction
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
-from pipeline.stages.cube_chunks import asperity_spots, chunk_terms, clean_terms, spots_of
+from pipeline.stages.cube_chunks import asperity_spots, clean_terms, exact_terms, spots_of
 from pipeline.stages.cube_dataset import dataset
 from pipeline.stages.cube_rounds import compute_cells, half_widths, padded, stopping_rule
 from pipeline.stages.oxide import FieldSource, RecordedFields
@@ -134,13 +134,8 @@ def _measured_crop_error(
     cropped: np.ndarray,
 ) -> float:
     """Largest relative change of ``R`` from cropping, over the first realization's entries."""
-    n = radius.shape[-1]
-    whole = dict(settings, crops=np.full(radius.shape[0], n), tolerance=0.0)
     first = np.arange(1)
-    fields = [source.fields(a, first) for a in range(len(source.lambdas))]
-    psi = np.stack([f[0] for f in fields])  # (lambda, 1, y, x): every lambda in one batch of masks
-    threshold = np.stack([f[1] for f in fields], axis=1)
-    exact = chunk_terms(psi, threshold, *spots_of(settings, first, radius, weights), whole)["resistance"]
+    exact = exact_terms(source, first, *spots_of(settings, first, radius, weights), settings)["resistance"]
     finite = np.isfinite(exact)
     if not finite.any():
         return 0.0

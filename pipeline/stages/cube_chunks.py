@@ -18,7 +18,7 @@ from pipeline.physics import constriction, point_model, spot_models
 from pipeline.stages.oxide import FieldSource
 
 __all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "spots_of", "chunk_terms", "clean_terms",
-           "field_chunk"]
+           "exact_terms", "field_chunk"]
 
 TERMS = ("resistance", "resistance_self", "resistance_interaction", "n_conducting", "crop_bound")
 #: Extra terms of the point model's iterative solve.
@@ -126,6 +126,18 @@ def clean_terms(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any
     extra = {"groups": np.arange(maps)} if radius.ndim == 4 else {}
     return model(settings)(np.ones((maps, n, n), dtype=bool), radius, weights, settings["pitch"], settings["rho"],
                            np.full(n_delta, n), 0.0, settings["method"], **extra)
+
+
+def exact_terms(source: FieldSource, realizations: np.ndarray, radius: np.ndarray, weights: np.ndarray,
+                settings: dict[str, Any]) -> dict[str, Any]:
+    """:func:`chunk_terms` of the fields of ``realizations`` at every lambda and xi of ``source``,
+    in one batch of masks, on the whole window (no crop: exact). ``radius`` and ``weights`` as
+    there (shared, or one map per realization of ``realizations``)."""
+    fields = [source.fields(a, realizations) for a in range(len(source.lambdas))]
+    psi = np.stack([f[0] for f in fields])  # (lambda, realization, y, x)
+    threshold = np.stack([f[1] for f in fields], axis=1)  # (xi, lambda, realization)
+    whole = dict(settings, crops=np.full(radius.shape[-3], radius.shape[-1]), tolerance=0.0)
+    return chunk_terms(psi, threshold, radius, weights, whole)
 
 
 def spots_of(settings: dict[str, Any], realizations: np.ndarray, radius: np.ndarray,
