@@ -1,0 +1,419 @@
+"""Discrete asperities with elastic interaction: a rough sphere's own caps solved at a given force.
+
+Greenwood–Tripp replaces the asperities by their mean, which is right when hundreds touch and
+biased when a handful do (design note 11). This model keeps one realization's asperities:
+
+* Asperities: Poisson positions of density ``eta`` over a disc that holds every asperity able to
+  touch (:func:`domain_radius`), heights ``z_i ~ N(0, sigma^2)``, spherical caps of radius
+  ``beta``, drawn from their own stream per realization (:func:`draw_asperities`).
+* Gap: ``g_i = z_i - profile(r_i)``, the asperity's height above the undeformed indenter surface
+  measured from the tip's level; at approach ``delta`` (the tip's separation from the mean
+  plane, negative: interpenetration) the interference is
+
+      w_i = g_i - delta - sum_{j != i} C_ij P_j,      P_i = (4/3) E* sqrt(beta) max(w_i, 0)^(3/2),
+
+  with ``C_ij = 1 / (pi E* max(r_ij, l))`` the half-space compliance of a point load (far-field
+  Boussinesq, both bodies through E*). Pairs closer than the floor ``l`` (:func:`coupling_floor`)
+  use ``l``: ``l = 4 sqrt(beta sigma) / (3 pi)`` is the distance at which a point load's
+  displacement equals the displacement ``3P / (4 a E*)`` at the centre of a Hertzian contact of
+  interference ``sigma`` (radius ``a = sqrt(beta sigma)``), so no pair is coupled more stiffly
+  than a cap is to its own load.
+* At a given total force ``F``: ``sum_i P_i = F`` fixes ``delta``. The solution is the unique
+  minimiser of a strictly convex energy on ``{P >= 0, sum P = F}`` (the compliance kernel is
+  positive definite), solved by a semismooth Newton method on ``(s, delta)`` with ``s`` the
+  interference of every candidate (:func:`solve_forces`), warm-started along ascending forces,
+  with a backtracking line search on the residual.
+* Candidates: since every displacement is >= 0, an asperity can touch only where ``g_i > delta``;
+  the solve starts from a candidate set ``g_i > threshold`` and grows it until the solved
+  ``delta`` lies above the threshold, so the answer is the one on the whole set, exactly.
+* Stiffness ``K = -dF/d delta = d^T (I + C D)^-1 1`` on the contacting set (``D = diag(dP/dw) =
+  diag(2 E* a_i)``), i.e. ``K = E* 1^T M^-1 1`` with ``M_ii = 1/(2 a_i)``, ``M_ij = 1/(pi
+  max(d_ij, l))``: Barber's theorem holds exactly against the point-interaction conductance on
+  the same spots and kernel (:mod:`pipeline.physics.discrete_resistance`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+__all__ = [
+    "ASPERITIES_TAG",
+    "Asperities",
+    "NotConverged",
+    "DiscreteContact",
+    "coupling_floor",
+    "interaction_kernel",
+    "domain_radius",
+    "draw_asperities",
+    "hertz_load",
+    "solve_forces",
+    "symmetric_solve",
+]
+
+#: Second entropy word of the asperity sets' streams: ``SeedSequence([seed, ASPERITIES_TAG],
+#: spawn_key=(k,))`` for surface ``k``, never equal to an oxide field's stream (whose entropy is
+#: the seed alone) nor to the grid asperities' heights (``spot_models.HEIGHTS_TAG``).
+ASPERITIES_TAG = 0x61737072  # "aspr"
+#: Default relative tolerance of the Newton solve: max |residual| <= tol x the largest
+#: interference, and |sum P - F| <= tol x F.
+TOLERANCE = 1e-10
+#: Newton iterations at most per force (a warm-started solve takes 3-8).
+MAX_ITERATIONS = 100
+
+
+@dataclass(frozen=True)
+class Asperities:
+    """One surface's asperities: positions and heights, m (all shape (n,))."""
+
+    x: np.ndarray
+    y: np.ndarray
+    z: np.ndarray
+
+    @property
+    def size(self) -> int:
+        """Number of asperities."""
+        return int(self.z.size)
+
+
+@dataclass(frozen=True)
+class DiscreteContact:
+    """The solution of one surface at every force (``n_f`` forces, ``n`` asperities).
+
+    Attributes
+    ----------
+    force
+        The imposed total forces, N, shape (n_f,).
+    delta
+        Approach (separation of the indenter's tip from the mean plane), m, shape (n_f,).
+    interference
+        ``max(w_i, 0)`` of every asperity at every force, m, shape (n_f, n).
+    load
+        Asperity forces ``P_i``, N, shape (n_f, n); they sum to ``force``.
+    stiffness
+        Contact stiffness ``K = -dF/d delta``, N/m, shape (n_f,).
+    iterations
+        Newton iterations per force (all candidate rounds), shape (n_f,).
+    residual
+        Final relative residual (the larger of the interference and the force balance), (n_f,).
+    candidates
+        Candidates in the final solve of each force, shape (n_f,).
+    """
+
+    force: np.ndarray
+    delta: np.ndarray
+    interference: np.ndarray
+    load: np.ndarray
+    stiffness: np.ndarray
+    iterations: np.ndarray
+    residual: np.ndarray
+    candidates: np.ndarray
+
+    def radius(self, beta: float) -> np.ndarray:
+        """Contact radii ``sqrt(beta w)``, m, shape (n_f, n) (0 off contact)."""
+        return np.sqrt(beta * self.interference)
+
+
+def coupling_floor(beta: float, sigma: float) -> float:
+    """The coupling's distance floor ``l = 4 sqrt(beta sigma) / (3 pi)``, m (see the module)."""
+    return 4.0 * np.sqrt(beta * sigma) / (3.0 * np.pi)
+
+
+def interaction_kernel(x: np.ndarray, y: np.ndarray, floor: float) -> np.ndarray:
+    """``1 / (pi max(d_ij, floor))`` between points at ``(x, y)`` (m), zero diagonal, in 1/m.
+
+    Divided by E* it is the compliance of point loads; it is also the off-diagonal of the
+    point-interaction resistance matrix.
+    """
+    d = np.hypot(x[:, None] - x[None, :], y[:, None] - y[None, :])
+    kernel = 1.0 / (np.pi * np.maximum(d, floor))
+    np.fill_diagonal(kernel, 0.0)
+    return kernel
+
+
+def hertz_load(w: np.ndarray, e_star: float, beta: float) -> np.ndarray:
+    """Hertz force ``(4/3) E* sqrt(beta) max(w, 0)^(3/2)`` of caps of radius ``beta`` (m), N."""
+    return 4.0 / 3.0 * e_star * np.sqrt(beta) * np.maximum(w, 0.0) ** 1.5
+
+
+def domain_radius(profile: Callable[[np.ndarray], np.ndarray], delta: float, sigma: float, eta: float,
+                  outside: float = 1e-6) -> float:
+    """Radius of a disc outside which fewer than ``outside`` asperities are expected to be able to touch.
+
+    An asperity at radius ``r`` can touch at approach ``delta`` only if its height exceeds
+    ``profile(r) + delta`` (displacements only separate the surfaces), so the expected number
+    outside ``R`` is ``eta int_R^inf 2 pi r Q((profile(r) + delta) / sigma) dr`` (``Q`` the normal
+    upper tail). Returns the smallest ``R`` on a fine grid where it is below ``outside``.
+
+    Parameters
+    ----------
+    profile
+        Indenter profile z(r) >= 0, m, increasing in r without bound.
+    delta
+        The lowest approach the disc must serve, m.
+    sigma, eta
+        Asperity height std (m) and density (1/m^2).
+    outside
+        Expected number of asperities left out, > 0.
+    """
+    from scipy.special import ndtr
+
+    if not (outside > 0 and sigma > 0 and eta > 0):
+        raise ValueError(f"outside = {outside!r}, sigma = {sigma!r}, eta = {eta!r}: all must be > 0")
+    top = 1e-6
+    while profile(np.array([top]))[0] + delta < 40.0 * sigma:
+        top *= 2.0
+        if top > 1e3:
+            raise ValueError("the indenter profile does not rise above the asperities: no finite domain")
+    r = np.linspace(0.0, top, 20001)
+    density = 2.0 * np.pi * r * eta * ndtr(-(profile(r) + delta) / sigma)
+    tail = np.concatenate([np.cumsum(((density[1:] + density[:-1]) * np.diff(r) / 2.0)[::-1])[::-1], [0.0]])
+    return float(r[np.argmax(tail < outside)])
+
+
+def draw_asperities(seed: int, realization: int, radius: float, eta: float, sigma: float) -> Asperities:
+    """Surface ``realization``'s asperities on a disc of ``radius`` (m), from its own stream.
+
+    Poisson count of mean ``eta pi radius^2``, uniform positions on the disc, heights
+    ``N(0, sigma^2)``. Surface ``k`` always gets the same asperities for the same disc.
+    """
+    stream = np.random.SeedSequence([int(seed), ASPERITIES_TAG], spawn_key=(int(realization),))
+    rng = np.random.default_rng(stream)
+    n = int(rng.poisson(eta * np.pi * radius**2))
+    r = radius * np.sqrt(rng.random(n))
+    theta = 2.0 * np.pi * rng.random(n)
+    z = sigma * rng.standard_normal(n)
+    return Asperities(r * np.cos(theta), r * np.sin(theta), z)
+
+
+def symmetric_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """Solve ``matrix x = rhs`` for a symmetric ``matrix`` (overwritten): Cholesky, or LU where
+    the distance floor leaves it indefinite (large caps closer than the floor)."""
+    from scipy.linalg import LinAlgError, cho_factor, cho_solve
+
+    try:
+        return cho_solve(cho_factor(matrix, check_finite=False), rhs, check_finite=False)
+    except LinAlgError:
+        return np.linalg.solve(matrix, rhs)
+
+
+def _rigid_delta(g: np.ndarray, force: float, e_star: float, beta: float) -> float:
+    """The approach at which the uncoupled caps carry ``force``: an upper bound on the coupled one."""
+    from scipy.optimize import brentq
+
+    top = float(g.max())
+    low = top - (force / (4.0 / 3.0 * e_star * np.sqrt(beta))) ** (2.0 / 3.0)  # one cap alone: too low
+    return float(brentq(lambda d: hertz_load(g - d, e_star, beta).sum() - force, low, top, xtol=1e-15, rtol=1e-15))
+
+
+@dataclass
+class _State:
+    s: np.ndarray  # interference of every candidate (negative: gap), m
+    delta: float
+
+
+class _GrowingKernel:
+    """:func:`interaction_kernel` of the first ``m`` points, extended block by block as ``m`` grows."""
+
+    def __init__(self, x: np.ndarray, y: np.ndarray, floor: float) -> None:
+        self.x, self.y, self.floor = x, y, floor
+        self.size = 0
+        self.table = np.zeros((0, 0))
+
+    def __call__(self, m: int) -> np.ndarray:
+        """The (m, m) kernel (a view)."""
+        if m > self.table.shape[0]:
+            grown = np.zeros((min(self.x.size, max(m, 2 * self.table.shape[0])),) * 2)
+            grown[: self.size, : self.size] = self.table[: self.size, : self.size]
+            self.table = grown
+        if m > self.size:
+            old, x, y = self.size, self.x[:m], self.y[:m]
+            d = np.hypot(x[old:, None] - x[None, :], y[old:, None] - y[None, :])
+            rows = 1.0 / (np.pi * np.maximum(d, self.floor))
+            rows[np.arange(m - old), np.arange(old, m)] = 0.0
+            self.table[old:m, :m] = rows
+            self.table[:old, old:m] = rows[:, :old].T
+            self.size = m
+        return self.table[:m, :m]
+
+
+def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, beta: float, state: _State,
+            tolerance: float, max_iterations: int) -> tuple[_State, float, int, float]:
+    """Solve ``s - g + delta + C P(s) = 0``, ``sum P(s) = F`` on a fixed candidate set (``C = kernel / E*``).
+
+    The Newton system of the contacting rows ``(I + C D) ds + d delta = -r`` is solved through
+    the symmetric positive definite ``D^-1 + C`` (Cholesky), ``D = diag(dP/ds)``. Returns the
+    state, the stiffness ``K = 1^T (D^-1 + C)^-1 1`` (N/m), the iterations and the final
+    relative residual.
+    """
+    k = 4.0 / 3.0 * e_star * np.sqrt(beta)
+    s, delta = state.s.copy(), state.delta
+
+    def residuals(s: np.ndarray, delta: float) -> tuple[np.ndarray, float, np.ndarray]:
+        load = hertz_load(s, e_star, beta)
+        active = np.flatnonzero(load > 0)
+        return s - g + delta + kernel[:, active] @ load[active] / e_star, load.sum() - force, active
+
+    res, res_f, active = residuals(s, delta)
+    for iteration in range(max_iterations + 1):
+        if active.size == 0:  # no cap touches: put the highest one at its lone Hertz interference
+            delta = delta + s.max() - (force / k) ** (2.0 / 3.0)
+            s = g - delta
+            res, res_f, active = residuals(s, delta)
+            continue
+        scale = float(s[active].max())
+        error = max(float(np.abs(res).max()) / scale, abs(res_f) / force)
+        slope = 1.5 * k * np.sqrt(s[active])
+        system = kernel[np.ix_(active, active)] / e_star
+        system[np.diag_indices_from(system)] += 1.0 / slope
+        solved = symmetric_solve(system, np.column_stack([np.ones(active.size), res[active]]))
+        unit, along = solved[:, 0], solved[:, 1]
+        stiffness = float(unit.sum())
+        if error <= tolerance or iteration == max_iterations:
+            return _State(s, delta), stiffness, iteration, error
+        # (I + C D)^-1 = D^-1 (D^-1 + C)^-1 on the contacting rows
+        step_delta = (res_f - along.sum()) / stiffness
+        step_active = -(along + step_delta * unit) / slope
+        step = -res - step_delta - kernel[:, active] @ (slope * step_active) / e_star
+        step[active] = step_active
+        merit = (np.linalg.norm(res) / scale) ** 2 + (res_f / force) ** 2
+        t = 1.0
+        for _ in range(40):
+            trial = residuals(s + t * step, delta + t * step_delta)
+            if (np.linalg.norm(trial[0]) / scale) ** 2 + (trial[1] / force) ** 2 < merit:
+                break
+            t *= 0.5
+        s, delta = s + t * step, delta + t * step_delta
+        res, res_f, active = trial
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+class NotConverged(ArithmeticError):
+    """Newton did not meet its tolerance within its iterations."""
+
+
+class _Walker:
+    """One surface's solution carried from force to force (warm starts, candidate rounds, continuation)."""
+
+    def __init__(self, g: np.ndarray, kernel: _GrowingKernel, e_star: float, beta: float, tolerance: float,
+                 max_iterations: int) -> None:
+        self.g, self.kernel, self.e_star, self.beta = g, kernel, e_star, beta
+        self.tolerance, self.max_iterations = tolerance, max_iterations
+        self.force = 0.0  # 0: cold, no solution yet
+        self.delta, self.threshold, self.stiffness, self.error = np.inf, np.inf, 0.0, np.inf
+        self.s, self.loads = np.zeros(0), np.zeros(0)
+
+    def _advance(self, force: float) -> int:
+        """Solve at ``force`` from the current solution (or cold), growing the candidates until
+        every asperity able to touch is one; the state changes only on success."""
+        g, e_star = self.g, self.e_star
+        if self.force == 0.0:
+            delta = threshold = _rigid_delta(g, force, e_star, self.beta)
+        else:  # the previous stiffness overstates the step: a lower delta, more candidates
+            delta = self.delta
+            threshold = min(self.threshold, delta - (force - self.force) / self.stiffness)
+        iterations = 0
+        while True:
+            m = max(int(np.searchsorted(-g, -threshold, side="left")), 1)
+            coupling = self.kernel(m)
+            carried = np.zeros(m)
+            carried[: self.loads.size] = self.loads[:m]
+            start = _State(g[:m] - delta - coupling @ carried / e_star, delta)
+            state, stiffness, its, error = _newton(g[:m], coupling, force, e_star, self.beta, start,
+                                                   self.tolerance, self.max_iterations)
+            iterations += its
+            if not error <= self.tolerance:
+                raise NotConverged(f"force {force:g} N: relative residual {error:.3g}")
+            delta = state.delta
+            if m == g.size or g[m] <= delta:  # every asperity that can touch was a candidate
+                break
+            threshold = delta - 0.5 * (threshold - delta)
+        self.force, self.delta, self.threshold, self.stiffness, self.error = force, delta, threshold, stiffness, error
+        self.s, self.loads = state.s, hertz_load(state.s, e_star, self.beta)
+        return iterations
+
+    def reach(self, force: float, depth: int = 0) -> int:
+        """Solve at ``force``; where Newton fails from the current start, walk up from a lighter
+        load in steps of at most sqrt(2) (from a quarter of the force when cold).
+
+        Raises
+        ------
+        NotConverged
+            Where even that fails (30 levels of refinement).
+        """
+        try:
+            return self._advance(force)
+        except NotConverged:
+            if depth >= 30:
+                raise
+        iterations = 0
+        if self.force == 0.0:
+            iterations += self.reach(force / 4.0, depth + 1)
+        for step in np.geomspace(self.force, force, int(np.ceil(2.0 * np.log2(force / self.force))) + 1)[1:]:
+            iterations += self.reach(float(step), depth + 1)
+        return iterations
+
+
+def solve_forces(
+    asperities: Asperities,
+    profile: Callable[[np.ndarray], np.ndarray],
+    forces: np.ndarray,
+    e_star: float,
+    beta: float,
+    floor: float,
+    *,
+    tolerance: float = TOLERANCE,
+    max_iterations: int = MAX_ITERATIONS,
+) -> DiscreteContact:
+    """The coupled caps of one surface at each total force (see the module for the model).
+
+    Parameters
+    ----------
+    asperities
+        The surface's asperities (positions relative to the indenter's axis), m.
+    profile
+        Indenter profile z(r), m.
+    forces
+        Total forces, N, > 0 and strictly increasing (each solve warm-starts from the previous).
+    e_star
+        Effective modulus E*, Pa.
+    beta
+        Cap radius, m.
+    floor
+        Coupling distance floor, m (:func:`coupling_floor`).
+    tolerance, max_iterations
+        Newton's relative tolerance and iteration cap per candidate round.
+
+    Raises
+    ------
+    ValueError
+        On forces that are not positive and increasing, or a surface with no asperity.
+    NotConverged
+        Where Newton fails even along a refined load path.
+    """
+    forces = np.asarray(forces, dtype=float)
+    if forces.ndim != 1 or not np.all(forces > 0) or np.any(np.diff(forces) <= 0):
+        raise ValueError("forces must be > 0 and strictly increasing (N)")
+    if asperities.size == 0:
+        raise ValueError("the surface has no asperity")
+    g = asperities.z - profile(np.hypot(asperities.x, asperities.y))
+    order = np.argsort(-g, kind="stable")  # candidates are a prefix of the descending gaps
+    walker = _Walker(g[order], _GrowingKernel(asperities.x[order], asperities.y[order], floor), e_star, beta,
+                     tolerance, max_iterations)
+    n, n_f = g.size, forces.size
+    out = {name: np.zeros(n_f) for name in ("delta", "stiffness", "iterations", "residual", "candidates")}
+    interference, load = np.zeros((n_f, n)), np.zeros((n_f, n))
+    for index, force in enumerate(forces):
+        iterations = walker.reach(force)
+        m = walker.loads.size
+        interference[index, order[:m]] = np.maximum(walker.s, 0.0)
+        load[index, order[:m]] = walker.loads
+        out["delta"][index], out["stiffness"][index] = walker.delta, walker.stiffness
+        out["iterations"][index], out["residual"][index], out["candidates"][index] = iterations, walker.error, m
+    return DiscreteContact(
+        force=forces, delta=out["delta"], interference=interference, load=load, stiffness=out["stiffness"],
+        iterations=out["iterations"].astype(np.int32), residual=out["residual"],
+        candidates=out["candidates"].astype(np.int32),
+    )

@@ -1,0 +1,154 @@
+"""The discrete-asperity contact: Hertz, point-load superposition, equilibrium, Barber, invariances."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.special import ndtr
+
+from pipeline.physics import discrete_contact as dc
+from pipeline.physics.discrete_resistance import resistances
+from pipeline.physics.hertz import hertz_radius
+
+E_STAR = 2.1e11 / (2 * (1 - 0.3**2))
+SIGMA, ETA, BETA, RADIUS = 20e-6, 2e8, 30e-6, 10e-3
+RHO = 7.2e-7
+FLOOR = dc.coupling_floor(BETA, SIGMA)
+FORCE_SCALE = E_STAR * np.sqrt(RADIUS * SIGMA**3) / 2.0  # F = F' x this
+
+
+def sphere(r: np.ndarray) -> np.ndarray:
+    return r * r / (2.0 * RADIUS)
+
+
+def flat(r: np.ndarray) -> np.ndarray:
+    return np.zeros_like(r)
+
+
+def surface(k: int) -> dc.Asperities:
+    return dc.draw_asperities(7, k, dc.domain_radius(sphere, -3.5 * SIGMA, SIGMA, ETA), ETA, SIGMA)
+
+
+FORCES = np.geomspace(0.05, 20.0, 8) * FORCE_SCALE
+
+
+def test_one_asperity_is_hertz_exactly():
+    cap = dc.Asperities(np.array([0.0]), np.array([0.0]), np.array([1e-6]))
+    forces = np.array([0.1, 1.0, 10.0])
+    sol = dc.solve_forces(cap, sphere, forces, E_STAR, BETA, FLOOR)
+    a = hertz_radius(forces, BETA, E_STAR)  # a cap of radius beta on a flat
+    np.testing.assert_allclose(sol.radius(BETA)[:, 0], a, rtol=1e-12)
+    np.testing.assert_allclose(sol.delta, 1e-6 - a**2 / BETA, rtol=1e-12)
+    np.testing.assert_allclose(sol.stiffness, 2.0 * E_STAR * a, rtol=1e-12)
+
+
+def test_two_distant_asperities_are_uncoupled():
+    pair = dc.Asperities(np.array([0.0, 1e3]), np.array([0.0, 0.0]), np.array([2e-6, 1e-6]))
+    sol = dc.solve_forces(pair, flat, np.array([5.0]), E_STAR, BETA, FLOOR)
+    k = 4.0 / 3.0 * E_STAR * np.sqrt(BETA)
+    w = sol.interference[0]
+    # uncoupled: both at the same delta, so the interferences differ by the height difference
+    np.testing.assert_allclose(w[0] - w[1], 1e-6, rtol=1e-6)
+    np.testing.assert_allclose(k * (w**1.5).sum(), 5.0, rtol=1e-10)
+
+
+@pytest.mark.parametrize("distance", [2e-4, 5e-5, 0.3 * FLOOR])
+def test_two_close_asperities_match_the_superposition_by_hand(distance):
+    pair = dc.Asperities(np.array([0.0, distance]), np.array([0.0, 0.0]), np.array([3e-6, 3e-6]))
+    force = 2.0
+    sol = dc.solve_forces(pair, flat, np.array([force]), E_STAR, BETA, FLOOR)
+    k = 4.0 / 3.0 * E_STAR * np.sqrt(BETA)
+    w = (force / 2.0 / k) ** (2.0 / 3.0)  # each carries half
+    coupling = 1.0 / (np.pi * E_STAR * max(distance, FLOOR))
+    np.testing.assert_allclose(sol.interference[0], [w, w], rtol=1e-9)
+    np.testing.assert_allclose(sol.delta[0], 3e-6 - w - coupling * force / 2.0, rtol=1e-9)
+    # K: 1^T (D^-1 + C)^-1 1 with D = 2 E* a on both: 2 / (1/(2 E* a) + coupling)
+    a = np.sqrt(BETA * w)
+    np.testing.assert_allclose(sol.stiffness[0], 2.0 / (1.0 / (2.0 * E_STAR * a) + coupling), rtol=1e-9)
+
+
+@pytest.mark.parametrize("k", [0, 1, 2])
+def test_equilibrium_and_complementarity_on_rough_spheres(k):
+    asp = surface(k)
+    sol = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR)
+    assert np.all(sol.residual <= dc.TOLERANCE)
+    np.testing.assert_allclose(sol.load.sum(axis=1), FORCES, rtol=1e-9)
+    g = asp.z - sphere(np.hypot(asp.x, asp.y))
+    kernel = dc.interaction_kernel(asp.x, asp.y, FLOOR)
+    for f in range(FORCES.size):
+        w = g - sol.delta[f] - kernel @ sol.load[f] / E_STAR  # over every asperity, candidates or not
+        touching = sol.load[f] > 0
+        np.testing.assert_allclose(w[touching], sol.interference[f, touching], rtol=1e-8, atol=1e-9 * SIGMA)
+        assert np.all(w[~touching] <= 1e-9 * SIGMA)
+        np.testing.assert_allclose(sol.load[f], dc.hertz_load(sol.interference[f], E_STAR, BETA), rtol=1e-12)
+    # heavier loads, more approach and more contacts
+    assert np.all(np.diff(sol.delta) < 0)
+    assert (sol.load[-1] > 0).sum() > 100 and (sol.load[0] > 0).sum() <= 10
+
+
+def test_solution_is_independent_of_the_order_of_the_asperities_and_of_the_load_steps():
+    asp = surface(3)
+    sol = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR)
+    perm = np.random.default_rng(0).permutation(asp.size)
+    shuffled = dc.Asperities(asp.x[perm], asp.y[perm], asp.z[perm])
+    other = dc.solve_forces(shuffled, sphere, FORCES, E_STAR, BETA, FLOOR)
+    np.testing.assert_allclose(other.delta, sol.delta, rtol=1e-9)
+    np.testing.assert_allclose(other.load, sol.load[:, perm], rtol=1e-7, atol=1e-9 * FORCES[-1])
+    alone = dc.solve_forces(asp, sphere, FORCES[-2:], E_STAR, BETA, FLOOR)  # no warm start from light loads
+    np.testing.assert_allclose(alone.delta, sol.delta[-2:], rtol=1e-9)
+    np.testing.assert_allclose(alone.stiffness, sol.stiffness[-2:], rtol=1e-8)
+
+
+def test_stiffness_is_the_derivative_of_the_force():
+    asp = surface(4)
+    forces = np.array([1.0, 1.0 + 1e-5]) * FORCE_SCALE
+    sol = dc.solve_forces(asp, sphere, forces, E_STAR, BETA, FLOOR)
+    fd = -(forces[1] - forces[0]) / (sol.delta[1] - sol.delta[0])
+    np.testing.assert_allclose(sol.stiffness[0], fd, rtol=1e-4)
+
+
+@pytest.mark.parametrize("k", [5, 6])
+def test_barber_holds_per_realization_with_the_point_model(k):
+    asp = surface(k)
+    sol = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR)
+    kernel = dc.interaction_kernel(asp.x, asp.y, FLOOR)
+    r_point = resistances(kernel, sol.radius(BETA), RHO, "point")
+    np.testing.assert_allclose(1.0 / r_point, sol.stiffness / (E_STAR * RHO), rtol=1e-8)
+    r_greenwood = resistances(kernel, sol.radius(BETA), RHO, "greenwood")
+    assert np.all(r_greenwood >= r_point * (1 - 1e-12))
+
+
+def test_resistance_of_one_spot_and_open_circuit():
+    kernel = dc.interaction_kernel(np.array([0.0, 1e-4]), np.array([0.0, 0.0]), FLOOR)
+    radius = np.array([[1e-5, 0.0], [0.0, 0.0]])
+    for model in ("point", "greenwood"):
+        np.testing.assert_allclose(resistances(kernel, radius, RHO, model), [RHO / 2e-5, np.inf], rtol=1e-14)
+
+
+def test_domain_radius_leaves_the_stated_expected_count_outside():
+    delta = -3.0 * SIGMA
+    radius = dc.domain_radius(sphere, delta, SIGMA, ETA, outside=1e-6)
+    # closed form for the sphere: eta 2 pi R* sigma int_{t0}^inf Q(t + delta/sigma) dt, t0 = R^2/(2 R* sigma)
+    def outside(r: float) -> float:
+        t0 = r * r / (2.0 * RADIUS * SIGMA)
+        return ETA * 2 * np.pi * RADIUS * SIGMA * quad(lambda t: ndtr(-(t + delta / SIGMA)), t0, np.inf)[0]
+    assert outside(radius) < 1e-6 < outside(0.99 * radius)
+
+
+def test_asperities_are_reproducible_poisson_with_gaussian_heights():
+    a, b = dc.draw_asperities(3, 9, 2e-3, ETA, SIGMA), dc.draw_asperities(3, 9, 2e-3, ETA, SIGMA)
+    np.testing.assert_array_equal(a.z, b.z)
+    counts = np.array([dc.draw_asperities(3, k, 1e-3, ETA, SIGMA).size for k in range(200)])
+    mean = ETA * np.pi * 1e-6
+    assert abs(counts.mean() - mean) < 4 * np.sqrt(mean / counts.size)
+    z = np.concatenate([dc.draw_asperities(3, k, 1e-3, ETA, SIGMA).z for k in range(20)])
+    assert abs(z.std() / SIGMA - 1) < 4 / np.sqrt(2 * z.size)
+    assert np.hypot(a.x, a.y).max() <= 2e-3
+
+
+def test_bad_forces_are_refused():
+    asp = surface(0)
+    for forces in ([1.0, 0.5], [0.0, 1.0], [-1.0]):
+        with pytest.raises(ValueError, match="forces"):
+            dc.solve_forces(asp, sphere, np.array(forces), E_STAR, BETA, FLOOR)
