@@ -17,7 +17,7 @@ the centre point, and ring k = 1 .. n, the annulus ``(1 + 3 (k - 1) k) / N <= r^
 (k + 1)) / N``, cut into ``6 k`` equal sectors (a count proportional to the ring's
 circumference, as in a hexagonal packing). Each cell carries one point of weight ``1 / N``, at
 the cell's mean ``r^2`` (the middle of the annulus in ``r^2``) and its middle angle; ring k is
-rotated by ``k`` times the golden angle fraction of its sector, so no two rings' points line up.
+turned by ``k (sqrt(5) - 1) / 2`` of its sector width, so no two rings' points line up.
 Every ring's points sum to zero, so the pattern's mean offset vanishes and its second moment
 ``sum w u^2`` is exactly that of the unit disc (1/4) but for the central cell's share
 ``1 / (4 N^2)``.
@@ -34,7 +34,8 @@ __all__ = ["DiscRule", "DEFAULT_RINGS", "spot_points", "clean_share", "effective
 #: Rings of the default pattern (217 points). On discs of radius half the correlation length
 #: cut by oxide edges, the clean share's absolute error against a 200 x 200 image of the disc is
 #: 0.005 on average and below 0.02 on every disc tried (6 rings: 0.007 and 0.03; 3 rings: 0.017
-#: and 0.07); see tests/test_spot_share.py.
+#: and 0.07), without bias (mean signed error within +-0.0012 at lambda 1, 5, 23); see
+#: tests/test_spot_share.py.
 DEFAULT_RINGS = 8
 
 #: Rotation of ring k, in sectors of that ring: k times the fractional golden ratio.
