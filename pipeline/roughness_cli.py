@@ -10,6 +10,14 @@ result is in SI units whatever the file's unit.
 The moments m0, m2, m4 come from the power spectrum below a stated short-wavelength cutoff
 (:func:`pipeline.physics.surface_spectrum.psd_moments`), the summit parameters from them
 (:func:`pipeline.physics.surface_spectrum.summit_parameters`).
+
+Undefined (NaN) pixels, up to :data:`MAX_MISSING_SHARE` of the map, are filled by harmonic
+interpolation (:func:`pipeline.physics.height_fill.fill_gaps`) before the moments are taken;
+the report says how many, and how the rms height, m2 and m4 change if those pixels are masked
+instead (:func:`pipeline.physics.height_fill.masked_moments`, finite differences on both maps).
+Finite differences see the kinks where a fill meets the measured pixels in full: at 5 % filled
+the masked m4 is ~10 % below the filled map's by that estimator, while the spectral m4 below
+the cutoff of the filled map is only 2 ... 3.5 % above the complete map's.
 """
 
 from __future__ import annotations
@@ -26,16 +34,20 @@ import numpy as np
 import xarray as xr
 
 from pipeline.config import ConfigError
+from pipeline.physics.height_fill import fill_gaps, masked_moments
 from pipeline.physics.roughness import validated_heights
 from pipeline.physics.surface_spectrum import BETA_RULES, psd_moments, summit_parameters
 
 __all__ = ["read_heightmap", "read_measured", "Measured", "measure", "roughness_cli", "PLAUSIBLE_SIGMA",
-           "CUTOFF_PIXELS", "INSTALL"]
+           "CUTOFF_PIXELS", "INSTALL", "MAX_MISSING_SHARE"]
 
 #: Height standard deviations (m) outside this range are almost surely in the wrong unit.
 PLAUSIBLE_SIGMA = (1e-10, 1e-3)
 #: Default short-wavelength cutoff, in pixels of the coarser axis.
 CUTOFF_PIXELS = 4.0
+#: Largest share of undefined pixels that is filled: beyond it the fill, not the measurement,
+#: would set the moments (at 5 % filled, m4 is already biased up by 2 ... 3.5 %; see height_fill).
+MAX_MISSING_SHARE = 0.25
 #: How to install the instrument-format reader.
 INSTALL = "pip install 'g2tom[topography]' (or: pip install SurfaceTopography)"
 #: Height units of instrument files, in m.
@@ -119,7 +131,7 @@ def _surface_topography(path: Path, why: str) -> Measured:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             topography = st.read_topography(str(path))
-            heights = np.asarray(topography.heights())
+            heights = np.ma.filled(np.ma.asarray(topography.heights(), dtype=float), np.nan)  # undefined: NaN
     except (ReadFileError, OSError, ValueError, KeyError, IndexError, TypeError) as exc:
         reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise ConfigError(f"HEIGHTMAP {str(path)!r} is unreadable: {why}, and SurfaceTopography knows no "
@@ -130,8 +142,6 @@ def _surface_topography(path: Path, why: str) -> Measured:
     if unit not in _UNITS:
         raise ConfigError(f"HEIGHTMAP {str(path)!r}: height unit {unit or 'none'!r} is not one of "
                           f"{', '.join(_UNITS)}")
-    if topography.has_undefined_data:
-        raise ConfigError(f"HEIGHTMAP {str(path)!r} holds undefined (missing) pixels: fill or crop them first")
     scale = _UNITS[unit]
     sizes = topography.physical_sizes
     pixel = None
@@ -167,6 +177,11 @@ def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | N
             periodic: bool | None = None, beta_rule: str = "paper") -> dict[str, Any]:
     """Everything ``g2tom roughness --json`` prints: moments, summit parameters, what was done (SI).
 
+    Undefined (NaN) pixels are filled first (``filled_pixels``, ``filled_share``); with any,
+    ``masked_rms_height`` (m) and ``masked_rms_change``, ``masked_m2_change``,
+    ``masked_m4_change`` (relative, masked over filled map, by finite differences) say how much
+    masking them instead would change; all four are None for a complete map.
+
     Parameters
     ----------
     path
@@ -194,10 +209,13 @@ def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | N
     cutoff = CUTOFF_PIXELS * max(pixel) if cutoff is None else cutoff
     if not (math.isfinite(cutoff) and cutoff > 0):
         raise ConfigError(f"--cutoff = {cutoff!r} is out of range: must be > 0 (m)")
+    periodic = measured.periodic if periodic is None else periodic
     try:
-        z = validated_heights(measured.heights)
-        moments = psd_moments(z, pixel, cutoff, measured.periodic if periodic is None else periodic)
+        filled, holed = _filled(measured.heights)
+        z = validated_heights(filled)
+        moments = psd_moments(z, pixel, cutoff, periodic)
         summits = summit_parameters(moments.m0, moments.m2, moments.m4, beta_rule)
+        gaps = _gaps(z, holed, pixel, periodic)
     except ValueError as exc:
         raise ConfigError(f"HEIGHTMAP {str(path)!r}: {exc}") from None
     return {
@@ -208,7 +226,40 @@ def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | N
         "bandwidth_alpha": summits.bandwidth, "sigma": summits.sigma,
         "summit_mean_height": summits.summit_mean_height, "eta": summits.eta, "beta": summits.beta,
         "beta_rule": f"{summits.beta_rule}: {BETA_RULES[summits.beta_rule]}",
+        **gaps,
     }
+
+
+def _filled(heights: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """The map with its NaN pixels filled, and the map as read (None: nothing to fill).
+
+    Raises
+    ------
+    ValueError
+        If more than :data:`MAX_MISSING_SHARE` of the pixels are NaN.
+    """
+    raw = np.asarray(heights)
+    if raw.dtype.kind != "f" or raw.ndim != 2 or not np.isnan(raw).any():
+        return raw, None
+    share = float(np.isnan(raw).mean())
+    if share > MAX_MISSING_SHARE:
+        raise ValueError(f"{share:.1%} of the pixels are undefined (NaN), more than the {MAX_MISSING_SHARE:.0%} "
+                         f"that are filled: crop the map to its measured part")
+    return fill_gaps(raw)[0], raw
+
+
+def _gaps(z: np.ndarray, holed: np.ndarray | None, pixel: tuple[float, float], periodic: bool) -> dict[str, Any]:
+    """Filled pixels and their share; with any, the masked map's rms height (m) and the relative
+    change of rms height, m2 and m4 from the filled to the masked map (same finite differences)."""
+    if holed is None:
+        return {"filled_pixels": 0, "filled_share": 0.0, "masked_rms_height": None,
+                "masked_rms_change": None, "masked_m2_change": None, "masked_m4_change": None}
+    count = int(np.isnan(holed).sum())
+    full = masked_moments(z, pixel, periodic)
+    masked = masked_moments(holed, pixel, periodic)
+    return {"filled_pixels": count, "filled_share": count / holed.size, "masked_rms_height": masked[0],
+            "masked_rms_change": masked[0] / full[0] - 1, "masked_m2_change": masked[1] / full[1] - 1,
+            "masked_m4_change": masked[2] / full[2] - 1}
 
 
 def _report(r: dict[str, Any]) -> str:
@@ -216,6 +267,7 @@ def _report(r: dict[str, Any]) -> str:
         f"file        {r['file']} ({r['reader']}, heights in {r['file_height_unit']}), {r['shape'][0]} x "
         f"{r['shape'][1]} pixels of {r['pixel_size'][0]:.4g} x {r['pixel_size'][1]:.4g} m",
         f"detrending  {r['detrending']} removed, window {r['window']}, wavelengths >= {r['cutoff_wavelength']:.4g} m",
+        _filled_line(r),
         f"rms_height = {r['rms_height']:.6g} m   (std of surface heights)",
         f"m0    = {r['m0']:.6g} m^2",
         f"m2    = {r['m2']:.6g}",
@@ -227,6 +279,14 @@ def _report(r: dict[str, Any]) -> str:
         f"use: --set roughness.sigma={r['sigma']:.6g} --set roughness.eta={r['eta']:.6g} "
         f"--set roughness.beta={r['beta']:.6g}",
     ])
+
+
+def _filled_line(r: dict[str, Any]) -> str:
+    if not r["filled_pixels"]:
+        return "filled      none (no undefined pixels)"
+    return (f"filled      {r['filled_pixels']} undefined pixels ({r['filled_share']:.2%}) by harmonic interpolation; "
+            f"masked instead, rms_height {r['masked_rms_change']:+.2%}, m2 {r['masked_m2_change']:+.2%}, "
+            f"m4 {r['masked_m4_change']:+.2%} (finite differences)")
 
 
 def roughness_cli(args: argparse.Namespace) -> None:
