@@ -172,6 +172,18 @@ class Contact:
         "asperities (one Gaussian asperity per cell, drawn per realization)",
         choices=("mean_area", "expected", "asperities"),
     )
+    model: str = _param(
+        "greenwood_tripp",
+        "1",
+        "contact model: greenwood_tripp (the asperities' mean, Sect. 2.5, discretized by contact.spots) "
+        "or discrete (each surface's own Poisson asperities, Hertzian caps coupled through the "
+        "half-space, solved at the Greenwood-Tripp forces of the approaches; design note 11)",
+        choices=("greenwood_tripp", "discrete"),
+    )
+    surfaces: int = _param(
+        256, "1", "discrete: rough surfaces solved (the pool); oxide realization k meets surface "
+        "k mod surfaces", ge=1,
+    )
 
 
 @dataclass(frozen=True)
@@ -243,6 +255,14 @@ class Oxide:
     film_resistance: float = _param(
         1e-11, "ohm m2", "specific resistance r_f of a resistive oxide film (used when oxide.film = resistive)",
         ge=0,
+    )
+    spot_rule: str = _param(
+        "centre",
+        "1",
+        "which share of a spot conducts: centre (all of it where its centre is clean, the paper's "
+        "rule) or disc (its clean share f of the contact disc, at quadrature points, conducting "
+        "with radius a sqrt(f); contact.model = discrete only)",
+        choices=("centre", "disc"),
     )
 
 
@@ -408,7 +428,8 @@ STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "contact": ("material", "roughness", "indenter", "loading", "contact"),
     "oxide": ("roughness.eta", "indenter.radius", "contact.window", "oxide"),
     # the fitted steps and fits.confidence: the adaptive ensemble's stopping rule
-    "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance", "fits.min_force", "fits.fit_range",
+    "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance", "oxide.spot_rule", "fits.min_force",
+             "fits.fit_range",
              "fits.min_force_normalized", "fits.confidence"),
     "fits": ("fits",),
     "surrogate": (
@@ -430,7 +451,7 @@ STAGE_INPUTS: dict[str, tuple[str, ...]] = {
 }
 #: Parameters left out of a stage's inputs although STAGE_INPUTS names their section.
 STAGE_EXCLUDED: dict[str, tuple[str, ...]] = {
-    "oxide": ("oxide.film", "oxide.film_resistance"),
+    "oxide": ("oxide.film", "oxide.film_resistance", "oxide.spot_rule"),
 }
 STAGE_UPSTREAM: dict[str, tuple[str, ...]] = {
     "contact": (),
@@ -674,9 +695,33 @@ def _check_spots(s: Scenario) -> None:
         )
 
 
+def _check_discrete(s: Scenario) -> None:
+    """The disc rule needs discrete spots; discrete spots take radius weights, no lattice term and
+    insulating films."""
+    if s.oxide.spot_rule == "disc" and s.contact.model != "discrete":
+        raise ConfigError(
+            f"oxide.spot_rule = 'disc' is not allowed with contact.model = {s.contact.model!r}: must be "
+            "'centre' (a grid spot stands for a cell's asperities, not one contact disc; the disc rule "
+            "needs contact.model = 'discrete')"
+        )
+    if s.contact.model != "discrete":
+        return
+    for name, value, allowed, why in (
+        ("cube.weights", s.cube.weights, "radius", "Greenwood's form on discrete spots weights by radii"),
+        ("oxide.film", s.oxide.film, "insulating", "resistive films are not implemented on discrete spots"),
+    ):
+        if value != allowed:
+            raise ConfigError(f"{name} = {value!r} is not allowed with contact.model = 'discrete': must be "
+                              f"{allowed!r} ({why})")
+    if s.cube.lattice_constant != 0:
+        raise ConfigError(f"cube.lattice_constant = {s.cube.lattice_constant!r} is not allowed with contact.model "
+                          "= 'discrete': must be 0 (discrete spots have no lattice to complete)")
+
+
 def _cross_checks(s: Scenario) -> None:
     _check_point_model(s)
     _check_spots(s)
+    _check_discrete(s)
     for section in SECTIONS:
         obj = getattr(s, section)
         for f in dataclasses.fields(obj):

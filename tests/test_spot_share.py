@@ -1,4 +1,4 @@
-"""The disc spot rule (pipeline.physics.spot_share) and the batched field evaluator (field_points)."""
+"""The disc spot rule (pipeline.physics.spot_share) and the field at arbitrary points (oxide_points)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pipeline.physics import oxide_field as of
-from pipeline.physics.field_points import fields_at_points
+from pipeline.physics.oxide_points import values_at_points
 from pipeline.physics.spot_share import DEFAULT_RINGS, DiscRule, clean_share, effective_radius, spot_points
 
 N_CELLS = 57  # the paper scenario's window
@@ -23,24 +23,24 @@ def _coeffs(modes: of.Band, lam: float, count: int, seed: int = 7) -> np.ndarray
 
 
 @pytest.mark.parametrize("lam, spectral", [(1.0, False), (5.0, True), (23.0, True)])
-def test_fields_at_points_equal_direct_sum(lam: float, spectral: bool) -> None:
+def test_values_at_points_equal_direct_sum(lam: float, spectral: bool) -> None:
     modes = _paper_band(lam) if spectral else of.band(N_CELLS, CELL, lam, 3.0, 0.5)
     coeffs = _coeffs(modes, lam, 6).reshape(2, 3, -1)  # any leading shape
     rng = np.random.default_rng(3)
     x, y = rng.uniform(-40 * CELL, 40 * CELL, (2, 5, 140))  # also outside the window
-    values = fields_at_points(modes, coeffs, x, y)
+    values = values_at_points(modes, coeffs, x, y)
     assert values.shape == (2, 3, 5, 140) and values.dtype == np.float64
     for b in np.ndindex(2, 3):
         # unit-variance fields: atol 1e-12 covers values near 0, where rtol means nothing
         np.testing.assert_allclose(values[b], of.field_at_points(modes, coeffs[b], x, y), rtol=1e-10, atol=1e-12)
 
 
-def test_fields_at_points_many_chunks_and_one_field() -> None:
+def test_values_at_points_of_many_fields_and_one_field() -> None:
     modes = _paper_band(5.0)
     coeffs = _coeffs(modes, 5.0, 40)
-    x = np.linspace(-20 * CELL, 20 * CELL, 3001)  # > one chunk of points at 40 fields
-    values = fields_at_points(modes, coeffs, x, 0.5 * x)
-    single = fields_at_points(modes, coeffs[17], x, 0.5 * x)
+    x = np.linspace(-20 * CELL, 20 * CELL, 3001)
+    values = values_at_points(modes, coeffs, x, 0.5 * x)
+    single = values_at_points(modes, coeffs[17], x, 0.5 * x)
     assert single.shape == x.shape
     np.testing.assert_allclose(values[17], single, rtol=0, atol=1e-12)
     np.testing.assert_allclose(single[::97], of.field_at_points(modes, coeffs[17], x[::97], 0.5 * x[::97]),
@@ -96,7 +96,7 @@ def test_disc_inside_clean_or_oxide_gives_one_or_zero() -> None:
     xc = centres[[hi[1], lo[1]]]
     yc = centres[[hi[0], lo[0]]]
     x, y = spot_points(xc, yc, np.full(2, 0.01 * lam * CELL), rule)
-    values = fields_at_points(modes, coeffs, x, y)
+    values = values_at_points(modes, coeffs, x, y)
     f = clean_share(values, 0.0, rule.weights())
     assert values[0].min() > 0 > values[1].max()
     np.testing.assert_array_equal(f, [0.0, 1.0])  # oxide on the peak, clean in the trough
@@ -125,7 +125,7 @@ def test_clean_share_converges_to_fine_image(lam: float) -> None:
     for n_rings in (1, 2, 4, DEFAULT_RINGS):
         rule = DiscRule(n_rings)
         x, y = spot_points(xc, yc, a, rule)
-        f = clean_share(fields_at_points(modes, coeffs, x, y), thresholds[:, None, None], rule.weights())
+        f = clean_share(values_at_points(modes, coeffs, x, y), thresholds[:, None, None], rule.weights())
         error = np.abs(f - fine)
         mean_error.append(error.mean())
     assert np.all(np.diff(mean_error) < 0)
@@ -153,7 +153,7 @@ def test_centre_rule_and_full_share_keep_the_radius() -> None:
     rule = DiscRule(0)
     x, y = spot_points(xc, yc, a, rule)
     np.testing.assert_array_equal(x[:, 0], xc)
-    f = clean_share(fields_at_points(modes, coeffs, x, y), 0.2, rule.weights())
+    f = clean_share(values_at_points(modes, coeffs, x, y), 0.2, rule.weights())
     centre_clean = of.field_at_points(modes, coeffs[1], xc, yc) < 0.2
     np.testing.assert_array_equal(f[1], centre_clean.astype(float))
     radius = effective_radius(a, f)

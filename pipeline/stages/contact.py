@@ -20,6 +20,7 @@ from pipeline.physics import greenwood_tripp as gt
 from pipeline.physics import hertz, spot_models, spots
 from pipeline.physics.asperity import area_fraction, asperity_pressure
 from pipeline.physics.grid import cell_centres
+from pipeline.stages import contact_discrete
 from pipeline.store import write_dataset
 
 __all__ = ["build", "run", "radial_grid", "indenter_profile", "solve_scenario", "fields"]
@@ -106,7 +107,7 @@ def _var(dims: tuple[str, ...], data: np.ndarray, long_name: str, units: str) ->
     return (dims, np.asarray(data), {"long_name": long_name, "units": units})
 
 
-def build(scenario: Scenario) -> xr.Dataset:
+def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=False)) -> xr.Dataset:
     """Solve the contact problem of ``scenario`` and collect every field (pure, in memory).
 
     Returns
@@ -118,7 +119,9 @@ def build(scenario: Scenario) -> xr.Dataset:
         hertz_radius, holm_radius, roughness_parameter, iterations, residual, converged,
         stiffness (N/m) and barber_conductance (S);
         over (delta, y, x): spot_area, spot_radius (by ``contact.spots``), spot_separation; over r: profile. ``auto`` domains are
-        resolved first (:func:`pipeline.domains.resolve`).
+        resolved first (:func:`pipeline.domains.resolve`). With ``contact.model = "discrete"``
+        also the pool of discrete surfaces at the same forces
+        (:func:`pipeline.stages.contact_discrete.variables`; its solves run where ``options`` says).
     """
     scenario = resolve(scenario)
     r, sols, stiffness = solve_with_stiffness(scenario)
@@ -154,7 +157,13 @@ def build(scenario: Scenario) -> xr.Dataset:
         "x": ("x", x, {"long_name": "cell centre x", "units": "m"}),
     }
     attrs = {"cell_size": scenario.cell_size, "hertz_reference": "sphere only (NaN otherwise)",
-             "spots": scenario.contact.spots}
+             "spots": scenario.contact.spots, "model": scenario.contact.model}
+    if scenario.contact.model == "discrete":
+        pool, radius = contact_discrete.solve_pool(scenario, f["force"], float(deltas.min()), options)
+        pool_vars, pool_coords, pool_attrs = contact_discrete.variables(scenario, pool, radius)
+        data_vars.update(pool_vars)
+        coords.update(pool_coords)
+        attrs.update(pool_attrs)
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 
@@ -196,7 +205,7 @@ def _scalar_vars(scenario: Scenario, force: np.ndarray, sols: list[gt.Solution])
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
     """Build the contact dataset and write ``<data_dir>/contact.nc`` atomically.
 
-    ``options`` is accepted for the stage interface; the stage is under a second of dense
-    linear algebra in one process, so it does not use dask.
+    The Greenwood–Tripp solve is under a second of dense linear algebra in one process; the
+    discrete model's pool of surfaces runs where ``options`` says.
     """
-    return write_dataset(build(scenario), data_dir, "contact", scenario)
+    return write_dataset(build(scenario, options), data_dir, "contact", scenario)

@@ -36,6 +36,7 @@ from pipeline.physics import constriction
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
 from pipeline.stages.cube_chunks import asperity_spots, clean_terms, exact_terms, spots_of
 from pipeline.stages.cube_dataset import dataset
+from pipeline.stages.cube_discrete import DiscretePool, clean_pool
 from pipeline.stages.cube_rounds import compute_cells, half_widths, padded, stopping_rule
 from pipeline.stages.oxide import FieldSource, RecordedFields
 
@@ -88,6 +89,8 @@ def _clean(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any], n_
     resistance of the mean conductance (open circuits conduct nothing), the self term of the
     mean self-conductance, and the probability of an open circuit.
     """
+    if settings["spots"] == "discrete":
+        return _clean_discrete(radius, settings, settings["model"])
     n_delta = radius.shape[0]
     if settings["spots"] != "asperities":
         res = clean_terms(radius, weights, settings)
@@ -101,6 +104,18 @@ def _clean(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any], n_
         own = rho / np.mean(rho / res.resistance_self, axis=0)
     return {"resistance": total, "self": own, "interaction": total - own,
             "open": np.mean(np.isinf(res.resistance), axis=0), "n_drawn": n_drawn}
+
+
+def _clean_discrete(pool: DiscretePool, settings: dict[str, Any], model: str) -> dict[str, np.ndarray]:
+    """:func:`_clean` on discrete spots: over the pool's surfaces, the resistance of the mean
+    conductance, the self term of the mean self-conductance, the probability of an open circuit."""
+    terms = clean_pool(pool, settings["rho"], model)
+    rho = settings["rho"]
+    with np.errstate(divide="ignore"):
+        total = rho / np.mean(rho / terms["resistance"], axis=0)
+        own = rho / np.mean(rho / terms["resistance_self"], axis=0)
+    return {"resistance": total, "self": own, "interaction": total - own,
+            "open": np.mean(np.isinf(terms["resistance"]), axis=0), "n_drawn": pool.size}
 
 
 #: The clean surface's conductance by each model, for Barber's check: (name, model, lattice constant).
@@ -118,6 +133,10 @@ def _clean_models(radius: np.ndarray, weights: np.ndarray, settings: dict[str, A
     for name, kind, constant in CLEAN_MODELS:
         if name in out:
             continue
+        if settings["spots"] == "discrete":  # no lattice on discrete spots
+            out[name] = (np.full(len(settings["crops"]), np.nan) if constant > 0 else
+                         1.0 / _clean_discrete(radius, settings, kind)["resistance"])
+            continue
         # the lattice term completes expected spots' continuum; drawn asperities have none to complete
         lattice_off = constant > 0 and settings["spots"] == "asperities"
         if lattice_off or kind == "point" and weights is not radius and not np.array_equal(weights, radius):
@@ -133,7 +152,10 @@ def _measured_crop_error(
     source: FieldSource, radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
     cropped: np.ndarray,
 ) -> float:
-    """Largest relative change of ``R`` from cropping, over the first realization's entries."""
+    """Largest relative change of ``R`` from cropping, over the first realization's entries
+    (0 on discrete spots: they are never cropped)."""
+    if settings["spots"] == "discrete":
+        return 0.0
     first = np.arange(1)
     exact = exact_terms(source, first, *spots_of(settings, first, radius, weights), settings)["resistance"]
     finite = np.isfinite(exact)
@@ -143,7 +165,8 @@ def _measured_crop_error(
 
 
 def work_settings(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
-    """Spot radii and weights (delta, y, x) of ``contact`` and the settings every task of the cube reads."""
+    """Spot radii and weights (delta, y, x) of ``contact`` and the settings every task of the cube reads
+    (with ``contact.model = "discrete"`` the pool of surfaces, :class:`DiscretePool`, for both)."""
     radius, weights, pitch = spot_maps(scenario, contact)
     cube = scenario.cube
     film = scenario.oxide.film_resistance if scenario.oxide.film == "resistive" else np.inf
@@ -163,6 +186,10 @@ def work_settings(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, 
         "spots": scenario.contact.spots,
         "lattice_constant": cube.lattice_constant,
     }
+    if scenario.contact.model == "discrete":
+        settings.update(spots="discrete", spot_rule=scenario.oxide.spot_rule)
+        pool = DiscretePool.of(contact)
+        return pool, pool, settings
     if scenario.contact.spots == "asperities":
         rough = scenario.roughness
         settings["asperities"] = (scenario.oxide.seed, rough.sigma, rough.beta)

@@ -4,7 +4,8 @@ A dask task regenerates a chunk of fields of one lambda from their seeds
 (:class:`pipeline.stages.oxide.FieldSource`), thresholds them at each oxide fraction and runs
 the scenario's resistance model (:func:`model`) on the conducting masks: Greenwood's closed
 form, Greenwood's form with films, or the point model. With ``asperities`` spots each
-realization brings its own drawn spots (:func:`asperity_spots`).
+realization brings its own drawn spots (:func:`asperity_spots`); discrete spots have their own
+chunk (:mod:`pipeline.stages.cube_discrete`).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from pipeline.physics import constriction, point_model, spot_models
+from pipeline.stages.cube_discrete import discrete_chunk
 from pipeline.stages.oxide import FieldSource
 
 __all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "spots_of", "chunk_terms", "clean_terms",
@@ -41,8 +43,8 @@ def model(settings: dict[str, Any]) -> Any:
 
 
 def terms(settings: dict[str, Any]) -> tuple[str, ...]:
-    """The per-entry terms the model of ``settings`` returns."""
-    return TERMS + SOLVER_TERMS if settings["model"] == "point" else TERMS
+    """The per-entry terms the model of ``settings`` returns (discrete spots: a direct solve, no solver terms)."""
+    return TERMS + SOLVER_TERMS if settings["model"] == "point" and settings["spots"] != "discrete" else TERMS
 
 
 def _resistance(masks: np.ndarray, radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
@@ -157,7 +159,11 @@ def field_chunk(
     """Regenerate the fields of ``realizations`` at lambda number ``index`` and run :func:`chunk_terms`.
 
     Only the fractions ``xi_index`` are evaluated; returns the terms shaped (xi, delta, realization).
+    Discrete spots (``radius`` a :class:`pipeline.stages.cube_discrete.DiscretePool`) go to
+    :func:`pipeline.stages.cube_discrete.discrete_chunk`.
     """
+    if settings["spots"] == "discrete":
+        return discrete_chunk(source, index, realizations, xi_index, radius, settings)
     psi, threshold = source.fields(index, realizations)
     radius, weights = spots_of(settings, realizations, radius, weights)
     out = chunk_terms(psi[None], threshold[xi_index][:, None], radius, weights, settings)

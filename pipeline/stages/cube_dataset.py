@@ -44,7 +44,10 @@ def dataset(
                              _attrs("1", "normalized force F' = 2F / (E* sqrt(R* sigma^3))")),
     }
     is_open = np.isposinf(out["resistance"])
-    clean_comment = ("the mean conductance (self-conductance) over the first "
+    discrete = scenario.contact.model == "discrete"
+    clean_comment = ("the mean conductance (self-conductance) over the "
+                     f"{clean['n_drawn']} discrete surfaces of contact.nc" if discrete else
+                     "the mean conductance (self-conductance) over the first "
                      f"{clean['n_drawn']} realizations of the asperity heights"
                      if scenario.contact.spots == "asperities" else "exact, every spot conducting")
     padding = "NaN beyond n_realizations(xi, lambda)"
@@ -111,6 +114,12 @@ def dataset(
         "model": scenario.cube.model,
         "film": ox.film,
     }
+    if discrete:
+        attrs["conducting_rule"] = (
+            "realization k meets discrete surface k mod contact.surfaces; a spot conducts with radius a where the "
+            "field at its centre is below the threshold (spot_rule centre), or with a sqrt(f), f its clean share of "
+            "the contact disc (spot_rule disc)")
+        attrs["spot_rule"] = ox.spot_rule
     if ox.film == "resistive":
         attrs["film_resistance"] = ox.film_resistance
         attrs["conducting_rule"] = "every spot conducts; where psi >= threshold through the film"

@@ -1,0 +1,136 @@
+"""Stage 1 with ``contact.model = "discrete"``: a pool of rough surfaces, each solved at the load steps' forces.
+
+The load steps are forces: those the Greenwood–Tripp solution gives at the scenario's approaches,
+so both models share the steps and F'. Surface ``k`` of the pool (``contact.surfaces`` of them)
+draws its own asperities (:func:`pipeline.physics.discrete_contact.draw_asperities`, stream
+``k``) on a disc that holds every asperity able to touch at the heaviest load
+(:func:`domain`); :func:`pipeline.physics.discrete_contact.solve_forces` gives its coupled caps
+at every force. The contact file keeps, per surface, the asperities that touch at some step
+(positions; radius per step, 0 off contact; padded to the largest count with ``spot_count``
+saying how many are real), its approach, stiffness K and Barber's conductance K / (E* rho*) per
+step, and the solver's report. The work is split over dask tasks of :data:`CHUNK` surfaces;
+each surface's result is independent of the chunking and the scheduler.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, Callable
+
+import dask
+import numpy as np
+import xarray as xr
+
+from pipeline.compute import ComputeOptions, compute
+from pipeline.config import Scenario
+from pipeline.physics import discrete_contact as dc
+from pipeline.physics.indenter import profile
+
+__all__ = ["CHUNK", "DOMAIN_MARGIN", "indenter", "domain", "surface_spots", "solve_pool", "variables"]
+
+#: Surfaces per dask task.
+CHUNK = 16
+#: The disc serves approaches down to the Greenwood–Tripp solution's lowest minus this many sigma
+#: (the coupled caps' approach at the same force lies within a fraction of sigma of it).
+DOMAIN_MARGIN = 1.0
+#: Expected number of asperities left outside the disc that could touch at that approach.
+DOMAIN_OUTSIDE = 1e-6
+
+
+def indenter(scenario: Scenario) -> Callable[[np.ndarray], np.ndarray]:
+    """The indenter profile z(r) (m) of ``scenario`` as a picklable function."""
+    ind = scenario.indenter
+    return functools.partial(profile, shape=ind.shape, radius=ind.radius, cone_angle=ind.cone_angle,
+                             punch_radius=ind.punch_radius, edge_radius=ind.edge_radius)
+
+
+def domain(scenario: Scenario, lowest_delta: float) -> tuple[float, float]:
+    """The asperity disc's radius (m) and the lowest approach (m) it serves."""
+    rough = scenario.roughness
+    served = lowest_delta - DOMAIN_MARGIN * rough.sigma
+    return dc.domain_radius(indenter(scenario), served, rough.sigma, rough.eta, DOMAIN_OUTSIDE), served
+
+
+def surface_spots(settings: dict[str, Any], k: int) -> dict[str, np.ndarray]:
+    """Surface ``k``'s touching asperities and its solution at every force (see the module).
+
+    Raises
+    ------
+    ValueError
+        If the solved approach falls below the one the disc serves (asperities may be missing).
+    """
+    asp = dc.draw_asperities(settings["seed"], k, settings["radius"], settings["eta"], settings["sigma"])
+    sol = dc.solve_forces(asp, settings["profile"], settings["forces"], settings["e_star"], settings["beta"],
+                          settings["floor"])
+    if sol.delta.min() < settings["served"]:
+        raise ValueError(f"surface {k}: the approach {sol.delta.min():.4g} m falls below the "
+                         f"{settings['served']:.4g} m its asperity disc serves")
+    touching = np.flatnonzero((sol.interference > 0).any(axis=0))
+    return {"x": asp.x[touching], "y": asp.y[touching], "radius": sol.radius(settings["beta"])[:, touching],
+            "delta": sol.delta, "stiffness": sol.stiffness, "iterations": sol.iterations,
+            "residual": sol.residual, "candidates": sol.candidates}
+
+
+def _chunk(settings: dict[str, Any], surfaces: np.ndarray) -> list[dict[str, np.ndarray]]:
+    return [surface_spots(settings, int(k)) for k in surfaces]
+
+
+def solve_pool(scenario: Scenario, forces: np.ndarray, lowest_delta: float,
+               options: ComputeOptions) -> tuple[list[dict[str, np.ndarray]], float]:
+    """Every surface of the pool at ``forces`` (N); returns the per-surface results and the disc radius (m)."""
+    rough = scenario.roughness
+    radius, served = domain(scenario, lowest_delta)
+    settings = {"seed": scenario.oxide.seed, "radius": radius, "served": served, "eta": rough.eta,
+                "sigma": rough.sigma, "beta": rough.beta, "e_star": scenario.material.E_star,
+                "profile": indenter(scenario), "forces": np.asarray(forces, float),
+                "floor": dc.coupling_floor(rough.beta, rough.sigma)}
+    shared = dask.delayed(settings)
+    n = scenario.contact.surfaces
+    tasks = [dask.delayed(_chunk, pure=True)(shared, np.arange(s, min(s + CHUNK, n))) for s in range(0, n, CHUNK)]
+    chunks = compute(*tasks, options=options, label=f"contact: {n} discrete surfaces")
+    return [r for chunk in chunks for r in chunk], radius
+
+
+def _var(dims: tuple[str, ...], data: np.ndarray, long_name: str, units: str) -> tuple:
+    return (dims, np.asarray(data), {"long_name": long_name, "units": units})
+
+
+def variables(scenario: Scenario, pool: list[dict[str, np.ndarray]], radius: float) -> tuple[dict, dict, dict]:
+    """The pool's variables, coordinates and attributes for contact.nc (spots padded: NaN
+    positions, zero radii beyond ``spot_count``)."""
+    n_s, n_d = len(pool), pool[0]["delta"].size
+    width = max(1, max(r["x"].size for r in pool))
+    x, y = np.full((n_s, width), np.nan), np.full((n_s, width), np.nan)
+    spot_radius = np.zeros((n_s, n_d, width))
+    for k, r in enumerate(pool):
+        m = r["x"].size
+        x[k, :m], y[k, :m], spot_radius[k, :, :m] = r["x"], r["y"], r["radius"]
+    stacked = {name: np.stack([r[name] for r in pool]) for name in ("delta", "stiffness", "iterations",
+                                                                    "residual", "candidates")}
+    e_star, rho = scenario.material.E_star, scenario.material.rho
+    sd, ss = ("surface", "delta"), ("surface", "spot")
+    data_vars = {
+        "spot_count": _var(("surface",), np.array([r["x"].size for r in pool], np.int32),
+                           "asperities of the surface that touch at some load step", "1"),
+        "asperity_x": _var(ss, x, "touching asperity position x (from the indenter's axis)", "m"),
+        "asperity_y": _var(ss, y, "touching asperity position y (from the indenter's axis)", "m"),
+        "asperity_radius": _var(("surface", "delta", "spot"), spot_radius,
+                                "contact radius sqrt(beta w) of the touching asperity (0 off contact)", "m"),
+        "discrete_approach": _var(sd, stacked["delta"], "approach of the discrete surface at the step's force "
+                                  "(tip's separation from the mean plane)", "m"),
+        "discrete_stiffness": _var(sd, stacked["stiffness"], "contact stiffness K = -dF/d delta of the "
+                                   "discrete surface (exact linearisation)", "N m-1"),
+        "discrete_barber_conductance": _var(sd, stacked["stiffness"] / (e_star * rho),
+                                            "Barber's conductance K / (E* rho*) of the discrete surface", "S"),
+        "discrete_iterations": _var(sd, stacked["iterations"].astype(np.int32),
+                                    "Newton iterations of the discrete solve", "1"),
+        "discrete_residual": _var(sd, stacked["residual"], "final relative residual of the discrete solve", "1"),
+        "discrete_candidates": _var(sd, stacked["candidates"].astype(np.int32),
+                                    "candidate asperities in the discrete solve", "1"),
+    }
+    coords = {"surface": ("surface", np.arange(n_s), {"long_name": "rough surface of the pool", "units": "1"}),
+              "spot": ("spot", np.arange(width), {"long_name": "touching asperity of a surface", "units": "1"})}
+    attrs = {"asperity_disc_radius": radius,
+             "coupling_floor": dc.coupling_floor(scenario.roughness.beta, scenario.roughness.sigma),
+             "discrete_tolerance": dc.TOLERANCE}
+    return data_vars, coords, attrs

@@ -1,0 +1,179 @@
+"""The cube on discrete spots (``contact.model = "discrete"``): oxide fields where each surface's spots lie.
+
+Oxide realization ``k`` meets surface ``k mod S`` of contact.nc's pool (``S = contact.surfaces``)
+and its own field (the same field as on grid spots, by seed and index, so paired comparisons
+stay possible). The field is evaluated where the spots are, exactly
+(:func:`pipeline.physics.oxide_points.values_at_points`), and each spot conducts by
+``oxide.spot_rule``:
+
+* ``centre``: all of it where the field at its centre is clean (``psi < threshold``, float32
+  values compared, as on grid spots), else nothing;
+* ``disc``: its clean share ``f`` of the contact disc, from the field at an equal-area pattern of
+  points on the disc (:class:`pipeline.physics.spot_share.DiscRule`), with radius ``a sqrt(f)``.
+  The pattern's rings follow the disc's size against the correlation length ``l_O``:
+  ``min(DEFAULT_RINGS, ceil(RINGS_PER_CORRELATION a / l_O))``, at least one, so a disc of radius
+  ``l_O / 2`` gets the full pattern (clean share within 0.02 of a fine image of the disc, see
+  :mod:`pipeline.physics.spot_share`) and a small one a few points.
+
+The resistance of each (xi, load step) is the exact point-interaction solve or Greenwood's form
+on the conducting spots (:func:`pipeline.physics.discrete_resistance.resistances`), with the
+coupling kernel of the contact solve, so the clean surface obeys Barber's theorem exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from pipeline.physics import oxide_field
+from pipeline.physics.discrete_contact import interaction_kernel
+from pipeline.physics.discrete_resistance import resistances
+from pipeline.physics.oxide_points import values_at_points
+from pipeline.physics.spot_share import DEFAULT_RINGS, DiscRule, clean_share, spot_points
+
+__all__ = ["RINGS_PER_CORRELATION", "DiscretePool", "rings", "clean_shares", "discrete_chunk", "clean_pool"]
+
+#: Disc rule: pattern rings per disc radius in correlation lengths l_O (8 rings at a = l_O / 2).
+RINGS_PER_CORRELATION = 16.0
+
+
+@dataclass(frozen=True)
+class DiscretePool:
+    """contact.nc's pool of discrete surfaces: spot positions (m) and radii per step (m), padded.
+
+    Attributes
+    ----------
+    x, y
+        Spot positions, shape (surface, spot).
+    radius
+        Contact radii, shape (surface, delta, spot); 0 off contact and beyond ``count``.
+    count
+        Spots of each surface, shape (surface,).
+    floor
+        The coupling kernel's distance floor, m.
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    radius: np.ndarray
+    count: np.ndarray
+    floor: float
+
+    @classmethod
+    def of(cls, contact: xr.Dataset) -> "DiscretePool":
+        """The pool stored in a discrete contact dataset."""
+        return cls(contact["asperity_x"].values, contact["asperity_y"].values,
+                   contact["asperity_radius"].transpose("surface", "delta", "spot").values,
+                   contact["spot_count"].values, float(contact.attrs["coupling_floor"]))
+
+    @property
+    def size(self) -> int:
+        """Surfaces in the pool."""
+        return int(self.count.size)
+
+    def spots(self, realization: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions (m) and radii (delta, spot) of the surface oxide realization ``realization`` meets."""
+        s = int(realization) % self.size
+        m = int(self.count[s])
+        return self.x[s, :m], self.y[s, :m], self.radius[s, :, :m]
+
+
+def rings(radius: np.ndarray, correlation_length: float) -> np.ndarray:
+    """Rings of the disc pattern for discs of ``radius`` (m) in a field of correlation length ``l_O`` (m)."""
+    wanted = np.ceil(RINGS_PER_CORRELATION * np.asarray(radius, float) / correlation_length)
+    return np.clip(wanted, 1, DEFAULT_RINGS).astype(int)
+
+
+def clean_shares(modes: oxide_field.Band, coeffs: np.ndarray, x: np.ndarray, y: np.ndarray, radius: np.ndarray,
+                 threshold: np.ndarray, rule: str, correlation_length: float) -> np.ndarray:
+    """Clean share of every spot at every step and oxide fraction, shape (xi, delta, spot).
+
+    Parameters
+    ----------
+    modes, coeffs
+        The field's band and its coefficients (modes.size,).
+    x, y
+        Spot positions, m, shape (spot,).
+    radius
+        Contact radii, m, shape (delta, spot); 0 off contact (share 0).
+    threshold
+        float32 thresholds, shape (xi,).
+    rule
+        ``centre`` or ``disc``.
+    correlation_length
+        ``l_O``, m (sets the disc pattern's rings).
+    """
+    touching = radius > 0
+    out = np.zeros((threshold.size,) + radius.shape)
+    thr = threshold.astype(np.float32)[:, None]
+    if rule == "centre":
+        centre = values_at_points(modes, coeffs, x, y).astype(np.float32)
+        out[:] = (centre[None, None, :] < thr[:, :, None]) & touching[None]
+        return out
+    steps, spots = np.nonzero(touching)
+    a = radius[steps, spots]
+    count = rings(a, correlation_length)
+    patterns = [(DiscRule(int(n)), np.flatnonzero(count == n)) for n in np.unique(count)]
+    px, py = [], []
+    for pattern, i in patterns:
+        points = spot_points(x[spots[i]], y[spots[i]], a[i], pattern)
+        px.append(points[0].ravel())
+        py.append(points[1].ravel())
+    if not patterns:
+        return out
+    values = values_at_points(modes, coeffs, np.concatenate(px), np.concatenate(py)).astype(np.float32)
+    start = 0
+    for pattern, i in patterns:
+        block = values[start:start + i.size * pattern.size].reshape(i.size, pattern.size)
+        start += block.size
+        out[:, steps[i], spots[i]] = clean_share(block[None], thr[:, :, None], pattern.weights())
+    return out
+
+
+def _terms(kernel: np.ndarray, radius: np.ndarray, rho: float, model: str) -> dict[str, np.ndarray]:
+    """Resistance terms of spot radii (..., spot) on one surface: R, its self term, the rest, the count."""
+    total = radius.sum(axis=-1)
+    resistance = resistances(kernel, radius, rho, model)
+    with np.errstate(divide="ignore"):
+        own = rho / (2.0 * total)
+    open_ = ~np.isfinite(resistance)
+    return {"resistance": resistance, "resistance_self": own,
+            "resistance_interaction": np.where(open_, np.inf, resistance - np.where(open_, 0.0, own)),
+            "n_conducting": (radius > 0).sum(axis=-1).astype(np.int32),
+            "crop_bound": np.zeros(resistance.shape)}
+
+
+def discrete_chunk(source: Any, index: int, realizations: np.ndarray, xi_index: np.ndarray,
+                   pool: DiscretePool, settings: dict[str, Any]) -> dict[str, Any]:
+    """The terms (xi, delta, realization) of the fields of ``realizations`` at lambda number ``index``.
+
+    ``source`` is a :class:`pipeline.stages.oxide.FieldSource` (or the record in front of one):
+    its thresholds and its fields' coefficients.
+    """
+    base = getattr(source, "source", source)
+    modes, lam = base.modes[index], base.lambdas[index]
+    _, thresholds = source.fields(index, realizations)
+    thresholds = thresholds[xi_index]
+    pieces = []
+    for column, k in enumerate(realizations):
+        x, y, radius = pool.spots(int(k))
+        coeffs = oxide_field.coefficients(modes, oxide_field.field_stream(base.seed, lam, int(k)), base.amplitudes)
+        share = clean_shares(modes, coeffs, x, y, radius, thresholds[:, column], settings["spot_rule"],
+                             lam * base.cell_size)
+        kernel = interaction_kernel(x, y, pool.floor)
+        pieces.append(_terms(kernel, radius[None] * np.sqrt(share), settings["rho"], settings["model"]))
+    out: dict[str, Any] = {name: np.stack([p[name] for p in pieces], axis=-1) for name in pieces[0]}
+    out["n_uncropped"] = 0
+    return out
+
+
+def clean_pool(pool: DiscretePool, rho: float, model: str) -> dict[str, np.ndarray]:
+    """The oxide-free terms of every surface of the pool, each (surface, delta)."""
+    pieces = []
+    for s in range(pool.size):
+        x, y, radius = pool.spots(s)
+        pieces.append(_terms(interaction_kernel(x, y, pool.floor), radius, rho, model))
+    return {name: np.stack([p[name] for p in pieces]) for name in pieces[0]}

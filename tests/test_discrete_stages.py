@@ -1,0 +1,101 @@
+"""Discrete spots through the stages: the contact pool, the cube's spot rules, Barber per surface."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pipeline.compute import ComputeOptions
+from pipeline.config import load_scenario
+from pipeline.domains import resolve
+from pipeline.physics import oxide_field
+from pipeline.physics.discrete_contact import interaction_kernel
+from pipeline.physics.discrete_resistance import resistances
+from pipeline.physics.spot_share import DEFAULT_RINGS
+from pipeline.stages import contact, contact_discrete, cube, cube_discrete, oxide
+from tests.conftest import SMALL_OVERRIDES
+
+QUIET = ComputeOptions(progress=False)
+DISCRETE = {**SMALL_OVERRIDES, "contact.model": "discrete", "contact.surfaces": 5, "oxide.xi": [0.5],
+            "oxide.lambda": [1.0, 9.0], "oxide.n_realizations": 7, "cube.model": "point"}
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return resolve(load_scenario("paper", {**DISCRETE, "oxide.spot_rule": "disc"}))
+
+
+@pytest.fixture(scope="module")
+def pool(scene):
+    return contact.build(scene, QUIET)
+
+
+def test_pool_holds_each_surface_at_the_forces_with_barber_exact(scene, pool):
+    assert pool.sizes["surface"] == 5 and pool.attrs["model"] == "discrete"
+    assert np.all(pool["discrete_residual"].values <= 1e-10)
+    assert np.all(np.diff(pool["discrete_approach"].values, axis=1) < 0)  # more force, more approach
+    # the light steps touch on a few asperities, the heavy ones on many
+    touching = (pool["asperity_radius"] > 0).sum("spot")
+    assert touching.isel(delta=0).max() <= 12 and touching.isel(delta=-1).min() >= 20
+    for s in range(5):
+        m = int(pool["spot_count"][s])
+        x, y = pool["asperity_x"].values[s, :m], pool["asperity_y"].values[s, :m]
+        kernel = interaction_kernel(x, y, pool.attrs["coupling_floor"])
+        r = resistances(kernel, pool["asperity_radius"].values[s, :, :m], scene.material.rho)
+        np.testing.assert_allclose(1.0 / r, pool["discrete_barber_conductance"].values[s], rtol=1e-8)
+
+
+def test_pool_is_independent_of_the_chunking(scene, pool, monkeypatch):
+    monkeypatch.setattr(contact_discrete, "CHUNK", 2)
+    again = contact.build(scene, ComputeOptions(progress=False, workers=1))
+    for name in ("asperity_x", "asperity_radius", "discrete_approach", "discrete_stiffness"):
+        np.testing.assert_array_equal(again[name].values, pool[name].values)
+
+
+def test_disc_with_every_spot_clean_equals_centre():
+    scene = resolve(load_scenario("paper", DISCRETE))
+    modes = oxide.bands(scene)[0]
+    coeffs = oxide_field.coefficients(modes, oxide_field.field_stream(1, 1.0, 0))
+    x, y = np.array([0.0, 1e-4, -2e-4]), np.array([0.0, 5e-5, 1e-4])
+    radius = np.array([[1e-5, 0.0, 2e-5], [3e-5, 1e-5, 4e-5]])
+    clean = np.array([np.inf], np.float32)
+    for rule in ("centre", "disc"):
+        share = cube_discrete.clean_shares(modes, coeffs, x, y, radius, clean, rule, scene.cell_size)
+        np.testing.assert_array_equal(share[0], radius > 0)
+
+
+def test_disc_rings_follow_the_spot_size():
+    l_o = 1e-4
+    np.testing.assert_array_equal(cube_discrete.rings(np.array([1e-9, l_o / 16, l_o / 2, 5 * l_o]), l_o),
+                                  [1, 1, DEFAULT_RINGS, DEFAULT_RINGS])
+
+
+def test_cube_on_discrete_spots(scene, pool):
+    ox = oxide.build(scene, QUIET)
+    out = cube.build(scene, pool, ox, QUIET)
+    assert out.attrs["spot_rule"] == "disc"
+    r = out["resistance"].values
+    clean = out["resistance_clean"].values
+    finite = np.isfinite(r)
+    assert finite.any() and np.all(r[finite] > 0)
+    # oxide removes conductance: every oxidized entry is at least its surface's clean resistance
+    pool_clean = cube_discrete.clean_pool(cube_discrete.DiscretePool.of(pool), scene.material.rho, "point")
+    surface_clean = pool_clean["resistance"][np.arange(r.shape[-1]) % 5]  # (realization, delta)
+    assert np.all(r[finite] >= np.broadcast_to(surface_clean.T, r.shape)[finite] * (1 - 1e-9))
+    # Barber on the pool: the clean point model against K / (E* rho*), surface by surface on average
+    np.testing.assert_allclose(out["conductance_clean_point"].values,
+                               pool["discrete_barber_conductance"].mean("surface").values, rtol=1e-8)
+    # chunking changes nothing
+    smaller = load_scenario("paper", {**DISCRETE, "oxide.spot_rule": "disc", "cube.chunk": 2})
+    again = cube.build(resolve(smaller), pool, ox, QUIET)
+    np.testing.assert_array_equal(again["resistance"].values, r)
+
+
+def test_centre_rule_switches_whole_spots(scene, pool):
+    centre = resolve(load_scenario("paper", {**DISCRETE, "oxide.spot_rule": "centre"}))
+    ox = oxide.build(centre, QUIET)
+    out = cube.build(centre, pool, ox, QUIET)
+    disc = cube.build(scene, pool, ox, QUIET)
+    # the same fields and surfaces: the rules differ, the clean surface does not
+    np.testing.assert_array_equal(out["resistance_clean"].values, disc["resistance_clean"].values)
+    assert not np.array_equal(out["resistance"].values, disc["resistance"].values)
