@@ -293,7 +293,8 @@ class Cube:
         "greenwood",
         "1",
         "resistance model: greenwood (closed form, Eqs. 11-13) or point (the exact "
-        "point-interaction solve, by preconditioned conjugate gradients)",
+        "point-interaction solve: by preconditioned conjugate gradients on grid spots, by a dense "
+        "Cholesky solve on discrete spots)",
         choices=("greenwood", "point"),
     )
     solver_tolerance: float = _param(

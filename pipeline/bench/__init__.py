@@ -25,7 +25,7 @@ __all__ = ["BENCHMARKS", "run_benchmarks", "summary_lines"]
 
 BENCHMARKS: tuple[str, ...] = (
     "contact", "oxide", "cube", "point", "scaling", "predict", "convergence", "stability", "frontier", "spots",
-    "biases",
+    "biases", "discrete",
 )
 
 

@@ -10,6 +10,10 @@ thing, all on the same oxide fields (same seeds; realization ``k`` of a lambda i
 4. the spectral period (the field lattice converged: a period that resolves the spectrum);
 5. expected spots (the discretization that obeys Barber's theorem: today's default);
 6. the point model (Greenwood's closed form is a bound; the exact solve of the same spots);
+7. discrete asperities (each surface's own caps coupled through the half-space, at the same forces,
+   in place of Greenwood–Tripp's mean; design note 11);
+8. the disc spot rule (each spot conducts with its clean share of its contact disc, not on/off
+   at its centre);
 
 and beside the chain, asperity spots (drawn per realization) in place of step 5. Each run
 reports alpha and gamma (the geometric-mean fit over the steps with F >= 200 N) and the
@@ -40,6 +44,8 @@ STEPS: tuple[tuple[str, dict[str, Any]], ...] = (
     ("spectral period (field lattice)", {"oxide.period": "spectral"}),
     ("expected spots (Barber, default)", {"contact.spots": "expected"}),
     ("point model (Greenwood's bound)", {"cube.model": "point"}),
+    ("discrete asperities (coupled caps)", {"contact.model": "discrete"}),
+    ("disc spot rule (a sqrt(f))", {"oxide.spot_rule": "disc"}),
 )
 #: Beside the chain: asperity spots in place of expected spots (step 5).
 SIDE = ("asperity spots (instead of expected)", 4, {"contact.spots": "asperities"})

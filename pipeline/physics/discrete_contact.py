@@ -298,8 +298,9 @@ class _Walker:
     """One surface's solution carried from force to force (warm starts, candidate rounds, continuation)."""
 
     def __init__(self, g: np.ndarray, kernel: _GrowingKernel, e_star: float, beta: float, tolerance: float,
-                 max_iterations: int) -> None:
+                 max_iterations: int, all_candidates: bool = False) -> None:
         self.g, self.kernel, self.e_star, self.beta = g, kernel, e_star, beta
+        self.all_candidates = all_candidates
         self.tolerance, self.max_iterations = tolerance, max_iterations
         self.force = 0.0  # 0: cold, no solution yet
         self.delta, self.threshold, self.stiffness, self.error = np.inf, np.inf, 0.0, np.inf
@@ -316,7 +317,7 @@ class _Walker:
             threshold = min(self.threshold, delta - (force - self.force) / self.stiffness)
         iterations = 0
         while True:
-            m = max(int(np.searchsorted(-g, -threshold, side="left")), 1)
+            m = g.size if self.all_candidates else max(int(np.searchsorted(-g, -threshold, side="left")), 1)
             coupling = self.kernel(m)
             carried = np.zeros(m)
             carried[: self.loads.size] = self.loads[:m]
@@ -366,6 +367,7 @@ def solve_forces(
     *,
     tolerance: float = TOLERANCE,
     max_iterations: int = MAX_ITERATIONS,
+    all_candidates: bool = False,
 ) -> DiscreteContact:
     """The coupled caps of one surface at each total force (see the module for the model).
 
@@ -385,6 +387,8 @@ def solve_forces(
         Coupling distance floor, m (:func:`coupling_floor`).
     tolerance, max_iterations
         Newton's relative tolerance and iteration cap per candidate round.
+    all_candidates
+        Solve on every asperity of the surface (the slow reference of the candidate selection).
 
     Raises
     ------
@@ -401,7 +405,7 @@ def solve_forces(
     g = asperities.z - profile(np.hypot(asperities.x, asperities.y))
     order = np.argsort(-g, kind="stable")  # candidates are a prefix of the descending gaps
     walker = _Walker(g[order], _GrowingKernel(asperities.x[order], asperities.y[order], floor), e_star, beta,
-                     tolerance, max_iterations)
+                     tolerance, max_iterations, all_candidates)
     n, n_f = g.size, forces.size
     out = {name: np.zeros(n_f) for name in ("delta", "stiffness", "iterations", "residual", "candidates")}
     interference, load = np.zeros((n_f, n)), np.zeros((n_f, n))

@@ -1,0 +1,120 @@
+"""Benchmark of the discrete model: the coupled-cap solve per (surface, load) and the cube's cost per map.
+
+On the scenario's scene with ``contact.model = "discrete"``, at the Greenwood–Tripp forces of its
+approaches:
+
+* the contact solve of each of :data:`SURFACES` surfaces over every load step (candidates grown
+  as needed, warm starts), its median time per (surface, load), against the same solve on every
+  asperity of the disc (no candidate selection: the slow exact reference) on the first
+  :data:`REFERENCE_SURFACES`, with the largest differences in approach and in resistance;
+* the cube's work per oxide map (one field at one lambda: every xi at every load step) on the
+  pool, for both spot rules and both resistance models, median over :data:`MAPS` maps.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import statistics
+import time
+from typing import Any
+
+import numpy as np
+
+from pipeline.compute import ComputeOptions
+from pipeline.config import Scenario
+from pipeline.domains import resolve
+from pipeline.physics import discrete_contact as dc
+from pipeline.physics.discrete_resistance import resistances
+from pipeline.stages import contact, contact_discrete, cube_discrete, oxide
+
+__all__ = ["run"]
+
+SURFACES = 24
+REFERENCE_SURFACES = 3
+MAPS = 12
+
+
+def _discrete(scenario: Scenario) -> Scenario:
+    return resolve(dataclasses.replace(
+        scenario, contact=dataclasses.replace(scenario.contact, model="discrete", surfaces=SURFACES)))
+
+
+def _solve(settings: dict[str, Any], k: int, all_candidates: bool = False) -> tuple[float, dc.DiscreteContact, Any]:
+    asp = dc.draw_asperities(settings["seed"], k, settings["radius"], settings["eta"], settings["sigma"])
+    start = time.perf_counter()
+    sol = dc.solve_forces(asp, settings["profile"], settings["forces"], settings["e_star"], settings["beta"],
+                          settings["floor"], all_candidates=all_candidates)
+    return time.perf_counter() - start, sol, asp
+
+
+def _contact(scenario: Scenario) -> tuple[dict[str, Any], np.ndarray]:
+    r, sols = contact.solve_scenario(scenario)
+    forces = contact.fields(scenario, r, sols)["force"]
+    radius, served = contact_discrete.domain(scenario, min(scenario.deltas))
+    rough = scenario.roughness
+    settings = {"seed": scenario.oxide.seed, "radius": radius, "eta": rough.eta, "sigma": rough.sigma,
+                "beta": rough.beta, "e_star": scenario.material.E_star, "profile": contact_discrete.indenter(scenario),
+                "forces": forces, "floor": dc.coupling_floor(rough.beta, rough.sigma)}
+    per_load, iterations, candidates, touching = [], [], [], []
+    for k in range(SURFACES):
+        seconds, sol, _ = _solve(settings, k)
+        per_load.append(seconds / forces.size)
+        iterations.append(float(sol.iterations.mean()))
+        candidates.append(int(sol.candidates.max()))
+        touching.append(int((sol.load[-1] > 0).sum()))
+    reference = []
+    for k in range(REFERENCE_SURFACES):
+        fast_seconds, fast, asp = _solve(settings, k)
+        slow_seconds, slow, _ = _solve(settings, k, all_candidates=True)
+        kernel = dc.interaction_kernel(asp.x, asp.y, settings["floor"])
+        rho = scenario.material.rho
+        r_fast = resistances(kernel, fast.radius(rough.beta), rho)
+        r_slow = resistances(kernel, slow.radius(rough.beta), rho)
+        reference.append({"surface": k, "asperities": asp.size, "seconds": round(fast_seconds, 4),
+                          "all_candidates_seconds": round(slow_seconds, 4),
+                          "speedup": round(slow_seconds / fast_seconds, 2),
+                          "max_approach_difference_m": float(np.max(np.abs(fast.delta - slow.delta))),
+                          "max_resistance_rel_difference": float(np.max(np.abs(r_fast / r_slow - 1)))})
+    figures = {
+        "surfaces": SURFACES, "load_steps": int(forces.size),
+        "force_normalized_range": [float(forces[0] / scenario.force_scale), float(forces[-1] / scenario.force_scale)],
+        "asperity_disc_radius_m": settings["radius"],
+        "median_seconds_per_surface_load": round(statistics.median(per_load), 5),
+        "max_seconds_per_surface_load": round(max(per_load), 5),
+        "mean_newton_iterations_per_load": round(statistics.mean(iterations), 2),
+        "candidates_at_heaviest_load_median": int(statistics.median(candidates)),
+        "touching_at_heaviest_load_median": int(statistics.median(touching)),
+        "reference_all_candidates": reference,
+        "target_median_seconds_per_surface_load": 0.020,
+    }
+    return figures, forces
+
+
+def _maps(scenario: Scenario) -> list[dict[str, Any]]:
+    options = ComputeOptions(progress=False)
+    pool_ds = contact.build(scenario, options)
+    pool = cube_discrete.DiscretePool.of(pool_ds)
+    source = oxide.FieldSource.of(scenario)
+    xi = np.arange(len(scenario.oxide.xi))
+    out = []
+    for rule in ("centre", "disc"):
+        for model in ("point", "greenwood"):
+            settings = {"rho": scenario.material.rho, "model": model, "spot_rule": rule}
+            for index, lam in enumerate(scenario.oxide.lambda_):
+                if lam not in (min(scenario.oxide.lambda_), max(scenario.oxide.lambda_)):
+                    continue
+                times = []
+                for k in range(MAPS):
+                    start = time.perf_counter()
+                    cube_discrete.discrete_chunk(source, index, np.array([k]), xi, pool, settings)
+                    times.append(time.perf_counter() - start)
+                out.append({"spot_rule": rule, "model": model, "lambda": lam, "xi_values": int(xi.size),
+                            "median_seconds_per_map": round(statistics.median(times), 5)})
+    return out
+
+
+def run(scenario: Scenario) -> dict[str, Any]:
+    """Time the discrete contact solve and the cube's work per map; JSON-ready figures."""
+    discrete = _discrete(scenario)
+    figures, _ = _contact(discrete)
+    return {"contact": figures, "cube_per_map": _maps(discrete)}
