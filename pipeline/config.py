@@ -27,6 +27,7 @@ from typing import Any, Iterable, Mapping
 __all__ = [
     "AUTO",
     "ConfigError",
+    "read_input_text",
     "check_domains",
     "check_surrogate_grid",
     "Scenario",
@@ -44,6 +45,38 @@ AUTO = "auto"
 
 class ConfigError(ValueError):
     """A parameter is unknown, malformed or outside its allowed range."""
+
+
+def read_input_text(option: str, path: str | Path, encoding: str = "utf-8") -> str:
+    """The text of an input file given by ``option``, or one ConfigError line naming both.
+
+    Parameters
+    ----------
+    option
+        How the user named the file (``--csv``, ``--surrogate``), for the message.
+    path
+        The file.
+    encoding
+        Its text encoding (``utf-8-sig`` also accepts a leading byte-order mark).
+
+    Raises
+    ------
+    ConfigError
+        If ``path`` is a directory, does not exist, cannot be read (permissions) or is not
+        text in ``encoding``.
+    """
+    path = Path(path)
+    where = f"{option} {str(path)!r}"
+    if path.is_dir():
+        raise ConfigError(f"{where} is a directory: give a file")
+    if not path.exists():
+        raise ConfigError(f"{where} does not exist")
+    try:
+        return path.read_text(encoding=encoding)
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{where} is not UTF-8 text (byte {exc.start}: {exc.object[exc.start:exc.start + 1]!r})") from None
+    except OSError as exc:
+        raise ConfigError(f"{where} is unreadable ({exc.strerror or exc}): check its permissions") from None
 
 
 def _spec(

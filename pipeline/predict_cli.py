@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.config import ConfigError, Scenario
+from pipeline.config import ConfigError, Scenario, read_input_text
 from pipeline.predict import predict
 from pipeline.predict_domain import check_surface, with_measured_roughness
 from pipeline.predict_queries import OUTPUT_COLUMNS, check_values
@@ -52,11 +52,10 @@ def _cli_queries(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, np.n
 
 def _read_csv(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Columns force, xi, lambda of a CSV file with a header line (other columns ignored)."""
-    if not path.is_file():
-        raise ConfigError(f"--csv {str(path)!r} does not exist")
+    text = read_input_text("--csv", path)
     try:
-        rows = list(csv.reader(io.StringIO(path.read_text())))
-    except (UnicodeDecodeError, csv.Error) as exc:
+        rows = list(csv.reader(io.StringIO(text)))
+    except csv.Error as exc:
         raise ConfigError(f"--csv {str(path)!r} is not a readable CSV file ({exc})") from None
     rows = [r for r in rows if any(c.strip() for c in r)]
     if len(rows) < 2:

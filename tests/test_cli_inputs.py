@@ -1,0 +1,70 @@
+"""Bad inputs of issue 32 and the predictor's input and output formats.
+
+Each refusal is checked as the bad-input catalog (tests/test_bad_inputs.py) checks its cases:
+exit status 2, stderr exactly one ``g2tom: error:`` line naming what was wrong, no traceback,
+nothing written under the working folder.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from pipeline.cli import main
+from pipeline.config import Scenario
+from tests.test_bad_inputs import _snapshot
+from tests.test_fits_stage import cli_overrides
+from tests.test_predict import data_dir  # noqa: F401 - the module's fixture: fits.nc and the surrogate files
+
+QUERY = "force,xi,lambda\n1500,0.4,4\n"
+
+
+def _refused(capsys: pytest.CaptureFixture, root: Path, argv: list[str], *expect: str, status: int = 2) -> str:
+    """Run ``g2tom argv``; assert one error line holding every ``expect`` and no change under ``root``."""
+    before = _snapshot(root)
+    capsys.readouterr()
+    assert main(argv) == status
+    out = capsys.readouterr()
+    lines = [line for line in out.err.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("g2tom: error: "), out.err
+    assert all(e in lines[0] for e in expect), lines[0]
+    assert "Traceback" not in out.err + out.out
+    assert _snapshot(root) == before
+    return lines[0]
+
+
+def _predict(data: Path, small: Scenario, *args: str) -> list[str]:
+    return ["predict", "--data-dir", str(data), *cli_overrides(small), *args]
+
+
+# ------------------------------------------------------------------ 1: an unreadable --csv
+def test_csv_that_is_a_directory(tmp_path, capsys, small, data_dir) -> None:  # noqa: F811
+    _refused(capsys, tmp_path, _predict(data_dir, small, "--csv", str(tmp_path)), f"--csv {str(tmp_path)!r}",
+             "is a directory")
+
+
+def test_csv_without_read_permission(tmp_path, capsys, small, data_dir, monkeypatch) -> None:  # noqa: F811
+    """As root chmod 000 does not block reading, so the refusal of the file system is simulated."""
+    path = tmp_path / "q.csv"
+    path.write_text(QUERY)
+
+    read_text = Path.read_text
+
+    def refuse(self: Path, *args, **kwargs) -> str:
+        if self == path:
+            raise PermissionError(13, "Permission denied", str(self))
+        return read_text(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "read_text", refuse)
+    _refused(capsys, tmp_path, _predict(data_dir, small, "--csv", str(path)), f"--csv {str(path)!r}",
+             "unreadable (Permission denied)")
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root reads a file whatever its mode: the monkeypatched test covers it")
+def test_csv_chmod_000(tmp_path, capsys, small, data_dir) -> None:  # noqa: F811
+    path = tmp_path / "q.csv"
+    path.write_text(QUERY)
+    path.chmod(0)
+    _refused(capsys, tmp_path, _predict(data_dir, small, "--csv", str(path)), "--csv", "Permission denied")
