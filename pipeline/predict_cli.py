@@ -17,6 +17,7 @@ import xarray as xr
 from pipeline.config import ConfigError, Scenario, read_input_text
 from pipeline.predict import predict
 from pipeline.predict_domain import check_surface, with_measured_roughness
+from pipeline.preflight import check_output_file
 from pipeline.predict_queries import OUTPUT_COLUMNS, check_values
 from pipeline.surrogate_file import SurrogateTables, load_surrogate
 
@@ -121,6 +122,8 @@ def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
     """``g2tom predict``: CSV of R_el, its band and the band's components; warnings on stderr."""
     force, xi, lam = _cli_queries(args)
     check_values(force, xi, lam)
+    if args.output is not None:
+        check_output_file("--output", args.output)
     if args.roughness is not None:
         scenario = with_measured_roughness(scenario, args.roughness, args.pixel_size)
     elif args.pixel_size is not None:

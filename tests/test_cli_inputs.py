@@ -68,3 +68,19 @@ def test_csv_chmod_000(tmp_path, capsys, small, data_dir) -> None:  # noqa: F811
     path.write_text(QUERY)
     path.chmod(0)
     _refused(capsys, tmp_path, _predict(data_dir, small, "--csv", str(path)), "--csv", "Permission denied")
+
+
+# ------------------------------------------------------------------ 2: --output that cannot be written
+@pytest.mark.parametrize("where, expect", [("folder", "is a directory"), ("a_file/out.csv", "which is a file")])
+def test_output_refused_before_work(tmp_path, capsys, small, data_dir, where: str, expect: str) -> None:  # noqa: F811
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "a_file").write_text("not a folder")
+    target = tmp_path / where
+    _refused(capsys, tmp_path, _predict(data_dir, small, "--force", "1500", "--xi", "0.4", "--lambda", "4",
+                                        "--output", str(target)), f"--output {str(target)!r}", expect)
+
+
+def test_output_in_a_new_folder(tmp_path, capsys, small, data_dir) -> None:  # noqa: F811
+    target = tmp_path / "new" / "out.csv"
+    assert main(_predict(data_dir, small, "--force", "1500", "--xi", "0.4", "--lambda", "4", "--output", str(target))) == 0
+    assert target.read_text().startswith("force_N,")
