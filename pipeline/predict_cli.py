@@ -101,7 +101,7 @@ def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
 
     if args.surrogate is not None:
         path = Path(args.surrogate)
-        if path.suffix == ".json" and path.is_file() and is_atlas_document(path.read_text()):
+        if path.suffix == ".json" and path.is_file() and is_atlas_document(read_input_text("--surrogate", path)):
             return load_atlas_surrogate(path)
         return load_surrogate(path)
     own = _default_surrogate(args.data_dir)

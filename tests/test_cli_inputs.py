@@ -84,3 +84,27 @@ def test_output_in_a_new_folder(tmp_path, capsys, small, data_dir) -> None:  # n
     target = tmp_path / "new" / "out.csv"
     assert main(_predict(data_dir, small, "--force", "1500", "--xi", "0.4", "--lambda", "4", "--output", str(target))) == 0
     assert target.read_text().startswith("force_N,")
+
+
+# ------------------------------------------------------------------ 3: --surrogate files that are not one
+def _future(data: Path, folder: Path) -> Path:
+    path = folder / "future.json"
+    path.write_text((data / "surrogate.json").read_text().replace('"version": 1,', '"version": 2,', 1))
+    return path
+
+
+def _binary(data: Path, folder: Path) -> Path:
+    path = folder / "binary.json"
+    path.write_bytes(b'{"format": "\xff\xfe\x00\x01' * 8)
+    return path
+
+
+@pytest.mark.parametrize("make, expect", [
+    (_binary, ("is not UTF-8 text",)),
+    (_future, ("format version 2", "reads version 1..1", "update g2tom")),
+    (lambda data, folder: data / "fits.nc", ("fits.nc'", "output of the fits stage, not a surrogate")),
+])
+def test_surrogate_that_is_not_one(tmp_path, capsys, small, data_dir, make, expect) -> None:  # noqa: F811
+    path = make(data_dir, tmp_path)
+    _refused(capsys, tmp_path, _predict(data_dir, small, "--force", "1500", "--xi", "0.4", "--lambda", "4",
+                                        "--surrogate", str(path)), f"--surrogate {str(path)!r}", *expect)
