@@ -174,8 +174,8 @@ class SurrogateTables:
         values = values[tuple(slice(None) if k else 0 for k in keep)]
         points = [np.clip(p, a.min(), a.max()) for p, a, k in zip(points, axes, keep) if k]
         axes = [a for a, k in zip(axes, keep) if k]
-        if not axes:
-            return np.broadcast_to(values, (lam.size, len(names))).copy()
+        if not axes:  # a single cell and no load axis: its values, whatever the query
+            return np.broadcast_to(values, (lam.size, *values.shape)).copy()
         return RegularGridInterpolator(tuple(axes), values)(np.stack(points, axis=-1))
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from pipeline.cli import main
-from pipeline.config import Scenario
+from pipeline.config import Scenario, load_scenario
 from tests.test_bad_inputs import _snapshot
 from tests.test_fits_stage import cli_overrides
 from tests.test_predict import data_dir  # noqa: F401 - the module's fixture: fits.nc and the surrogate files
@@ -108,3 +108,31 @@ def test_surrogate_that_is_not_one(tmp_path, capsys, small, data_dir, make, expe
     path = make(data_dir, tmp_path)
     _refused(capsys, tmp_path, _predict(data_dir, small, "--force", "1500", "--xi", "0.4", "--lambda", "4",
                                         "--surrogate", str(path)), f"--surrogate {str(path)!r}", *expect)
+
+
+# ------------------------------------------------------------------ 4: a run on a 1 x 1 grid
+def test_one_cell_run_answers_with_its_cell(tmp_path, capsys, small) -> None:
+    """No interpolation on one cell: the cell's own curve, its band without a surrogate error, said so."""
+    import warnings
+
+    from pipeline.domains import resolve
+    from pipeline.stages import fits, surrogate
+    from pipeline.store import write_dataset
+    from tests.conftest import SMALL_OVERRIDES
+    from tests.test_fits_stage import synthetic_cube
+
+    one = resolve(load_scenario("paper", {**SMALL_OVERRIDES, "oxide.xi": [0.5], "oxide.lambda": [5.0],
+                                          "surrogate.method": "paper", "surrogate.rank": 1}))
+    write_dataset(fits.build(one, synthetic_cube(one, noise=0.2)), tmp_path, "fits", one)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        surrogate.run(one, tmp_path, None)
+    capsys.readouterr()
+    assert main(_predict(tmp_path, one, "--force", "1500,2500", "--xi", "0.5", "--lambda", "5")) == 0
+    out = capsys.readouterr()
+    assert "the surrogate holds one cell (xi = 0.5, lambda = 5)" in out.err and "without interpolation" in out.err
+    header, *rows = [line.split(",") for line in out.out.strip().splitlines()]
+    values = [dict(zip(header, map(float, row))) for row in rows]
+    assert len(values) == 2 and all(v["surrogate_error"] == 0 for v in values)
+    assert all(v["lower_ohm"] < v["resistance_ohm"] < v["upper_ohm"] for v in values)
+    assert values[0]["resistance_ohm"] > values[1]["resistance_ohm"]  # the cell's curve, falling with the load
