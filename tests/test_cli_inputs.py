@@ -136,3 +136,14 @@ def test_one_cell_run_answers_with_its_cell(tmp_path, capsys, small) -> None:
     assert len(values) == 2 and all(v["surrogate_error"] == 0 for v in values)
     assert all(v["lower_ohm"] < v["resistance_ohm"] < v["upper_ohm"] for v in values)
     assert values[0]["resistance_ohm"] > values[1]["resistance_ohm"]  # the cell's curve, falling with the load
+
+
+# ------------------------------------------------------------------ 5: a pixel size no map can have
+@pytest.mark.parametrize("pixel", ["1e300", "1e-12"])
+def test_pixel_size_beyond_a_physical_map(tmp_path, capsys, pixel: str) -> None:
+    import numpy as np
+
+    path = tmp_path / "map.npy"
+    np.save(path, np.random.default_rng(1).normal(scale=1e-6, size=(16, 16)))
+    _refused(capsys, tmp_path, ["roughness", "--pixel-size", pixel, str(path)],
+             f"--pixel-size = {float(pixel)!r} is out of range", "16 x 16 map", "[6.25e-11, 0.0625] m")
