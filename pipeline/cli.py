@@ -273,6 +273,9 @@ def _cmd_validate(args: argparse.Namespace, scenario: Scenario) -> None:
     if args.overrides or args.config != "paper":
         raise ConfigError("g2tom validate runs its own validation scene (the default set or --quick): "
                           "--config and --set are not used by it; leave them out")
+    from pipeline.preflight import check_data_dir
+
+    check_data_dir(args.data_dir)
     problem = missing_extra()
     if problem:
         raise ConfigError(problem)

@@ -147,3 +147,17 @@ def test_pixel_size_beyond_a_physical_map(tmp_path, capsys, pixel: str) -> None:
     np.save(path, np.random.default_rng(1).normal(scale=1e-6, size=(16, 16)))
     _refused(capsys, tmp_path, ["roughness", "--pixel-size", pixel, str(path)],
              f"--pixel-size = {float(pixel)!r} is out of range", "16 x 16 map", "[6.25e-11, 0.0625] m")
+
+
+# ------------------------------------------------------------------ 6: validate's checks before work
+@pytest.mark.parametrize("where, expect", [("a_file", "is not a directory"), ("a_file/data", "is not writable")])
+def test_validate_data_dir_refused_before_work(tmp_path, capsys, monkeypatch, where: str, expect: str) -> None:
+    import pipeline.reference.validate as validate
+
+    def never(*args, **kwargs) -> None:
+        raise AssertionError("validate started work on an unusable --data-dir")
+
+    monkeypatch.setattr(validate, "run_validation", never)
+    (tmp_path / "a_file").write_text("not a folder")
+    _refused(capsys, tmp_path, ["validate", "--quick", "--data-dir", str(tmp_path / where)],
+             f"--data-dir {str(tmp_path / where)!r}", expect)
