@@ -423,6 +423,24 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:  #
     return f"g2tom: warning: {message}\n"
 
 
+#: Exit status after Ctrl-C (128 + SIGINT, as a shell reports a command killed by it).
+INTERRUPTED = 130
+
+
+def _kept(args: argparse.Namespace) -> str:
+    """What an interrupted command kept, and how to go on from it (one line)."""
+    if args.command == "validate":
+        from pipeline.reference.validate import output_folder
+
+        where = output_folder(args.data_dir, args.surface) / "cases"
+        return (f"the cases finished so far are kept in {where}; run the same `g2tom validate` command again to "
+                "continue from them")
+    if args.command == "atlas":
+        return (f"the scenes finished so far are kept in {Path(args.data_dir) / 'atlas'}; run the same `g2tom atlas` "
+                "command again to continue from them")
+    return "stopped before the end; run the command again"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``g2tom`` console script; returns the exit status."""
     parser = _parser()
@@ -445,6 +463,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except StaleInputError as exc:
         print(f"g2tom: error: {exc}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        print(f"g2tom: interrupted: {_kept(args)}", file=sys.stderr)
+        return INTERRUPTED
     finally:
         warnings.formatwarning = formatwarning
     return 0

@@ -161,3 +161,22 @@ def test_validate_data_dir_refused_before_work(tmp_path, capsys, monkeypatch, wh
     (tmp_path / "a_file").write_text("not a folder")
     _refused(capsys, tmp_path, ["validate", "--quick", "--data-dir", str(tmp_path / where)],
              f"--data-dir {str(tmp_path / where)!r}", expect)
+
+
+# ------------------------------------------------------------------ 7: Ctrl-C during validate or atlas
+@pytest.mark.parametrize("command, module, function, kept", [
+    ("validate", "pipeline.reference.validate", "run_validation", "validate/cases"),
+    ("atlas", "pipeline.atlas", "run_atlas", "atlas"),
+])
+def test_ctrl_c_says_what_was_kept(tmp_path, capsys, monkeypatch, command, module, function, kept) -> None:
+    import importlib
+
+    def interrupted(*args, **kwargs) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(importlib.import_module(module), function, interrupted)
+    capsys.readouterr()
+    assert main([command, "--data-dir", str(tmp_path)]) == 130
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("g2tom: interrupted: "), lines
+    assert f"kept in {tmp_path / kept}" in lines[0] and f"run the same `g2tom {command}` command again" in lines[0]
