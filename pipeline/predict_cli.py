@@ -53,7 +53,7 @@ def _cli_queries(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, np.n
 
 def _read_csv(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Columns force, xi, lambda of a CSV file with a header line (other columns ignored)."""
-    text = read_input_text("--csv", path)
+    text = read_input_text("--csv", path, encoding="utf-8-sig")  # Excel's "CSV UTF-8" starts with a BOM
     try:
         rows = list(csv.reader(io.StringIO(text)))
     except csv.Error as exc:

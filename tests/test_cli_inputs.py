@@ -180,3 +180,15 @@ def test_ctrl_c_says_what_was_kept(tmp_path, capsys, monkeypatch, command, modul
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("g2tom: interrupted: "), lines
     assert f"kept in {tmp_path / kept}" in lines[0] and f"run the same `g2tom {command}` command again" in lines[0]
+
+
+# ------------------------------------------------------------------ 8: a CSV with a byte-order mark
+def test_csv_with_a_byte_order_mark(tmp_path, capsys, small, data_dir) -> None:  # noqa: F811
+    plain, marked = tmp_path / "plain.csv", tmp_path / "excel.csv"
+    plain.write_text(QUERY)
+    marked.write_bytes(b"\xef\xbb\xbf" + QUERY.encode())
+    answers = []
+    for path in (plain, marked):
+        assert main(_predict(data_dir, small, "--csv", str(path))) == 0
+        answers.append(capsys.readouterr().out)
+    assert answers[0] == answers[1] and answers[0].count("\n") == 2
