@@ -932,6 +932,9 @@ def load_scenario(
         Naming the parameter, its value and the allowed range.
     """
     data, name = _read_toml(config)
+    # the settings the user chose (a file's own, not those of its base or of a bundled scenario)
+    explicit = set() if str(config) in bundled_scenarios() else {
+        f"{section}.{key}" for section, table in data.items() if isinstance(table, dict) for key in table}
     name = str(data.pop("name", name))
     description = str(data.pop("description", ""))
     base = data.pop("base", None)
@@ -956,7 +959,36 @@ def load_scenario(
         if section not in SECTIONS or not key:
             raise _unknown(dotted)
         data.setdefault(section, {})[key] = value
-    return _build(data, name=name, description=description)
+        explicit.add(dotted)
+    return _settle(_build(data, name=name, description=description), explicit)
+
+
+#: Settings used only under another setting's value: key -> (that setting, its value, what is used instead).
+USED_ONLY_WITH: dict[str, tuple[str, str, str]] = {
+    "fits.min_force": ("fits.fit_range", "force", "fits.min_force_normalized"),
+    "fits.min_force_normalized": ("fits.fit_range", "force_normalized", "fits.min_force"),
+}
+
+
+def _settle(s: Scenario, explicit: set[str]) -> Scenario:
+    """A warning for each chosen setting that has no effect.
+
+    A setting of :data:`USED_ONLY_WITH` the user set while another setting overrides it is
+    warned about, naming that setting.
+
+    Parameters
+    ----------
+    s
+        The scenario as built.
+    explicit
+        ``section.key`` of every setting the user chose (``--set``, or the TOML file's own).
+    """
+    flat = s.flat()
+    for key, (control, needed, instead) in USED_ONLY_WITH.items():
+        if key in explicit and flat[control] != needed:
+            warnings.warn(f"{key} = {flat[key]:g} has no effect: {control} = {flat[control]!r} selects by {instead} "
+                          f"instead; set {control} = {needed!r} for {key} to count", stacklevel=3)
+    return s
 
 
 def _split_override(text: str) -> tuple[str, Any]:

@@ -192,3 +192,21 @@ def test_csv_with_a_byte_order_mark(tmp_path, capsys, small, data_dir) -> None: 
         assert main(_predict(data_dir, small, "--csv", str(path))) == 0
         answers.append(capsys.readouterr().out)
     assert answers[0] == answers[1] and answers[0].count("\n") == 2
+
+
+# ------------------------------------------------------------------ 9: a setting another one overrides
+@pytest.mark.parametrize("argv, warned", [
+    (["--set", "fits.min_force=1e12"], "fits.min_force = 1e+12 has no effect: fits.fit_range = 'force_normalized'"),
+    (["--set", "fits.fit_range=force", "--set", "fits.min_force_normalized=3"],
+     "fits.min_force_normalized = 3 has no effect: fits.fit_range = 'force'"),
+])
+def test_setting_without_effect_is_warned(capsys, argv: list[str], warned: str) -> None:
+    assert main(["params", *argv]) == 0
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"g2tom: warning: {warned}"), lines
+
+
+def test_settings_of_the_bundled_scenario_are_not_warned(capsys) -> None:
+    """paper.toml carries min_force beside fit_range = force_normalized: not the user's choice."""
+    assert main(["params", "--set", "fits.min_force_normalized=0.5"]) == 0
+    assert capsys.readouterr().err == ""
