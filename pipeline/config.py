@@ -971,10 +971,13 @@ USED_ONLY_WITH: dict[str, tuple[str, str, str]] = {
 
 
 def _settle(s: Scenario, explicit: set[str]) -> Scenario:
-    """A warning for each chosen setting that has no effect.
+    """Defaults that follow the grid, and a warning for each chosen setting that has no effect.
 
-    A setting of :data:`USED_ONLY_WITH` the user set while another setting overrides it is
-    warned about, naming that setting.
+    ``surrogate.rank`` left at its default follows the oxide grid (at most
+    min(len(oxide.xi), len(oxide.lambda))); one the user set is kept, and
+    :func:`check_surrogate_grid` refuses it when out of range. A setting of
+    :data:`USED_ONLY_WITH` the user set while another setting overrides it is warned about,
+    naming that setting.
 
     Parameters
     ----------
@@ -988,6 +991,9 @@ def _settle(s: Scenario, explicit: set[str]) -> Scenario:
         if key in explicit and flat[control] != needed:
             warnings.warn(f"{key} = {flat[key]:g} has no effect: {control} = {flat[control]!r} selects by {instead} "
                           f"instead; set {control} = {needed!r} for {key} to count", stacklevel=3)
+    top = min(len(s.oxide.xi), len(s.oxide.lambda_))
+    if "surrogate.rank" not in explicit and s.surrogate.rank > top:
+        s = dataclasses.replace(s, surrogate=dataclasses.replace(s.surrogate, rank=top))
     return s
 
 

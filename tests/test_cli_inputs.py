@@ -210,3 +210,23 @@ def test_settings_of_the_bundled_scenario_are_not_warned(capsys) -> None:
     """paper.toml carries min_force beside fit_range = force_normalized: not the user's choice."""
     assert main(["params", "--set", "fits.min_force_normalized=0.5"]) == 0
     assert capsys.readouterr().err == ""
+
+
+# ------------------------------------------------------------------ 10: the default rank follows the grid
+_ONE_CELL = ["--set", "oxide.xi=[0.5]", "--set", "oxide.lambda=[5]", "--set", "surrogate.method=paper"]
+
+
+def test_default_rank_follows_a_one_cell_grid(tmp_path, capsys) -> None:
+    assert load_scenario("paper", {"oxide.xi": [0.5], "oxide.lambda": [5.0]}).surrogate.rank == 1
+    assert load_scenario("paper", {"oxide.xi": [0.3, 0.5, 0.7]}).surrogate.rank == 2  # the default, within the grid
+    assert main(["run", "--check", "--data-dir", str(tmp_path), *_ONE_CELL]) == 0
+    assert "every check before work passed" in capsys.readouterr().err
+
+
+def test_chosen_rank_beyond_the_grid_stays_refused(tmp_path, capsys) -> None:
+    _refused(capsys, tmp_path, ["run", "--check", "--data-dir", str(tmp_path / "data"), *_ONE_CELL,
+                                "--set", "surrogate.rank=2"], "surrogate.rank = 2 is out of range", "<= 1")
+    toml = tmp_path / "mine.toml"
+    toml.write_text('base = "paper"\n[surrogate]\nmethod = "paper"\nrank = 2\n[oxide]\nxi = [0.5]\nlambda = [5.0]\n')
+    _refused(capsys, tmp_path, ["run", "--check", "--config", str(toml), "--data-dir", str(tmp_path / "data")],
+             "surrogate.rank = 2 is out of range")
