@@ -51,8 +51,13 @@ def _cli_queries(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, np.n
     return tuple(np.broadcast_to(v, (n,)).copy() for v in values)  # type: ignore[return-value]
 
 
+#: Input column names (lower case) read as another: the output's ``force_N`` as ``force``.
+INPUT_ALIASES = {"force_n": "force"}
+
+
 def _read_csv(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Columns force, xi, lambda of a CSV file with a header line (other columns ignored)."""
+    """Columns force (or force_N, as predict writes it), xi, lambda of a CSV file with a header line
+    (other columns ignored)."""
     text = read_input_text("--csv", path, encoding="utf-8-sig")  # Excel's "CSV UTF-8" starts with a BOM
     try:
         rows = list(csv.reader(io.StringIO(text)))
@@ -62,6 +67,10 @@ def _read_csv(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if len(rows) < 2:
         raise ConfigError(f"--csv {str(path)!r} needs a header line (force,xi,lambda) and at least one query")
     header = [c.strip().lower() for c in rows[0]]
+    both = [f"{target} and {alias}" for alias, target in INPUT_ALIASES.items() if alias in header and target in header]
+    if both:
+        raise ConfigError(f"--csv {str(path)!r}: header {rows[0]!r} has both {both[0]} (the same column): keep one")
+    header = [INPUT_ALIASES.get(c, c) for c in header]
     missing = [c for c in ("force", "xi", "lambda") if c not in header]
     if missing:
         raise ConfigError(f"--csv {str(path)!r}: header {rows[0]!r} lacks column(s) {', '.join(missing)} (need force, xi, lambda)")

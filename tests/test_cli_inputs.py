@@ -230,3 +230,16 @@ def test_chosen_rank_beyond_the_grid_stays_refused(tmp_path, capsys) -> None:
     toml.write_text('base = "paper"\n[surrogate]\nmethod = "paper"\nrank = 2\n[oxide]\nxi = [0.5]\nlambda = [5.0]\n')
     _refused(capsys, tmp_path, ["run", "--check", "--config", str(toml), "--data-dir", str(tmp_path / "data")],
              "surrogate.rank = 2 is out of range")
+
+
+# ------------------------------------------------------------------ 11: predict's output as its input, and its formats
+def test_output_feeds_back_as_input(tmp_path, capsys, small, data_dir) -> None:  # noqa: F811
+    first = tmp_path / "first.csv"
+    assert main(_predict(data_dir, small, "--force", "1500,2500", "--xi", "0.4", "--lambda", "4,6",
+                         "--output", str(first))) == 0
+    assert first.read_text().startswith("force_N,")
+    assert main(_predict(data_dir, small, "--csv", str(first))) == 0
+    assert capsys.readouterr().out == first.read_text()
+    both = tmp_path / "both.csv"
+    both.write_text("force,force_N,xi,lambda\n1500,1500,0.4,4\n")
+    _refused(capsys, tmp_path, _predict(data_dir, small, "--csv", str(both)), "both force and force_n", "keep one")
