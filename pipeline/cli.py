@@ -386,7 +386,9 @@ def _parser() -> argparse.ArgumentParser:
     predict.add_argument("--xi", default=None, help="oxide fraction in (0, 1): a number or a comma-separated list")
     predict.add_argument("--lambda", dest="lam", default=None, help="l_O sqrt(eta) > 0: a number or a comma-separated list")
     predict.add_argument("--csv", type=Path, default=None, help="CSV file of queries with columns force, xi, lambda")
-    predict.add_argument("--output", type=Path, default=None, help="write the CSV result here (default: stdout)")
+    predict.add_argument("--output", type=Path, default=None,
+                         help="write the CSV (or --json) result here (default: stdout; on a terminal, a short table)")
+    predict.add_argument("--json", action="store_true", help="the result as one JSON object (SI units)")
     predict.add_argument("--extrapolate", action="store_true", help="allow queries outside the fitted ranges (with a warning)")
     predict.add_argument("--model", choices=("curve", "power_law"), default="curve",
                          help="curve: each cell's ln R'(ln F') curve, interpolated (default); power_law: Eq. 27")

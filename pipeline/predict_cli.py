@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+import json
 import sys
 import warnings
 from pathlib import Path
@@ -21,7 +22,7 @@ from pipeline.preflight import check_output_file
 from pipeline.predict_queries import OUTPUT_COLUMNS, check_values
 from pipeline.surrogate_file import SurrogateTables, load_surrogate
 
-__all__ = ["predict_cli", "to_csv"]
+__all__ = ["predict_cli", "to_csv", "to_json", "to_table", "INPUT_ALIASES", "TABLE_COLUMNS"]
 
 
 def _parse_list(option: str, text: str) -> np.ndarray:
@@ -92,14 +93,54 @@ def _default_surrogate(data_dir: Path) -> Path:
     return json_path if json_path.is_file() else Path(data_dir) / "surrogate.nc"
 
 
+#: The columns of the table printed on a terminal (all of them: CSV or --json).
+TABLE_COLUMNS = ("force", "xi", "lambda", "resistance", "lower", "upper", "open_probability")
+#: Significant digits in that table.
+TABLE_DIGITS = 4
+
+
+def _label(name: str) -> str:
+    """A column's name in the output: with its unit appended unless dimensionless (force_N)."""
+    unit = OUTPUT_COLUMNS[name][0]
+    return f"{name}_{unit}" if unit != "1" else name
+
+
+def _columns(ds: xr.Dataset, names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
+    """The output's columns (flat), in the order of :data:`OUTPUT_COLUMNS`: ``names`` of them, or all
+    that ``ds`` holds."""
+    chosen = [n for n in OUTPUT_COLUMNS if n in ds and (names is None or n in names)]
+    return {n: np.asarray(ds[n].values, dtype=float).ravel() for n in chosen}
+
+
 def to_csv(ds: xr.Dataset) -> str:
-    """Prediction dataset as CSV text, one query per line, columns :data:`OUTPUT_COLUMNS`."""
-    names = list(OUTPUT_COLUMNS)
-    columns = [np.asarray(ds[n].values, dtype=float).ravel() for n in names]
-    header = [f"{n}_{OUTPUT_COLUMNS[n][0]}" if OUTPUT_COLUMNS[n][0] != "1" else n for n in names]
-    lines = [",".join(header)]
-    lines += [",".join(f"{v:.10g}" for v in row) for row in zip(*columns)]
+    """Prediction dataset as CSV text, one query per line, columns :data:`OUTPUT_COLUMNS` that it holds."""
+    columns = _columns(ds)
+    lines = [",".join(_label(n) for n in columns)]
+    lines += [",".join(f"{v:.10g}" for v in row) for row in zip(*columns.values())]
     return "\n".join(lines) + "\n"
+
+
+def to_json(ds: xr.Dataset) -> str:
+    """Prediction dataset as one JSON object: who answered, each column's unit and meaning, and one
+    object per query (NaN as null, infinities as "inf")."""
+    from pipeline.surrogate_file import _encode
+
+    columns = _columns(ds)
+    rows = [dict(zip(map(_label, columns), values)) for values in zip(*(_encode(c) for c in columns.values()))]
+    doc = {"answered_by": ds.attrs.get("answered_by", ""), "band": ds.attrs.get("band", ""),
+           "columns": {_label(n): {"units": OUTPUT_COLUMNS[n][0], "long_name": OUTPUT_COLUMNS[n][1]} for n in columns},
+           "queries": rows}
+    return json.dumps(doc, indent=1) + "\n"
+
+
+def to_table(ds: xr.Dataset) -> str:
+    """The main columns (:data:`TABLE_COLUMNS`) as an aligned table of :data:`TABLE_DIGITS`
+    significant digits, for a terminal."""
+    columns = _columns(ds, TABLE_COLUMNS)
+    cells = [[_label(n) for n in columns]]
+    cells += [[f"{v:.{TABLE_DIGITS}g}" for v in row] for row in zip(*columns.values())]
+    widths = [max(len(row[k]) for row in cells) for k in range(len(columns))]
+    return "\n".join("  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells) + "\n"
 
 
 def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
@@ -144,13 +185,23 @@ def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
             result = predict(answer, scenario, force, xi, lam, extrapolate=args.extrapolate,
                              model=args.model)
         else:
-            from pipeline.predict_atlas import predict_atlas
+            from pipeline.predict_atlas import NOT_IN_ATLAS, predict_atlas
 
             result = predict_atlas(answer, scenario, force, xi, lam, extrapolate=args.extrapolate)
+            result = result.drop_vars(NOT_IN_ATLAS)
+            print(f"g2tom: note: the atlas surrogate holds no realization spread, fit interval or open-circuit share: "
+                  f"columns {', '.join(NOT_IN_ATLAS)} left out; its band is its held-out error", file=sys.stderr)
     for w in caught:
         print(f"g2tom: warning: {w.message}", file=sys.stderr)
     print(f"g2tom: answered by {result.attrs['answered_by']}", file=sys.stderr)
-    text = to_csv(result)
+    if args.json:
+        text = to_json(result)
+    elif args.output is None and sys.stdout.isatty():
+        text = to_table(result)
+        print(f"g2tom: note: the main columns, {TABLE_DIGITS} significant digits; every column in full: "
+              "--output FILE (CSV), --json, or pipe the output", file=sys.stderr)
+    else:
+        text = to_csv(result)
     if args.output is None:
         sys.stdout.write(text)
     else:

@@ -243,3 +243,39 @@ def test_output_feeds_back_as_input(tmp_path, capsys, small, data_dir) -> None: 
     both = tmp_path / "both.csv"
     both.write_text("force,force_N,xi,lambda\n1500,1500,0.4,4\n")
     _refused(capsys, tmp_path, _predict(data_dir, small, "--csv", str(both)), "both force and force_n", "keep one")
+
+
+def test_json_and_the_terminal_table(capsys, small, data_dir, monkeypatch) -> None:  # noqa: F811
+    import json
+
+    query = ("--force", "1500,2500", "--xi", "0.4", "--lambda", "4,6")
+    assert main(_predict(data_dir, small, *query)) == 0
+    csv_rows = capsys.readouterr().out.strip().splitlines()
+    assert main(_predict(data_dir, small, *query, "--json")) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert [list(row) for row in doc["queries"]] == [csv_rows[0].split(",")] * 2
+    assert doc["queries"][1]["force_N"] == 2500 and doc["columns"]["resistance_ohm"]["units"] == "ohm"
+    assert doc["answered_by"].startswith("the run's own")
+    monkeypatch.setattr("sys.stdout.isatty", lambda: True)
+    assert main(_predict(data_dir, small, *query)) == 0
+    out = capsys.readouterr()
+    table = out.out.splitlines()
+    assert table[0].split() == ["force_N", "xi", "lambda", "resistance_ohm", "lower_ohm", "upper_ohm", "open_probability"]
+    assert len({len(line) for line in table}) == 1 and len(table) == 3  # aligned, one line per query
+    assert all(len(cell.replace(".", "").replace("e-0", "").lstrip("0")) <= 4 for cell in table[1].split())
+    assert "g2tom: note: the main columns" in out.err
+
+
+def test_atlas_answer_leaves_out_what_the_atlas_lacks(capsys, small, data_dir) -> None:  # noqa: F811
+    from pipeline.predict_atlas import NOT_IN_ATLAS, shipped_path
+
+    shipped = shipped_path()
+    if shipped is None:
+        pytest.skip("this installation ships no atlas surrogate")
+    assert main(_predict(data_dir, small, "--force", "1500", "--xi", "0.5", "--lambda", "3",
+                         "--surrogate", str(shipped))) == 0
+    out = capsys.readouterr()
+    header = out.out.splitlines()[0].split(",")
+    assert not [c for c in header if c.startswith(NOT_IN_ATLAS)] and "nan" not in out.out
+    assert "resistance_ohm" in header and "upper_ohm" in header
+    assert "g2tom: note: the atlas surrogate holds no realization spread" in out.err
