@@ -408,7 +408,7 @@ def _parser() -> argparse.ArgumentParser:
                                "Gaussian self-affine surface, g2tom fed its summit statistics (<data-dir>/validate_random_process/)")
     rough = add("roughness", _cmd_roughness, "sigma, eta and beta from a measured height map")
     rough.add_argument("heightmap", type=Path, help=".npy, netCDF or text (heights in m), or an instrument file "
-                       "(SurfaceTopography: pip install 'g2tom[topography]')")
+                       "(read by the optional package SurfaceTopography)")
     rough.add_argument("--pixel-size", type=float, default=None,
                        help="pixel size, m (required for .npy, netCDF and text; overrides an instrument file's)")
     rough.add_argument("--cutoff", type=float, default=None,

@@ -26,6 +26,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline.config import ConfigError
+from pipeline.errors import install_hint
 from pipeline.physics.roughness import validated_heights
 from pipeline.physics.surface_spectrum import BETA_RULES, psd_moments, summit_parameters
 
@@ -39,7 +40,7 @@ MAP_EXTENT = (1e-9, 1.0)
 #: Default short-wavelength cutoff, in pixels of the coarser axis.
 CUTOFF_PIXELS = 4.0
 #: How to install the instrument-format reader.
-INSTALL = "pip install 'g2tom[topography]' (or: pip install SurfaceTopography)"
+INSTALL = install_hint("topography", "SurfaceTopography")
 #: Height units of instrument files, in m.
 _UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "pm": 1e-12, "Å": 1e-10, "A": 1e-10}
 _OWN_SUFFIXES = (".npy", ".nc", ".nc4", ".cdf")
