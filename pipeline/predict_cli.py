@@ -1,5 +1,6 @@
 """``g2tom predict``: queries from the command line or a CSV file, the surrogate that answers
-(``--surrogate``, the run's own, or the atlas's), and the answer as CSV (warnings on stderr)."""
+(``--surrogate``, the run's own, or the atlas's), and the answer as CSV, JSON or, on a terminal, a short
+table (warnings on stderr)."""
 
 from __future__ import annotations
 
@@ -93,7 +94,7 @@ def _default_surrogate(data_dir: Path) -> Path:
     return json_path if json_path.is_file() else Path(data_dir) / "surrogate.nc"
 
 
-#: The columns of the table printed on a terminal (all of them: CSV or --json).
+#: The columns of the table printed on a terminal (every column: CSV or --json).
 TABLE_COLUMNS = ("force", "xi", "lambda", "resistance", "lower", "upper", "open_probability")
 #: Significant digits in that table.
 TABLE_DIGITS = 4
@@ -169,7 +170,8 @@ def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
 
 
 def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
-    """``g2tom predict``: CSV of R_el, its band and the band's components; warnings on stderr."""
+    """``g2tom predict``: R_el, its band and the band's components as CSV (a short table on a terminal,
+    JSON with ``--json``), to stdout or ``--output``; warnings and notes on stderr."""
     force, xi, lam = _cli_queries(args)
     check_values(force, xi, lam)
     if args.output is not None:
