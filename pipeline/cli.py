@@ -273,6 +273,9 @@ def _cmd_validate(args: argparse.Namespace, scenario: Scenario) -> None:
     if args.overrides or args.config != "paper":
         raise ConfigError("g2tom validate runs its own validation scene (the default set or --quick): "
                           "--config and --set are not used by it; leave them out")
+    from pipeline.preflight import check_data_dir
+
+    check_data_dir(args.data_dir)
     problem = missing_extra()
     if problem:
         raise ConfigError(problem)
@@ -383,7 +386,9 @@ def _parser() -> argparse.ArgumentParser:
     predict.add_argument("--xi", default=None, help="oxide fraction in (0, 1): a number or a comma-separated list")
     predict.add_argument("--lambda", dest="lam", default=None, help="l_O sqrt(eta) > 0: a number or a comma-separated list")
     predict.add_argument("--csv", type=Path, default=None, help="CSV file of queries with columns force, xi, lambda")
-    predict.add_argument("--output", type=Path, default=None, help="write the CSV result here (default: stdout)")
+    predict.add_argument("--output", type=Path, default=None,
+                         help="write the CSV (or --json) result here (default: stdout; on a terminal, a short table)")
+    predict.add_argument("--json", action="store_true", help="the result as one JSON object (SI units)")
     predict.add_argument("--extrapolate", action="store_true", help="allow queries outside the fitted ranges (with a warning)")
     predict.add_argument("--model", choices=("curve", "power_law"), default="curve",
                          help="curve: each cell's ln R'(ln F') curve, interpolated (default); power_law: Eq. 27")
@@ -403,7 +408,7 @@ def _parser() -> argparse.ArgumentParser:
                                "Gaussian self-affine surface, g2tom fed its summit statistics (<data-dir>/validate_random_process/)")
     rough = add("roughness", _cmd_roughness, "sigma, eta and beta from a measured height map")
     rough.add_argument("heightmap", type=Path, help=".npy, netCDF or text (heights in m), or an instrument file "
-                       "(SurfaceTopography: pip install 'g2tom[topography]')")
+                       "(read by the optional package SurfaceTopography)")
     rough.add_argument("--pixel-size", type=float, default=None,
                        help="pixel size, m (required for .npy, netCDF and text; overrides an instrument file's)")
     rough.add_argument("--cutoff", type=float, default=None,
@@ -418,6 +423,24 @@ def _parser() -> argparse.ArgumentParser:
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:  # noqa: ANN001
     """Warnings as one ``g2tom: warning:`` line, without the source line that raised them."""
     return f"g2tom: warning: {message}\n"
+
+
+#: Exit status after Ctrl-C (128 + SIGINT, as a shell reports a command killed by it).
+INTERRUPTED = 130
+
+
+def _kept(args: argparse.Namespace) -> str:
+    """What an interrupted command kept, and how to go on from it (one line)."""
+    if args.command == "validate":
+        from pipeline.reference.validate import output_folder
+
+        where = output_folder(args.data_dir, args.surface) / "cases"
+        return (f"the cases finished so far are kept in {where}; run the same `g2tom validate` command again to "
+                "continue from them")
+    if args.command == "atlas":
+        return (f"the scenes finished so far are kept in {Path(args.data_dir) / 'atlas'}; run the same `g2tom atlas` "
+                "command again to continue from them")
+    return "stopped before the end; run the command again"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -442,6 +465,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except StaleInputError as exc:
         print(f"g2tom: error: {exc}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        print(f"g2tom: interrupted: {_kept(args)}", file=sys.stderr)
+        return INTERRUPTED
     finally:
         warnings.formatwarning = formatwarning
     return 0

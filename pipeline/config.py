@@ -27,6 +27,7 @@ from typing import Any, Iterable, Mapping
 __all__ = [
     "AUTO",
     "ConfigError",
+    "read_input_text",
     "check_domains",
     "check_surrogate_grid",
     "Scenario",
@@ -44,6 +45,38 @@ AUTO = "auto"
 
 class ConfigError(ValueError):
     """A parameter is unknown, malformed or outside its allowed range."""
+
+
+def read_input_text(option: str, path: str | Path, encoding: str = "utf-8") -> str:
+    """The text of an input file given by ``option``, or one ConfigError line naming both.
+
+    Parameters
+    ----------
+    option
+        How the user named the file (``--csv``, ``--surrogate``), for the message.
+    path
+        The file.
+    encoding
+        Its text encoding (``utf-8-sig`` also accepts a leading byte-order mark).
+
+    Raises
+    ------
+    ConfigError
+        If ``path`` is a directory, does not exist, cannot be read (permissions) or is not
+        text in ``encoding``.
+    """
+    path = Path(path)
+    where = f"{option} {str(path)!r}"
+    if path.is_dir():
+        raise ConfigError(f"{where} is a directory: give a file")
+    if not path.exists():
+        raise ConfigError(f"{where} does not exist")
+    try:
+        return path.read_text(encoding=encoding)
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{where} is not UTF-8 text (byte {exc.start}: {exc.object[exc.start:exc.start + 1]!r})") from None
+    except OSError as exc:
+        raise ConfigError(f"{where} is unreadable ({exc.strerror or exc}): check its permissions") from None
 
 
 def _spec(
@@ -945,6 +978,9 @@ def load_scenario(
         Naming the parameter, its value and the allowed range.
     """
     data, name = _read_toml(config)
+    # the settings the user chose (a file's own, not those of its base or of a bundled scenario)
+    explicit = set() if str(config) in bundled_scenarios() else {
+        f"{section}.{key}" for section, table in data.items() if isinstance(table, dict) for key in table}
     name = str(data.pop("name", name))
     description = str(data.pop("description", ""))
     base = data.pop("base", None)
@@ -969,7 +1005,42 @@ def load_scenario(
         if section not in SECTIONS or not key:
             raise _unknown(dotted)
         data.setdefault(section, {})[key] = value
-    return _build(data, name=name, description=description)
+        explicit.add(dotted)
+    return _settle(_build(data, name=name, description=description), explicit)
+
+
+#: Settings used only under another setting's value: key -> (that setting, its value, what is used instead).
+USED_ONLY_WITH: dict[str, tuple[str, str, str]] = {
+    "fits.min_force": ("fits.fit_range", "force", "fits.min_force_normalized"),
+    "fits.min_force_normalized": ("fits.fit_range", "force_normalized", "fits.min_force"),
+}
+
+
+def _settle(s: Scenario, explicit: set[str]) -> Scenario:
+    """Defaults that follow the grid, and a warning for each chosen setting that has no effect.
+
+    ``surrogate.rank`` left at its default follows the oxide grid (at most
+    min(len(oxide.xi), len(oxide.lambda))); one the user set is kept, and
+    :func:`check_surrogate_grid` refuses it when out of range. A setting of
+    :data:`USED_ONLY_WITH` the user set while another setting overrides it is warned about,
+    naming that setting.
+
+    Parameters
+    ----------
+    s
+        The scenario as built.
+    explicit
+        ``section.key`` of every setting the user chose (``--set``, or the TOML file's own).
+    """
+    flat = s.flat()
+    for key, (control, needed, instead) in USED_ONLY_WITH.items():
+        if key in explicit and flat[control] != needed:
+            warnings.warn(f"{key} = {flat[key]:g} has no effect: {control} = {flat[control]!r} selects by {instead} "
+                          f"instead; set {control} = {needed!r} for {key} to count", stacklevel=3)
+    top = min(len(s.oxide.xi), len(s.oxide.lambda_))
+    if "surrogate.rank" not in explicit and s.surrogate.rank > top:
+        s = dataclasses.replace(s, surrogate=dataclasses.replace(s.surrogate, rank=top))
+    return s
 
 
 def _split_override(text: str) -> tuple[str, Any]:

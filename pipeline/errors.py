@@ -2,8 +2,30 @@
 
 from __future__ import annotations
 
-__all__ = ["StaleInputError"]
+import shlex
+import sys
+
+__all__ = ["StaleInputError", "install_hint"]
 
 
 class StaleInputError(RuntimeError):
     """A stage input is missing or was built from a different configuration."""
+
+
+def install_hint(extra: str, *packages: str) -> str:
+    """The command that installs ``packages`` into the Python running g2tom, wherever it was installed.
+
+    Parameters
+    ----------
+    extra
+        The g2tom optional extra that lists the packages, named as an aside.
+    packages
+        What pip installs.
+
+    Returns
+    -------
+    str
+        E.g. ``/usr/bin/python3 -m pip install tamaas (g2tom's optional extra 'reference')``.
+    """
+    command = " ".join(shlex.quote(word) for word in (sys.executable, "-m", "pip", "install", *packages))
+    return f"{command} (g2tom's optional extra '{extra}')"

@@ -142,6 +142,8 @@ def predict(
         resistance, fit_error, surrogate_error = curve, s_curve, e_curve
     else:
         resistance, fit_error, surrogate_error = power_law, np.hypot(s_a, ln_f * s_g), np.hypot(e_a, ln_f * e_g)
+    if tables.lam.size == tables.xi.size == 1:
+        surrogate_error = _single_cell(tables, surrogate_error)
     _warn_components(fit_error, surrogate_error, lm, x)
     threshold = scenario.surrogate.warn_error if warn_error is None else warn_error
     _warn_surrogate_error(surrogate_error, threshold, lm, x, force_n)
@@ -164,6 +166,18 @@ def predict(
     ds.attrs["model"] = model
     ds.attrs["answered_by"] = answered_by(tables)
     return ds
+
+
+def _single_cell(tables: SurrogateTables, surrogate_error: np.ndarray) -> np.ndarray:
+    """A one-cell surrogate answers with its cell's own fit, not an interpolation: no surrogate error.
+
+    Returns zeros shaped like ``surrogate_error`` and says so (SurrogateErrorWarning), so the
+    band is the realization spread and the fit interval only.
+    """
+    warnings.warn(f"the surrogate holds one cell (xi = {tables.xi[0]:g}, lambda = {tables.lam[0]:g}): the answer is that "
+                  "cell's own fit, without interpolation; its band is the realization spread and the fit interval "
+                  "(no surrogate error)", SurrogateErrorWarning, stacklevel=3)
+    return np.zeros_like(surrogate_error)
 
 
 def _warn_components(fit_error: np.ndarray, surrogate_error: np.ndarray, lam: np.ndarray, xi: np.ndarray) -> None:

@@ -28,12 +28,15 @@ from pipeline.physics.atlas_surrogate import AtlasModel
 from pipeline.predict_queries import OUTPUT_COLUMNS, check_ranges, check_values, queries
 from pipeline.stages.surrogate import scene_groups
 
-__all__ = ["AtlasSurrogate", "is_atlas_document", "load_atlas_surrogate", "predict_atlas", "shipped_path", "SHIPPED"]
+__all__ = ["NOT_IN_ATLAS", "AtlasSurrogate", "is_atlas_document", "load_atlas_surrogate", "predict_atlas", "shipped_path", "SHIPPED"]
 
 #: The atlas surrogate shipped inside the package (``make atlas`` regenerates it), so that
 #: ``g2tom predict`` answers other surfaces on a fresh install.
 SHIPPED = "atlas_surrogate.json"
 _DOMAIN = ("mu", "Pi", "xi", "lambda", "force_normalized")
+#: The single-scene band's components the atlas does not hold: NaN in its answers.
+NOT_IN_ATLAS = ("realization_lower", "realization_upper", "spread_lower", "spread_upper", "fit_error",
+                "open_probability")
 
 
 def is_atlas_document(text: str) -> bool:
@@ -119,13 +122,11 @@ def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi:
     power_law = alpha * scenario.resistance_scale * np.exp(-gamma * np.log(force_n))
     resistance = surrogate.models[CURVE](x, lm, mu, pi, force_n) * scenario.resistance_scale
     error = np.full(f.size, surrogate.error)
-    unknown = np.full(f.size, np.nan)
     columns = {
         "force": f, "xi": x, "lambda": lm, "force_normalized": force_n, "alpha": alpha, "gamma": gamma,
         "resistance": resistance, "lower": resistance * np.exp(-error), "upper": resistance * np.exp(error),
-        "realization_lower": unknown, "realization_upper": unknown, "spread_lower": unknown,
-        "spread_upper": unknown, "fit_error": unknown, "surrogate_error": error, "total_lower": error,
-        "total_upper": error, "open_probability": unknown, "resistance_curve": resistance,
+        **{name: np.full(f.size, np.nan) for name in NOT_IN_ATLAS}, "surrogate_error": error,
+        "total_lower": error, "total_upper": error, "resistance_curve": resistance,
         "resistance_power_law": power_law, "mu": mu, "Pi": pi,
     }
     ds = xr.Dataset({name: label(values) for name, values in columns.items()})

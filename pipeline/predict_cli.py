@@ -1,11 +1,13 @@
 """``g2tom predict``: queries from the command line or a CSV file, the surrogate that answers
-(``--surrogate``, the run's own, or the atlas's), and the answer as CSV (warnings on stderr)."""
+(``--surrogate``, the run's own, or the atlas's), and the answer as CSV, JSON or, on a terminal, a short
+table (warnings on stderr)."""
 
 from __future__ import annotations
 
 import argparse
 import csv
 import io
+import json
 import sys
 import warnings
 from pathlib import Path
@@ -14,13 +16,14 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.config import ConfigError, Scenario
+from pipeline.config import ConfigError, Scenario, read_input_text
 from pipeline.predict import predict
 from pipeline.predict_domain import check_surface, with_measured_roughness
+from pipeline.preflight import check_output_file
 from pipeline.predict_queries import OUTPUT_COLUMNS, check_values
 from pipeline.surrogate_file import SurrogateTables, load_surrogate
 
-__all__ = ["predict_cli", "to_csv"]
+__all__ = ["predict_cli", "to_csv", "to_json", "to_table", "INPUT_ALIASES", "TABLE_COLUMNS"]
 
 
 def _parse_list(option: str, text: str) -> np.ndarray:
@@ -50,18 +53,26 @@ def _cli_queries(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, np.n
     return tuple(np.broadcast_to(v, (n,)).copy() for v in values)  # type: ignore[return-value]
 
 
+#: Input column names (lower case) read as another: the output's ``force_N`` as ``force``.
+INPUT_ALIASES = {"force_n": "force"}
+
+
 def _read_csv(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Columns force, xi, lambda of a CSV file with a header line (other columns ignored)."""
-    if not path.is_file():
-        raise ConfigError(f"--csv {str(path)!r} does not exist")
+    """Columns force (or force_N, as predict writes it), xi, lambda of a CSV file with a header line
+    (other columns ignored)."""
+    text = read_input_text("--csv", path, encoding="utf-8-sig")  # Excel's "CSV UTF-8" starts with a BOM
     try:
-        rows = list(csv.reader(io.StringIO(path.read_text())))
-    except (UnicodeDecodeError, csv.Error) as exc:
+        rows = list(csv.reader(io.StringIO(text)))
+    except csv.Error as exc:
         raise ConfigError(f"--csv {str(path)!r} is not a readable CSV file ({exc})") from None
     rows = [r for r in rows if any(c.strip() for c in r)]
     if len(rows) < 2:
         raise ConfigError(f"--csv {str(path)!r} needs a header line (force,xi,lambda) and at least one query")
     header = [c.strip().lower() for c in rows[0]]
+    both = [f"{target} and {alias}" for alias, target in INPUT_ALIASES.items() if alias in header and target in header]
+    if both:
+        raise ConfigError(f"--csv {str(path)!r}: header {rows[0]!r} has both {both[0]} (the same column): keep one")
+    header = [INPUT_ALIASES.get(c, c) for c in header]
     missing = [c for c in ("force", "xi", "lambda") if c not in header]
     if missing:
         raise ConfigError(f"--csv {str(path)!r}: header {rows[0]!r} lacks column(s) {', '.join(missing)} (need force, xi, lambda)")
@@ -83,14 +94,54 @@ def _default_surrogate(data_dir: Path) -> Path:
     return json_path if json_path.is_file() else Path(data_dir) / "surrogate.nc"
 
 
+#: The columns of the table printed on a terminal (every column: CSV or --json).
+TABLE_COLUMNS = ("force", "xi", "lambda", "resistance", "lower", "upper", "open_probability")
+#: Significant digits in that table.
+TABLE_DIGITS = 4
+
+
+def _label(name: str) -> str:
+    """A column's name in the output: with its unit appended unless dimensionless (force_N)."""
+    unit = OUTPUT_COLUMNS[name][0]
+    return f"{name}_{unit}" if unit != "1" else name
+
+
+def _columns(ds: xr.Dataset, names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
+    """The output's columns (flat), in the order of :data:`OUTPUT_COLUMNS`: ``names`` of them, or all
+    that ``ds`` holds."""
+    chosen = [n for n in OUTPUT_COLUMNS if n in ds and (names is None or n in names)]
+    return {n: np.asarray(ds[n].values, dtype=float).ravel() for n in chosen}
+
+
 def to_csv(ds: xr.Dataset) -> str:
-    """Prediction dataset as CSV text, one query per line, columns :data:`OUTPUT_COLUMNS`."""
-    names = list(OUTPUT_COLUMNS)
-    columns = [np.asarray(ds[n].values, dtype=float).ravel() for n in names]
-    header = [f"{n}_{OUTPUT_COLUMNS[n][0]}" if OUTPUT_COLUMNS[n][0] != "1" else n for n in names]
-    lines = [",".join(header)]
-    lines += [",".join(f"{v:.10g}" for v in row) for row in zip(*columns)]
+    """Prediction dataset as CSV text, one query per line, columns :data:`OUTPUT_COLUMNS` that it holds."""
+    columns = _columns(ds)
+    lines = [",".join(_label(n) for n in columns)]
+    lines += [",".join(f"{v:.10g}" for v in row) for row in zip(*columns.values())]
     return "\n".join(lines) + "\n"
+
+
+def to_json(ds: xr.Dataset) -> str:
+    """Prediction dataset as one JSON object: who answered, each column's unit and meaning, and one
+    object per query (NaN as null, infinities as "inf")."""
+    from pipeline.surrogate_file import _encode
+
+    columns = _columns(ds)
+    rows = [dict(zip(map(_label, columns), values)) for values in zip(*(_encode(c) for c in columns.values()))]
+    doc = {"answered_by": ds.attrs.get("answered_by", ""), "band": ds.attrs.get("band", ""),
+           "columns": {_label(n): {"units": OUTPUT_COLUMNS[n][0], "long_name": OUTPUT_COLUMNS[n][1]} for n in columns},
+           "queries": rows}
+    return json.dumps(doc, indent=1) + "\n"
+
+
+def to_table(ds: xr.Dataset) -> str:
+    """The main columns (:data:`TABLE_COLUMNS`) as an aligned table of :data:`TABLE_DIGITS`
+    significant digits, for a terminal."""
+    columns = _columns(ds, TABLE_COLUMNS)
+    cells = [[_label(n) for n in columns]]
+    cells += [[f"{v:.{TABLE_DIGITS}g}" for v in row] for row in zip(*columns.values())]
+    widths = [max(len(row[k]) for row in cells) for k in range(len(columns))]
+    return "\n".join("  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells) + "\n"
 
 
 def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
@@ -101,7 +152,7 @@ def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
 
     if args.surrogate is not None:
         path = Path(args.surrogate)
-        if path.suffix == ".json" and path.is_file() and is_atlas_document(path.read_text()):
+        if path.suffix == ".json" and path.is_file() and is_atlas_document(read_input_text("--surrogate", path)):
             return load_atlas_surrogate(path)
         return load_surrogate(path)
     own = _default_surrogate(args.data_dir)
@@ -119,9 +170,12 @@ def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
 
 
 def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
-    """``g2tom predict``: CSV of R_el, its band and the band's components; warnings on stderr."""
+    """``g2tom predict``: R_el, its band and the band's components as CSV (a short table on a terminal,
+    JSON with ``--json``), to stdout or ``--output``; warnings and notes on stderr."""
     force, xi, lam = _cli_queries(args)
     check_values(force, xi, lam)
+    if args.output is not None:
+        check_output_file("--output", args.output)
     if args.roughness is not None:
         scenario = with_measured_roughness(scenario, args.roughness, args.pixel_size)
     elif args.pixel_size is not None:
@@ -133,13 +187,23 @@ def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
             result = predict(answer, scenario, force, xi, lam, extrapolate=args.extrapolate,
                              model=args.model)
         else:
-            from pipeline.predict_atlas import predict_atlas
+            from pipeline.predict_atlas import NOT_IN_ATLAS, predict_atlas
 
             result = predict_atlas(answer, scenario, force, xi, lam, extrapolate=args.extrapolate)
+            result = result.drop_vars(NOT_IN_ATLAS)
+            print(f"g2tom: note: the atlas surrogate holds no realization spread, fit interval or open-circuit share: "
+                  f"columns {', '.join(NOT_IN_ATLAS)} left out; its band is its held-out error", file=sys.stderr)
     for w in caught:
         print(f"g2tom: warning: {w.message}", file=sys.stderr)
     print(f"g2tom: answered by {result.attrs['answered_by']}", file=sys.stderr)
-    text = to_csv(result)
+    if args.json:
+        text = to_json(result)
+    elif args.output is None and sys.stdout.isatty():
+        text = to_table(result)
+        print(f"g2tom: note: the main columns, {TABLE_DIGITS} significant digits; every column in full: "
+              "--output FILE (CSV), --json, or pipe the output", file=sys.stderr)
+    else:
+        text = to_csv(result)
     if args.output is None:
         sys.stdout.write(text)
     else:

@@ -28,7 +28,7 @@ import numpy as np
 
 from pipeline.config import ConfigError, Scenario
 
-__all__ = ["check_data_dir", "check_scheduler", "check_scene", "scene_forces", "preflight"]
+__all__ = ["check_data_dir", "check_output_file", "check_scheduler", "check_scene", "scene_forces", "preflight"]
 
 #: Seconds a scheduler has to accept a TCP connection.
 CONNECT_TIMEOUT = 2.0
@@ -59,6 +59,39 @@ def check_data_dir(data_dir: str | Path) -> None:
         reason = os.strerror(exc.errno) if exc.errno else str(exc)
         raise ConfigError(f"--data-dir {str(path)!r} is not writable ({reason}): choose another "
                           f"directory or fix its permissions") from None
+
+
+def check_output_file(option: str, target: str | Path) -> None:
+    """Refuse, before any work, an output file that could not be written at ``target``.
+
+    Nothing is created: a missing folder on the way is made only when the file is written.
+
+    Parameters
+    ----------
+    option
+        How the user named the file (``--output``), for the message.
+    target
+        The file to be written (replaced if it exists).
+
+    Raises
+    ------
+    ConfigError
+        If ``target`` is a directory, lies under a file, or its nearest existing folder is not
+        writable.
+    """
+    path = Path(target)
+    where = f"{option} {str(path)!r}"
+    if path.is_dir():
+        raise ConfigError(f"{where} is a directory: give a file name, e.g. {str(path / 'predictions.csv')!r}")
+    folder = path.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        raise ConfigError(f"{where} lies under {str(folder)!r}, which is a file, not a directory: give a path "
+                          "in a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ConfigError(f"{where} cannot be written: {str(folder)!r} is not writable; choose another path "
+                          "or fix its permissions")
 
 
 def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:

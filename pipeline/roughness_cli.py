@@ -34,22 +34,25 @@ import numpy as np
 import xarray as xr
 
 from pipeline.config import ConfigError
+from pipeline.errors import install_hint
 from pipeline.physics.height_fill import fill_gaps, masked_moments
 from pipeline.physics.roughness import validated_heights
 from pipeline.physics.surface_spectrum import BETA_RULES, psd_moments, summit_parameters
 
 __all__ = ["read_heightmap", "read_measured", "Measured", "measure", "roughness_cli", "PLAUSIBLE_SIGMA",
-           "CUTOFF_PIXELS", "INSTALL", "MAX_MISSING_SHARE"]
+           "CUTOFF_PIXELS", "INSTALL", "MAX_MISSING_SHARE", "MAP_EXTENT"]
 
 #: Height standard deviations (m) outside this range are almost surely in the wrong unit.
 PLAUSIBLE_SIGMA = (1e-10, 1e-3)
+#: Physical side lengths (m) a measured map may span: from a nanometre to a metre.
+MAP_EXTENT = (1e-9, 1.0)
 #: Default short-wavelength cutoff, in pixels of the coarser axis.
 CUTOFF_PIXELS = 4.0
 #: Largest share of undefined pixels that is filled: beyond it the fill, not the measurement,
 #: would set the moments (at 5 % filled, m4 is already biased up by 2 ... 3.5 %; see height_fill).
 MAX_MISSING_SHARE = 0.25
 #: How to install the instrument-format reader.
-INSTALL = "pip install 'g2tom[topography]' (or: pip install SurfaceTopography)"
+INSTALL = install_hint("topography", "SurfaceTopography")
 #: Height units of instrument files, in m.
 _UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "pm": 1e-12, "Å": 1e-10, "A": 1e-10}
 _OWN_SUFFIXES = (".npy", ".nc", ".nc4", ".cdf")
@@ -173,6 +176,33 @@ def read_measured(path: str | Path) -> Measured:
     return Measured(heights, None, False, "m", "g2tom")
 
 
+def _check_extent(shape: tuple[int, ...], pixel: tuple[float, float], source: str) -> None:
+    """Refuse a pixel size that makes the map span less than a nanometre or more than a metre.
+
+    Parameters
+    ----------
+    shape
+        The map's pixels (rows, columns).
+    pixel
+        Pixel pitch (dy, dx), m.
+    source
+        Where the pixel size came from (``--pixel-size`` or the file), for the message.
+
+    Raises
+    ------
+    ConfigError
+        Naming the pixel size, the span it gives and the allowed range of square pixels.
+    """
+    spans = [n * d for n, d in zip(shape, pixel)]
+    low, high = MAP_EXTENT
+    if low <= min(spans) and max(spans) <= high:
+        return
+    value = pixel[0] if pixel[0] == pixel[1] else pixel
+    raise ConfigError(f"{source} = {value!r} is out of range: the {shape[0]} x {shape[1]} map would span "
+                      f"{spans[0]:.3g} x {spans[1]:.3g} m; must be in [{low / min(shape):.3g}, {high / max(shape):.3g}] m "
+                      f"(a map spans {low:g} m to {high:g} m)")
+
+
 def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | None = None,
             periodic: bool | None = None, beta_rule: str = "paper") -> dict[str, Any]:
     """Everything ``g2tom roughness --json`` prints: moments, summit parameters, what was done (SI).
@@ -206,16 +236,20 @@ def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | N
     pixel = (pixel_size, pixel_size) if pixel_size is not None else measured.pixel_size
     if pixel is None:
         raise ConfigError(f"HEIGHTMAP {str(path)!r} carries no pixel size: give --pixel-size (m)")
-    cutoff = CUTOFF_PIXELS * max(pixel) if cutoff is None else cutoff
-    if not (math.isfinite(cutoff) and cutoff > 0):
-        raise ConfigError(f"--cutoff = {cutoff!r} is out of range: must be > 0 (m)")
     periodic = measured.periodic if periodic is None else periodic
     try:
         filled, holed = _filled(measured.heights)
         z = validated_heights(filled)
+        _check_extent(z.shape, pixel, "--pixel-size" if pixel_size is not None else
+                      f"the pixel size of HEIGHTMAP {str(path)!r}")
+        cutoff = CUTOFF_PIXELS * max(pixel) if cutoff is None else cutoff
+        if not (math.isfinite(cutoff) and cutoff > 0):
+            raise ConfigError(f"--cutoff = {cutoff!r} is out of range: must be > 0 (m)")
         moments = psd_moments(z, pixel, cutoff, periodic)
         summits = summit_parameters(moments.m0, moments.m2, moments.m4, beta_rule)
         gaps = _gaps(z, holed, pixel, periodic)
+    except ConfigError:
+        raise
     except ValueError as exc:
         raise ConfigError(f"HEIGHTMAP {str(path)!r}: {exc}") from None
     return {

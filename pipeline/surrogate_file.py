@@ -18,7 +18,8 @@ import numpy as np
 import xarray as xr
 from scipy.interpolate import RegularGridInterpolator
 
-from pipeline.config import ConfigError
+from pipeline import __version__
+from pipeline.config import ConfigError, read_input_text
 from pipeline.physics.curve_model import evaluate_curve
 from pipeline.physics.surrogate import evaluate, to_w, to_z
 
@@ -66,11 +67,15 @@ class SurrogateTables:
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def from_dataset(cls, ds: xr.Dataset) -> "SurrogateTables":
-        """From ``surrogate.nc`` (or the surrogate stage's dataset)."""
+    def from_dataset(cls, ds: xr.Dataset, source: str = "the surrogate dataset") -> "SurrogateTables":
+        """From ``surrogate.nc`` (or the surrogate stage's dataset); ``source`` names it in errors."""
         missing = [n for n in (*(f"{p}_coef_w" for p in PARAMETERS), *GRID_TABLES, *STEP_TABLES, CURVE_TABLE) if n not in ds]
         if missing:
-            raise ConfigError(f"the surrogate dataset lacks {', '.join(missing)}: re-run `g2tom surrogate`")
+            title = str(ds.attrs.get("title", ""))
+            if title.startswith("g2tom ") and "surrogate" not in title:
+                raise ConfigError(f"{source} is the output of the {title.removeprefix('g2tom ')}, not a surrogate: "
+                                  "give surrogate.json or surrogate.nc (written by `g2tom surrogate`)")
+            raise ConfigError(f"{source} lacks {', '.join(missing)}: re-run `g2tom surrogate`")
         coef = {p: (ds[f"{p}_coef_w"].values, ds[f"{p}_coef_z"].values, str(ds[f"{p}_coef_w"].attrs.get("transform", "identity")))
                 for p in PARAMETERS}
         tables = {n: ds[n].transpose("lambda", "xi").values for n in GRID_TABLES}
@@ -125,6 +130,7 @@ class SurrogateTables:
             doc = json.loads(text)
             if doc.get("format") != FORMAT:
                 raise ValueError(f"format is {doc.get('format')!r}, not {FORMAT!r}")
+            _check_version(doc.get("version"), source)
             coef = {p: (np.array(doc["parameters"][p]["coef_w"], dtype=float), np.array(doc["parameters"][p]["coef_z"], dtype=float),
                         str(doc["parameters"][p]["transform"])) for p in PARAMETERS}
             tables = {k: np.array(_decode(doc["tables"][k]), dtype=float) for k in (*GRID_TABLES, *STEP_TABLES, CURVE_TABLE)}
@@ -138,6 +144,8 @@ class SurrogateTables:
                 tables=tables,
                 info=doc.get("info", {}),
             )
+        except ConfigError:
+            raise
         except (ValueError, KeyError, TypeError, AttributeError) as exc:
             raise ConfigError(f"--surrogate {source!r} is not a g2tom surrogate.json ({exc})") from None
 
@@ -166,8 +174,8 @@ class SurrogateTables:
         values = values[tuple(slice(None) if k else 0 for k in keep)]
         points = [np.clip(p, a.min(), a.max()) for p, a, k in zip(points, axes, keep) if k]
         axes = [a for a, k in zip(axes, keep) if k]
-        if not axes:
-            return np.broadcast_to(values, (lam.size, len(names))).copy()
+        if not axes:  # a single cell and no load axis: its values, whatever the query
+            return np.broadcast_to(values, (lam.size, *values.shape)).copy()
         return RegularGridInterpolator(tuple(axes), values)(np.stack(points, axis=-1))
 
 
@@ -204,22 +212,30 @@ def _decode(values: Any) -> Any:
     return float(values) if isinstance(values, str) and values in ("inf", "-inf") else values
 
 
+def _check_version(version: Any, source: str) -> None:
+    """Refuse a surrogate.json of a format version this g2tom does not read (a newer g2tom's)."""
+    if isinstance(version, bool) or not isinstance(version, int) or not 1 <= version <= VERSION:
+        raise ConfigError(f"--surrogate {source!r} has format version {version!r}: this g2tom ({__version__}) reads "
+                          f"version 1..{VERSION}; update g2tom, or rewrite the file with this one (`g2tom surrogate`)")
+
+
 def load_surrogate(path: str | Path) -> SurrogateTables:
     """Load ``surrogate.json`` (no netCDF needed) or ``surrogate.nc``.
 
     Raises
     ------
     ConfigError
-        If the file is missing or is not a surrogate file.
+        If the file is missing, unreadable, not a surrogate file (naming it), or of a newer
+        format version.
     """
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"--surrogate {str(path)!r} does not exist: run `g2tom surrogate` (or `make surrogate`) first")
     if path.suffix == ".json":
-        return SurrogateTables.from_json(path.read_text(), str(path))
+        return SurrogateTables.from_json(read_input_text("--surrogate", path), str(path))
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
             ds = ds.load()
     except (OSError, ValueError) as exc:
         raise ConfigError(f"--surrogate {str(path)!r} is not a readable netCDF file ({exc})") from None
-    return SurrogateTables.from_dataset(ds)
+    return SurrogateTables.from_dataset(ds, f"--surrogate {str(path)!r}")

@@ -133,4 +133,5 @@ def test_bad_topographies(tmp_path, capsys, surface) -> None:
 def test_missing_surface_topography_names_the_install(tmp_path, capsys, monkeypatch) -> None:
     (tmp_path / "scan.x3p").write_bytes(b"PK\x03\x04 not really")
     monkeypatch.setitem(sys.modules, "SurfaceTopography", None)  # import fails as if not installed
-    _bad(tmp_path, capsys, [str(tmp_path / "scan.x3p")], "pip install 'g2tom[topography]'")
+    _bad(tmp_path, capsys, [str(tmp_path / "scan.x3p")], f"{sys.executable} -m pip install SurfaceTopography",
+         "extra 'topography'")

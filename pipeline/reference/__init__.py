@@ -15,10 +15,12 @@ driver), ``summary`` (validate.nc) and ``section`` (its figure and report sectio
 
 from __future__ import annotations
 
+from pipeline.errors import install_hint
+
 __all__ = ["INSTALL_HINT", "missing_extra"]
 
-#: The command that installs the reference's optional dependencies into the project's venv.
-INSTALL_HINT = ".venv/bin/pip install -e '.[reference]'  (or: make validate)"
+#: The command that installs the reference's optional dependency into the Python running g2tom.
+INSTALL_HINT = install_hint("reference", "tamaas")
 
 
 def missing_extra() -> str | None:
