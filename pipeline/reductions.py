@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from pipeline.physics.powerlaw import quantile_with_inf
+from pipeline.fitting.powerlaw import quantile_with_inf
 
 __all__ = [
     "DIM",

@@ -10,8 +10,8 @@ import xarray as xr
 
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
-from pipeline.physics import ensemble
-from pipeline.physics.powerlaw import fit_power_law
+from pipeline.fitting import ensemble
+from pipeline.fitting.powerlaw import fit_power_law
 from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube, cube_rounds, fits
 from pipeline.stages import oxide as oxide_stage

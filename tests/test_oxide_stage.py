@@ -11,11 +11,12 @@ import pytest
 import xarray as xr
 
 from analysis import figures_oxide
-from pipeline import cli, store
+from pipeline import store
+from pipeline.cli import main as cli
 from pipeline.bench import oxide as bench_oxide
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario, load_scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.physics import oxide_field
 from pipeline.physics.grid import cell_centres
 from pipeline.stages import oxide

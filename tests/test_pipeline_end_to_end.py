@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pipeline import __version__
-from pipeline.cli import STAGES, main
+from pipeline.cli.main import STAGES, main
 from pipeline.store import read_stage
 from tests.conftest import SMALL_OVERRIDES
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.physics.roughness import roughness_parameters
 
 PIXEL = 1e-6  # m

@@ -21,7 +21,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline.config import Scenario, load_scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.reference import surfaces
 from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube as cube_stage

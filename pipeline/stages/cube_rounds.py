@@ -3,7 +3,7 @@
 ``oxide.ensemble = "fixed"`` computes ``oxide.n_realizations`` fields per lambda in one round.
 ``"adaptive"`` grows every (xi, lambda) cell in rounds: first ``oxide.min_realizations``, then
 ``oxide.batch`` more while the cell's fast-rule 95 % half-width of alpha
-(:mod:`pipeline.physics.ensemble`, exact for the geometric-mean fit on the steps with
+(:mod:`pipeline.fitting.ensemble`, exact for the geometric-mean fit on the steps with
 steps the fits stage fits, :func:`pipeline.stages.fit_steps.fit_range`) exceeds :data:`RULE_MARGIN` x ``oxide.target_half_width``, up to
 ``oxide.max_realizations``. A cell keeps the first prefix of realizations that meets the
 target, so the result does not depend on the batch.
@@ -18,7 +18,7 @@ import numpy as np
 
 from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
-from pipeline.physics import ensemble
+from pipeline.fitting import ensemble
 from pipeline.stages.cube_chunks import field_chunk, terms
 from pipeline.stages.fit_steps import fit_range
 from pipeline.stages.oxide import FieldSource

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from pipeline.atlas_design import AtlasDesign, Scene, design_scenes, plan_atlas, scene_scenario
+from pipeline.atlas.design import AtlasDesign, Scene, design_scenes, plan_atlas, scene_scenario
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
 from pipeline.store import atomic_path, provenance
@@ -43,7 +43,7 @@ def scene_path(data_dir: str | Path, scene: Scene) -> Path:
 
 def scene_dataset(base: Scenario, scene: Scene) -> xr.Dataset:
     """Run the chain on one scene in memory, single-threaded; its slice of ``atlas.nc``."""
-    from pipeline.domains import resolve
+    from pipeline.before_work.domains import resolve
     from pipeline.stages import contact, cube, fits, oxide
     from pipeline.stages.labels import COORD_LABELS
 

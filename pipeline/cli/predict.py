@@ -15,10 +15,10 @@ import numpy as np
 import xarray as xr
 
 from pipeline.config import ConfigError, Scenario
-from pipeline.predict import predict
-from pipeline.predict_domain import check_surface, with_measured_roughness
-from pipeline.predict_queries import OUTPUT_COLUMNS, check_values
-from pipeline.surrogate_file import SurrogateTables, load_surrogate
+from pipeline.predict.predictor import predict
+from pipeline.predict.domain import check_surface, with_measured_roughness
+from pipeline.predict.queries import OUTPUT_COLUMNS, check_values
+from pipeline.predict.surrogate_file import SurrogateTables, load_surrogate
 
 __all__ = ["predict_cli", "to_csv"]
 
@@ -97,7 +97,7 @@ def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
     """The surrogate that answers: ``--surrogate`` (either kind), else the run's own when it is of
     this surface, else the atlas's (``<data-dir>/atlas/surrogate.json``, else the one shipped in
     the package) when there is one."""
-    from pipeline.predict_atlas import is_atlas_document, load_atlas_surrogate, shipped_path
+    from pipeline.predict.atlas import is_atlas_document, load_atlas_surrogate, shipped_path
 
     if args.surrogate is not None:
         path = Path(args.surrogate)
@@ -133,7 +133,7 @@ def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
             result = predict(answer, scenario, force, xi, lam, extrapolate=args.extrapolate,
                              model=args.model)
         else:
-            from pipeline.predict_atlas import predict_atlas
+            from pipeline.predict.atlas import predict_atlas
 
             result = predict_atlas(answer, scenario, force, xi, lam, extrapolate=args.extrapolate)
     for w in caught:
