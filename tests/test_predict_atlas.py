@@ -18,7 +18,7 @@ from pipeline.config import ConfigError, load_scenario
 from pipeline.predict.predictor import ExtrapolationWarning
 from pipeline.predict.atlas import load_atlas_surrogate, predict_atlas
 from pipeline.stages import fits, surrogate
-from pipeline.stages.surrogate import scene_groups
+from pipeline.scene import scene_groups
 from pipeline.store import write_dataset
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_atlas import BASE, DESIGN

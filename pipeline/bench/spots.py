@@ -27,7 +27,7 @@ from pipeline.config import Scenario
 from pipeline.before_work.domains import resolve
 from pipeline.physics.spot_models import DISCRETIZATIONS
 from pipeline.stages import contact, cube, cube_chunks
-from pipeline.stages.oxide import FieldSource
+from pipeline.scene import FieldSource
 
 __all__ = ["run", "TARGETS"]
 

@@ -26,7 +26,7 @@ from pipeline.atlas.fit import CURVE, FORMAT
 from pipeline.config import ConfigError, Scenario
 from pipeline.fitting.atlas_surrogate import AtlasModel
 from pipeline.predict.queries import OUTPUT_COLUMNS, check_ranges, check_values, queries
-from pipeline.stages.surrogate import scene_groups
+from pipeline.scene import scene_groups
 
 __all__ = ["AtlasSurrogate", "is_atlas_document", "load_atlas_surrogate", "predict_atlas", "shipped_path", "SHIPPED"]
 

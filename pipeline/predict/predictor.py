@@ -52,7 +52,7 @@ from pipeline.predict.queries import (
     check_values,
     queries,
 )
-from pipeline.stages.surrogate import scene_groups
+from pipeline.scene import scene_groups
 from pipeline.predict.surrogate_file import GRID_TABLES, STEP_TABLES, SurrogateTables, load_surrogate
 
 __all__ = ["ExtrapolationWarning", "SurrogateErrorWarning", "SurrogateTables", "load_surrogate", "predict", "MODELS",

@@ -20,7 +20,7 @@ from pipeline.reference import scene, surfaces
 from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube as cube_stage
 from pipeline.stages import cube_chunks
-from pipeline.stages.oxide import FieldSource
+from pipeline.scene import FieldSource
 
 __all__ = ["SURFACE_ASPERITIES", "spot_radii", "g2tom_resistances"]
 

@@ -20,7 +20,7 @@ from pipeline.config import ConfigError, load_scenario
 from pipeline.progress import format_duration
 from pipeline.reference import cases as cases_mod
 from pipeline.reference import scene, section, summary, surface_spots, window
-from pipeline.stages.oxide import FieldSource
+from pipeline.scene import FieldSource
 from pipeline.store import atomic_path
 
 #: Largest relative difference of g2tom's forces at one delta between discretizations and models

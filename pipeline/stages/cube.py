@@ -14,7 +14,7 @@ whatever the chunk size or scheduler.
 
 The fields oxide.nc records (the fixed ensemble, or the adaptive ensemble's first batch) are
 served from the record when it is at most :data:`pipeline.stages.oxide.RECORD_BYTES`; every other
-field is regenerated inside its task from its seed (:class:`pipeline.stages.oxide.FieldSource`,
+field is regenerated inside its task from its seed (:class:`pipeline.scene.FieldSource`,
 bit-identical to the record), so memory stays bounded and the ensemble can grow. ``oxide.ensemble = "fixed"`` computes
 ``oxide.n_realizations`` fields per lambda. ``"adaptive"`` grows every (xi, lambda) cell in
 rounds (:mod:`pipeline.stages.cube_rounds`). The realization axis is padded to the largest count
@@ -37,7 +37,8 @@ from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
 from pipeline.stages.cube_chunks import asperity_spots, clean_terms, exact_terms, spots_of
 from pipeline.stages.cube_dataset import dataset
 from pipeline.stages.cube_rounds import compute_cells, half_widths, padded, stopping_rule
-from pipeline.stages.oxide import FieldSource, RecordedFields
+from pipeline.scene import FieldSource
+from pipeline.stages.oxide import RecordedFields
 
 __all__ = ["build", "run", "spot_maps", "work_settings", "clean_conductances", "CLEAN_MODELS"]
 

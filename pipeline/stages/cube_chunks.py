@@ -1,7 +1,7 @@
 """The cube's unit of work: the resistance terms of a chunk of oxide fields at every load step.
 
 A dask task regenerates a chunk of fields of one lambda from their seeds
-(:class:`pipeline.stages.oxide.FieldSource`), thresholds them at each oxide fraction and runs
+(:class:`pipeline.scene.FieldSource`), thresholds them at each oxide fraction and runs
 the scenario's resistance model (:func:`model`) on the conducting masks: Greenwood's closed
 form, Greenwood's form with films, or the point model. With ``asperities`` spots each
 realization brings its own drawn spots (:func:`asperity_spots`).
@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from pipeline.physics import constriction, point_model, spot_models
-from pipeline.stages.oxide import FieldSource
+from pipeline.scene import FieldSource
 
 __all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "spots_of", "chunk_terms", "clean_terms",
            "exact_terms", "field_chunk"]

@@ -21,7 +21,7 @@ from pipeline.config import Scenario
 from pipeline.fitting import ensemble
 from pipeline.stages.cube_chunks import field_chunk, terms
 from pipeline.stages.fit_steps import fit_range
-from pipeline.stages.oxide import FieldSource
+from pipeline.scene import FieldSource
 
 __all__ = ["RULE_MARGIN", "stopping_rule", "half_widths", "compute_cells", "padded"]
 

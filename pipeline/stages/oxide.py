@@ -29,27 +29,10 @@ import xarray as xr
 from pipeline import store
 from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
-from pipeline.physics import oxide_field
 from pipeline.physics.grid import cell_centres
+from pipeline.scene import FieldSource, bands, threshold_block
 
-__all__ = ["build", "run", "bands", "FieldSource", "RecordedFields", "recorded_realizations"]
-
-
-def bands(scenario: Scenario) -> list[oxide_field.Band]:
-    """The wave-vector band of every correlation length of the scenario, in ``oxide.lambda`` order.
-
-    ``oxide.period = "window"`` puts the modes on the window's lattice (the published fields);
-    ``"spectral"`` on the lattice of :func:`oxide_field.spectral_period` at
-    ``oxide.spectral_resolution``.
-    """
-    ox = scenario.oxide
-    out = []
-    for lam in ox.lambda_:
-        period = None
-        if ox.period == "spectral":
-            period = oxide_field.spectral_period(scenario.n_cells, lam, ox.spectral_resolution)
-        out.append(oxide_field.band(scenario.n_cells, scenario.cell_size, lam, ox.ks_ratio, ox.hurst, period))
-    return out
+__all__ = ["build", "run", "RecordedFields", "recorded_realizations"]
 
 
 def recorded_realizations(scenario: Scenario) -> int:
@@ -61,41 +44,6 @@ def recorded_realizations(scenario: Scenario) -> int:
 #: Largest record of fields (bytes) the cube serves from oxide.nc instead of regenerating them
 #: (a local cluster ships it to each worker once).
 RECORD_BYTES = 256 * 2**20
-
-
-@dataclass(frozen=True)
-class FieldSource:
-    """Everything needed to regenerate any field and its thresholds from its seed (picklable).
-
-    The oxide stage and the cube's tasks both call it, so a field regenerated in the cube is
-    bit-identical to the one recorded in oxide.nc.
-    """
-
-    modes: tuple[oxide_field.Band, ...]
-    lambdas: tuple[float, ...]
-    xi: np.ndarray
-    seed: int
-    amplitudes: str
-    rule: str
-    n_cells: int
-    cell_size: float
-
-    @classmethod
-    def of(cls, scenario: Scenario) -> "FieldSource":
-        """The field source of a validated scenario."""
-        ox = scenario.oxide
-        return cls(tuple(bands(scenario)), tuple(ox.lambda_), np.asarray(ox.xi, float), ox.seed,
-                   ox.amplitudes, ox.threshold, scenario.n_cells, scenario.cell_size)
-
-    def psi(self, index: int, realizations: np.ndarray) -> np.ndarray:
-        """Fields of ``realizations`` at lambda number ``index``: float32 (realization, y, x)."""
-        return oxide_field.realize(self.modes[index], self.seed, self.lambdas[index], realizations,
-                                   self.amplitudes, self.n_cells, self.cell_size)
-
-    def fields(self, index: int, realizations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Fields (realization, y, x) and their float32 thresholds (xi, realization) at lambda ``index``."""
-        psi = self.psi(index, realizations)
-        return psi, _threshold_block(psi[None], xi=self.xi, rule=self.rule)[:, 0]
 
 
 @dataclass(frozen=True)
@@ -152,15 +100,6 @@ def _psi_block(realizations: np.ndarray, *, source: FieldSource) -> np.ndarray:
     return out
 
 
-def _threshold_block(psi: np.ndarray, *, xi: np.ndarray, rule: str) -> np.ndarray:
-    """float32 thresholds (xi, lambda, realization) of a chunk of fields."""
-    if rule == "theoretical":
-        value = oxide_field.theoretical_threshold(xi).astype(np.float32)
-        return np.broadcast_to(value[:, None, None], (xi.size,) + psi.shape[:2]).copy()
-    flat = psi.reshape(psi.shape[:2] + (-1,))
-    return np.stack([oxide_field.empirical_threshold(f, xi) for f in flat], axis=1)  # one lambda at a time
-
-
 def _fraction_block(psi: np.ndarray, threshold: np.ndarray) -> np.ndarray:
     """Covered fraction (xi, lambda, realization) of the cell centres: mean of psi >= threshold."""
     flat = psi.reshape(psi.shape[:2] + (-1,))
@@ -187,7 +126,7 @@ def _lazy(scenario: Scenario) -> tuple[da.Array, da.Array, da.Array]:
     )
     # Index letters: z = xi, l = lambda, r = realization; y, x are reduced (one chunk each).
     threshold = da.blockwise(
-        _threshold_block, "zlr", psi, "lryx",
+        threshold_block, "zlr", psi, "lryx",
         xi=xi, rule=ox.threshold, new_axes={"z": xi.size}, concatenate=True,
         dtype=np.float32, meta=np.empty((0, 0, 0), np.float32),
     )

@@ -53,14 +53,14 @@ from scipy.stats import norm
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
 from pipeline.fitting import surrogate as sg
-from pipeline.physics.groups import Groups, groups
 from pipeline.stages.labels import COORD_LABELS
 from pipeline.stages.surrogate_tables import band_tables, curve_tables
 from pipeline.stages.table3 import PARAMETERS, table3_csv, table3_markdown
 from pipeline.store import atomic_path, read_stage, write_dataset
 from pipeline.predict.surrogate_file import SurrogateTables
+from pipeline.scene import scene_groups
 
-__all__ = ["build", "run", "scene_groups", "PARAMETERS"]
+__all__ = ["build", "run", "PARAMETERS"]
 
 #: Highest orders tried by the paper method's cross-validation scan.
 MAX_ORDER_W = 4
@@ -236,12 +236,6 @@ def _parameter(scenario: Scenario, fits: xr.Dataset, name: str) -> tuple[dict[st
         f"{name}_formula": sg.closed_formula(info["coef_w"], info["coef_z"], transform, name),
     }
     return variables, attrs
-
-
-def scene_groups(scenario: Scenario) -> Groups:
-    """(mu, Pi) of a scenario's surface and sphere (:mod:`pipeline.physics.groups`)."""
-    rough = scenario.roughness
-    return groups(rough.sigma, rough.eta, rough.beta, scenario.indenter.radius)
 
 
 def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:

@@ -1,0 +1,209 @@
+"""Measured surfaces: height maps read from files, their spectral moments and Greenwood–Williamson
+parameters (what ``g2tom roughness FILE`` prints and ``g2tom predict --heightmap`` uses).
+
+Height maps are read from numpy ``.npy``, netCDF (``.nc``: the variable ``height``, ``z``
+or the only 2-D variable) or whitespace-separated text, heights in m with ``--pixel-size``
+in m; any other file (instrument formats: X3P, Gwyddion, Dektak, Keyence, Zygo, Sensofar,
+MountainsMap, SurfaceTopography's netCDF, ...) through SurfaceTopography (the optional extra
+``g2tom[topography]``), which reads the pixel size and the height unit from the file; every
+result is in SI units whatever the file's unit.
+
+The moments m0, m2, m4 come from the power spectrum below a stated short-wavelength cutoff
+(:func:`pipeline.physics.surface_spectrum.psd_moments`), the summit parameters from them
+(:func:`pipeline.physics.surface_spectrum.summit_parameters`).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from pipeline.config import ConfigError
+from pipeline.physics.roughness import validated_heights
+from pipeline.physics.surface_spectrum import BETA_RULES, psd_moments, summit_parameters
+
+__all__ = ["read_heightmap", "read_measured", "Measured", "measure", "PLAUSIBLE_SIGMA", "CUTOFF_PIXELS", "INSTALL"]
+
+#: Height standard deviations (m) outside this range are almost surely in the wrong unit.
+PLAUSIBLE_SIGMA = (1e-10, 1e-3)
+#: Default short-wavelength cutoff, in pixels of the coarser axis.
+CUTOFF_PIXELS = 4.0
+#: How to install the instrument-format reader.
+INSTALL = "pip install 'g2tom[topography]' (or: pip install SurfaceTopography)"
+#: Height units of instrument files, in m.
+_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "pm": 1e-12, "Å": 1e-10, "A": 1e-10}
+_OWN_SUFFIXES = (".npy", ".nc", ".nc4", ".cdf")
+
+
+@dataclass(frozen=True)
+class Measured:
+    """A height map in m, its pixel pitch (dy, dx) in m (None: not in the file), and its origin."""
+
+    heights: np.ndarray
+    pixel_size: tuple[float, float] | None
+    periodic: bool
+    unit: str
+    reader: str
+
+
+def _netcdf_heights(path: Path) -> np.ndarray:
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        for name in ("height", "z"):
+            if name in ds:
+                return ds[name].values
+        two_d = [name for name, var in ds.data_vars.items() if var.ndim == 2]
+        if len(two_d) != 1:
+            raise ConfigError(
+                f"HEIGHTMAP {str(path)!r}: expected a variable 'height' or 'z' or exactly one 2-D variable, "
+                f"found {list(ds.data_vars)}"
+            )
+        return ds[two_d[0]].values
+
+
+def _is_surface_topography_netcdf(path: Path) -> bool:
+    """SurfaceTopography's netCDF layout: a 2-D ``heights`` with its ``unit`` (not in m, maybe)."""
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            return "heights" in ds and ds["heights"].ndim == 2 and "unit" in ds["heights"].attrs
+    except (OSError, ValueError):
+        return False
+
+
+def read_heightmap(path: str | Path) -> np.ndarray:
+    """Load a height map (m) from .npy, netCDF or whitespace-separated text.
+
+    Raises
+    ------
+    ConfigError
+        If the file is missing or cannot be parsed.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise ConfigError(f"HEIGHTMAP {str(path)!r} is a directory: give a .npy, netCDF, text or instrument file")
+    if not path.is_file():
+        raise ConfigError(f"HEIGHTMAP {str(path)!r} does not exist")
+    if path.stat().st_size == 0:
+        raise ConfigError(f"HEIGHTMAP {str(path)!r} is empty (0 bytes)")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # loadtxt's "empty input file" and the like
+            if path.suffix == ".npy":
+                return np.load(path, allow_pickle=False)
+            if path.suffix in (".nc", ".nc4", ".cdf"):
+                return _netcdf_heights(path)
+            return np.loadtxt(path, ndmin=2)
+    except ConfigError:
+        raise
+    except (OSError, ValueError, EOFError, UnicodeDecodeError, UserWarning) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ConfigError(f"HEIGHTMAP {str(path)!r} is unreadable ({reason})") from None
+
+
+def _surface_topography(path: Path, why: str) -> Measured:
+    """Read an instrument file with SurfaceTopography; heights and pixel size converted to m."""
+    try:
+        import SurfaceTopography as st
+        from SurfaceTopography.Exceptions import ReadFileError
+    except ImportError:
+        raise ConfigError(f"HEIGHTMAP {str(path)!r} is {why}; reading instrument formats needs "
+                          f"SurfaceTopography: {INSTALL}") from None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            topography = st.read_topography(str(path))
+            heights = np.asarray(topography.heights())
+    except (ReadFileError, OSError, ValueError, KeyError, IndexError, TypeError) as exc:
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ConfigError(f"HEIGHTMAP {str(path)!r} is unreadable: {why}, and SurfaceTopography knows no "
+                          f"format for it ({reason})") from None
+    if topography.dim != 2:
+        raise ConfigError(f"HEIGHTMAP {str(path)!r} is a {topography.dim}-D line scan: must be a 2-D map")
+    unit = str(topography.unit) if topography.unit is not None else ""
+    if unit not in _UNITS:
+        raise ConfigError(f"HEIGHTMAP {str(path)!r}: height unit {unit or 'none'!r} is not one of "
+                          f"{', '.join(_UNITS)}")
+    if topography.has_undefined_data:
+        raise ConfigError(f"HEIGHTMAP {str(path)!r} holds undefined (missing) pixels: fill or crop them first")
+    scale = _UNITS[unit]
+    sizes = topography.physical_sizes
+    pixel = None
+    if sizes is not None and all(s is not None and s > 0 for s in sizes):
+        nx, ny = topography.nb_grid_pts  # SurfaceTopography's heights are (x, y)
+        pixel = (sizes[1] * scale / ny, sizes[0] * scale / nx)
+    return Measured(heights.T * scale, pixel, bool(topography.is_periodic), unit,
+                    f"SurfaceTopography {st.__version__}")
+
+
+def read_measured(path: str | Path) -> Measured:
+    """A height map in m from .npy, the project's netCDF, plain text, or an instrument file.
+
+    Raises
+    ------
+    ConfigError
+        If the file is missing, unreadable by every reader, or SurfaceTopography is needed but
+        not installed (naming the install command).
+    """
+    path = Path(path)
+    if path.suffix in (".nc", ".nc4", ".cdf") and path.is_file() and _is_surface_topography_netcdf(path):
+        return _surface_topography(path, "SurfaceTopography's netCDF")
+    try:
+        heights = read_heightmap(path)
+    except ConfigError as exc:
+        if path.suffix in _OWN_SUFFIXES or not path.is_file() or path.stat().st_size == 0:
+            raise
+        return _surface_topography(path, f"not a plain text height map ({str(exc).rsplit('(', 1)[-1].rstrip(')')})")
+    return Measured(heights, None, False, "m", "g2tom")
+
+
+def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | None = None,
+            periodic: bool | None = None, beta_rule: str = "paper") -> dict[str, Any]:
+    """Everything ``g2tom roughness --json`` prints: moments, summit parameters, what was done (SI).
+
+    Parameters
+    ----------
+    path
+        The height map.
+    pixel_size
+        Pixel pitch, m (required for .npy, netCDF and text maps; overrides an instrument file's).
+    cutoff
+        Shortest wavelength counted, m (default :data:`CUTOFF_PIXELS` pixels of the coarser axis).
+    periodic
+        Treat the map as periodic (default: what the file says; never for .npy, netCDF and text).
+    beta_rule
+        ``paper`` (0.737/sqrt(m4)) or ``nayak`` (0.375 sqrt(pi/m4)).
+
+    Raises
+    ------
+    ConfigError
+        Naming the file or option at fault.
+    """
+    if pixel_size is not None and not (math.isfinite(pixel_size) and pixel_size > 0):
+        raise ConfigError(f"--pixel-size = {pixel_size!r} is out of range: must be > 0 (m)")
+    measured = read_measured(path)
+    pixel = (pixel_size, pixel_size) if pixel_size is not None else measured.pixel_size
+    if pixel is None:
+        raise ConfigError(f"HEIGHTMAP {str(path)!r} carries no pixel size: give --pixel-size (m)")
+    cutoff = CUTOFF_PIXELS * max(pixel) if cutoff is None else cutoff
+    if not (math.isfinite(cutoff) and cutoff > 0):
+        raise ConfigError(f"--cutoff = {cutoff!r} is out of range: must be > 0 (m)")
+    try:
+        z = validated_heights(measured.heights)
+        moments = psd_moments(z, pixel, cutoff, measured.periodic if periodic is None else periodic)
+        summits = summit_parameters(moments.m0, moments.m2, moments.m4, beta_rule)
+    except ValueError as exc:
+        raise ConfigError(f"HEIGHTMAP {str(path)!r}: {exc}") from None
+    return {
+        "file": str(path), "reader": measured.reader, "file_height_unit": measured.unit,
+        "shape": list(z.shape), "pixel_size": list(pixel),
+        "detrending": moments.detrending, "window": moments.window, "cutoff_wavelength": moments.cutoff_wavelength,
+        "rms_height": moments.rms_height, "m0": moments.m0, "m2": moments.m2, "m4": moments.m4,
+        "bandwidth_alpha": summits.bandwidth, "sigma": summits.sigma,
+        "summit_mean_height": summits.summit_mean_height, "eta": summits.eta, "beta": summits.beta,
+        "beta_rule": f"{summits.beta_rule}: {BETA_RULES[summits.beta_rule]}",
+    }
