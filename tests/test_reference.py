@@ -10,7 +10,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pipeline.physics.roughness import roughness_parameters
+from tests.oracles import roughness_parameters
 from pipeline.reference import elastic, surfaces
 from pipeline.reference.contact import contact_at_force
 from pipeline.reference.oxide import field_on_grid, oxide_on_grid

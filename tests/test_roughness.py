@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 from pipeline.cli.main import main
-from pipeline.physics.roughness import roughness_parameters
+from tests.oracles import roughness_parameters
 
 PIXEL = 1e-6  # m
 
