@@ -44,7 +44,7 @@ from pipeline.fitting.powerlaw import (
 )
 from pipeline.reductions import DIM, reduce_realizations
 from pipeline.stages.fit_steps import fitted_steps, range_label
-from pipeline.stages.labels import label_coords
+from pipeline.stages.schema import label_coords
 from pipeline.store import read_stage, write_dataset
 
 __all__ = ["build", "run"]

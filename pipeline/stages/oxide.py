@@ -31,6 +31,7 @@ from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
 from pipeline.physics.grid import cell_centres
 from pipeline.scene import FieldSource, bands, threshold_block
+from pipeline.stages.schema import variable
 
 __all__ = ["build", "run", "RecordedFields", "recorded_realizations"]
 
@@ -142,42 +143,24 @@ def _dataset(scenario: Scenario, psi: np.ndarray, threshold: np.ndarray, fractio
     ox = scenario.oxide
     centres = cell_centres(scenario.n_cells, scenario.cell_size)
     modes = bands(scenario)
+    lambdas = np.asarray(ox.lambda_, float)
     coords = {
-        "lambda": ("lambda", np.asarray(ox.lambda_, float),
-                   {"units": "1", "long_name": "normalized oxide correlation length l_O sqrt(eta)"}),
-        "realization": ("realization", np.arange(recorded_realizations(scenario)),
-                        {"units": "1", "long_name": "realization index of the random field"}),
-        "xi": ("xi", np.asarray(ox.xi, float), {"units": "1", "long_name": "nominal oxide fraction"}),
-        "y": ("y", centres, {"units": "m", "long_name": "cell-centre y coordinate from the axis"}),
-        "x": ("x", centres, {"units": "m", "long_name": "cell-centre x coordinate from the axis"}),
-        "correlation_length": ("lambda", np.asarray(ox.lambda_, float) * scenario.cell_size,
-                               {"units": "m", "long_name": "oxide correlation length l_O = pi / k1"}),
+        "lambda": variable("oxide", "lambda", lambdas),
+        "realization": variable("oxide", "realization", np.arange(recorded_realizations(scenario))),
+        "xi": variable("oxide", "xi", np.asarray(ox.xi, float)),
+        "y": variable("oxide", "y", centres),
+        "x": variable("oxide", "x", centres),
+        "correlation_length": variable("oxide", "correlation_length", lambdas * scenario.cell_size),
     }
     data_vars = {
-        "psi": (("lambda", "realization", "y", "x"), psi, {
-            "units": "1",
-            "long_name": "unit-variance Gaussian random field at the cell centres",
-            "comment": "oxide where psi >= threshold, conducting where psi < threshold (float32)",
-        }),
-        "threshold": (("xi", "lambda", "realization"), threshold, {
-            "units": "1",
-            "long_name": "threshold psi0 used for each field",
-            "rule": ox.threshold,
-        }),
-        "oxide_fraction": (("xi", "lambda", "realization"), fraction, {
-            "units": "1",
-            "long_name": "realized oxide-covered fraction of the cell centres",
-        }),
-        "n_modes": ("lambda", np.array([m.size for m in modes]), {
-            "units": "1",
-            "long_name": "independent Fourier modes (Hermitian pairs) in the band k1..ks",
-        }),
-        "period_cells": ("lambda", np.array([int(round(m.period / scenario.cell_size)) for m in modes]), {
-            "units": "1",
-            "long_name": "period of the random field, in cells",
-        }),
+        "psi": variable("oxide", "psi", psi,
+                        comment="oxide where psi >= threshold, conducting where psi < threshold (float32)"),
+        "threshold": variable("oxide", "threshold", threshold, rule=ox.threshold),
+        "oxide_fraction": variable("oxide", "oxide_fraction", fraction),
+        "n_modes": variable("oxide", "n_modes", np.array([m.size for m in modes])),
+        "period_cells": variable("oxide", "period_cells", np.array([int(round(m.period / scenario.cell_size)) for m in modes])),
     }
-    attrs = {
+    dataset_attrs = {
         "oxide_rule": "a cell is oxide where psi >= threshold (float32 comparison)",
         "field_normalization": (
             "sum |c_k|^2 / 2 = 1: unit variance of the continuous spectrum over the field's whole "
@@ -191,7 +174,7 @@ def _dataset(scenario: Scenario, psi: np.ndarray, threshold: np.ndarray, fractio
         ),
         "random_streams": "SeedSequence(oxide.seed, spawn_key=(round(lambda * 1e6), realization))",
     }
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    return xr.Dataset(data_vars, coords=coords, attrs=dataset_attrs)
 
 
 def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=False)) -> xr.Dataset:

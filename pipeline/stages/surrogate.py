@@ -53,7 +53,7 @@ from scipy.stats import norm
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
 from pipeline.fitting import surrogate as sg
-from pipeline.stages.labels import COORD_LABELS
+from pipeline.stages.schema import SURROGATE_COORDINATES
 from pipeline.stages.surrogate_tables import band_tables, curve_tables
 from pipeline.stages.table3 import PARAMETERS, table3_csv, table3_markdown
 from pipeline.store import atomic_path, read_stage, write_dataset
@@ -260,7 +260,7 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
             [values.min(), values.max()], dims="end", coords=end, attrs={"units": "1", "long_name": f"fitted range of {name}"}
         )
     for name in ("xi", "lambda"):
-        ds[name].attrs = {"units": COORD_LABELS[name][0], "long_name": COORD_LABELS[name][1]}
+        ds[name].attrs = SURROGATE_COORDINATES[name].attrs()
     for name in ("order_w", "order_z"):
         if name in ds.coords:
             ds[name].attrs = {"units": "1", "long_name": f"polynomial order in {name[-1]} tried by cross-validation"}
