@@ -61,7 +61,7 @@ def g2tom_resistances(vset: scene.ValidationSet, model: str) -> xr.Dataset:
     contact = contact_stage.build(scenario)
     _, _, settings = cube_stage.work_settings(scenario, contact)
     realizations = np.asarray(vset.realizations)
-    radius = np.stack([spot_radii(vset, int(k), contact["x"].values, settings["separation"]) for k in realizations])
+    radius = np.stack([spot_radii(vset, int(k), contact["x"].values, settings.separation) for k in realizations])
     clean = cube_chunks.clean_terms(radius, radius, settings).resistance  # (realization, delta)
     oxidized = cube_chunks.exact_terms(FieldSource.of(scenario), realizations, radius, radius, settings)["resistance"]
     return xr.Dataset({

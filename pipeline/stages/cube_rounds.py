@@ -19,7 +19,7 @@ import numpy as np
 from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
 from pipeline.fitting import ensemble
-from pipeline.stages.cube_chunks import field_chunk, terms
+from pipeline.stages.cube_chunks import CubeSettings, field_chunk, terms
 from pipeline.stages.fit_steps import fit_range
 from pipeline.scene import FieldSource
 
@@ -87,7 +87,7 @@ def _decide(scenario: Scenario, resistance: np.ndarray, rule: dict[str, Any]) ->
 
 def compute_cells(
     scenario: Scenario, source: FieldSource, radius: np.ndarray, weights: np.ndarray,
-    settings: dict[str, Any], rule: dict[str, Any], options: ComputeOptions,
+    settings: CubeSettings, rule: dict[str, Any], options: ComputeOptions,
 ) -> tuple[list[list[dict[str, np.ndarray]]], int]:
     """Rounds of dask tasks over (lambda, realization chunk) until every (xi, lambda) has its count.
 
