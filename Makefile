@@ -80,7 +80,7 @@ compare: | $(VENV)/.installed
 	  $(G2TOM) $$s --config $(SCENARIO) --data-dir $(DATA)/compare/$$m $(foreach s,$(SET),--set $(s)) \
 	    --set oxide.n_realizations=$(COMPARE_N) --set cube.model=$$m || exit 1; done; done
 
-# The chain on every scene of the atlas's design over (mu, Pi) (pipeline/atlas.py): the plan first,
+# The chain on every scene of the atlas's design over (mu, Pi) (pipeline/atlas/run.py): the plan first,
 # then one scene per core; a killed atlas continues with the scenes not written yet.
 # Its base scene is the bundled scenario `atlas` (5 xi x 6 lambda, 5 % target): ATLAS_SCENARIO=... to change.
 ATLAS_SCENARIO ?= atlas

@@ -1,1 +1,2 @@
-"""Analysis: reductions, figures and the report built from the stage outputs."""
+"""Analysis: the figures and the report, built from the stage outputs (the reductions over
+realizations are :mod:`pipeline.reductions`, applied by the fits stage)."""

@@ -21,7 +21,7 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from pipeline.config import Scenario
 from pipeline.physics import barber
-from pipeline.physics.surrogate import evaluate
+from pipeline.fitting.surrogate import evaluate
 from pipeline.store import read_stage
 
 __all__ = ["write"]

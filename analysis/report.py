@@ -23,7 +23,7 @@ from analysis.report_blocks import Block, table as _table
 from analysis.report_physics import atlas_blocks, barber_blocks, bias_blocks, curve_blocks, validation_blocks
 from pipeline import __version__
 from pipeline.config import STAGE_INPUTS, Scenario, parameter_table
-from pipeline.physics import surrogate as sg
+from pipeline.fitting import surrogate as sg
 from pipeline.stages.table3 import PARAMETERS, table3_rows
 from pipeline.store import StaleInputError, atomic_path, read_stage
 

@@ -39,7 +39,7 @@ __all__ = [
 
 
 #: The value of ``contact.r_max`` and ``contact.window`` resolved from the solution
-#: (:func:`pipeline.domains.resolve`) before any stage runs.
+#: (:func:`pipeline.before_work.domains.resolve`) before any stage runs.
 AUTO = "auto"
 
 
@@ -430,7 +430,7 @@ class Surrogate:
 
 @dataclass(frozen=True)
 class Atlas:
-    """The atlas's design over the groups mu and Pi (``g2tom atlas``, :mod:`pipeline.atlas_design`):
+    """The atlas's design over the groups mu and Pi (``g2tom atlas``, :mod:`pipeline.atlas.design`):
     a log-spaced ``n_mu x n_pi`` grid over the box, plus held-out scenes drawn inside it."""
 
     mu_min: float = _param(1.0, "1", "lowest mu = (8/3) eta sigma sqrt(2 R* beta) of the design", gt=0)
@@ -547,7 +547,7 @@ class Scenario:
         """Cells along one side of the window: the odd number closest to window/cell size."""
         if self.contact.window == AUTO:
             raise ConfigError(
-                "contact.window = 'auto' is not resolved yet: call pipeline.domains.resolve(scenario)"
+                "contact.window = 'auto' is not resolved yet: call pipeline.before_work.domains.resolve(scenario)"
             )
         n = self.contact.window * self.indenter.radius / self.cell_size
         k = int(round((n - 1.0) / 2.0))

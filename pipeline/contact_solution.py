@@ -1,9 +1,9 @@
 """The Greenwood–Tripp solve of a scenario: its indenter profile, radial grid and solution.
 
 The glue between a :class:`pipeline.config.Scenario` and :mod:`pipeline.physics.greenwood_tripp`,
-shared by the contact stage and by :mod:`pipeline.domains` (which sizes the domains from a fast
+shared by the contact stage and by :mod:`pipeline.before_work.domains` (which sizes the domains from a fast
 solve before any stage runs); no I/O. :func:`solve` needs numeric domains
-(:func:`pipeline.domains.resolve` resolves ``auto``).
+(:func:`pipeline.before_work.domains.resolve` resolves ``auto``).
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ def _solve(
     """Radial nodes (m), influence matrix (m/Pa) and the solution of every approach."""
     c = scenario.contact
     if c.r_max == AUTO:
-        raise ValueError("contact.r_max = 'auto' must be resolved first (pipeline.domains.resolve)")
+        raise ValueError("contact.r_max = 'auto' must be resolved first (pipeline.before_work.domains.resolve)")
     r = radial_grid(scenario, n_radial)
     matrix = gt.influence_matrix(r, scenario.material.E_star)
     sols = gt.solve(

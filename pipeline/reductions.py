@@ -1,7 +1,7 @@
 """Reductions of the resistance cube over realizations, as labelled xarray operations.
 
-They live in the pipeline because the fits stage uses them (stages import no analysis); the
-figures and the report import them from here.
+The fits stage reduces the cube with them (:func:`reduce_realizations`); the figures and the
+report read the reductions from fits.nc.
 
 Open circuits (R = +inf) are policy, not noise:
 
@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from pipeline.physics.powerlaw import quantile_with_inf
+from pipeline.fitting.powerlaw import quantile_with_inf
 
 __all__ = [
     "DIM",

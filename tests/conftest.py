@@ -12,7 +12,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import pytest  # noqa: E402
 
 from pipeline.config import Scenario, load_scenario  # noqa: E402
-from pipeline.domains import resolve  # noqa: E402
+from pipeline.before_work.domains import resolve  # noqa: E402
 
 SMALL_OVERRIDES = {
     "loading.n_delta": 6,

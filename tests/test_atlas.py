@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import atlas
-from pipeline.atlas_design import AtlasDesign, design_scenes
+from pipeline.atlas import run as atlas
+from pipeline.atlas.design import AtlasDesign, design_scenes
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, load_scenario
 from tests.conftest import SMALL_OVERRIDES
@@ -102,14 +102,14 @@ def test_a_refused_scene_stops_the_atlas_before_work(tmp_path) -> None:
 
 
 def test_atlas_surrogate_fitted_on_design_judged_on_heldout(tmp_path, base, uninterrupted) -> None:
-    from pipeline.atlas_fit import CURVE, fit_atlas
+    from pipeline.atlas.fit import CURVE, fit_atlas
 
     doc, rows = fit_atlas(uninterrupted)
     assert doc["alpha"]["degree"] == 1  # 8 design points: only degree 1 (5 terms) cross-validates
     assert doc["heldout"]["cells"] == 2 and {r["scene"] for r in rows} == {"h00"}
     assert doc["domain"]["mu"] == pytest.approx([4.0, 16.0])
     # one row by hand: ln(alpha F'^-gamma) of the fitted polynomials against the scene's R'
-    from pipeline.physics.atlas_surrogate import AtlasModel
+    from pipeline.fitting.atlas_surrogate import AtlasModel
 
     r = rows[0]
     models = {p: AtlasModel(doc[p]["transform"], np.array(doc[p]["low"]), np.array(doc[p]["high"]),
@@ -129,7 +129,7 @@ def test_atlas_surrogate_fitted_on_design_judged_on_heldout(tmp_path, base, unin
 def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     import json
 
-    from pipeline.atlas_fit import FORMAT, write_atlas_surrogate
+    from pipeline.atlas.fit import FORMAT, write_atlas_surrogate
 
     target, doc = write_atlas_surrogate(atlas.run_atlas(base, DESIGN, tmp_path))
     assert json.loads(target.read_text())["format"] == FORMAT == doc["format"]
@@ -150,7 +150,7 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
 
 
 def test_cli_runs_fits_and_summarizes(tmp_path, capsys) -> None:
-    from pipeline.cli import main
+    from pipeline.cli.main import main
 
     small = {"atlas.mu_min": DESIGN.mu[0], "atlas.mu_max": DESIGN.mu[1], "atlas.pi_min": DESIGN.Pi[0],
              "atlas.pi_max": DESIGN.Pi[1], "atlas.n_mu": DESIGN.n_mu, "atlas.n_pi": DESIGN.n_pi,

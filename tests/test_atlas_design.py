@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from pipeline.atlas_design import AtlasDesign, design_scenes, format_atlas_plan, plan_atlas, scene_scenario
+from pipeline.atlas.design import AtlasDesign, design_scenes, format_atlas_plan, plan_atlas, scene_scenario
 from pipeline.config import AUTO, ConfigError, load_scenario
 from pipeline.physics.groups import groups
 from tests.conftest import SMALL_OVERRIDES
@@ -73,7 +73,7 @@ def test_plan_grows_with_pi_and_reports_refusals() -> None:
 
 
 def test_cli_plans_the_atlas(capsys) -> None:
-    from pipeline.cli import main
+    from pipeline.cli.main import main
 
     assert main(["plan", "--atlas", "--workers", "2", *[a for k, v in SMALL_OVERRIDES.items()
                                                         for a in ("--set", f"{k}={v}")]]) == 0

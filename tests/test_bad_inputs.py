@@ -22,7 +22,7 @@ from typing import Callable
 import numpy as np
 import pytest
 
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.config import SECTIONS, _key, load_scenario
 from pipeline.store import stage_path, write_dataset
 from tests.conftest import SMALL_OVERRIDES

@@ -22,17 +22,15 @@ def test_f_as_printed() -> None:
 
 
 def test_eq7_roots_solve_eq6() -> None:
+    """Eq. 7's two roots, x_plus = 1/2 + cos(theta) in [1, 3/2] and x_minus = 1/2 + cos(theta - 2 pi/3)
+    in [0, 1] with theta = arccos(6 S - 1) / 3, solve Eq. 6 (labels swapped as printed, see barber)."""
     S = np.linspace(0.0, 1.0 / 3.0, 41)
-    x_plus, x_minus = barber.cubic_roots(S)
+    theta = np.arccos(np.clip(6.0 * S - 1.0, -1.0, 1.0)) / 3.0
+    x_plus, x_minus = 0.5 + np.cos(theta), 0.5 + np.cos(theta - 2.0 * np.pi / 3.0)
     np.testing.assert_allclose(barber.shape_parameter(x_plus), S, atol=1e-13)
     np.testing.assert_allclose(barber.shape_parameter(x_minus), S, atol=1e-13)
     assert np.all((x_plus >= 1 - 1e-12) & (x_plus <= 1.5 + 1e-12))
     assert np.all((x_minus >= -1e-12) & (x_minus <= 1 + 1e-12))
-
-
-def test_cubic_roots_reject_s_outside_domain() -> None:
-    with pytest.raises(ValueError, match="S ="):
-        barber.cubic_roots(0.5)
 
 
 def test_bounds_follow_the_parametric_curve() -> None:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pipeline.config import load_scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.stages import contact, cube
 
 #: A coarse paper scene: 6 load steps from 39 N to 9.7 kN, 160 radial nodes, 200 drawn surfaces.

@@ -115,7 +115,7 @@ def test_one_cell_run_answers_with_its_cell(tmp_path, capsys, small) -> None:
     """No interpolation on one cell: the cell's own curve, its band without a surrogate error, said so."""
     import warnings
 
-    from pipeline.domains import resolve
+    from pipeline.before_work.domains import resolve
     from pipeline.stages import fits, surrogate
     from pipeline.store import write_dataset
     from tests.conftest import SMALL_OVERRIDES

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.compute import ComputeOptions
 from pipeline.stages import oxide
 from tests.conftest import SMALL_OVERRIDES

@@ -8,7 +8,7 @@ import warnings
 import pytest
 
 from pipeline.config import ConfigError, bundled_scenarios, load_scenario, parameter_table
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 
 
 def test_bundled_scenarios_are_listed() -> None:
@@ -178,7 +178,7 @@ def test_integers_must_fit_the_64_bit_attributes_they_are_stored_in() -> None:
 
 
 def test_list_split_at_spaces_by_make_is_glued_back(capsys) -> None:
-    from pipeline.cli import _rejoin, main
+    from pipeline.cli.main import _rejoin, main
 
     assert _rejoin(["oxide.xi=[0.3,", "0.5]", "cube.weights=area"]) == ["oxide.xi=[0.3, 0.5]", "cube.weights=area"]
     assert _rejoin(["oxide.lambda=[1.0,", "5.0,", "13.0]"]) == ["oxide.lambda=[1.0, 5.0, 13.0]"]
@@ -191,7 +191,7 @@ def test_list_split_at_spaces_by_make_is_glued_back(capsys) -> None:
 
 def test_version_names_package_and_commit(capsys) -> None:
     from pipeline import __version__
-    from pipeline.cli import main
+    from pipeline.cli.main import main
 
     with pytest.raises(SystemExit) as exit_:
         main(["--version"])

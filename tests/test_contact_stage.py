@@ -9,7 +9,7 @@ import pytest
 import xarray as xr
 
 from pipeline.bench import contact as bench_contact
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, load_scenario
 from pipeline.physics import spot_models

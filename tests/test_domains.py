@@ -7,9 +7,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pipeline import domains
+from pipeline.before_work import domains
 from pipeline.config import AUTO, ConfigError, load_scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.physics import constriction
 from pipeline.stages import contact
 
@@ -81,7 +81,7 @@ def test_explicit_values_are_kept_exactly_and_hashes_use_resolved_values():
 
 
 def test_unresolved_window_has_no_cell_count():
-    with pytest.raises(ConfigError, match="pipeline.domains.resolve"):
+    with pytest.raises(ConfigError, match="pipeline.before_work.domains.resolve"):
         load_scenario("paper").n_cells
 
 

@@ -10,8 +10,9 @@ import xarray as xr
 
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
-from pipeline.physics import ensemble
-from pipeline.physics.powerlaw import fit_power_law
+from pipeline.fitting import ensemble
+from pipeline.fitting.powerlaw import fit_power_law
+from pipeline.scene import FieldSource
 from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube, cube_rounds, fits
 from pipeline.stages import oxide as oxide_stage
@@ -115,7 +116,7 @@ def test_adaptive_cube_does_not_depend_on_batch_chunk_or_workers(
 
 def test_regenerated_fields_are_the_recorded_ones(adaptive_inputs) -> None:
     scenario, _, oxide = adaptive_inputs
-    source = oxide_stage.FieldSource.of(scenario)
+    source = FieldSource.of(scenario)
     for a in range(len(scenario.oxide.lambda_)):
         psi, threshold = source.fields(a, np.arange(scenario.oxide.min_realizations))
         np.testing.assert_array_equal(psi, oxide["psi"].values[a])

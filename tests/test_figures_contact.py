@@ -9,7 +9,7 @@ import pytest
 from analysis import figures_contact
 from pipeline import store
 from pipeline.config import load_scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.stages import contact
 
 FAST = {"loading.n_delta": 6, "contact.n_radial": 160}

@@ -10,7 +10,7 @@ import pytest
 
 from analysis import figures_point
 from analysis.report import build_blocks
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.config import Scenario
 from tests.test_fits_stage import cli_overrides
 

@@ -15,7 +15,7 @@ from pipeline.reductions import (
     quantiles,
     reduce_realizations,
 )
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.config import ConfigError, Scenario, load_scenario
 from pipeline.stages import fits
 from pipeline.store import read_stage, write_dataset

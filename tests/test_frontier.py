@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 from pipeline.bench import frontier
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.config import load_scenario
 
 

@@ -9,7 +9,7 @@ import pytest
 import xarray as xr
 
 from pipeline.bench import frontier
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.config import load_scenario
 
 SETS = {"oxide.xi": "[0.3, 0.7]", "oxide.lambda": "[3.0, 9.0]", "oxide.min_realizations": 60,
@@ -27,7 +27,7 @@ def adaptive_dir(tmp_path_factory):
 
 
 def _scenario():
-    from pipeline.domains import resolve
+    from pipeline.before_work.domains import resolve
 
     return resolve(load_scenario("paper", {k: json.loads(v) if isinstance(v, str) else v for k, v in SETS.items()}))
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pipeline.config import load_scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.physics.groups import greenwood_tripp_mu, groups, lattice_pi, surface_from_groups
 from pipeline.stages import contact, cube, fits, oxide
 from tests.conftest import SMALL_OVERRIDES

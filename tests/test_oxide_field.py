@@ -8,6 +8,7 @@ from scipy.stats import norm
 
 from pipeline.physics import oxide_field as of
 from pipeline.physics.grid import cell_centres
+from tests.oracles import fine_grid
 
 N_CELLS = 57  # the paper scenario's window
 CELL = 1.0 / np.sqrt(2e8)  # m
@@ -33,7 +34,7 @@ def _at_centres(image: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("lam", [1.0, 1.37, 2.0, 7.0])
 def test_cell_values_equal_fine_synthesis_at_centres(lam: float, amplitudes: str) -> None:
     modes, coeffs = _fields(lam, 2, amplitudes=amplitudes)
-    fine = of.fine_grid(modes, coeffs, N_CELLS * STRIDE)
+    fine = fine_grid(modes, coeffs, N_CELLS * STRIDE)
     np.testing.assert_allclose(of.cell_values(modes, coeffs, N_CELLS), _at_centres(fine), rtol=0, atol=1e-12)
 
 
@@ -49,7 +50,7 @@ def test_folding_is_needed_above_nyquist() -> None:
 
 def test_point_evaluation_matches_1024_image_where_pixels_lie() -> None:
     modes, coeffs = _fields(1.0, 1)
-    image = of.fine_grid(modes, coeffs, 1024)[0]
+    image = fine_grid(modes, coeffs, 1024)[0]
     rng = np.random.default_rng(0)
     a, b = rng.integers(0, 1024, (2, 300))
     pixel = modes.period / 1024
@@ -110,7 +111,7 @@ def test_band_edges_are_inclusive() -> None:
 @pytest.mark.parametrize("lam", [1.0, 5.0, 23.0])
 def test_unit_variance_over_the_window(lam: float, amplitudes: str) -> None:
     modes, coeffs = _fields(lam, 3, amplitudes=amplitudes)
-    fine = of.fine_grid(modes, coeffs, 228)
+    fine = fine_grid(modes, coeffs, 228)
     np.testing.assert_allclose(fine.std(axis=(-2, -1)), 1.0, atol=1e-12)
     np.testing.assert_allclose(fine.mean(axis=(-2, -1)), 0.0, atol=1e-12)
 
@@ -129,7 +130,7 @@ def test_indicator_correlation_length_scales_with_lambda() -> None:
 
     def length(lam: float) -> float:
         modes, coeffs = _fields(lam, 20)
-        indicator = (of.fine_grid(modes, coeffs, pixels) >= 0).astype(float)
+        indicator = (fine_grid(modes, coeffs, pixels) >= 0).astype(float)
         indicator -= indicator.mean(axis=(-2, -1), keepdims=True)
         acf = np.fft.irfft2(np.abs(np.fft.rfft2(indicator)) ** 2, s=(pixels, pixels)).mean(axis=0)
         q = np.fft.fftfreq(pixels, 1.0 / pixels)

@@ -11,13 +11,15 @@ import pytest
 import xarray as xr
 
 from analysis import figures_oxide
-from pipeline import cli, store
+from pipeline import store
+from pipeline.cli import main as cli
 from pipeline.bench import oxide as bench_oxide
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario, load_scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.physics import oxide_field
 from pipeline.physics.grid import cell_centres
+from pipeline.scene import FieldSource, bands
 from pipeline.stages import oxide
 
 
@@ -171,7 +173,7 @@ def test_window_without_modes_is_an_error() -> None:
 
 def test_spectral_period_has_modes_at_any_lambda() -> None:
     scenario = resolve(load_scenario("paper", {"oxide.lambda": [500.0], "oxide.spectral_resolution": 4.0}))
-    assert oxide.bands(scenario)[0].size > 100
+    assert bands(scenario)[0].size > 100
 
 
 @pytest.mark.parametrize("lam", [1.0, 3.0, 13.0, 19.0, 23.0, 50.0, 60.0])
@@ -188,7 +190,7 @@ def test_adaptive_record_is_the_first_batch_and_cube_regenerates_it(small: Scena
     )
     record = oxide.build(scenario)
     assert record.sizes["realization"] == 5
-    source = oxide.FieldSource.of(scenario)
+    source = FieldSource.of(scenario)
     for a in range(len(scenario.oxide.lambda_)):
         psi, threshold = source.fields(a, np.arange(2, 5))
         np.testing.assert_array_equal(psi, record["psi"].values[a, 2:5])

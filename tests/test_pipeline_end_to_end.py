@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from pipeline import __version__
-from pipeline.cli import STAGES, main
+from pipeline.cli.main import STAGES, main
 from pipeline.store import read_stage
 from tests.conftest import SMALL_OVERRIDES
+from tests.test_schema import written_against_schema
 
 
 def _set_args() -> list[str]:
@@ -72,3 +73,7 @@ def test_rerun_of_a_stage_with_stale_input_is_refused(run_dir, capsys) -> None:
     status = main(["cube", "--data-dir", str(run_dir), "--no-progress", *_set_args(), "--set", "oxide.seed=3"])
     assert status == 1
     assert "oxide.nc was built from a different configuration" in capsys.readouterr().err
+
+
+def test_every_output_variable_is_declared_in_the_schema(run_dir) -> None:
+    assert written_against_schema(run_dir) == []

@@ -7,10 +7,10 @@ import sys
 
 import pytest
 
-from pipeline import plan
-from pipeline.cli import main
+from pipeline.before_work import plan
+from pipeline.cli.main import main
 from pipeline.config import ConfigError, load_scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 
 MEMORY = 16.0 * 2**30  # a fixed machine, so the refusals do not depend on the one running the test
 
@@ -63,7 +63,7 @@ def test_estimates_grow_with_the_cell_count():
 # VmHWM, the peak RSS of this process image (ru_maxrss would carry the forking parent's peak).
 _RSS = """
 import sys
-from pipeline.cli import main
+from pipeline.cli.main import main
 code = main(sys.argv[1:])
 with open("/proc/self/status") as fh:
     print(next(int(line.split()[1]) * 1024 for line in fh if line.startswith("VmHWM:")))

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pipeline import cli
+from pipeline.cli import main as cli
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, load_scenario
 from pipeline.physics import constriction, point_model, point_solve

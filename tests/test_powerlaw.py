@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.physics import powerlaw
+from pipeline.fitting import powerlaw
 
 
 def test_exact_power_law_vectorized() -> None:

@@ -10,11 +10,11 @@ import pytest
 import xarray as xr
 from numpy.polynomial import polynomial as P
 
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.config import ConfigError, Scenario, load_scenario
-from pipeline.domains import resolve
-from pipeline.physics.surrogate import evaluate
-from pipeline.predict import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
+from pipeline.before_work.domains import resolve
+from pipeline.fitting.surrogate import evaluate
+from pipeline.predict.predictor import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
 from pipeline.stages import fits, surrogate
 from pipeline.store import write_dataset
 from tests.conftest import SMALL_OVERRIDES

@@ -11,14 +11,14 @@ import warnings
 import numpy as np
 import pytest
 
-from pipeline import atlas
-from pipeline.atlas_fit import CURVE, write_atlas_surrogate
-from pipeline.cli import main
+from pipeline.atlas import run as atlas
+from pipeline.atlas.fit import CURVE, write_atlas_surrogate
+from pipeline.cli.main import main
 from pipeline.config import ConfigError, load_scenario
-from pipeline.predict import ExtrapolationWarning
-from pipeline.predict_atlas import NOT_IN_ATLAS, load_atlas_surrogate, predict_atlas
+from pipeline.predict.atlas import NOT_IN_ATLAS, load_atlas_surrogate, predict_atlas
+from pipeline.predict.predictor import ExtrapolationWarning
 from pipeline.stages import fits, surrogate
-from pipeline.stages.surrogate import scene_groups
+from pipeline.scene import scene_groups
 from pipeline.store import write_dataset
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_atlas import BASE, DESIGN
@@ -74,8 +74,8 @@ def test_refuses_outside_the_domain_naming_the_group(atlas_json) -> None:
 
 
 def test_cli_the_run_own_for_its_surface_the_atlas_for_others(tmp_path, capsys, atlas_json) -> None:
-    from pipeline.domains import resolve
-    from pipeline.predict import load_surrogate
+    from pipeline.before_work.domains import resolve
+    from pipeline.predict.predictor import load_surrogate
 
     small = resolve(load_scenario("paper", SMALL_OVERRIDES))  # the run's own: a 3 x 3 grid
     write_dataset(fits.build(small, synthetic_cube(small, noise=0.2)), tmp_path, "fits", small)
@@ -110,7 +110,7 @@ def test_cli_the_run_own_for_its_surface_the_atlas_for_others(tmp_path, capsys, 
 
 
 def test_fresh_install_answers_from_the_shipped_atlas(tmp_path, capsys, atlas_json, monkeypatch) -> None:
-    import pipeline.predict_atlas as pa
+    import pipeline.predict.atlas as pa
 
     sur = load_atlas_surrogate(atlas_json)
     scenario = _surface(1.5e8)

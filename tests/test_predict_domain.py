@@ -8,11 +8,11 @@ import warnings
 import numpy as np
 import pytest
 
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.config import ConfigError, Scenario, load_scenario
 from pipeline.physics.groups import groups, surface_from_groups
-from pipeline.predict import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
-from pipeline.roughness_cli import measure
+from pipeline.predict.predictor import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
+from pipeline.heightmap import measure
 from tests.test_fits_stage import cli_overrides
 from tests.test_predict import _quiet, _rows, data_dir  # noqa: F401 (the fixture: fits.nc and the surrogate stage run)
 from tests.test_roughness import PIXEL, wave_surface

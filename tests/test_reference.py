@@ -10,12 +10,12 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pipeline.physics.roughness import roughness_parameters
+from tests.oracles import roughness_parameters
 from pipeline.reference import elastic, surfaces
 from pipeline.reference.contact import contact_at_force
 from pipeline.reference.oxide import field_on_grid, oxide_on_grid
 from pipeline.reference.punch import punch_conductance
-from pipeline.stages.oxide import FieldSource
+from pipeline.scene import FieldSource
 
 E_STAR, RHO = 1.154e11, 7.2e-7
 

@@ -12,7 +12,7 @@ import pytest
 
 from analysis import figures_results
 from analysis.report import Block, to_html, to_markdown, write_report
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.config import Scenario, load_scenario
 from pipeline.stages import fits as fits_stage
 from pipeline.store import write_dataset

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.cli import main
-from pipeline.physics.roughness import roughness_parameters
+from pipeline.cli.main import main
+from tests.oracles import roughness_parameters
 
 PIXEL = 1e-6  # m
 

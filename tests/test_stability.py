@@ -12,7 +12,7 @@ import pytest
 from pipeline.bench import stability
 from pipeline.compute import ComputeOptions
 from pipeline.config import load_scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.stages import contact, cube, fits, oxide
 
 FAST = {"contact.n_radial": 240, "loading.n_delta": 8}

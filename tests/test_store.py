@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 
 from pipeline import __version__
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.config import load_scenario
 from pipeline.store import StaleInputError, atomic_path, read_stage, stage_path, stage_problem, write_dataset
 from tests.conftest import SMALL_OVERRIDES

@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.physics.surface_spectrum import psd_moments, summit_parameters
 from tests.test_roughness import PIXEL, wave_surface
 

@@ -8,8 +8,8 @@ from numpy.polynomial import polynomial as P
 from scipy.optimize import least_squares
 
 from pipeline.config import ConfigError, load_scenario
-from pipeline.domains import resolve
-from pipeline.physics import surrogate as sg
+from pipeline.before_work.domains import resolve
+from pipeline.fitting import surrogate as sg
 from pipeline.stages import fits, surrogate, table3
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import assert_labelled, synthetic_cube, true_alpha

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.config import ConfigError, check_surrogate_grid, load_scenario
 from tests.conftest import SMALL_OVERRIDES
 

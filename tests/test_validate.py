@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.config import ConfigError
 from pipeline.reference import cases, scene
 from pipeline.reference.validate import chosen_set, run_validation

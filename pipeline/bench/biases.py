@@ -29,7 +29,7 @@ import numpy as np
 
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario, load_scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.stages import contact, cube, fits, oxide
 
 __all__ = ["STEPS", "run"]

@@ -22,10 +22,11 @@ import numpy as np
 
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.physics import discrete_contact as dc
 from pipeline.physics.discrete_resistance import resistances
-from pipeline.stages import contact, contact_discrete, cube_discrete, oxide
+from pipeline.scene import FieldSource
+from pipeline.stages import contact, contact_discrete, cube, cube_discrete
 
 __all__ = ["run"]
 
@@ -91,15 +92,14 @@ def _contact(scenario: Scenario) -> tuple[dict[str, Any], np.ndarray]:
 
 
 def _maps(scenario: Scenario) -> list[dict[str, Any]]:
-    options = ComputeOptions(progress=False)
-    pool_ds = contact.build(scenario, options)
-    pool = cube_discrete.DiscretePool.of(pool_ds)
-    source = oxide.FieldSource.of(scenario)
+    pool_ds = contact.build(scenario, ComputeOptions(progress=False))
+    pool, _, base = cube.work_settings(scenario, pool_ds)
+    source = FieldSource.of(scenario)
     xi = np.arange(len(scenario.oxide.xi))
     out = []
     for rule in ("centre", "disc"):
         for model in ("point", "greenwood"):
-            settings = {"rho": scenario.material.rho, "model": model, "spot_rule": rule}
+            settings = dataclasses.replace(base, model=model, spot_rule=rule)
             for index, lam in enumerate(scenario.oxide.lambda_):
                 if lam not in (min(scenario.oxide.lambda_), max(scenario.oxide.lambda_)):
                     continue

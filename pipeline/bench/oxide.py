@@ -19,6 +19,7 @@ from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
 from pipeline.physics import oxide_field
 from pipeline.physics.grid import cell_centres
+from pipeline.scene import FieldSource, bands
 from pipeline.stages import oxide
 
 __all__ = ["run"]
@@ -33,7 +34,7 @@ SUBSET_REALIZATIONS = 2
 
 def _per_lambda(scenario: Scenario) -> list[dict[str, Any]]:
     """Seconds per field (stream, coefficients, evaluation, thresholds) at every lambda."""
-    source = oxide.FieldSource.of(scenario)
+    source = FieldSource.of(scenario)
     rows = []
     for a, (lam, modes) in enumerate(zip(source.lambdas, source.modes)):
         start = time.perf_counter()
@@ -50,7 +51,7 @@ def _direct_subset(scenario: Scenario, psi: np.ndarray) -> tuple[float, float]:
     x = cell_centres(scenario.n_cells, scenario.cell_size)
     fields, error = 0, 0.0
     start = time.perf_counter()
-    for a, (lam, modes) in enumerate(zip(ox.lambda_, oxide.bands(scenario))):
+    for a, (lam, modes) in enumerate(zip(ox.lambda_, bands(scenario))):
         for r in range(min(SUBSET_REALIZATIONS, psi.shape[1])):
             coeffs = oxide_field.coefficients(modes, oxide_field.field_stream(ox.seed, lam, r), ox.amplitudes)
             direct = oxide_field.field_at_points(modes, coeffs, x[None, :], x[:, None])

@@ -24,10 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from pipeline import plan
+from pipeline.before_work import plan
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario, load_scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.physics import constriction
 from pipeline.physics import interaction_fft as fft
 from pipeline.stages import contact as contact_stage

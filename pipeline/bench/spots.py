@@ -24,10 +24,10 @@ import numpy as np
 
 from pipeline.bench.timing import median_time
 from pipeline.config import Scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.physics.spot_models import DISCRETIZATIONS
 from pipeline.stages import contact, cube, cube_chunks
-from pipeline.stages.oxide import FieldSource
+from pipeline.scene import FieldSource
 
 __all__ = ["run", "TARGETS"]
 

@@ -101,7 +101,7 @@ def evaluate(case: Case) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
                               "seconds": 0.0, "finite_nonnegative": False, "force_monotone": False,
                               "resistance_falls": False, "hertz_ratio": math.nan, "roughness_parameter": math.nan,
                               "open_circuits": 0}
-    from pipeline.domains import resolve
+    from pipeline.before_work.domains import resolve
 
     try:
         scenario = resolve(load_scenario("paper", {**FAST, **case.overrides}))

@@ -24,7 +24,6 @@ __all__ = [
     "asperity_integral_slope",
     "area_fraction",
     "asperity_pressure",
-    "asperity_stiffness",
 ]
 
 #: |h/sigma| beyond which the asymptotic series are used (relative error < 1e-13 there).
@@ -166,11 +165,3 @@ def area_fraction(h: ArrayLike, sigma: float, eta: float, beta: float) -> np.nda
 def asperity_pressure(h: ArrayLike, sigma: float, eta: float, beta: float, e_star: float) -> np.ndarray:
     """Mean asperity pressure p(h) = (4/3) eta E* sqrt(beta) F_{3/2}(h) (Eq. 16), in Pa."""
     return (4.0 / 3.0) * eta * e_star * np.sqrt(beta) * asperity_integral(h, sigma, 1.5)
-
-
-def asperity_stiffness(h: ArrayLike, sigma: float, eta: float, beta: float, e_star: float) -> np.ndarray:
-    """-dp/dh = 2 eta E* sqrt(beta) F_{1/2}(h), in Pa/m (positive: p falls as h grows)."""
-    if not (np.isfinite(sigma) and sigma > 0):
-        raise ValueError(f"sigma = {sigma!r} is out of range: must be > 0 (m)")
-    x = np.asarray(h, dtype=float) / sigma
-    return (4.0 / 3.0) * eta * e_star * np.sqrt(beta * sigma) * asperity_integral_slope(x, 1.5)

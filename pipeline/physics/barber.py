@@ -14,8 +14,7 @@ branch (``d(x^2/S)/dx`` has the sign of ``1 - x^3``), so a load ``F'`` maps to e
 
 Note on Eq. 7 as printed: the root ``1/2 + cos(theta)`` lies in [1, 3/2] and the root
 ``1/2 + cos(theta - 2 pi/3)`` in [0, 1], so by the branch ranges quoted in the text the
-labels ``x_+`` and ``x_-`` of Eq. 7 are swapped; :func:`cubic_roots` returns both roots
-under the printed names and the bounds below follow the text.
+labels ``x_+`` and ``x_-`` of Eq. 7 are swapped; the bounds below follow the text.
 """
 
 from __future__ import annotations
@@ -26,7 +25,6 @@ from numpy.typing import ArrayLike
 __all__ = [
     "oxide_factor",
     "shape_parameter",
-    "cubic_roots",
     "clean_bounds",
     "oxide_bounds",
     "p_average",
@@ -65,28 +63,6 @@ def shape_parameter(x: ArrayLike) -> np.ndarray:
     """S(x) = (2 x^3 - 3 x^2 + 1) / 3 of Eq. 6, dimensionless."""
     x = np.asarray(x, dtype=float)
     return (2.0 * x**3 - 3.0 * x**2 + 1.0) / 3.0
-
-
-def cubic_roots(S: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    """The two non-negative roots of Eq. 6 for ``0 <= S <= 1/3``, as printed in Eq. 7.
-
-    Parameters
-    ----------
-    S
-        Normalized roughness height s / zeta_0, dimensionless, in [0, 1/3].
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        ``(x_plus, x_minus)`` with ``x_plus = 1/2 + cos(theta)`` in [1, 3/2] and
-        ``x_minus = 1/2 + cos(theta - 2 pi/3)`` in [0, 1],
-        ``theta = arccos(6 S - 1) / 3``.
-    """
-    S = np.asarray(S, dtype=float)
-    if np.any(~np.isfinite(S)) or np.any((S < 0.0) | (S > 1.0 / 3.0)):
-        raise ValueError(f"S = {S} is out of range: Eq. 7 needs 0 <= S <= 1/3")
-    theta = np.arccos(np.clip(6.0 * S - 1.0, -1.0, 1.0)) / 3.0
-    return 0.5 + np.cos(theta), 0.5 + np.cos(theta - 2.0 * np.pi / 3.0)
 
 
 def _force(x: np.ndarray) -> np.ndarray:

@@ -20,7 +20,7 @@ Exact values at the cell centres. The centres are ``x_p = (p - m) h`` with ``h =
 a mode takes at the centres exactly the values of the lattice mode ``(i mod n, j mod n)``.
 Folding every coefficient onto that n x n spectrum and doing one n x n inverse FFT gives the
 continuous field's point values, also where ``ks`` lies above the grid's Nyquist frequency
-(lambda near 1); :func:`field_at_points` and :func:`fine_grid` are the slow references.
+(lambda near 1); :func:`field_at_points` is the slow reference.
 
 Spectral period. With the window as the period the band ``k1..3 k1`` holds only n / (2 lambda)
 ... 3n / (2 lambda) lattice steps: a few dozen modes at lambda >= 13, and which rings fall inside
@@ -57,7 +57,6 @@ __all__ = [
     "grid_values",
     "realize",
     "field_at_points",
-    "fine_grid",
     "theoretical_threshold",
     "empirical_threshold",
     "covered_count",
@@ -385,37 +384,6 @@ def field_at_points(modes: Band, coeffs: np.ndarray, x: np.ndarray, y: np.ndarra
     ex = np.exp(1j * step * np.outer(x.ravel(), np.arange(-top, top + 1)))
     ey = np.exp(1j * step * np.outer(y.ravel(), np.arange(0, top + 1)))
     return np.einsum("pj,pj->p", ey, ex @ table.T).real.reshape(x.shape)
-
-
-def fine_grid(modes: Band, coeffs: np.ndarray, n_pixels: int) -> np.ndarray:
-    """Synthesis of fields on a fine n_pixels x n_pixels image of the window (the slow way).
-
-    Pixel ``(a, b)`` lies at ``(x, y) = (b, a) * period / n_pixels`` relative to the window
-    centre (the centre is pixel (0, 0); coordinates wrap with the period).
-
-    Parameters
-    ----------
-    modes
-        The band; every mode must lie below the image's Nyquist index ``n_pixels / 2``.
-    coeffs
-        Complex coefficients, shape (..., modes.size).
-    n_pixels
-        Image side in pixels.
-
-    Returns
-    -------
-    numpy.ndarray
-        float64, shape (..., n_pixels, n_pixels), indexed ``[..., y, x]``.
-    """
-    top = max(np.abs(modes.i).max(), modes.j.max())
-    if 2 * top >= n_pixels:
-        raise ValueError(
-            f"n_pixels = {n_pixels} is too small: modes up to index {top} need more than {2 * top}"
-        )
-    lead = coeffs.shape[:-1]
-    spectrum = np.zeros(lead + (n_pixels, n_pixels), dtype=complex)
-    spectrum[..., modes.j % n_pixels, modes.i % n_pixels] = coeffs
-    return np.fft.ifft2(spectrum, norm="forward").real
 
 
 def theoretical_threshold(xi: np.ndarray) -> np.ndarray:

@@ -22,7 +22,7 @@ from pipeline.reference import elastic, scene, window
 from pipeline.reference.contact import ContactReachesEdge, contact_at_force
 from pipeline.reference.oxide import oxide_on_grid
 from pipeline.reference.punch import punch_conductance
-from pipeline.stages.oxide import FieldSource
+from pipeline.scene import FieldSource
 from pipeline.store import atomic_path
 
 __all__ = ["Case", "plan_cases", "case_key", "load_case", "run_case", "estimate_seconds"]

@@ -13,7 +13,7 @@ import numpy as np
 
 from pipeline.physics import oxide_field
 from pipeline.physics.grid import cell_centres
-from pipeline.stages.oxide import FieldSource
+from pipeline.scene import FieldSource
 
 __all__ = ["field_on_grid", "oxide_on_grid"]
 

@@ -21,14 +21,14 @@ import numpy as np
 import xarray as xr
 
 from pipeline.config import Scenario, load_scenario
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.reference import surfaces
 from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube as cube_stage
 from pipeline.stages import oxide as oxide_stage
 
 __all__ = ["ValidationSet", "DEFAULT", "QUICK", "RANDOM", "random_process_set", "surface_stream", "rough_sphere", "g2tom_scenario",
-           "g2tom_resistances", "contact_extent", "has_spots_key", "FLOOR_SIGMAS"]
+           "g2tom_resistances", "contact_extent", "FLOOR_SIGMAS"]
 
 #: The GW surface's floor between asperities, in sigma below the reference plane: far below any
 #: contact of the loads used (the deepest touching tip lies near delta >= -3 sigma).
@@ -176,11 +176,6 @@ def rough_sphere(vset: ValidationSet, realization: int, n: int, side: float | No
     return rough + surfaces.sphere(n, pixel, vset.radius)
 
 
-def has_spots_key(scenario: Scenario) -> bool:
-    """Whether this g2tom knows ``contact.spots`` (issue 21)."""
-    return "contact.spots" in scenario.flat()
-
-
 def g2tom_scenario(vset: ValidationSet, model: str, spots: str) -> Scenario:
     """The g2tom scenario of the validation scene, one ``cube.model`` and one spot discretization."""
     lo, hi = min(vset.deltas), max(vset.deltas)
@@ -191,14 +186,9 @@ def g2tom_scenario(vset: ValidationSet, model: str, spots: str) -> Scenario:
         "loading.delta_max": hi, "loading.delta_min": lo, "loading.n_delta": len(vset.deltas),
         "oxide.xi": list(vset.xi), "oxide.lambda": list(vset.lambdas), "oxide.seed": vset.oxide_seed,
         "oxide.ensemble": "fixed", "oxide.n_realizations": max(2, max(vset.realizations) + 1),
-        "cube.model": model,
+        "cube.model": model, "contact.spots": spots,
     }
-    scenario = load_scenario("paper", overrides)
-    if has_spots_key(scenario):
-        scenario = load_scenario("paper", {**overrides, "contact.spots": spots})
-    elif spots != "mean_area":
-        raise ValueError(f"spot discretization {spots!r} needs contact.spots (issue 21), which this g2tom lacks")
-    scenario = resolve(scenario)
+    scenario = resolve(load_scenario("paper", overrides))
     expected = np.asarray(vset.deltas) * vset.sigma
     if not np.allclose(scenario.deltas, expected, rtol=1e-12, atol=0):
         raise ValueError(f"deltas = {vset.deltas} must be evenly spaced, lightest load first (g2tom's load steps)")

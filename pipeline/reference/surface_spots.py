@@ -20,7 +20,7 @@ from pipeline.reference import scene, surfaces
 from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube as cube_stage
 from pipeline.stages import cube_chunks
-from pipeline.stages.oxide import FieldSource
+from pipeline.scene import FieldSource
 
 __all__ = ["SURFACE_ASPERITIES", "spot_radii", "g2tom_resistances"]
 
@@ -61,7 +61,7 @@ def g2tom_resistances(vset: scene.ValidationSet, model: str) -> xr.Dataset:
     contact = contact_stage.build(scenario)
     _, _, settings = cube_stage.work_settings(scenario, contact)
     realizations = np.asarray(vset.realizations)
-    radius = np.stack([spot_radii(vset, int(k), contact["x"].values, settings["separation"]) for k in realizations])
+    radius = np.stack([spot_radii(vset, int(k), contact["x"].values, settings.separation) for k in realizations])
     clean = cube_chunks.clean_terms(radius, radius, settings).resistance  # (realization, delta)
     oxidized = cube_chunks.exact_terms(FieldSource.of(scenario), realizations, radius, radius, settings)["resistance"]
     return xr.Dataset({

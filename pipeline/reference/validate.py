@@ -20,7 +20,7 @@ from pipeline.config import ConfigError, load_scenario
 from pipeline.progress import format_duration
 from pipeline.reference import cases as cases_mod
 from pipeline.reference import scene, section, summary, surface_spots, window
-from pipeline.stages.oxide import FieldSource
+from pipeline.scene import FieldSource
 from pipeline.store import atomic_path
 
 #: Largest relative difference of g2tom's forces at one delta between discretizations and models
@@ -32,18 +32,15 @@ __all__ = ["available_discretizations", "default_discretization", "plan_lines", 
 
 
 def available_discretizations(surface: str = "gw") -> tuple[str, ...]:
-    """The spot discretizations this g2tom offers (``contact.spots``, issue 21; else today's one),
-    and on the GW surface its own asperities (:data:`surface_spots.SURFACE_ASPERITIES`)."""
-    if not scene.has_spots_key(load_scenario("paper")):
-        return ("mean_area",)
+    """The spot discretizations of ``contact.spots``, and on the GW surface its own asperities
+    (:data:`surface_spots.SURFACE_ASPERITIES`)."""
     own = (surface_spots.SURFACE_ASPERITIES,) if surface == "gw" else ()
     return ("mean_area", "expected", "asperities") + own
 
 
 def default_discretization() -> str:
     """The discretization of the default scenario ``paper``."""
-    paper = load_scenario("paper")
-    return paper.contact.spots if scene.has_spots_key(paper) else "mean_area"
+    return load_scenario("paper").contact.spots
 
 
 def plan_lines(vset: scene.ValidationSet, everything: list[cases_mod.Case]) -> list[str]:

@@ -15,7 +15,7 @@ import xarray as xr
 from pipeline.compute import ComputeOptions
 from pipeline.config import AUTO, ConfigError, Scenario
 from pipeline.contact_solution import indenter_profile, radial_grid, solve, solve_with_stiffness
-from pipeline.domains import resolve
+from pipeline.before_work.domains import resolve
 from pipeline.physics import greenwood_tripp as gt
 from pipeline.physics import hertz, spot_models, spots
 from pipeline.physics.asperity import area_fraction, asperity_pressure
@@ -119,7 +119,7 @@ def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=
         hertz_radius, holm_radius, roughness_parameter, iterations, residual, converged,
         stiffness (N/m) and barber_conductance (S);
         over (delta, y, x): spot_area, spot_radius (by ``contact.spots``), spot_separation; over r: profile. ``auto`` domains are
-        resolved first (:func:`pipeline.domains.resolve`). With ``contact.model = "discrete"``
+        resolved first (:func:`pipeline.before_work.domains.resolve`). With ``contact.model = "discrete"``
         also the pool of discrete surfaces at the same forces
         (:func:`pipeline.stages.contact_discrete.variables`; its solves run where ``options`` says).
     """

@@ -14,7 +14,7 @@ whatever the chunk size or scheduler.
 
 The fields oxide.nc records (the fixed ensemble, or the adaptive ensemble's first batch) are
 served from the record when it is at most :data:`pipeline.stages.oxide.RECORD_BYTES`; every other
-field is regenerated inside its task from its seed (:class:`pipeline.stages.oxide.FieldSource`,
+field is regenerated inside its task from its seed (:class:`pipeline.scene.FieldSource`,
 bit-identical to the record), so memory stays bounded and the ensemble can grow. ``oxide.ensemble = "fixed"`` computes
 ``oxide.n_realizations`` fields per lambda. ``"adaptive"`` grows every (xi, lambda) cell in
 rounds (:mod:`pipeline.stages.cube_rounds`). The realization axis is padded to the largest count
@@ -23,6 +23,7 @@ rounds (:mod:`pipeline.stages.cube_rounds`). The realization axis is padded to t
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -34,11 +35,12 @@ from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
 from pipeline.physics import constriction
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
-from pipeline.stages.cube_chunks import asperity_spots, clean_terms, exact_terms, spots_of
+from pipeline.stages.cube_chunks import CubeSettings, asperity_spots, clean_terms, exact_terms, spots_of
 from pipeline.stages.cube_dataset import dataset
 from pipeline.stages.cube_discrete import DiscretePool, clean_pool
 from pipeline.stages.cube_rounds import compute_cells, half_widths, padded, stopping_rule
-from pipeline.stages.oxide import FieldSource, RecordedFields
+from pipeline.scene import FieldSource
+from pipeline.stages.oxide import RecordedFields
 
 __all__ = ["build", "run", "spot_maps", "work_settings", "clean_conductances", "CLEAN_MODELS"]
 
@@ -82,23 +84,23 @@ def _check_grids(contact: xr.Dataset, oxide: xr.Dataset) -> None:
         raise ValueError("contact.nc: the cell grid must be square (x and y identical)")
 
 
-def _clean(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any], n_drawn: int) -> dict[str, np.ndarray]:
+def _clean(radius: np.ndarray, weights: np.ndarray, settings: CubeSettings, n_drawn: int) -> dict[str, np.ndarray]:
     """The oxide-free surface, every spot conducting, on the whole window (exact), over delta.
 
     For ``asperities`` spots, over the first ``n_drawn`` realizations of the heights: the
     resistance of the mean conductance (open circuits conduct nothing), the self term of the
     mean self-conductance, and the probability of an open circuit.
     """
-    if settings["spots"] == "discrete":
-        return _clean_discrete(radius, settings, settings["model"])
+    if settings.spots == "discrete":
+        return _clean_discrete(radius, settings.rho, settings.model)
     n_delta = radius.shape[0]
-    if settings["spots"] != "asperities":
+    if settings.spots != "asperities":
         res = clean_terms(radius, weights, settings)
         return {"resistance": res.resistance[0], "self": res.resistance_self[0],
                 "interaction": res.resistance_interaction[0], "open": np.zeros(n_delta), "n_drawn": 0}
     drawn = asperity_spots(settings, np.arange(n_drawn))
     res = clean_terms(drawn, drawn, settings)
-    rho = settings["rho"]
+    rho = settings.rho
     with np.errstate(divide="ignore"):
         total = rho / np.mean(rho / res.resistance, axis=0)
         own = rho / np.mean(rho / res.resistance_self, axis=0)
@@ -106,11 +108,10 @@ def _clean(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any], n_
             "open": np.mean(np.isinf(res.resistance), axis=0), "n_drawn": n_drawn}
 
 
-def _clean_discrete(pool: DiscretePool, settings: dict[str, Any], model: str) -> dict[str, np.ndarray]:
+def _clean_discrete(pool: DiscretePool, rho: float, model: str) -> dict[str, np.ndarray]:
     """:func:`_clean` on discrete spots: over the pool's surfaces, the resistance of the mean
     conductance, the self term of the mean self-conductance, the probability of an open circuit."""
-    terms = clean_pool(pool, settings["rho"], model)
-    rho = settings["rho"]
+    terms = clean_pool(pool, rho, model)
     with np.errstate(divide="ignore"):
         total = rho / np.mean(rho / terms["resistance"], axis=0)
         own = rho / np.mean(rho / terms["resistance_self"], axis=0)
@@ -123,7 +124,7 @@ CLEAN_MODELS = (("greenwood", "greenwood", 0.0), ("point", "point", 0.0),
                 ("point_lattice", "point", SQUARE_LATTICE_CONSTANT))
 
 
-def _clean_models(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any], n_drawn: int,
+def _clean_models(radius: np.ndarray, weights: np.ndarray, settings: CubeSettings, n_drawn: int,
                   known: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """The oxide-free conductance (S, over delta) of every model of :data:`CLEAN_MODELS` with the
     run's spots, solved tightly (NaN where the model does not apply: the point model needs radius
@@ -133,28 +134,28 @@ def _clean_models(radius: np.ndarray, weights: np.ndarray, settings: dict[str, A
     for name, kind, constant in CLEAN_MODELS:
         if name in out:
             continue
-        if settings["spots"] == "discrete":  # no lattice on discrete spots
-            out[name] = (np.full(len(settings["crops"]), np.nan) if constant > 0 else
-                         1.0 / _clean_discrete(radius, settings, kind)["resistance"])
+        if settings.spots == "discrete":  # no lattice on discrete spots
+            out[name] = (np.full(len(settings.crops), np.nan) if constant > 0 else
+                         1.0 / _clean_discrete(radius, settings.rho, kind)["resistance"])
             continue
         # the lattice term completes expected spots' continuum; drawn asperities have none to complete
-        lattice_off = constant > 0 and settings["spots"] == "asperities"
+        lattice_off = constant > 0 and settings.spots == "asperities"
         if lattice_off or kind == "point" and weights is not radius and not np.array_equal(weights, radius):
             out[name] = np.full(radius.shape[0], np.nan)
             continue
-        chosen = dict(settings, model=kind, lattice_constant=constant, film_resistance=np.inf,
-                      solver_tolerance=1e-12, solver_criterion="error", max_iterations=200)
+        chosen = dataclasses.replace(settings, model=kind, lattice_constant=constant, film_resistance=np.inf,
+                                     solver_tolerance=1e-12, solver_criterion="error", max_iterations=200)
         out[name] = 1.0 / _clean(radius, weights, chosen, n_drawn)["resistance"]
     return out
 
 
 def _measured_crop_error(
-    source: FieldSource, radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
+    source: FieldSource, radius: np.ndarray, weights: np.ndarray, settings: CubeSettings,
     cropped: np.ndarray,
 ) -> float:
     """Largest relative change of ``R`` from cropping, over the first realization's entries
     (0 on discrete spots: they are never cropped)."""
-    if settings["spots"] == "discrete":
+    if settings.spots == "discrete":
         return 0.0
     first = np.arange(1)
     exact = exact_terms(source, first, *spots_of(settings, first, radius, weights), settings)["resistance"]
@@ -164,36 +165,39 @@ def _measured_crop_error(
     return float(np.max(np.abs(cropped[..., :1][finite] / exact[finite] - 1.0)))
 
 
-def work_settings(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+def work_settings(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, np.ndarray, CubeSettings]:
     """Spot radii and weights (delta, y, x) of ``contact`` and the settings every task of the cube reads
     (with ``contact.model = "discrete"`` the pool of surfaces, :class:`DiscretePool`, for both)."""
     radius, weights, pitch = spot_maps(scenario, contact)
     cube = scenario.cube
     film = scenario.oxide.film_resistance if scenario.oxide.film == "resistive" else np.inf
     whole_window = cube.model == "greenwood" and np.isfinite(film)
-    settings = {
-        "pitch": pitch,
-        "rho": scenario.material.rho,
-        "model": cube.model,
-        "film_resistance": film,
-        "solver_tolerance": cube.solver_tolerance,
-        "max_iterations": cube.max_iterations,
-        "solver_criterion": cube.solver_criterion,
-        "crops": constriction.choose_crops(radius, weights, pitch, 0.0 if whole_window else cube.crop_tolerance),
-        "tolerance": cube.crop_tolerance,
-        "method": cube.method,
-        "method_used": constriction.AUTO_METHOD if cube.method == "auto" else cube.method,
-        "spots": scenario.contact.spots,
-        "lattice_constant": cube.lattice_constant,
-    }
-    if scenario.contact.model == "discrete":
-        settings.update(spots="discrete", spot_rule=scenario.oxide.spot_rule)
-        pool = DiscretePool.of(contact)
-        return pool, pool, settings
+    asperities = separation = None
     if scenario.contact.spots == "asperities":
         rough = scenario.roughness
-        settings["asperities"] = (scenario.oxide.seed, rough.sigma, rough.beta)
-        settings["separation"] = np.asarray(contact["spot_separation"].transpose("delta", "y", "x").values, np.float64)
+        asperities = (scenario.oxide.seed, rough.sigma, rough.beta)
+        separation = np.asarray(contact["spot_separation"].transpose("delta", "y", "x").values, np.float64)
+    settings = CubeSettings(
+        pitch=pitch,
+        rho=scenario.material.rho,
+        model=cube.model,
+        film_resistance=film,
+        solver_tolerance=cube.solver_tolerance,
+        max_iterations=cube.max_iterations,
+        solver_criterion=cube.solver_criterion,
+        crops=constriction.choose_crops(radius, weights, pitch, 0.0 if whole_window else cube.crop_tolerance),
+        tolerance=cube.crop_tolerance,
+        method=cube.method,
+        method_used=constriction.AUTO_METHOD if cube.method == "auto" else cube.method,
+        spots=scenario.contact.spots,
+        lattice_constant=cube.lattice_constant,
+        asperities=asperities,
+        separation=separation,
+        spot_rule=scenario.oxide.spot_rule,
+    )
+    if scenario.contact.model == "discrete":
+        pool = DiscretePool.of(contact)
+        return pool, pool, dataclasses.replace(settings, spots="discrete")
     return radius, weights, settings
 
 

@@ -1,7 +1,7 @@
 """The cube's unit of work: the resistance terms of a chunk of oxide fields at every load step.
 
 A dask task regenerates a chunk of fields of one lambda from their seeds
-(:class:`pipeline.stages.oxide.FieldSource`), thresholds them at each oxide fraction and runs
+(:class:`pipeline.scene.FieldSource`), thresholds them at each oxide fraction and runs
 the scenario's resistance model (:func:`model`) on the conducting masks: Greenwood's closed
 form, Greenwood's form with films, or the point model. With ``asperities`` spots each
 realization brings its own drawn spots (:func:`asperity_spots`); discrete spots have their own
@@ -11,15 +11,16 @@ chunk (:mod:`pipeline.stages.cube_discrete`).
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from pipeline.physics import constriction, point_model, spot_models
+from pipeline.scene import FieldSource
 from pipeline.stages.cube_discrete import discrete_chunk
-from pipeline.stages.oxide import FieldSource
 
-__all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "spots_of", "chunk_terms", "clean_terms",
+__all__ = ["CubeSettings", "TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "spots_of", "chunk_terms", "clean_terms",
            "exact_terms", "field_chunk"]
 
 TERMS = ("resistance", "resistance_self", "resistance_interaction", "n_conducting", "crop_bound")
@@ -27,46 +28,98 @@ TERMS = ("resistance", "resistance_self", "resistance_interaction", "n_conductin
 SOLVER_TERMS = ("iterations", "residual", "error_estimate")
 
 
-def model(settings: dict[str, Any]) -> Any:
-    """The resistance function of ``settings["model"]`` with the calling convention of
+@dataclass(frozen=True, eq=False)
+class CubeSettings:
+    """What every task of the cube reads besides the fields and the spot maps (picklable).
+
+    Attributes
+    ----------
+    pitch
+        Cell pitch, m.
+    rho
+        Effective resistivity rho*, ohm m.
+    model
+        ``cube.model``: ``greenwood`` or ``point``.
+    film_resistance
+        Specific resistance of a resistive oxide film, ohm m2 (inf: insulating).
+    solver_tolerance, max_iterations, solver_criterion
+        The point model's iterative solve (``cube.*``).
+    crops
+        Side of the centred square of cells kept at each approach, (delta,).
+    tolerance
+        ``cube.crop_tolerance``: the crop's relative error bound (0: whole window).
+    method
+        ``cube.method`` as configured; ``method_used`` with ``auto`` resolved.
+    spots
+        ``contact.spots``, or ``discrete`` with ``contact.model = "discrete"``.
+    lattice_constant
+        ``cube.lattice_constant`` of the point model's self term.
+    asperities
+        ``asperities`` spots only: (oxide.seed, sigma in m, beta in m) of the drawn heights.
+    separation
+        ``asperities`` spots only: separation at the cell centres (delta, y, x), m.
+    spot_rule
+        ``oxide.spot_rule`` (discrete spots: ``centre`` or ``disc``).
+    """
+
+    pitch: float
+    rho: float
+    model: str
+    film_resistance: float
+    solver_tolerance: float
+    max_iterations: int
+    solver_criterion: str
+    crops: np.ndarray
+    tolerance: float
+    method: str
+    method_used: str
+    spots: str
+    lattice_constant: float
+    asperities: tuple[int, float, float] | None = None
+    separation: np.ndarray | None = None
+    spot_rule: str = "centre"
+
+
+def model(settings: CubeSettings) -> Any:
+    """The resistance function of ``settings.model`` with the calling convention of
     :func:`constriction.resistance`: the point solve, Greenwood with films, or Greenwood."""
-    film = settings["film_resistance"]
-    if settings["model"] == "point":
+    film = settings.film_resistance
+    if settings.model == "point":
         return functools.partial(
             point_model.resistance, film_resistance=film,
-            solver_tolerance=settings["solver_tolerance"], max_iterations=settings["max_iterations"],
-            criterion=settings["solver_criterion"], lattice_constant=settings["lattice_constant"],
+            solver_tolerance=settings.solver_tolerance, max_iterations=settings.max_iterations,
+            criterion=settings.solver_criterion, lattice_constant=settings.lattice_constant,
         )
     if np.isfinite(film):
         return functools.partial(point_model.greenwood_resistance, film_resistance=film)
     return constriction.resistance
 
 
-def terms(settings: dict[str, Any]) -> tuple[str, ...]:
+def terms(settings: CubeSettings) -> tuple[str, ...]:
     """The per-entry terms the model of ``settings`` returns (discrete spots: a direct solve, no solver terms)."""
-    return TERMS + SOLVER_TERMS if settings["model"] == "point" and settings["spots"] != "discrete" else TERMS
+    return TERMS + SOLVER_TERMS if settings.model == "point" and settings.spots != "discrete" else TERMS
 
 
-def _resistance(masks: np.ndarray, radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
+def _resistance(masks: np.ndarray, radius: np.ndarray, weights: np.ndarray, settings: CubeSettings,
                 groups: np.ndarray | None = None) -> constriction.ChunkResult:
     """Resistance terms of a batch of conducting masks (batch, y, x) at every load step (map
     ``b`` with the spots ``radius[groups[b]]`` when ``groups`` is given)."""
     extra = {} if groups is None else {"groups": groups}
     return model(settings)(
-        masks, radius, weights, settings["pitch"], settings["rho"],
-        settings["crops"], settings["tolerance"], settings["method"], **extra,
+        masks, radius, weights, settings.pitch, settings.rho,
+        settings.crops, settings.tolerance, settings.method, **extra,
     )
 
 
-def asperity_spots(settings: dict[str, Any], realizations: np.ndarray) -> np.ndarray:
+def asperity_spots(settings: CubeSettings, realizations: np.ndarray) -> np.ndarray:
     """The ``asperities`` discretization's spot radii of ``realizations``, (realization, delta, y, x), m.
 
     Realization ``k`` draws its asperity heights from its own stream
     (:func:`pipeline.physics.spot_models.heights`), held over every load step and shared by
     every (xi, lambda): the surface is one, the oxide fields vary.
     """
-    seed, sigma, beta = settings["asperities"]
-    separation = settings["separation"]
+    seed, sigma, beta = settings.asperities
+    separation = settings.separation
     n = separation.shape[-1]
     return np.stack([
         spot_models.asperity_radius(spot_models.heights(seed, int(k), n, sigma)[None], separation, beta)
@@ -79,7 +132,7 @@ def chunk_terms(
     threshold: np.ndarray,
     radius: np.ndarray,
     weights: np.ndarray,
-    settings: dict[str, Any],
+    settings: CubeSettings,
 ) -> dict[str, Any]:
     """Greenwood terms of a chunk of fields.
 
@@ -117,7 +170,7 @@ def chunk_terms(
     return out
 
 
-def clean_terms(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any]) -> constriction.ChunkResult:
+def clean_terms(radius: np.ndarray, weights: np.ndarray, settings: CubeSettings) -> constriction.ChunkResult:
     """The oxide-free surface, every spot conducting, on the whole window (exact), at every load step.
 
     ``radius`` and ``weights`` as in :func:`chunk_terms`: (delta, y, x) gives one map,
@@ -126,27 +179,27 @@ def clean_terms(radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any
     n, n_delta = radius.shape[-1], radius.shape[-3]
     maps = radius.shape[0] if radius.ndim == 4 else 1
     extra = {"groups": np.arange(maps)} if radius.ndim == 4 else {}
-    return model(settings)(np.ones((maps, n, n), dtype=bool), radius, weights, settings["pitch"], settings["rho"],
-                           np.full(n_delta, n), 0.0, settings["method"], **extra)
+    return model(settings)(np.ones((maps, n, n), dtype=bool), radius, weights, settings.pitch, settings.rho,
+                           np.full(n_delta, n), 0.0, settings.method, **extra)
 
 
 def exact_terms(source: FieldSource, realizations: np.ndarray, radius: np.ndarray, weights: np.ndarray,
-                settings: dict[str, Any]) -> dict[str, Any]:
+                settings: CubeSettings) -> dict[str, Any]:
     """:func:`chunk_terms` of the fields of ``realizations`` at every lambda and xi of ``source``,
     in one batch of masks, on the whole window (no crop: exact). ``radius`` and ``weights`` as
     there (shared, or one map per realization of ``realizations``)."""
     fields = [source.fields(a, realizations) for a in range(len(source.lambdas))]
     psi = np.stack([f[0] for f in fields])  # (lambda, realization, y, x)
     threshold = np.stack([f[1] for f in fields], axis=1)  # (xi, lambda, realization)
-    whole = dict(settings, crops=np.full(radius.shape[-3], radius.shape[-1]), tolerance=0.0)
+    whole = replace(settings, crops=np.full(radius.shape[-3], radius.shape[-1]), tolerance=0.0)
     return chunk_terms(psi, threshold, radius, weights, whole)
 
 
-def spots_of(settings: dict[str, Any], realizations: np.ndarray, radius: np.ndarray,
+def spots_of(settings: CubeSettings, realizations: np.ndarray, radius: np.ndarray,
              weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The spot radii and weights the fields of ``realizations`` meet: drawn per realization for
     ``asperities`` spots (:func:`asperity_spots`), else the shared ``radius`` and ``weights``."""
-    if settings["spots"] == "asperities":
+    if settings.spots == "asperities":
         drawn = asperity_spots(settings, realizations)
         return drawn, drawn
     return radius, weights
@@ -154,7 +207,7 @@ def spots_of(settings: dict[str, Any], realizations: np.ndarray, radius: np.ndar
 
 def field_chunk(
     source: FieldSource, index: int, realizations: np.ndarray, xi_index: np.ndarray,
-    radius: np.ndarray, weights: np.ndarray, settings: dict[str, Any],
+    radius: np.ndarray, weights: np.ndarray, settings: CubeSettings,
 ) -> dict[str, Any]:
     """Regenerate the fields of ``realizations`` at lambda number ``index`` and run :func:`chunk_terms`.
 
@@ -162,7 +215,7 @@ def field_chunk(
     Discrete spots (``radius`` a :class:`pipeline.stages.cube_discrete.DiscretePool`) go to
     :func:`pipeline.stages.cube_discrete.discrete_chunk`.
     """
-    if settings["spots"] == "discrete":
+    if settings.spots == "discrete":
         return discrete_chunk(source, index, realizations, xi_index, radius, settings)
     psi, threshold = source.fields(index, realizations)
     radius, weights = spots_of(settings, realizations, radius, weights)

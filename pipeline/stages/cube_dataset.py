@@ -8,6 +8,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline.config import Scenario
+from pipeline.stages.cube_chunks import CubeSettings
 from pipeline.stages.cube_rounds import RULE_MARGIN
 
 __all__ = ["dataset"]
@@ -25,7 +26,7 @@ def _attrs(units: str, long_name: str, **extra: Any) -> dict[str, Any]:
 
 def dataset(
     scenario: Scenario, contact: xr.Dataset, oxide: xr.Dataset, out: dict[str, Any],
-    clean: dict[str, Any], settings: dict[str, Any], measured: float,
+    clean: dict[str, Any], settings: CubeSettings, measured: float,
     counts: np.ndarray, widths: tuple[np.ndarray, np.ndarray],
 ) -> xr.Dataset:
     """Wrap the computed arrays with coordinates and CF attributes."""
@@ -88,7 +89,7 @@ def dataset(
            for name, values in clean["models"].items()},
         "clean_open_probability": ("delta", clean["open"], _attrs(
             "1", "probability that the oxide-free surface is an open circuit (no touching asperity)")),
-        "crop_cells": ("delta", np.asarray(settings["crops"], np.int32), _attrs(
+        "crop_cells": ("delta", np.asarray(settings.crops, np.int32), _attrs(
             "1", "side of the centred square of cells kept at each approach")),
     }
     if "iterations" in out:
@@ -101,8 +102,8 @@ def dataset(
             comment=padding))
     attrs = {
         "interaction_weights": scenario.cube.weights,
-        "method": settings["method_used"],
-        "crop_tolerance": settings["tolerance"],
+        "method": settings.method_used,
+        "crop_tolerance": settings.tolerance,
         "crop_error_bound": float(np.nanmax(out["crop_bound"], initial=0.0)),
         "crop_error_measured": measured,
         "crop_error_measured_on": "all entries of the first realization, against the whole window",

@@ -23,7 +23,7 @@ coupling kernel of the contact solve, so the clean surface obeys Barber's theore
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import xarray as xr
@@ -33,6 +33,9 @@ from pipeline.physics.discrete_contact import interaction_kernel
 from pipeline.physics.discrete_resistance import resistances
 from pipeline.physics.oxide_points import values_at_points
 from pipeline.physics.spot_share import DEFAULT_RINGS, DiscRule, clean_share, spot_points
+
+if TYPE_CHECKING:  # cube_chunks imports this module
+    from pipeline.stages.cube_chunks import CubeSettings
 
 __all__ = ["RINGS_PER_CORRELATION", "DiscretePool", "rings", "clean_shares", "discrete_chunk", "clean_pool"]
 
@@ -147,10 +150,10 @@ def _terms(kernel: np.ndarray, radius: np.ndarray, rho: float, model: str) -> di
 
 
 def discrete_chunk(source: Any, index: int, realizations: np.ndarray, xi_index: np.ndarray,
-                   pool: DiscretePool, settings: dict[str, Any]) -> dict[str, Any]:
+                   pool: DiscretePool, settings: "CubeSettings") -> dict[str, Any]:
     """The terms (xi, delta, realization) of the fields of ``realizations`` at lambda number ``index``.
 
-    ``source`` is a :class:`pipeline.stages.oxide.FieldSource` (or the record in front of one):
+    ``source`` is a :class:`pipeline.scene.FieldSource` (or the record in front of one):
     its thresholds and its fields' coefficients.
     """
     base = getattr(source, "source", source)
@@ -161,10 +164,10 @@ def discrete_chunk(source: Any, index: int, realizations: np.ndarray, xi_index: 
     for column, k in enumerate(realizations):
         x, y, radius = pool.spots(int(k))
         coeffs = oxide_field.coefficients(modes, oxide_field.field_stream(base.seed, lam, int(k)), base.amplitudes)
-        share = clean_shares(modes, coeffs, x, y, radius, thresholds[:, column], settings["spot_rule"],
+        share = clean_shares(modes, coeffs, x, y, radius, thresholds[:, column], settings.spot_rule,
                              lam * base.cell_size)
         kernel = interaction_kernel(x, y, pool.floor)
-        pieces.append(_terms(kernel, radius[None] * np.sqrt(share), settings["rho"], settings["model"]))
+        pieces.append(_terms(kernel, radius[None] * np.sqrt(share), settings.rho, settings.model))
     out: dict[str, Any] = {name: np.stack([p[name] for p in pieces], axis=-1) for name in pieces[0]}
     out["n_uncropped"] = 0
     return out

@@ -3,7 +3,7 @@
 ``oxide.ensemble = "fixed"`` computes ``oxide.n_realizations`` fields per lambda in one round.
 ``"adaptive"`` grows every (xi, lambda) cell in rounds: first ``oxide.min_realizations``, then
 ``oxide.batch`` more while the cell's fast-rule 95 % half-width of alpha
-(:mod:`pipeline.physics.ensemble`, exact for the geometric-mean fit on the steps with
+(:mod:`pipeline.fitting.ensemble`, exact for the geometric-mean fit on the steps with
 steps the fits stage fits, :func:`pipeline.stages.fit_steps.fit_range`) exceeds :data:`RULE_MARGIN` x ``oxide.target_half_width``, up to
 ``oxide.max_realizations``. A cell keeps the first prefix of realizations that meets the
 target, so the result does not depend on the batch.
@@ -18,10 +18,10 @@ import numpy as np
 
 from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
-from pipeline.physics import ensemble
-from pipeline.stages.cube_chunks import field_chunk, terms
+from pipeline.fitting import ensemble
+from pipeline.stages.cube_chunks import CubeSettings, field_chunk, terms
 from pipeline.stages.fit_steps import fit_range
-from pipeline.stages.oxide import FieldSource
+from pipeline.scene import FieldSource
 
 __all__ = ["RULE_MARGIN", "stopping_rule", "half_widths", "compute_cells", "padded"]
 
@@ -87,7 +87,7 @@ def _decide(scenario: Scenario, resistance: np.ndarray, rule: dict[str, Any]) ->
 
 def compute_cells(
     scenario: Scenario, source: FieldSource, radius: np.ndarray, weights: np.ndarray,
-    settings: dict[str, Any], rule: dict[str, Any], options: ComputeOptions,
+    settings: CubeSettings, rule: dict[str, Any], options: ComputeOptions,
 ) -> tuple[list[list[dict[str, np.ndarray]]], int]:
     """Rounds of dask tasks over (lambda, realization chunk) until every (xi, lambda) has its count.
 

@@ -5,7 +5,7 @@ Reads ``cube.nc``, writes ``fits.nc``. For every (xi, lambda) the chosen reducti
 over the fitted load steps, F >= ``fits.min_force`` (N) or, with ``fits.fit_range =
 "force_normalized"``, F' >= ``fits.min_force_normalized``; the clean surface is fitted the same way.
 
-Curve model (:mod:`pipeline.physics.curve_model`): on the same steps, ln R' of the reduction is
+Curve model (:mod:`pipeline.fitting.curve_model`): on the same steps, ln R' of the reduction is
 also fitted by the lowest-order polynomial in ln F' (up to ``fits.curve_max_order``) that lies
 within ``fits.curve_tolerance`` at every fitted step or, failing that, within max(tolerance,
 the step's bootstrap interval of the reduction); the clean curve has no interval.
@@ -34,8 +34,8 @@ from scipy import stats
 
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
-from pipeline.physics.curve_model import CurveFit, fit_curve
-from pipeline.physics.powerlaw import (
+from pipeline.fitting.curve_model import CurveFit, fit_curve
+from pipeline.fitting.powerlaw import (
     bootstrap_log_mean,
     bootstrap_median,
     fit_power_law,
@@ -44,7 +44,7 @@ from pipeline.physics.powerlaw import (
 )
 from pipeline.reductions import DIM, reduce_realizations
 from pipeline.stages.fit_steps import fitted_steps, range_label
-from pipeline.stages.labels import label_coords
+from pipeline.stages.schema import label_coords
 from pipeline.store import read_stage, write_dataset
 
 __all__ = ["build", "run"]

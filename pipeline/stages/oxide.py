@@ -29,27 +29,11 @@ import xarray as xr
 from pipeline import store
 from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
-from pipeline.physics import oxide_field
 from pipeline.physics.grid import cell_centres
+from pipeline.scene import FieldSource, bands, threshold_block
+from pipeline.stages.schema import variable
 
-__all__ = ["build", "run", "bands", "FieldSource", "RecordedFields", "recorded_realizations"]
-
-
-def bands(scenario: Scenario) -> list[oxide_field.Band]:
-    """The wave-vector band of every correlation length of the scenario, in ``oxide.lambda`` order.
-
-    ``oxide.period = "window"`` puts the modes on the window's lattice (the published fields);
-    ``"spectral"`` on the lattice of :func:`oxide_field.spectral_period` at
-    ``oxide.spectral_resolution``.
-    """
-    ox = scenario.oxide
-    out = []
-    for lam in ox.lambda_:
-        period = None
-        if ox.period == "spectral":
-            period = oxide_field.spectral_period(scenario.n_cells, lam, ox.spectral_resolution)
-        out.append(oxide_field.band(scenario.n_cells, scenario.cell_size, lam, ox.ks_ratio, ox.hurst, period))
-    return out
+__all__ = ["build", "run", "RecordedFields", "recorded_realizations"]
 
 
 def recorded_realizations(scenario: Scenario) -> int:
@@ -61,41 +45,6 @@ def recorded_realizations(scenario: Scenario) -> int:
 #: Largest record of fields (bytes) the cube serves from oxide.nc instead of regenerating them
 #: (a local cluster ships it to each worker once).
 RECORD_BYTES = 256 * 2**20
-
-
-@dataclass(frozen=True)
-class FieldSource:
-    """Everything needed to regenerate any field and its thresholds from its seed (picklable).
-
-    The oxide stage and the cube's tasks both call it, so a field regenerated in the cube is
-    bit-identical to the one recorded in oxide.nc.
-    """
-
-    modes: tuple[oxide_field.Band, ...]
-    lambdas: tuple[float, ...]
-    xi: np.ndarray
-    seed: int
-    amplitudes: str
-    rule: str
-    n_cells: int
-    cell_size: float
-
-    @classmethod
-    def of(cls, scenario: Scenario) -> "FieldSource":
-        """The field source of a validated scenario."""
-        ox = scenario.oxide
-        return cls(tuple(bands(scenario)), tuple(ox.lambda_), np.asarray(ox.xi, float), ox.seed,
-                   ox.amplitudes, ox.threshold, scenario.n_cells, scenario.cell_size)
-
-    def psi(self, index: int, realizations: np.ndarray) -> np.ndarray:
-        """Fields of ``realizations`` at lambda number ``index``: float32 (realization, y, x)."""
-        return oxide_field.realize(self.modes[index], self.seed, self.lambdas[index], realizations,
-                                   self.amplitudes, self.n_cells, self.cell_size)
-
-    def fields(self, index: int, realizations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Fields (realization, y, x) and their float32 thresholds (xi, realization) at lambda ``index``."""
-        psi = self.psi(index, realizations)
-        return psi, _threshold_block(psi[None], xi=self.xi, rule=self.rule)[:, 0]
 
 
 @dataclass(frozen=True)
@@ -152,15 +101,6 @@ def _psi_block(realizations: np.ndarray, *, source: FieldSource) -> np.ndarray:
     return out
 
 
-def _threshold_block(psi: np.ndarray, *, xi: np.ndarray, rule: str) -> np.ndarray:
-    """float32 thresholds (xi, lambda, realization) of a chunk of fields."""
-    if rule == "theoretical":
-        value = oxide_field.theoretical_threshold(xi).astype(np.float32)
-        return np.broadcast_to(value[:, None, None], (xi.size,) + psi.shape[:2]).copy()
-    flat = psi.reshape(psi.shape[:2] + (-1,))
-    return np.stack([oxide_field.empirical_threshold(f, xi) for f in flat], axis=1)  # one lambda at a time
-
-
 def _fraction_block(psi: np.ndarray, threshold: np.ndarray) -> np.ndarray:
     """Covered fraction (xi, lambda, realization) of the cell centres: mean of psi >= threshold."""
     flat = psi.reshape(psi.shape[:2] + (-1,))
@@ -187,7 +127,7 @@ def _lazy(scenario: Scenario) -> tuple[da.Array, da.Array, da.Array]:
     )
     # Index letters: z = xi, l = lambda, r = realization; y, x are reduced (one chunk each).
     threshold = da.blockwise(
-        _threshold_block, "zlr", psi, "lryx",
+        threshold_block, "zlr", psi, "lryx",
         xi=xi, rule=ox.threshold, new_axes={"z": xi.size}, concatenate=True,
         dtype=np.float32, meta=np.empty((0, 0, 0), np.float32),
     )
@@ -203,42 +143,24 @@ def _dataset(scenario: Scenario, psi: np.ndarray, threshold: np.ndarray, fractio
     ox = scenario.oxide
     centres = cell_centres(scenario.n_cells, scenario.cell_size)
     modes = bands(scenario)
+    lambdas = np.asarray(ox.lambda_, float)
     coords = {
-        "lambda": ("lambda", np.asarray(ox.lambda_, float),
-                   {"units": "1", "long_name": "normalized oxide correlation length l_O sqrt(eta)"}),
-        "realization": ("realization", np.arange(recorded_realizations(scenario)),
-                        {"units": "1", "long_name": "realization index of the random field"}),
-        "xi": ("xi", np.asarray(ox.xi, float), {"units": "1", "long_name": "nominal oxide fraction"}),
-        "y": ("y", centres, {"units": "m", "long_name": "cell-centre y coordinate from the axis"}),
-        "x": ("x", centres, {"units": "m", "long_name": "cell-centre x coordinate from the axis"}),
-        "correlation_length": ("lambda", np.asarray(ox.lambda_, float) * scenario.cell_size,
-                               {"units": "m", "long_name": "oxide correlation length l_O = pi / k1"}),
+        "lambda": variable("oxide", "lambda", lambdas),
+        "realization": variable("oxide", "realization", np.arange(recorded_realizations(scenario))),
+        "xi": variable("oxide", "xi", np.asarray(ox.xi, float)),
+        "y": variable("oxide", "y", centres),
+        "x": variable("oxide", "x", centres),
+        "correlation_length": variable("oxide", "correlation_length", lambdas * scenario.cell_size),
     }
     data_vars = {
-        "psi": (("lambda", "realization", "y", "x"), psi, {
-            "units": "1",
-            "long_name": "unit-variance Gaussian random field at the cell centres",
-            "comment": "oxide where psi >= threshold, conducting where psi < threshold (float32)",
-        }),
-        "threshold": (("xi", "lambda", "realization"), threshold, {
-            "units": "1",
-            "long_name": "threshold psi0 used for each field",
-            "rule": ox.threshold,
-        }),
-        "oxide_fraction": (("xi", "lambda", "realization"), fraction, {
-            "units": "1",
-            "long_name": "realized oxide-covered fraction of the cell centres",
-        }),
-        "n_modes": ("lambda", np.array([m.size for m in modes]), {
-            "units": "1",
-            "long_name": "independent Fourier modes (Hermitian pairs) in the band k1..ks",
-        }),
-        "period_cells": ("lambda", np.array([int(round(m.period / scenario.cell_size)) for m in modes]), {
-            "units": "1",
-            "long_name": "period of the random field, in cells",
-        }),
+        "psi": variable("oxide", "psi", psi,
+                        comment="oxide where psi >= threshold, conducting where psi < threshold (float32)"),
+        "threshold": variable("oxide", "threshold", threshold, rule=ox.threshold),
+        "oxide_fraction": variable("oxide", "oxide_fraction", fraction),
+        "n_modes": variable("oxide", "n_modes", np.array([m.size for m in modes])),
+        "period_cells": variable("oxide", "period_cells", np.array([int(round(m.period / scenario.cell_size)) for m in modes])),
     }
-    attrs = {
+    dataset_attrs = {
         "oxide_rule": "a cell is oxide where psi >= threshold (float32 comparison)",
         "field_normalization": (
             "sum |c_k|^2 / 2 = 1: unit variance of the continuous spectrum over the field's whole "
@@ -252,7 +174,7 @@ def _dataset(scenario: Scenario, psi: np.ndarray, threshold: np.ndarray, fractio
         ),
         "random_streams": "SeedSequence(oxide.seed, spawn_key=(round(lambda * 1e6), realization))",
     }
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    return xr.Dataset(data_vars, coords=coords, attrs=dataset_attrs)
 
 
 def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=False)) -> xr.Dataset:

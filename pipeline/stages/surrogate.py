@@ -1,7 +1,7 @@
 """Stage 5: the surrogate of alpha and gamma (Eq. 26) and the predictor's tables.
 
 Reads ``fits.nc``; writes ``surrogate.nc``, ``surrogate.json`` (everything the predictor
-needs, see :mod:`pipeline.surrogate_file`), ``table3.csv`` and ``table3.md``.
+needs, see :mod:`pipeline.predict.surrogate_file`), ``table3.csv`` and ``table3.md``.
 
 Two methods (``surrogate.method``):
 
@@ -11,7 +11,7 @@ Two methods (``surrogate.method``):
   lambda or sqrt(lambda) (``surrogate.lambda_map``; the spec string ``T`` or ``T;w=<map>``), all coefficients fitted
   at once by weighted least squares (weights 1 / max(relative 95 % half-width,
   ``weight_floor``)^2 from ``fits.nc``'s ``{p}_ci``), transform, rank and orders chosen by
-  leave-one-line-out cross-validation (:func:`pipeline.physics.surrogate.select_model`).
+  leave-one-line-out cross-validation (:func:`pipeline.fitting.surrogate.select_model`).
 
 ``surrogate.nc`` holds, for ``p`` in (alpha, gamma):
 
@@ -52,15 +52,15 @@ from scipy.stats import norm
 
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
-from pipeline.physics import surrogate as sg
-from pipeline.physics.groups import Groups, groups
-from pipeline.stages.labels import COORD_LABELS
+from pipeline.fitting import surrogate as sg
+from pipeline.stages.schema import SURROGATE_COORDINATES
 from pipeline.stages.surrogate_tables import band_tables, curve_tables
 from pipeline.stages.table3 import PARAMETERS, table3_csv, table3_markdown
 from pipeline.store import atomic_path, read_stage, write_dataset
-from pipeline.surrogate_file import SurrogateTables
+from pipeline.predict.surrogate_file import SurrogateTables
+from pipeline.scene import scene_groups
 
-__all__ = ["build", "run", "scene_groups", "PARAMETERS"]
+__all__ = ["build", "run", "PARAMETERS"]
 
 #: Highest orders tried by the paper method's cross-validation scan.
 MAX_ORDER_W = 4
@@ -238,12 +238,6 @@ def _parameter(scenario: Scenario, fits: xr.Dataset, name: str) -> tuple[dict[st
     return variables, attrs
 
 
-def scene_groups(scenario: Scenario) -> Groups:
-    """(mu, Pi) of a scenario's surface and sphere (:mod:`pipeline.physics.groups`)."""
-    rough = scenario.roughness
-    return groups(rough.sigma, rough.eta, rough.beta, scenario.indenter.radius)
-
-
 def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
     """The surrogate dataset of a fits dataset (see the module docstring)."""
     ds = xr.Dataset(coords={"lambda": fits["lambda"].values, "xi": fits["xi"].values})
@@ -266,7 +260,7 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
             [values.min(), values.max()], dims="end", coords=end, attrs={"units": "1", "long_name": f"fitted range of {name}"}
         )
     for name in ("xi", "lambda"):
-        ds[name].attrs = {"units": COORD_LABELS[name][0], "long_name": COORD_LABELS[name][1]}
+        ds[name].attrs = SURROGATE_COORDINATES[name].attrs()
     for name in ("order_w", "order_z"):
         if name in ds.coords:
             ds[name].attrs = {"units": "1", "long_name": f"polynomial order in {name[-1]} tried by cross-validation"}

@@ -11,8 +11,8 @@ import xarray as xr
 from scipy.stats import norm
 
 from pipeline.config import Scenario
-from pipeline.physics import surrogate as sg
-from pipeline.physics.curve_model import evaluate_curve, interpolation_error
+from pipeline.fitting import surrogate as sg
+from pipeline.fitting.curve_model import evaluate_curve, interpolation_error
 
 __all__ = ["band_tables", "curve_tables"]
 

@@ -1,4 +1,5 @@
-"""``g2tom roughness FILE``: spectral moments and Greenwood–Williamson parameters of a measured surface.
+"""Measured surfaces: height maps read from files, their spectral moments and Greenwood–Williamson
+parameters (what ``g2tom roughness FILE`` prints and ``g2tom predict --heightmap`` uses).
 
 Height maps are read from numpy ``.npy``, netCDF (``.nc``: the variable ``height``, ``z``
 or the only 2-D variable) or whitespace-separated text, heights in m with ``--pixel-size``
@@ -22,8 +23,6 @@ the cutoff of the filled map is only 2 ... 3.5 % above the complete map's.
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 import warnings
 from dataclasses import dataclass
@@ -39,8 +38,8 @@ from pipeline.physics.height_fill import fill_gaps, masked_moments
 from pipeline.physics.roughness import validated_heights
 from pipeline.physics.surface_spectrum import BETA_RULES, psd_moments, summit_parameters
 
-__all__ = ["read_heightmap", "read_measured", "Measured", "measure", "roughness_cli", "PLAUSIBLE_SIGMA",
-           "CUTOFF_PIXELS", "INSTALL", "MAX_MISSING_SHARE", "MAP_EXTENT"]
+__all__ = ["read_heightmap", "read_measured", "Measured", "measure", "PLAUSIBLE_SIGMA", "CUTOFF_PIXELS", "INSTALL",
+           "MAX_MISSING_SHARE", "MAP_EXTENT"]
 
 #: Height standard deviations (m) outside this range are almost surely in the wrong unit.
 PLAUSIBLE_SIGMA = (1e-10, 1e-3)
@@ -294,47 +293,3 @@ def _gaps(z: np.ndarray, holed: np.ndarray | None, pixel: tuple[float, float], p
     return {"filled_pixels": count, "filled_share": count / holed.size, "masked_rms_height": masked[0],
             "masked_rms_change": masked[0] / full[0] - 1, "masked_m2_change": masked[1] / full[1] - 1,
             "masked_m4_change": masked[2] / full[2] - 1}
-
-
-def _report(r: dict[str, Any]) -> str:
-    return "\n".join([
-        f"file        {r['file']} ({r['reader']}, heights in {r['file_height_unit']}), {r['shape'][0]} x "
-        f"{r['shape'][1]} pixels of {r['pixel_size'][0]:.4g} x {r['pixel_size'][1]:.4g} m",
-        f"detrending  {r['detrending']} removed, window {r['window']}, wavelengths >= {r['cutoff_wavelength']:.4g} m",
-        _filled_line(r),
-        f"rms_height = {r['rms_height']:.6g} m   (std of surface heights)",
-        f"m0    = {r['m0']:.6g} m^2",
-        f"m2    = {r['m2']:.6g}",
-        f"m4    = {r['m4']:.6g} m^-2",
-        f"alpha = {r['bandwidth_alpha']:.6g}   (Nayak's bandwidth m0 m4/m2^2)",
-        f"sigma = {r['sigma']:.6g} m   (std of summit heights, sqrt(1 - 0.8968/alpha) sqrt(m0))",
-        f"eta   = {r['eta']:.6g} m^-2   (sqrt(3)/(18 pi) m4/m2)",
-        f"beta  = {r['beta']:.6g} m   ({r['beta_rule']})",
-        f"use: --set roughness.sigma={r['sigma']:.6g} --set roughness.eta={r['eta']:.6g} "
-        f"--set roughness.beta={r['beta']:.6g}",
-    ])
-
-
-def _filled_line(r: dict[str, Any]) -> str:
-    if not r["filled_pixels"]:
-        return "filled      none (no undefined pixels)"
-    return (f"filled      {r['filled_pixels']} undefined pixels ({r['filled_share']:.2%}) by harmonic interpolation; "
-            f"masked instead, rms_height {r['masked_rms_change']:+.2%}, m2 {r['masked_m2_change']:+.2%}, "
-            f"m4 {r['masked_m4_change']:+.2%} (finite differences)")
-
-
-def roughness_cli(args: argparse.Namespace) -> None:
-    """Print the moments and GW parameters of ``args.heightmap`` (text, or one JSON object with --json).
-
-    Raises
-    ------
-    ConfigError
-        On a bad option, a missing or unreadable file, or an unusable map.
-    """
-    result = measure(args.heightmap, args.pixel_size, args.cutoff, True if args.periodic else None, args.beta_rule)
-    low, high = PLAUSIBLE_SIGMA
-    if not low <= result["rms_height"] <= high:
-        warnings.warn(
-            f"HEIGHTMAP {str(args.heightmap)!r}: rms height = {result['rms_height']:.3g} m is implausible for a "
-            f"surface (expected {low:g}..{high:g} m): are the heights in m?", stacklevel=2)
-    print(json.dumps(result) if args.json else _report(result))

@@ -22,7 +22,7 @@ from pipeline import __version__  # noqa: E402
 from pipeline.config import (  # noqa: E402
     STAGE_INPUTS, ConfigError, Scenario, check_surrogate_grid, load_scenario, parameter_table)
 from pipeline.errors import StaleInputError  # noqa: E402
-from pipeline.plan import prepare  # noqa: E402
+from pipeline.before_work.plan import prepare  # noqa: E402
 
 if TYPE_CHECKING:
     from pipeline.compute import ComputeOptions
@@ -77,8 +77,8 @@ def _options(args: argparse.Namespace) -> ComputeOptions:
 
 
 def _preflight(args: argparse.Namespace, scenario: Scenario, scene: bool = True) -> None:
-    """Directory, scheduler and cross-stage checks before any work (pipeline.preflight)."""
-    from pipeline.preflight import preflight
+    """Directory, scheduler and cross-stage checks before any work (pipeline.before_work.preflight)."""
+    from pipeline.before_work.preflight import preflight
 
     preflight(scenario, args.data_dir, getattr(args, "scheduler", None), scene=scene)
 
@@ -217,10 +217,10 @@ def _cmd_params(args: argparse.Namespace, scenario: Scenario) -> None:
 
 
 def _cmd_plan(args: argparse.Namespace, scenario: Scenario) -> None:
-    from pipeline.plan import format_plan
+    from pipeline.before_work.plan import format_plan
 
     if args.atlas:
-        from pipeline.atlas_design import AtlasDesign, format_atlas_plan, plan_atlas
+        from pipeline.atlas.design import AtlasDesign, format_atlas_plan, plan_atlas
 
         # one single-threaded scene per worker
         parallel = max(1, args.workers or os.cpu_count() or 1)
@@ -230,7 +230,7 @@ def _cmd_plan(args: argparse.Namespace, scenario: Scenario) -> None:
 
 
 def _cmd_predict(args: argparse.Namespace, scenario: Scenario) -> None:
-    from pipeline.predict_cli import predict_cli
+    from pipeline.cli.predict import predict_cli
     from pipeline.store import stage_path, unreadable
 
     surrogate = args.surrogate or stage_path(args.data_dir, "surrogate")
@@ -242,15 +242,15 @@ def _cmd_predict(args: argparse.Namespace, scenario: Scenario) -> None:
 
 
 def _cmd_atlas(args: argparse.Namespace, scenario: Scenario) -> None:
-    from pipeline.atlas import run_atlas
-    from pipeline.atlas_design import AtlasDesign
+    from pipeline.atlas.run import run_atlas
+    from pipeline.atlas.design import AtlasDesign
 
     _preflight(args, scenario, scene=False)
     if args.workers is None and args.scheduler is None:
         args.workers = os.cpu_count() or 1  # a local cluster, one single-threaded scene per core
     path = run_atlas(scenario, AtlasDesign.of(scenario), args.data_dir, _options(args))
     print(f"atlas: wrote {path}", file=sys.stderr)
-    from pipeline.atlas_fit import write_atlas_surrogate
+    from pipeline.atlas.fit import write_atlas_surrogate
 
     target, doc = write_atlas_surrogate(path)
     held, worst = doc["heldout"], doc["heldout"]["worst"]
@@ -261,7 +261,7 @@ def _cmd_atlas(args: argparse.Namespace, scenario: Scenario) -> None:
 
 
 def _cmd_roughness(args: argparse.Namespace, scenario: Scenario) -> None:
-    from pipeline.roughness_cli import roughness_cli
+    from pipeline.cli.roughness import roughness_cli
 
     roughness_cli(args)
 
@@ -273,7 +273,7 @@ def _cmd_validate(args: argparse.Namespace, scenario: Scenario) -> None:
     if args.overrides or args.config != "paper":
         raise ConfigError("g2tom validate runs its own validation scene (the default set or --quick): "
                           "--config and --set are not used by it; leave them out")
-    from pipeline.preflight import check_data_dir
+    from pipeline.before_work.preflight import check_data_dir
 
     check_data_dir(args.data_dir)
     problem = missing_extra()

@@ -20,8 +20,8 @@ from scipy.interpolate import RegularGridInterpolator
 
 from pipeline import __version__
 from pipeline.config import ConfigError, read_input_text
-from pipeline.physics.curve_model import evaluate_curve
-from pipeline.physics.surrogate import evaluate, to_w, to_z
+from pipeline.fitting.curve_model import evaluate_curve
+from pipeline.fitting.surrogate import evaluate, to_w, to_z
 
 __all__ = ["FORMAT", "VERSION", "PARAMETERS", "GRID_TABLES", "STEP_TABLES", "CURVE_TABLE", "RANGES",
            "SurrogateTables", "load_surrogate"]

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from pipeline.atlas_design import AtlasDesign, Scene, design_scenes, plan_atlas, scene_scenario
+from pipeline.atlas.design import AtlasDesign, Scene, design_scenes, plan_atlas, scene_scenario
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
 from pipeline.store import atomic_path, provenance
@@ -43,9 +43,9 @@ def scene_path(data_dir: str | Path, scene: Scene) -> Path:
 
 def scene_dataset(base: Scenario, scene: Scene) -> xr.Dataset:
     """Run the chain on one scene in memory, single-threaded; its slice of ``atlas.nc``."""
-    from pipeline.domains import resolve
+    from pipeline.before_work.domains import resolve
     from pipeline.stages import contact, cube, fits, oxide
-    from pipeline.stages.labels import COORD_LABELS
+    from pipeline.stages.schema import SURROGATE_COORDINATES
 
     start = time.perf_counter()
     scenario = resolve(scene_scenario(base, scene))
@@ -72,7 +72,7 @@ def scene_dataset(base: Scenario, scene: Scene) -> xr.Dataset:
                 "units": "1", "long_name": "F' = 2F/(E* sqrt(R* sigma^3))"}),
             "fitted": (("step",), f["fitted"].values, {"units": "1", "long_name": "1 where the step was fitted"}),
         },
-        coords={name: (name, f[name].values, {"units": COORD_LABELS[name][0], "long_name": COORD_LABELS[name][1]})
+        coords={name: (name, f[name].values, SURROGATE_COORDINATES[name].attrs())
                 for name in grid},
     )
     ds = ds.assign_coords(bound=("bound", f["bound"].values, {"units": "1", "long_name": "end of the interval"}),

@@ -1,6 +1,6 @@
 """Any surface inside the atlas: R' from the atlas surrogate over (xi, lambda, mu, Pi, F').
 
-The atlas surrogate (``<data>/atlas/surrogate.json``, :mod:`pipeline.atlas_fit`) gives ln R' at
+The atlas surrogate (``<data>/atlas/surrogate.json``, :mod:`pipeline.atlas.fit`) gives ln R' at
 the query's (xi, lambda, F') and the surface's groups (mu, Pi) (:mod:`pipeline.physics.groups`)
 by its curve model (the default, ``resistance``), and alpha and gamma of Eq. 27
 (``resistance_power_law`` = alpha 2 rho*/sqrt(R* sigma) F'^-gamma). Its band is the held-out error
@@ -22,11 +22,11 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.atlas_fit import CURVE, FORMAT
+from pipeline.atlas.fit import CURVE, FORMAT
 from pipeline.config import ConfigError, Scenario
-from pipeline.physics.atlas_surrogate import AtlasModel
-from pipeline.predict_queries import OUTPUT_COLUMNS, check_ranges, check_values, queries
-from pipeline.stages.surrogate import scene_groups
+from pipeline.fitting.atlas_surrogate import AtlasModel
+from pipeline.predict.queries import OUTPUT_COLUMNS, check_ranges, check_values, queries
+from pipeline.scene import scene_groups
 
 __all__ = ["NOT_IN_ATLAS", "AtlasSurrogate", "is_atlas_document", "load_atlas_surrogate", "predict_atlas", "shipped_path", "SHIPPED"]
 
@@ -101,7 +101,7 @@ def _check_domain(surrogate: AtlasSurrogate, values: dict[str, np.ndarray], extr
 
 def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi: Any, lam: Any,
                   extrapolate: bool = False) -> xr.Dataset:
-    """R_el of Eq. 27 from the atlas surrogate, with the held-out band; columns of :data:`pipeline.predict_queries.OUTPUT_COLUMNS`.
+    """R_el of Eq. 27 from the atlas surrogate, with the held-out band; columns of :data:`pipeline.predict.queries.OUTPUT_COLUMNS`.
 
     Raises
     ------

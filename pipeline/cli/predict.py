@@ -16,12 +16,12 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from pipeline.before_work.preflight import check_output_file
 from pipeline.config import ConfigError, Scenario, read_input_text
-from pipeline.predict import predict
-from pipeline.predict_domain import check_surface, with_measured_roughness
-from pipeline.preflight import check_output_file
-from pipeline.predict_queries import OUTPUT_COLUMNS, check_values
-from pipeline.surrogate_file import SurrogateTables, load_surrogate
+from pipeline.predict.domain import check_surface, with_measured_roughness
+from pipeline.predict.predictor import predict
+from pipeline.predict.queries import OUTPUT_COLUMNS, check_values
+from pipeline.predict.surrogate_file import SurrogateTables, load_surrogate
 
 __all__ = ["predict_cli", "to_csv", "to_json", "to_table", "INPUT_ALIASES", "TABLE_COLUMNS"]
 
@@ -148,7 +148,7 @@ def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
     """The surrogate that answers: ``--surrogate`` (either kind), else the run's own when it is of
     this surface, else the atlas's (``<data-dir>/atlas/surrogate.json``, else the one shipped in
     the package) when there is one."""
-    from pipeline.predict_atlas import is_atlas_document, load_atlas_surrogate, shipped_path
+    from pipeline.predict.atlas import is_atlas_document, load_atlas_surrogate, shipped_path
 
     if args.surrogate is not None:
         path = Path(args.surrogate)
@@ -187,7 +187,7 @@ def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
             result = predict(answer, scenario, force, xi, lam, extrapolate=args.extrapolate,
                              model=args.model)
         else:
-            from pipeline.predict_atlas import NOT_IN_ATLAS, predict_atlas
+            from pipeline.predict.atlas import NOT_IN_ATLAS, predict_atlas
 
             result = predict_atlas(answer, scenario, force, xi, lam, extrapolate=args.extrapolate)
             result = result.drop_vars(NOT_IN_ATLAS)

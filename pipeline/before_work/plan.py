@@ -11,7 +11,7 @@ carry a range (every cell stopped at ``oxide.min_realizations`` .. every cell at
 (:func:`realizations`); memory is always checked at the cap, the padded realization axis
 the cube and fits hold in the worst case.
 :func:`prepare` is what the CLI runs before any stage: the checks, then the resolution of
-``auto`` domains (:func:`pipeline.domains.resolve`), then the checks on the resolved cell count.
+``auto`` domains (:func:`pipeline.before_work.domains.resolve`), then the checks on the resolved cell count.
 """
 
 from __future__ import annotations
@@ -128,7 +128,7 @@ def _cells(scenario: Scenario) -> int:
     """Cells per window side: the resolved count, or a cheap estimate while ``auto``."""
     if scenario.contact.window != AUTO:
         return scenario.n_cells
-    from pipeline.domains import estimate_cells
+    from pipeline.before_work.domains import estimate_cells
 
     return estimate_cells(scenario)
 
@@ -336,7 +336,7 @@ def check_resources(scenario: Scenario, workers: int | None = None, memory: floa
     ConfigError
         Naming the parameter that drives the excess, its value and the estimate.
     """
-    from pipeline.domains import check_cell_count
+    from pipeline.before_work.domains import check_cell_count
 
     check_cell_count(scenario, memory or available_memory())
     limit = memory or available_memory()
@@ -360,7 +360,7 @@ def prepare(command: str, scenario: Scenario, workers: int | None = None) -> Sce
     """
     if command in _NO_DOMAINS:
         return scenario
-    from pipeline.domains import resolve
+    from pipeline.before_work.domains import resolve
 
     check_resources(scenario, workers)
     resolved = resolve(scenario)

@@ -1,6 +1,6 @@
 """The predictors' queries: broadcasting (numbers, arrays or DataArrays), their allowed values,
 the fitted ranges (refused, or warned with ``extrapolate``), and the output columns both
-predictors (:mod:`pipeline.predict`, :mod:`pipeline.predict_atlas`) answer with."""
+predictors (:mod:`pipeline.predict.predictor`, :mod:`pipeline.predict.atlas`) answer with."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """The atlas surrogate: R'(xi, lambda, mu, Pi, F') and alpha, gamma over (xi, lambda, mu, Pi) from
 ``atlas.nc``, checked on held-out scenes.
 
-Fitted on the design scenes only (:mod:`pipeline.physics.atlas_surrogate`, degrees by
+Fitted on the design scenes only (:mod:`pipeline.fitting.atlas_surrogate`, degrees by
 leave-one-scene-out cross-validation): the curve model, ln R' as one polynomial of total degree
 D in the mapped log coordinates of (xi, lambda, mu, Pi, F') fitted to every design cell's
 reduction at every fitted step (the predictor's default: Barber's curve bends, so a power law
@@ -24,7 +24,7 @@ import numpy as np
 import xarray as xr
 from scipy.stats import norm
 
-from pipeline.physics.atlas_surrogate import AtlasModel, fit_atlas_model, select_degree
+from pipeline.fitting.atlas_surrogate import AtlasModel, fit_atlas_model, select_degree
 from pipeline.store import atomic_path, git_commit
 
 __all__ = ["fit_atlas", "write_atlas_surrogate", "FLOOR", "FORMAT", "CURVE"]

@@ -13,9 +13,9 @@ import dataclasses
 import warnings
 from pathlib import Path
 from pipeline.config import ConfigError, Scenario
-from pipeline.predict_queries import ExtrapolationWarning
-from pipeline.stages.surrogate import scene_groups
-from pipeline.surrogate_file import SurrogateTables
+from pipeline.predict.queries import ExtrapolationWarning
+from pipeline.scene import scene_groups
+from pipeline.predict.surrogate_file import SurrogateTables
 
 __all__ = ["GROUP_TOLERANCE", "answered_by", "check_surface", "with_measured_roughness"]
 
@@ -77,9 +77,9 @@ def with_measured_roughness(scenario: Scenario, path: Path, pixel_size: float | 
     Raises
     ------
     ConfigError
-        If the file cannot be read or measured (see :func:`pipeline.roughness_cli.measure`).
+        If the file cannot be read or measured (see :func:`pipeline.heightmap.measure`).
     """
-    from pipeline.roughness_cli import measure
+    from pipeline.heightmap import measure
 
     measured = measure(path, pixel_size)
     roughness = dataclasses.replace(scenario.roughness, sigma=measured["sigma"], eta=measured["eta"],

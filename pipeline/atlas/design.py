@@ -11,7 +11,7 @@ R*, only scales F and R. This module holds what is known before any scene runs:
   in both coordinates, so none duplicates a design scene;
 * :func:`scene_scenario`: the scenario of one scene: the base scenario with eta and beta from
   (mu, Pi) at the base's sigma and R*, and the domains back to ``auto``;
-* :func:`plan_atlas`: each scene's window, memory and time (:func:`pipeline.plan.estimate`), or
+* :func:`plan_atlas`: each scene's window, memory and time (:func:`pipeline.before_work.plan.estimate`), or
   why it cannot run (a refusal of the plan or the preflight), before any work.
 """
 
@@ -146,9 +146,9 @@ def plan_atlas(base: Scenario, design: AtlasDesign, workers: int | None = 1) -> 
     the plan or the preflight refuses carries the refusal as ``problem`` instead of raising, so
     the whole design is seen at once.
     """
-    from pipeline import plan
-    from pipeline.domains import resolve
-    from pipeline.preflight import check_scene
+    from pipeline.before_work import plan
+    from pipeline.before_work.domains import resolve
+    from pipeline.before_work.preflight import check_scene
 
     out = []
     for scene in design_scenes(design):

@@ -1,0 +1,31 @@
+"""The variable schema (pipeline.stages.schema) against its stored list, and the files against the schema."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import xarray as xr
+
+from pipeline.stages.schema import SCHEMA, matches
+
+STORED = Path(__file__).parent / "fixtures" / "schema.json"
+
+
+def test_schema_is_the_stored_list() -> None:
+    """Every variable's dims, units and long name as stored: a change to a file's CF attributes is deliberate."""
+    rows = [[stage, name, list(v.dims), v.units, v.long_name] for stage, vs in SCHEMA.items() for name, v in sorted(vs.items())]
+    assert rows == json.loads(STORED.read_text())
+
+
+def written_against_schema(data_dir: Path) -> list[str]:
+    """The variables of the stage files under ``data_dir`` that their schema lacks or labels otherwise."""
+    wrong = []
+    for stage, declared in SCHEMA.items():
+        with xr.open_dataset(data_dir / f"{stage}.nc", decode_cf=False) as ds:
+            for name, var in ds.variables.items():
+                if "units" not in var.attrs:  # string labels
+                    continue
+                if name not in declared or not matches(stage, name, var.dims, var.attrs):
+                    wrong.append(f"{stage}.nc: {name} {var.dims} {var.attrs.get('units')!r} {var.attrs.get('long_name')!r}")
+    return wrong
