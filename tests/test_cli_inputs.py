@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.config import Scenario, load_scenario
 from tests.test_bad_inputs import _snapshot
 from tests.test_fits_stage import cli_overrides
@@ -166,7 +166,7 @@ def test_validate_data_dir_refused_before_work(tmp_path, capsys, monkeypatch, wh
 # ------------------------------------------------------------------ 7: Ctrl-C during validate or atlas
 @pytest.mark.parametrize("command, module, function, kept", [
     ("validate", "pipeline.reference.validate", "run_validation", "validate/cases"),
-    ("atlas", "pipeline.atlas", "run_atlas", "atlas"),
+    ("atlas", "pipeline.atlas.run", "run_atlas", "atlas"),
 ])
 def test_ctrl_c_says_what_was_kept(tmp_path, capsys, monkeypatch, command, module, function, kept) -> None:
     import importlib
@@ -273,7 +273,7 @@ def test_json_and_the_terminal_table(capsys, small, data_dir, monkeypatch) -> No
 
 
 def test_atlas_answer_leaves_out_what_the_atlas_lacks(capsys, small, data_dir) -> None:  # noqa: F811
-    from pipeline.predict_atlas import NOT_IN_ATLAS, shipped_path
+    from pipeline.predict.atlas import NOT_IN_ATLAS, shipped_path
 
     shipped = shipped_path()
     if shipped is None:

@@ -7,9 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from pipeline.cli import main
+from pipeline.cli.main import main
 from pipeline.config import ConfigError
-from pipeline.roughness_cli import MAX_MISSING_SHARE, measure
+from pipeline.heightmap import MAX_MISSING_SHARE, measure
 from tests.test_height_fill import PIXEL, punch_holes, rough_surface
 
 

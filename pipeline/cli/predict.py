@@ -124,7 +124,7 @@ def to_csv(ds: xr.Dataset) -> str:
 def to_json(ds: xr.Dataset) -> str:
     """Prediction dataset as one JSON object: who answered, each column's unit and meaning, and one
     object per query (NaN as null, infinities as "inf")."""
-    from pipeline.surrogate_file import _encode
+    from pipeline.predict.surrogate_file import _encode
 
     columns = _columns(ds)
     rows = [dict(zip(map(_label, columns), values)) for values in zip(*(_encode(c) for c in columns.values()))]
