@@ -18,7 +18,7 @@ from pipeline.reference.validate import chosen_set, run_validation
 
 TINY = dataclasses.replace(scene.QUICK, radius=1e-3, deltas=(1.0, 0.0), realizations=(0, 1), n_grid=96,
                            pixels_per_cell=4.0, convergence_grid=48,
-                           discretizations=("expected", "asperities", "surface_asperities"))
+                           discretizations=("expected", "asperities", "surface_asperities", "discrete"))
 
 
 def test_without_the_extra_validate_names_the_install_command_and_exits_2(tmp_path, monkeypatch, capsys) -> None:
@@ -89,6 +89,32 @@ def test_outputs_are_labelled_and_consistent(tiny_run) -> None:
     assert "### surface_asperities, greenwood" in text
     assert not np.isnan(ds["resistance_g2tom"].values).any()  # +inf where g2tom's own asperities all miss
     assert (out / "validate.png").stat().st_size > 10_000
+
+
+def test_the_discrete_model_on_each_surfaces_own_caps_tracks_the_full_field(tiny_run) -> None:
+    out, _ = tiny_run
+    ds = xr.open_dataset(out / "validate.nc")
+    clean = ds["ratio_clean"].sel(discretization="discrete").values  # (model, realization, load)
+    assert np.all(clean[:, 0] != clean[:, 1])  # each surface its own
+    # a coarse tiny grid (4 pixels per asperity spacing): within 10 % per surface, clean
+    assert np.all(np.abs(clean[ds["model"].values == "point"] - 1.0) < 0.10)
+    se = ds["ratio_clean_standard_error"].sel(discretization="discrete").values  # (model, load)
+    logs = np.log(clean)
+    np.testing.assert_allclose(se, logs.std(axis=1, ddof=1) / np.sqrt(2), rtol=1e-12)
+    assert "### discrete, point" in (out / "validate.md").read_text()
+
+
+def test_log_standard_error_against_a_bootstrap() -> None:
+    from pipeline.fitting.ensemble import log_standard_error
+
+    rng = np.random.default_rng(5)
+    ratios = np.exp(rng.normal(0.05, 0.3, size=40))
+    means = [np.mean(np.log(rng.choice(ratios, ratios.size))) for _ in range(4000)]
+    assert log_standard_error(ratios) == pytest.approx(np.std(means), rel=0.08)
+    # open circuits (inf), NaN and zero are left out; fewer than two values: NaN
+    padded = np.concatenate([ratios, [np.inf, np.nan, 0.0]])
+    assert log_standard_error(padded) == log_standard_error(ratios)
+    assert np.isnan(log_standard_error(np.array([1.2, np.inf])))
 
 
 def test_a_rerun_resumes_from_the_stored_cases(tiny_run) -> None:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-__all__ = ["fit_weights", "statistic", "prefix_half_width", "stop_count", "z_value"]
+__all__ = ["fit_weights", "statistic", "prefix_half_width", "stop_count", "z_value", "log_standard_error"]
 
 
 def fit_weights(log_x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -127,3 +127,21 @@ def stop_count(half_width: np.ndarray, target: float, n_min: int) -> int | None:
     ok[: max(n_min, 1) - 1] = False
     hits = np.flatnonzero(ok)
     return int(hits[0]) + 1 if hits.size else None
+
+
+def log_standard_error(values: np.ndarray, axis: int = -1) -> np.ndarray:
+    """Standard error of the mean of ``ln values`` along ``axis``: the standard error of the log of
+    their geometric mean, ``std(ln v, ddof=1) / sqrt(n)`` over the finite positive values.
+
+    NaN where fewer than two values count. For a ratio g2tom / reference over paired realizations,
+    it is the standard error of the log of the geometric-mean ratio (the pairing's own scatter);
+    for two independent ensembles, the squares of each one's add.
+    """
+    values = np.moveaxis(np.asarray(values, dtype=float), axis, -1)
+    ok = np.isfinite(values) & (values > 0)
+    count = ok.sum(axis=-1)
+    logs = np.where(ok, np.log(np.where(ok, values, 1.0)), 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = logs.sum(axis=-1) / count
+        var = np.where(ok, (logs - mean[..., None]) ** 2, 0.0).sum(axis=-1) / (count - 1)
+        return np.where(count >= 2, np.sqrt(var / count), np.nan)

@@ -20,6 +20,9 @@ MEANINGS = {
     "surface_asperities": "the GW surface's own asperities in g2tom's cells at Greenwood-Tripp's separation: "
                           "against the full field, what remains is Greenwood-Tripp's averaging and the "
                           "resistance model",
+    "discrete": "the discrete model on the GW surface's own asperities: the caps coupled through the half-space "
+                "at g2tom's forces, oxide counted per spot (disc rule); against the full field it measures the "
+                "discrete model itself",
 }
 #: Relative deviations of the default discretization that the section's first lines flag.
 CLEAN_LIMIT = 0.10
@@ -76,11 +79,12 @@ def figure(ds: xr.Dataset, path: Path) -> Path:
     return path
 
 
-def _cell(gm: float, lo: float, hi: float, count: int, total: int) -> str:
+def _cell(gm: float, lo: float, hi: float, count: int, total: int, error: float = np.nan) -> str:
     if count == 0:
         return "open"
     open_note = f", {total - count} open" if count < total else ""
-    return f"{gm:.3f} [{lo:.3f}-{hi:.3f}{open_note}]"
+    spread = f" ± {error:.3f}" if np.isfinite(error) else ""
+    return f"{gm:.3f}{spread} [{lo:.3f}-{hi:.3f}{open_note}]"
 
 
 def _flags(ds: xr.Dataset) -> list[str]:
@@ -157,7 +161,7 @@ def markdown(ds: xr.Dataset) -> str:
            "their summit statistics)") + " on a "
         f"{ds.attrs['scene_n_grid']}^2 grid on each case's window, fitted to its contact ({_pixels(ds)}), "
         f"{n_real} realization(s); the reference is solved at g2tom's force. Ratio g2tom / full field: "
-        "geometric mean [min-max] over realizations.", "",
+        "geometric mean ± the standard error of its log (paired over realizations) [min-max].", "",
     ]
     lines += ["Discretizations: " + "; ".join(f"{d}: {MEANINGS.get(str(d), 'no description')}"
                                           for d in ds["discretization"].values) + ".", ""]
@@ -173,9 +177,11 @@ def markdown(ds: xr.Dataset) -> str:
                       "|---|---|" + "---|" * len(cases)]
             clean = ratios(ds["ratio_clean"].sel(discretization=d, model=m).values)
             ox = ratios(ds["ratio"].sel(discretization=d, model=m).values)
+            se_clean = ds["ratio_clean_standard_error"].sel(discretization=d, model=m).values
+            se_ox = ds["ratio_standard_error"].sel(discretization=d, model=m).values
             for k in range(ds.sizes["load"]):
-                row = [_cell(*(v[k] for v in clean), n_real)]
-                row += [_cell(*(v[z, a, k] for v in ox), n_real)
+                row = [_cell(*(v[k] for v in clean), n_real, se_clean[k])]
+                row += [_cell(*(v[z, a, k] for v in ox), n_real, se_ox[z, a, k])
                         for z in range(ds.sizes["xi"]) for a in range(ds.sizes["lambda"])]
                 lines.append(f"| {ds['force'].values[k]:.4g} | {ds['force_normalized'].values[k]:.3g} | "
                              + " | ".join(row) + " |")

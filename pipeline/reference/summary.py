@@ -14,6 +14,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline import __version__
+from pipeline.fitting.ensemble import log_standard_error
 from pipeline.reference import scene
 from pipeline.store import git_commit
 
@@ -87,6 +88,12 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "ratio_clean": (dm + rl, clean_ratio, _a("1", "g2tom / full-field clean resistance at equal force")),
         "ratio": (dm + ox, ox_ratio, _a("1", "g2tom / full-field oxidized resistance at equal force",
                                           comment="+inf: only g2tom open; 0: only the full field open; NaN: both")),
+        "ratio_clean_standard_error": (dm + ("load",), log_standard_error(clean_ratio, axis=-2), _a(
+            "1", "standard error of ln of the geometric-mean clean ratio over the realizations (paired)",
+            comment="NaN with fewer than two finite ratios")),
+        "ratio_standard_error": (dm + ("xi", "lambda", "load"), log_standard_error(ox_ratio, axis=-2), _a(
+            "1", "standard error of ln of the geometric-mean oxidized ratio over the realizations (paired)",
+            comment="NaN with fewer than two finite ratios")),
         "resistance_convergence": (("grid", "load"), np.stack([fine, ref["coarse"]["resistance_clean"]]),
                                    _a("ohm", "clean full-field resistance of the first realization on each grid")),
         "convergence_change": ("load", ref["coarse"]["resistance_clean"] / fine - 1.0,
@@ -108,7 +115,8 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "failed_cases": "; ".join(ref["failed"]) or "none",
         "skipped_g2tom": "; ".join(g2tom["skipped"]) or "none",
         "g2tom_clean": "asperities: 1 / (g2tom's mean clean conductance over its own asperity draws); "
-                       "surface_asperities: each realization's surface asperities in g2tom's cells (exact); others: "
+                       "surface_asperities: each realization's surface asperities in g2tom's cells (exact); "
+                       "discrete: each realization's surface asperities as coupled caps (exact); others: "
                        "the clean cube entry",
         "surface": "GW: Poisson asperities of density eta, heights N(0, sigma^2), paraboloidal tips of radius beta",
     })

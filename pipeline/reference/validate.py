@@ -19,7 +19,7 @@ import numpy as np
 from pipeline.config import ConfigError, load_scenario
 from pipeline.progress import format_duration
 from pipeline.reference import cases as cases_mod
-from pipeline.reference import scene, section, summary, surface_spots, window
+from pipeline.reference import discrete_spots, scene, section, summary, surface_spots, window
 from pipeline.scene import FieldSource
 from pipeline.store import atomic_path
 
@@ -32,9 +32,10 @@ __all__ = ["available_discretizations", "default_discretization", "plan_lines", 
 
 
 def available_discretizations(surface: str = "gw") -> tuple[str, ...]:
-    """The spot discretizations of ``contact.spots``, and on the GW surface its own asperities
-    (:data:`surface_spots.SURFACE_ASPERITIES`)."""
-    own = (surface_spots.SURFACE_ASPERITIES,) if surface == "gw" else ()
+    """The spot discretizations of ``contact.spots``, and on the GW surface its own asperities in
+    g2tom's cells (:data:`surface_spots.SURFACE_ASPERITIES`) and as discrete coupled caps
+    (:data:`discrete_spots.DISCRETE`)."""
+    own = (surface_spots.SURFACE_ASPERITIES, discrete_spots.DISCRETE) if surface == "gw" else ()
     return ("mean_area", "expected", "asperities") + own
 
 
@@ -81,6 +82,8 @@ def _g2tom_side(vset: scene.ValidationSet) -> dict:
             try:
                 if spots == surface_spots.SURFACE_ASPERITIES:
                     cube = surface_spots.g2tom_resistances(vset, model)
+                elif spots == discrete_spots.DISCRETE:
+                    cube = discrete_spots.g2tom_resistances(vset, model)
                 else:
                     cube = scene.g2tom_resistances(vset, model, spots)
             except ConfigError as exc:

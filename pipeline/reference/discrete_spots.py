@@ -1,0 +1,73 @@
+"""g2tom's discrete model on the GW surface's own asperities: the ``discrete`` discretization of validate.
+
+On the GW surface the reference knows every asperity. The discrete model
+(:mod:`pipeline.physics.discrete_contact`) solves those very caps, coupled through the half-space,
+at g2tom's forces (the Greenwood–Tripp forces of the set's approaches, where the reference is
+solved too), and the cube's discrete chunk (:func:`pipeline.stages.cube_discrete.discrete_chunk`)
+counts oxide per spot by the ``disc`` rule on g2tom's own fields. Against the full field it
+measures the discrete model itself, surface by surface: the caps' point-load coupling, the
+resistance model and the disc rule.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import xarray as xr
+
+from pipeline.physics import discrete_contact as dc
+from pipeline.reference import scene, surfaces
+from pipeline.scene import FieldSource
+from pipeline.stages import contact as contact_stage
+from pipeline.stages import cube as cube_stage
+from pipeline.stages.cube_discrete import DiscretePool, clean_pool, discrete_chunk
+
+__all__ = ["DISCRETE", "SPOT_RULE", "surface_pool", "g2tom_resistances"]
+
+#: The discretization's name in validate.nc.
+DISCRETE = "discrete"
+#: The oxide rule the discretization uses (the discrete model's own).
+SPOT_RULE = "disc"
+
+
+def surface_pool(vset: scene.ValidationSet, realization: int, forces: np.ndarray) -> DiscretePool:
+    """A one-surface pool: the realization's GW asperities (the reference's own) solved at ``forces`` (N)."""
+    if vset.surface != "gw":
+        raise ValueError(f"{DISCRETE} needs the GW surface, whose asperities are known (not {vset.surface!r})")
+    tips = surfaces.gw_asperities(vset.side, vset.eta, vset.sigma, vset.beta, scene.surface_stream(vset, realization))
+    floor = dc.coupling_floor(vset.beta, vset.sigma)
+    sol = dc.solve_forces(dc.Asperities(tips.x, tips.y, tips.z), lambda r: r * r / (2.0 * vset.radius),
+                          np.asarray(forces, float), vset.e_star, vset.beta, floor)
+    touching = np.flatnonzero((sol.interference > 0).any(axis=0))
+    return DiscretePool(tips.x[None, touching], tips.y[None, touching], sol.radius(vset.beta)[None][..., touching],
+                        np.array([touching.size]), floor)
+
+
+def g2tom_resistances(vset: scene.ValidationSet, model: str) -> xr.Dataset:
+    """g2tom's discrete resistances of the set on each surface's own caps.
+
+    Returns ``force`` (delta, N), ``resistance_clean`` (realization, delta) and ``resistance``
+    (xi, lambda, delta, realization), ohm (+inf: open circuit), and ``contact_extent`` (delta, m)
+    as :func:`pipeline.reference.scene.g2tom_resistances`.
+    """
+    scenario = scene.g2tom_scenario(vset, model, "expected")
+    contact = contact_stage.build(scenario)
+    forces = contact["force"].values
+    _, _, settings = cube_stage.work_settings(scenario, contact)
+    settings = dataclasses.replace(settings, spots="discrete", spot_rule=SPOT_RULE, model=model)
+    source = FieldSource.of(scenario)
+    xi_all = np.arange(len(vset.xi))
+    clean, oxidized = [], []
+    for k in vset.realizations:
+        pool = surface_pool(vset, int(k), forces)
+        clean.append(clean_pool(pool, vset.rho, model)["resistance"][0])
+        oxidized.append(np.stack([discrete_chunk(source, a, np.array([int(k)]), xi_all, pool, settings)["resistance"][..., 0]
+                                  for a in range(len(vset.lambdas))], axis=1))  # (xi, lambda, delta)
+    return xr.Dataset({
+        "force": contact["force"],
+        "resistance_clean": (("realization", "delta"), np.stack(clean), {"units": "ohm", "long_name": "clean resistance"}),
+        "resistance": (("xi", "lambda", "delta", "realization"), np.stack(oxidized, axis=-1),
+                       {"units": "ohm", "long_name": "resistance"}),
+        "contact_extent": scene.contact_extent(contact),
+    })
