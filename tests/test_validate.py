@@ -232,3 +232,25 @@ def test_a_case_window_holds_its_contact_and_grows_when_too_small() -> None:
     steps = np.log(grown / tight) / np.log(window.GROWTH)  # a whole number of growths, or capped at the set's window
     assert grown > tight and (steps == pytest.approx(round(steps), abs=1e-9) or grown == TINY.side)
     assert not (state.contact[0].any() or state.contact[-1].any() or state.contact[:, 0].any() or state.contact[:, -1].any())
+
+
+def test_realizations_and_loads_override_the_set_and_bad_values_exit_2(tmp_path, monkeypatch, capsys) -> None:
+    vset = chosen_set(False, realizations=40, loads=8)
+    assert vset.realizations == tuple(range(40))
+    np.testing.assert_allclose(vset.deltas, np.linspace(2.0, -3.0, 8))
+    for argv, expect in ((["--realizations", "0"], "--realizations = 0"), (["--loads", "1"], "--loads = 1")):
+        assert main(["validate", "--data-dir", str(tmp_path), *argv]) == 2
+        err = capsys.readouterr().err
+        assert expect in err and err.count("\n") == 1 and "Traceback" not in err
+    assert not (tmp_path / "validate").exists()
+    seen = {}
+
+    def record(vset, out, progress=True, **_):
+        seen.update(vset=vset, progress=progress)
+        return []
+
+    import pipeline.reference.validate as validate
+
+    monkeypatch.setattr(validate, "run_validation", record)
+    assert main(["validate", "--quick", "--no-progress", "--realizations", "2", "--data-dir", str(tmp_path)]) == 0
+    assert seen["progress"] is False and seen["vset"].realizations == (0, 1) and seen["vset"].n_grid == 256

@@ -281,7 +281,8 @@ def _cmd_validate(args: argparse.Namespace, scenario: Scenario) -> None:
         raise ConfigError(problem)
     from pipeline.reference.validate import chosen_set, output_folder, run_validation
 
-    run_validation(chosen_set(args.quick, args.surface), output_folder(args.data_dir, args.surface))
+    vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads)
+    run_validation(vset, output_folder(args.data_dir, args.surface), progress=not args.no_progress)
 
 
 def _version() -> str:
@@ -403,6 +404,11 @@ def _parser() -> argparse.ArgumentParser:
                    "the full-field elastic contact (tamaas) against g2tom: <data-dir>/validate/")
     validate.add_argument("--quick", action="store_true",
                           help="256^2 grid, one realization, two loads, clean and one oxidized case")
+    validate.add_argument("--realizations", type=int, default=None,
+                          help="surfaces (and oxide fields) 0 .. N-1 instead of the set's (>= 1)")
+    validate.add_argument("--loads", type=int, default=None,
+                          help="load steps evenly spaced in delta/sigma over the set's range (>= 2)")
+    validate.add_argument("--no-progress", action="store_true", help="hide the line per finished case")
     validate.add_argument("--surface", choices=("gw", "random_process"), default="gw",
                           help="gw: asperities with g2tom's own parameters (<data-dir>/validate/); random_process: a "
                                "Gaussian self-affine surface, g2tom fed its summit statistics (<data-dir>/validate_random_process/)")

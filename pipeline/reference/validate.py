@@ -103,8 +103,10 @@ def _g2tom_side(vset: scene.ValidationSet) -> dict:
     return {"force": forces[0], "clean": clean, "resistance": oxidized, "skipped": skipped}
 
 
-def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.stderr) -> list[Path]:
-    """Run the set into ``out`` (plan, g2tom, every case, outputs); return the written files."""
+def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.stderr,
+                   progress: bool = True) -> list[Path]:
+    """Run the set into ``out`` (plan, g2tom, every case, outputs); return the written files
+    (``progress``: one line per finished case)."""
     start = time.perf_counter()
     out = Path(out)
     case_dir = out / "cases"
@@ -127,9 +129,10 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
         left = cases_mod.estimate_seconds(vset, todo[number:], g2tom=False)
         result = (f"FAILED ({record['error']})" if "error" in record else
                   f"F = {record['force']:.4g} N, R = {record['resistance_clean']:.4g} ohm")
-        print(f"validate: case {number}/{len(todo)} {case.name}: {result} in {record['seconds_total']:.1f} s; "
-              f"elapsed {format_duration(elapsed)}, ~{format_duration(max(left, 0.0))} left",
-              file=stream, flush=True)
+        if progress:
+            print(f"validate: case {number}/{len(todo)} {case.name}: {result} in {record['seconds_total']:.1f} s; "
+                  f"elapsed {format_duration(elapsed)}, ~{format_duration(max(left, 0.0))} left",
+                  file=stream, flush=True)
     ds = summary.dataset(vset, everything, done, g2tom, default_discretization())
     paths = [out / "validate.nc", out / "validate.png", out / "validate.md"]
     with atomic_path(paths[0]) as tmp:
@@ -146,14 +149,32 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
 SURFACES = ("gw", "random_process")
 
 
-def chosen_set(quick: bool, surface: str = "gw") -> scene.ValidationSet:
-    """The default or the quick set on the chosen surface, with every discretization this g2tom offers."""
+def chosen_set(quick: bool, surface: str = "gw", realizations: int | None = None,
+               loads: int | None = None) -> scene.ValidationSet:
+    """The default or the quick set on the chosen surface, with every discretization this g2tom offers;
+    ``realizations`` (surfaces 0 .. N-1) and ``loads`` (steps evenly spaced in delta/sigma over the
+    set's range, lightest first) override the set's.
+
+    Raises
+    ------
+    ConfigError
+        On an unknown surface, fewer than one realization or two loads.
+    """
     if surface not in SURFACES:
         raise ConfigError(f"--surface {surface!r} is not allowed: must be one of {', '.join(SURFACES)}")
+    if realizations is not None and realizations < 1:
+        raise ConfigError(f"--realizations = {realizations} is out of range: must be >= 1")
+    if loads is not None and loads < 2:
+        raise ConfigError(f"--loads = {loads} is out of range: must be >= 2 (the lightest and the heaviest)")
     base = scene.QUICK if quick else scene.DEFAULT
     if surface == "random_process":
         base = scene.random_process_set(base, rms=scene.RANDOM.rms)
-    return dataclasses.replace(base, discretizations=available_discretizations(surface))
+    changes: dict = {"discretizations": available_discretizations(surface)}
+    if realizations is not None:
+        changes["realizations"] = tuple(range(realizations))
+    if loads is not None:
+        changes["deltas"] = tuple(float(d) for d in np.linspace(max(base.deltas), min(base.deltas), loads))
+    return dataclasses.replace(base, **changes)
 
 
 def output_folder(data_dir: Path, surface: str) -> Path:
