@@ -35,7 +35,7 @@ def _report(r: dict[str, Any]) -> str:
 def _filled_line(r: dict[str, Any]) -> str:
     if not r["filled_pixels"]:
         return "filled      none (no undefined pixels)"
-    return (f"filled      {r['filled_pixels']} undefined pixels ({r['filled_share']:.2%}) by harmonic interpolation; "
+    return (f"filled      {r['filled_pixels']} undefined pixels ({r['filled_share']:.2%}) by the fill of least curvature; "
             f"masked instead, rms_height {r['masked_rms_change']:+.2%}, m2 {r['masked_m2_change']:+.2%}, "
             f"m4 {r['masked_m4_change']:+.2%} (finite differences)")
 

@@ -1,21 +1,23 @@
-"""Measured height maps with undefined pixels (issue 31): harmonic filling, and masked moments.
+"""Measured height maps with undefined pixels (issue 31): filling, and masked moments.
 
 Optical profilometers leave pixels undefined (NaN) where the light did not come back: steep
-flanks, dark or glossy spots. :func:`fill_gaps` gives every NaN pixel the value of the discrete
-harmonic (Laplace) interpolant of the defined pixels: with the 4-neighbour stencil, each filled
-pixel is the mean of its neighbours inside the map (defined or filled),
+flanks, dark or glossy spots. :func:`fill_gaps` gives every NaN pixel a value from the defined
+pixels, which stay as they are, by one sparse least-squares solve over the missing pixels:
 
-    sum_{q ~ p} (z_p - z_q) = 0   for every missing pixel p,
-
-one sparse symmetric positive definite system over the missing pixels, the defined pixels being
-Dirichlet data. A missing pixel on the map's edge has fewer neighbours (a zero normal slope
-there), so a tilt is reproduced exactly only across holes that do not touch the edge. The
-interpolant is the smoothest fill (it minimizes the sum of squared differences over the
-missing pixels' links) and obeys the maximum principle (no new peak or valley): inside a hole
-it is smoother than the surface was, and it meets the defined pixels with a kink. Measured on a
-synthetic surface (wavelengths >= 16 px) with 5 % of the pixels missing in discs of radius
-1 ... 4 px, the spectral moments below a 4 px cutoff of the filled map differ from the
-complete map's by -0.3 % (rms height), -1 % (m2) and +2 ... +3.5 % (m4, the kinks).
+``curvature`` (default)
+    the fill of least squared curvature: the second differences ``z[k-1] - 2 z[k] + z[k+1]``
+    along x and y over every triple that touches a missing pixel, squared and summed (plus
+    :data:`SLOPE_WEIGHT` times the first differences, which makes it unique where no defined
+    triple pins a hole). It meets the defined pixels without a kink and keeps a tilt, also at the
+    map's edges. Measured on a synthetic surface (wavelengths >= 16 px) with 5 % of the pixels
+    missing in discs of radius 1 ... 4 px, four seeds: the spectral moments below a 4 px cutoff
+    move by at most 0.05 % (rms height), 0.16 % (m2) and 0.14 % (m4). Cost: 0.26 s for 5 %
+    scattered over 1024^2 pixels, 31 s for a 512^2 hole in it (harmonic: 0.12 s and 6 s).
+``harmonic``
+    the discrete Laplace interpolant, the usual choice in profilometry software: each filled
+    pixel is the mean of its 4 neighbours inside the map (a missing pixel on the map's edge has
+    fewer, a zero normal slope there), so it obeys the maximum principle but meets the defined
+    pixels with a kink: on the surface above, -0.3 % (rms height), -1 % (m2), +2 ... +4 % (m4).
 
 :func:`masked_moments` is the other choice, ignoring the missing pixels: the rms height over the
 defined pixels, and m2, m4 from finite differences over the pixel pairs and triples that are
@@ -27,19 +29,69 @@ estimator.
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix
+from scipy.sparse import coo_matrix, vstack
 from scipy.sparse.linalg import spsolve
 
-__all__ = ["fill_gaps", "masked_moments"]
+__all__ = ["METHODS", "SLOPE_WEIGHT", "fill_gaps", "masked_moments"]
 
 
-def fill_gaps(heights: np.ndarray) -> tuple[np.ndarray, int]:
-    """The height map with its NaN pixels filled by harmonic interpolation of the defined ones.
+#: The fills of :func:`fill_gaps`.
+METHODS = ("curvature", "harmonic")
+#: Weight of the slope rows that make the curvature fill unique (a hole that no defined pixel
+#: triple pins, e.g. a single defined pixel), relative to the curvature rows: it pulls the fill
+#: towards the flattest of the smoothest fills: it moves a tilt across a 20-pixel hole by ~1e-8 of its
+#: value and a map of one defined pixel by ~4e-7 (the curvature alone leaves both undetermined).
+SLOPE_WEIGHT = 1e-4
+
+
+def _links(index: np.ndarray, z: np.ndarray, stencil: tuple[float, ...], axis: int):
+    """Rows of one 1-D difference stencil along ``axis`` at every position that touches a missing
+    pixel: (row numbers, unknown numbers, weights) of the unknowns and the known part of each row."""
+    n = index.shape[axis]
+    width = len(stencil)
+    parts = [tuple(slice(k, n - width + 1 + k) if a == axis else slice(None) for a in range(2)) for k in range(width)]
+    ks = [index[p].ravel() for p in parts]
+    zs = [z[p].ravel() for p in parts]
+    touch = np.any([k >= 0 for k in ks], axis=0)
+    rows = np.arange(int(touch.sum()))
+    known = np.zeros(rows.size)
+    out_rows, out_cols, out_vals = [], [], []
+    for k, v, w in zip(ks, zs, stencil):
+        k, v = k[touch], v[touch]
+        unknown = k >= 0
+        out_rows.append(rows[unknown])
+        out_cols.append(k[unknown])
+        out_vals.append(np.full(int(unknown.sum()), w))
+        known += np.where(unknown, 0.0, w * np.where(unknown, 0.0, v))
+    return np.concatenate(out_rows), np.concatenate(out_cols), np.concatenate(out_vals), known
+
+
+def _system(index: np.ndarray, z: np.ndarray, stencil: tuple[float, ...], weight: float):
+    """The stencil's rows along both axes as one sparse matrix over the unknowns, and the right-hand side."""
+    count = int((index >= 0).sum())
+    blocks, rhs, offset = [], [], 0
+    for axis in (0, 1):
+        rows, cols, vals, known = _links(index, z, stencil, axis)
+        blocks.append((rows + offset, cols, weight * vals))
+        rhs.append(-weight * known)
+        offset += known.size
+    rows, cols, vals = (np.concatenate(parts) for parts in zip(*blocks))
+    return coo_matrix((vals, (rows, cols)), shape=(offset, count)), np.concatenate(rhs)
+
+
+def fill_gaps(heights: np.ndarray, method: str = "curvature") -> tuple[np.ndarray, int]:
+    """The height map with its NaN pixels filled from the defined ones.
 
     Parameters
     ----------
     heights
         Height map, 2-D, m; NaN marks an undefined pixel (infinite values are left as they are).
+    method
+        ``curvature`` (default): the fill of least squared curvature, the sum over x and y of the
+        second differences ``z[k-1] - 2 z[k] + z[k+1]`` squared over every triple that touches a
+        missing pixel (with :data:`SLOPE_WEIGHT` times the first differences, for uniqueness): a
+        smooth fill that meets the defined pixels without a kink and keeps any tilt, also at the
+        map's edges. ``harmonic``: the discrete Laplace interpolant (see the module).
 
     Returns
     -------
@@ -51,8 +103,10 @@ def fill_gaps(heights: np.ndarray) -> tuple[np.ndarray, int]:
     Raises
     ------
     ValueError
-        If the map is not 2-D or no pixel is defined.
+        If the map is not 2-D, no pixel is defined or the method is unknown.
     """
+    if method not in METHODS:
+        raise ValueError(f"method = {method!r} is not allowed: must be one of {', '.join(METHODS)}")
     z = np.array(heights, dtype=float)
     if z.ndim != 2:
         raise ValueError(f"height map has shape {z.shape}: must be a 2-D array")
@@ -64,33 +118,15 @@ def fill_gaps(heights: np.ndarray) -> tuple[np.ndarray, int]:
         raise ValueError(f"height map holds no defined pixel ({z.shape[0]} x {z.shape[1]}, all NaN)")
     index = np.full(z.shape, -1)
     index[missing] = np.arange(count)
-    degree = np.zeros(count)
-    rhs = np.zeros(count)
-    rows, cols = [], []
-    ny, nx = z.shape
-    # every ordered pair (p, q) of 4-neighbours inside the map: q = p shifted by one pixel
-    for p_part, q_part in (
-        ((slice(None), slice(0, nx - 1)), (slice(None), slice(1, nx))),
-        ((slice(None), slice(1, nx)), (slice(None), slice(0, nx - 1))),
-        ((slice(0, ny - 1), slice(None)), (slice(1, ny), slice(None))),
-        ((slice(1, ny), slice(None)), (slice(0, ny - 1), slice(None))),
-    ):
-        p, q, z_q = index[p_part].ravel(), index[q_part].ravel(), z[q_part].ravel()
-        unknown = p >= 0
-        degree += np.bincount(p[unknown], minlength=count)
-        to_missing = unknown & (q >= 0)
-        rows.append(p[to_missing])
-        cols.append(q[to_missing])
-        to_defined = unknown & (q < 0)
-        rhs += np.bincount(p[to_defined], weights=z_q[to_defined], minlength=count)
-    rows_all, cols_all = np.concatenate(rows), np.concatenate(cols)
-    diagonal = np.arange(count)
-    matrix = coo_matrix(
-        (np.concatenate([degree, -np.ones(rows_all.size)]),
-         (np.concatenate([diagonal, rows_all]), np.concatenate([diagonal, cols_all]))),
-        shape=(count, count),
-    ).tocsc()
-    z[missing] = spsolve(matrix, rhs)
+    slope, slope_rhs = _system(index, z, (-1.0, 1.0), 1.0 if method == "harmonic" else SLOPE_WEIGHT)
+    if method == "harmonic":  # the Laplace equation: the normal equations of the first differences
+        matrix, rhs = slope, slope_rhs
+    else:
+        curvature, curvature_rhs = _system(index, z, (1.0, -2.0, 1.0), 1.0)
+        matrix = vstack([curvature, slope])
+        rhs = np.concatenate([curvature_rhs, slope_rhs])
+    matrix = matrix.tocsc()
+    z[missing] = spsolve((matrix.T @ matrix).tocsc(), matrix.T @ rhs)
     return z, count
 
 
