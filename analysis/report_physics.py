@@ -110,7 +110,11 @@ def bias_blocks(data_dir: Path) -> list[Block]:
         "spectral period changes the fields' lattice by design). alpha and gamma: the geometric-mean power law over "
         f"the steps with F >= {study['fits.min_force']:g} N; R: geometric mean (mOhm) at the load steps nearest "
         f"{', '.join(f'{f:.4g}' for f in loads)} N. The last row replaces expected spots by asperities drawn per "
-        "realization.")))
+        "realization. The discrete rows solve each surface's own coupled caps at the same forces (100 surfaces, "
+        "one per realization) and then count oxide per spot by its clean share of the contact disc (radius "
+        "a sqrt(f)) instead of on/off at its centre. The disc rule is refused with grid spots: a grid spot "
+        "stands for the expected sum of a cell's asperity radii at one cell centre, not for one contact disc, "
+        "so it has no disc whose clean share could be counted.")))
     rows = [[r["step"], r["n_cells"], r["clean"]["alpha"], r["clean"]["gamma"],
              *[1e3 * v for v in r["clean"]["resistance"]]] for r in chain]
     blocks.append(table(["step (clean surface)", "cells", "alpha", "gamma",
