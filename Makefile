@@ -93,7 +93,7 @@ atlas: atlas-plan | $(VENV)/.installed
 	cp $(DATA)/atlas/surrogate.json pipeline/atlas_surrogate.json
 
 bench: | $(VENV)/.installed
-	$(G2TOM) bench $(ARGS)
+	$(G2TOM) bench $(ARGS) --verbose
 
 # The full-field reference (tamaas, the `reference` extra) against g2tom; not part of `make run`.
 # VALIDATE="--quick" for the 256^2 check (a few minutes at most).

@@ -100,3 +100,4 @@ def test_centre_rule_switches_whole_spots(scene, pool):
     # the same fields and surfaces: the rules differ, the clean surface does not
     np.testing.assert_array_equal(out["resistance_clean"].values, disc["resistance_clean"].values)
     assert not np.array_equal(out["resistance"].values, disc["resistance"].values)
+

@@ -2,7 +2,7 @@
 
 Each module ``pipeline.bench.<name>`` exposes ``run(scenario) -> dict`` returning JSON-ready
 figures (medians of repeated timings, errors, ratios to a reference run in the same process).
-:func:`run_benchmarks` prints them and saves ``<data_dir>/bench/<name>.json``. Modules whose
+:func:`run_benchmarks` saves ``<data_dir>/bench/<name>.json`` (and prints them with ``verbose``). Modules whose
 ``run`` also takes ``data_dir`` save labelled data there too: ``frontier`` (the accuracy–time
 frontier, ``bench/frontier.nc`` and its figures) and ``stability`` (``bench/stability.nc``).
 """
@@ -57,8 +57,10 @@ def summary_lines(result: Mapping[str, Any], prefix: str = "") -> list[str]:
     return lines
 
 
-def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str] | None = None) -> dict[str, Path]:
-    """Run the benchmarks (all, or ``only`` those named), print and save each as JSON.
+def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str] | None = None,
+                   verbose: bool = False) -> dict[str, Path]:
+    """Run the benchmarks (all, or ``only`` those named) and save each as JSON: one line per
+    benchmark naming its file, or with ``verbose`` every figure (:func:`summary_lines`).
 
     Returns
     -------
@@ -81,11 +83,14 @@ def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str]
         extra = {"data_dir": data_dir} if "data_dir" in inspect.signature(module.run).parameters else {}
         result = {"benchmark": name, "scenario": scenario.name, "machine": _machine(), **module.run(scenario, **extra)}
         text = json.dumps(result, indent=2, sort_keys=False, default=float)
-        print(f"== bench {name} ==")
-        for line in summary_lines(result):
-            print(line)
         target = out_dir / f"{name}.json"
         with atomic_path(target) as tmp:
             tmp.write_text(text + "\n")
+        lines = summary_lines(result)
+        if verbose:
+            print(f"== bench {name} ==")
+            print("\n".join(lines))
+        else:
+            print(f"bench {name}: {len(lines)} figures in {target} (`g2tom bench --only {name} --verbose` prints them)")
         written[name] = target
     return written

@@ -179,7 +179,7 @@ def _cmd_bench(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.bench import run_benchmarks
 
     _preflight(args, scenario, scene=False)
-    run_benchmarks(scenario, args.data_dir, only=args.only)
+    run_benchmarks(scenario, args.data_dir, only=args.only, verbose=args.verbose)
 
 
 def _cmd_stamp(args: argparse.Namespace, scenario: Scenario) -> None:
@@ -374,6 +374,7 @@ def _parser() -> argparse.ArgumentParser:
     add("report", _cmd_report, "write <data-dir>/report.md and report.html")
     bench = add("bench", _cmd_bench, "benchmarks: run time against error, printed and saved")
     bench.add_argument("--only", action="append", default=None, help="run only this benchmark")
+    bench.add_argument("--verbose", action="store_true", help="print every figure, not only where it was saved")
     add("stamp", _cmd_stamp, "update per-stage configuration stamps (used by make)")
     plan = add("plan", _cmd_plan, "estimate each stage's peak memory and run time; refuse what cannot fit",
                compute=True)
