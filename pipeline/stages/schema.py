@@ -19,7 +19,7 @@ from typing import Any
 
 import xarray as xr
 
-__all__ = ["Variable", "COORDINATES", "SURROGATE_COORDINATES", "SCHEMA", "attrs", "variable", "matches", "label_coords"]
+__all__ = ["Variable", "COORDINATES", "SURROGATE_COORDINATES", "RESISTANCE_LONG_NAMES", "SCHEMA", "attrs", "variable", "matches", "label_coords"]
 
 
 @dataclass(frozen=True)
@@ -108,7 +108,7 @@ _CONTACT: dict[str, Variable] = {
 _CUBE: dict[str, Variable] = {
     "clean_open_probability": _v("delta", "1",
               "probability that the oxide-free surface is an open circuit (no touching asperity)"),
-    "conductance_clean": _v("delta", "S", "conductance of the oxide-free surface (greenwood model)"),
+    "conductance_clean": _v("delta", "S", "conductance of the oxide-free surface ({model} model)"),
     "conductance_clean_greenwood": _v("delta", "S", "conductance of the oxide-free surface by the greenwood model"),
     "conductance_clean_point": _v("delta", "S", "conductance of the oxide-free surface by the point model"),
     "conductance_clean_point_lattice": _v("delta", "S",
@@ -123,7 +123,11 @@ _CUBE: dict[str, Variable] = {
     "n_realizations": _v("xi lambda", "1",
               "realizations used at this (xi, lambda): the leading entries of realization"),
     "realization": COORDINATES["realization"],
-    "resistance": _v("xi lambda delta realization", "ohm", "Greenwood constriction resistance R = R_self + R_int"),
+    "resistance": _v("xi lambda delta realization", "ohm", "{resistance}"),
+    "iterations": _v("xi lambda delta realization", "1", "conjugate-gradient iterations of the point-model solve"),
+    "residual": _v("xi lambda delta realization", "1", "final relative residual of the point-model solve (Jacobi norm)"),
+    "error_estimate": _v("xi lambda delta realization", "1",
+                         "estimated relative error of the point-model conductance (energy norm of the last step)"),
     "resistance_clean": _v("delta", "ohm", "resistance of the oxide-free surface"),
     "resistance_clean_interaction": _v("delta", "ohm", "interaction term of the oxide-free surface"),
     "resistance_clean_self": _v("delta", "ohm", "self term of the oxide-free surface"),
@@ -264,6 +268,12 @@ _SURROGATE: dict[str, Variable] = {
     "xi_range": _v("end", "1", "fitted range of xi"),
 }
 
+#: The long name of the cube's ``resistance`` by ``cube.model`` (its ``{resistance}`` slot).
+RESISTANCE_LONG_NAMES = {
+    "greenwood": "Greenwood constriction resistance R = R_self + R_int",
+    "point": "point-interaction constriction resistance R = rho* / sum f (exact solve of M f = 1)",
+}
+
 #: Every stage file's variables and labelled coordinates.
 SCHEMA: dict[str, dict[str, Variable]] = {
     "contact": _CONTACT, "oxide": _OXIDE, "cube": _CUBE, "fits": _FITS, "surrogate": _SURROGATE,
@@ -275,11 +285,12 @@ def attrs(stage: str, name: str, **fields: Any) -> dict[str, str]:
     return SCHEMA[stage][name].attrs(**fields)
 
 
-def variable(stage: str, name: str, data: Any, **extra: Any) -> tuple[tuple[str, ...], Any, dict[str, Any]]:
-    """``(dims, data, attrs)`` of variable ``name`` of ``stage``'s file, for :class:`xarray.Dataset`;
-    ``extra`` attributes follow ``units`` and ``long_name``."""
+def variable(stage: str, name: str, data: Any, slots: dict[str, Any] | None = None,
+             **extra: Any) -> tuple[tuple[str, ...], Any, dict[str, Any]]:
+    """``(dims, data, attrs)`` of variable ``name`` of ``stage``'s file, for :class:`xarray.Dataset`:
+    the long name's slots filled from ``slots``, ``extra`` attributes after ``units`` and ``long_name``."""
     var = SCHEMA[stage][name]
-    return var.dims, data, {**var.attrs(), **extra}
+    return var.dims, data, {**var.attrs(**(slots or {})), **extra}
 
 
 def matches(stage: str, name: str, dims: tuple[str, ...], found: dict[str, Any]) -> bool:
