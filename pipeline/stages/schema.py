@@ -19,7 +19,7 @@ from typing import Any
 
 import xarray as xr
 
-__all__ = ["Variable", "COORDINATES", "SURROGATE_COORDINATES", "RESISTANCE_LONG_NAMES", "SCHEMA", "attrs", "variable", "matches", "label_coords"]
+__all__ = ["Variable", "COORDINATES", "SURROGATE_COORDINATES", "RESISTANCE_LONG_NAMES", "SPOT_RADIUS_LONG_NAMES", "SCHEMA", "attrs", "variable", "matches", "label_coords"]
 
 
 @dataclass(frozen=True)
@@ -97,7 +97,7 @@ _CONTACT: dict[str, Variable] = {
     "roughness_parameter": _v("delta", "1", "roughness parameter sigma R* / a^2"),
     "separation": _v("delta r", "m", "separation of the mean planes, delta + profile + displacement"),
     "spot_area": _v("delta y x", "m2", "cell contact area A*(r_i) dx^2"),
-    "spot_radius": _v("delta y x", "m", "spot radius {spots}"),
+    "spot_radius": _v("delta y x", "m", "{spot_radius}"),
     "spot_separation": _v("delta y x", "m", "separation of the mean planes at the cell centre"),
     "stiffness": _v("delta", "N m-1",
               "contact stiffness K = -dF/d delta (exact linearisation of the discretised Greenwood-Tripp system)"),
@@ -266,6 +266,13 @@ _SURROGATE: dict[str, Variable] = {
     "order_z": _v("order_z", "1", "polynomial order in z tried by cross-validation"),
     "xi": SURROGATE_COORDINATES["xi"],
     "xi_range": _v("end", "1", "fitted range of xi"),
+}
+
+#: The long name of contact.nc's ``spot_radius`` by ``contact.spots`` (its ``{spot_radius}`` slot).
+SPOT_RADIUS_LONG_NAMES = {
+    "mean_area": "spot radius sqrt(A_i / pi) (mean_area spots)",
+    "expected": "spot radius sqrt(beta) F_1/2(h): expected sum of asperity radii in the cell (expected spots)",
+    "asperities": "mean spot radius sqrt(beta) F_1/2(h) over realizations (asperity spots are drawn in the cube)",
 }
 
 #: The long name of the cube's ``resistance`` by ``cube.model`` (its ``{resistance}`` slot).
