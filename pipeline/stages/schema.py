@@ -19,7 +19,7 @@ from typing import Any
 
 import xarray as xr
 
-__all__ = ["Variable", "COORDINATES", "SURROGATE_COORDINATES", "RESISTANCE_LONG_NAMES", "SPOT_RADIUS_LONG_NAMES", "SCHEMA", "attrs", "variable", "matches", "label_coords"]
+__all__ = ["Variable", "COORDINATES", "SURROGATE_COORDINATES", "RESISTANCE_LONG_NAMES", "SPOT_RADIUS_LONG_NAMES", "SCHEMA", "attrs", "variable", "array", "matches", "label_coords"]
 
 
 @dataclass(frozen=True)
@@ -302,6 +302,12 @@ def variable(stage: str, name: str, data: Any, slots: dict[str, Any] | None = No
     the long name's slots filled from ``slots``, ``extra`` attributes after ``units`` and ``long_name``."""
     var = SCHEMA[stage][name]
     return var.dims, data, {**var.attrs(**(slots or {})), **extra}
+
+
+def array(stage: str, name: str, data: Any, slots: dict[str, Any] | None = None, **extra: Any) -> xr.DataArray:
+    """Variable ``name`` of ``stage``'s file as a :class:`xarray.DataArray` (see :func:`variable`)."""
+    dims, data, found = variable(stage, name, data, slots, **extra)
+    return xr.DataArray(data, dims=dims, attrs=found)
 
 
 def matches(stage: str, name: str, dims: tuple[str, ...], found: dict[str, Any]) -> bool:
