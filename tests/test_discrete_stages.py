@@ -101,3 +101,12 @@ def test_centre_rule_switches_whole_spots(scene, pool):
     np.testing.assert_array_equal(out["resistance_clean"].values, disc["resistance_clean"].values)
     assert not np.array_equal(out["resistance"].values, disc["resistance"].values)
 
+
+
+def test_pool_variables_are_the_schemas(pool):
+    from pipeline.stages.schema import matches
+
+    for name in ("spot_count", "asperity_x", "asperity_radius", "discrete_approach", "discrete_barber_conductance",
+                 "surface", "spot"):
+        var = pool[name]
+        assert matches("contact", name, var.dims, var.attrs), name

@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from pipeline.cli.main import main
-from pipeline.config import ConfigError, check_surrogate_grid, load_scenario
+from pipeline.before_work.surrogate_grid import check_surrogate_grid
+from pipeline.config import ConfigError, load_scenario
 from tests.conftest import SMALL_OVERRIDES
 
 _SMALL = [a for k, v in SMALL_OVERRIDES.items() for a in ("--set", f"{k}={v}")]

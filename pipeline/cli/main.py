@@ -20,9 +20,10 @@ from typing import TYPE_CHECKING, Callable, NoReturn, Sequence  # noqa: E402
 
 from pipeline import __version__  # noqa: E402
 from pipeline.config import (  # noqa: E402
-    STAGE_INPUTS, ConfigError, Scenario, check_surrogate_grid, load_scenario, parameter_table)
+    STAGE_INPUTS, ConfigError, Scenario, load_scenario, parameter_table)
 from pipeline.errors import StaleInputError  # noqa: E402
 from pipeline.before_work.plan import prepare  # noqa: E402
+from pipeline.before_work.surrogate_grid import check_surrogate_grid  # noqa: E402
 
 if TYPE_CHECKING:
     from pipeline.compute import ComputeOptions

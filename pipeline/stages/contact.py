@@ -21,17 +21,11 @@ from pipeline.physics import hertz, spot_models, spots
 from pipeline.physics.asperity import area_fraction, asperity_pressure
 from pipeline.physics.grid import cell_centres
 from pipeline.stages import contact_discrete
+from pipeline.stages.schema import SCHEMA, SPOT_RADIUS_LONG_NAMES
 from pipeline.store import write_dataset
 
 __all__ = ["build", "run", "radial_grid", "indenter_profile", "solve_scenario", "fields"]
 
-_FIELD = ("delta", "r")
-_RADIUS_NAMES = {
-    "mean_area": "spot radius sqrt(A_i / pi) (mean_area spots)",
-    "expected": "spot radius sqrt(beta) F_1/2(h): expected sum of asperity radii in the cell (expected spots)",
-    "asperities": "mean spot radius sqrt(beta) F_1/2(h) over realizations (asperity spots are drawn in the cube)",
-}
-_SPOTS = ("delta", "y", "x")
 
 
 def solve_scenario(
@@ -102,9 +96,10 @@ def _hertz(scenario: Scenario, r: np.ndarray, force: np.ndarray) -> dict[str, np
     return {"a": a, "p": hertz.hertz_pressure(r[None, :], col_a, col_f), "u": u, "gap": gap}
 
 
-def _var(dims: tuple[str, ...], data: np.ndarray, long_name: str, units: str) -> tuple:
-    """An xarray variable tuple with CF long_name and units."""
-    return (dims, np.asarray(data), {"long_name": long_name, "units": units})
+def _var(name: str, data: np.ndarray, **slots: str) -> tuple:
+    """An xarray variable tuple of contact.nc: dims and CF long_name and units from the schema."""
+    var = SCHEMA["contact"][name]
+    return (var.dims, np.asarray(data), {"long_name": var.long_name.format(**slots), "units": var.units})
 
 
 def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=False)) -> xr.Dataset:
@@ -135,26 +130,20 @@ def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=
     data_vars = {
         **_continuous_vars(scenario, r, f),
         **_scalar_vars(scenario, f["force"], sols),
-        "stiffness": _var(("delta",), stiffness, "contact stiffness K = -dF/d delta (exact linearisation of the "
-                          "discretised Greenwood-Tripp system)", "N m-1"),
-        "barber_conductance": _var(("delta",), stiffness / (scenario.material.E_star * scenario.material.rho),
-                                   "Barber's conductance K / (E* rho*) of the clean elastic contact (Eq. 1)", "S"),
-        "spot_area": _var(_SPOTS, cells["area"], "cell contact area A*(r_i) dx^2", "m2"),
-        "spot_radius": _var(_SPOTS, cells["radius"], _RADIUS_NAMES[scenario.contact.spots], "m"),
-        "spot_separation": _var(_SPOTS, cells["separation"], "separation of the mean planes at the cell centre", "m"),
+        "stiffness": _var("stiffness", stiffness),
+        "barber_conductance": _var("barber_conductance", stiffness / (scenario.material.E_star * scenario.material.rho)),
+        "spot_area": _var("spot_area", cells["area"]),
+        "spot_radius": _var("spot_radius", cells["radius"], spot_radius=SPOT_RADIUS_LONG_NAMES[scenario.contact.spots]),
+        "spot_separation": _var("spot_separation", cells["separation"]),
     }
-    data_vars["holm_radius"] = _var(
-        ("delta",), spots.holm_greenwood_radius(data_vars["spot_radius"][1], scenario.cell_size),
-        "Holm-Greenwood radius alpha_HG of all spots (Eq. 13)", "m")
+    data_vars["holm_radius"] = _var("holm_radius", spots.holm_greenwood_radius(data_vars["spot_radius"][1], scenario.cell_size))
     deltas = np.asarray(scenario.deltas)
     coords = {
-        "delta": ("delta", deltas, {"long_name": "initial separation of the tip from the mean plane "
-                                    "(negative: interpenetration)", "units": "m"}),
-        "delta_sigma": ("delta", deltas / scenario.roughness.sigma,
-                        {"long_name": "approach delta / sigma", "units": "1"}),
-        "r": ("r", r, {"long_name": "radial coordinate", "units": "m"}),
-        "y": ("y", x, {"long_name": "cell centre y", "units": "m"}),
-        "x": ("x", x, {"long_name": "cell centre x", "units": "m"}),
+        "delta": _var("delta", deltas),
+        "delta_sigma": _var("delta_sigma", deltas / scenario.roughness.sigma),
+        "r": _var("r", r),
+        "y": _var("y", x),
+        "x": _var("x", x),
     }
     attrs = {"cell_size": scenario.cell_size, "hertz_reference": "sphere only (NaN otherwise)",
              "spots": scenario.contact.spots, "model": scenario.contact.model}
@@ -171,34 +160,29 @@ def _continuous_vars(scenario: Scenario, r: np.ndarray, f: dict[str, np.ndarray]
     """The (delta, r) fields, the profile and the Hertz reference fields."""
     ref = _hertz(scenario, r, f["force"])
     return {
-        "pressure": _var(_FIELD, f["p"], "mean asperity contact pressure (Eq. 16)", "Pa"),
-        "displacement": _var(_FIELD, f["u"], "total elastic normal displacement of both surfaces (Eq. 18)", "m"),
-        "separation": _var(_FIELD, f["h"], "separation of the mean planes, delta + profile + displacement", "m"),
-        "area_fraction": _var(_FIELD, f["area"], "real contact area fraction A* (Eq. 21 with the 1/2)", "1"),
-        "profile": _var(("r",), indenter_profile(scenario, r),
-                        f"undeformed indenter profile ({scenario.indenter.shape})", "m"),
-        "hertz_pressure": _var(_FIELD, ref["p"], "Hertz pressure at the same force", "Pa"),
-        "hertz_displacement": _var(_FIELD, ref["u"], "Hertz displacement at the same force", "m"),
-        "hertz_separation": _var(_FIELD, ref["gap"], "Hertz gap between the deformed surfaces", "m"),
-        "hertz_radius": _var(("delta",), ref["a"], "Hertz contact radius at the same force", "m"),
+        "pressure": _var("pressure", f["p"]),
+        "displacement": _var("displacement", f["u"]),
+        "separation": _var("separation", f["h"]),
+        "area_fraction": _var("area_fraction", f["area"]),
+        "profile": _var("profile", indenter_profile(scenario, r), shape=scenario.indenter.shape),
+        "hertz_pressure": _var("hertz_pressure", ref["p"]),
+        "hertz_displacement": _var("hertz_displacement", ref["u"]),
+        "hertz_separation": _var("hertz_separation", ref["gap"]),
+        "hertz_radius": _var("hertz_radius", ref["a"]),
         "roughness_parameter": _var(
-            ("delta",), hertz.roughness_parameter(scenario.roughness.sigma, scenario.indenter.radius, ref["a"]),
-            "roughness parameter sigma R* / a^2", "1"),
+            "roughness_parameter", hertz.roughness_parameter(scenario.roughness.sigma, scenario.indenter.radius, ref["a"])),
     }
 
 
 def _scalar_vars(scenario: Scenario, force: np.ndarray, sols: list[gt.Solution]) -> dict:
     """Force, normalized force (Eq. 25) and the solver's report, over delta."""
-    d = ("delta",)
     return {
-        "force": _var(d, force, "normal force 2 pi integral p r dr", "N"),
-        "force_normalized": _var(d, force / scenario.force_scale, "normalized force 2F / (E* sqrt(R* sigma^3)) (Eq. 25)", "1"),
-        "iterations": _var(d, np.array([s.iterations for s in sols], dtype=np.int32),
-                           f"{scenario.contact.solver} iterations", "1"),
-        "residual": _var(d, np.array([s.residual for s in sols]),
-                         "final relative residual max|u - M p(u)| / max|M p(u)|", "1"),
-        "converged": _var(d, np.array([s.converged for s in sols], dtype=np.int8),
-                          "1 if the solver met its tolerance", "1"),
+        "force": _var("force", force),
+        "force_normalized": _var("force_normalized", force / scenario.force_scale),
+        "iterations": _var("iterations", np.array([s.iterations for s in sols], dtype=np.int32),
+                           solver=scenario.contact.solver),
+        "residual": _var("residual", np.array([s.residual for s in sols])),
+        "converged": _var("converged", np.array([s.converged for s in sols], dtype=np.int8)),
     }
 
 

@@ -25,6 +25,7 @@ from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
 from pipeline.physics import discrete_contact as dc
 from pipeline.physics.indenter import profile
+from pipeline.stages.schema import SCHEMA
 
 __all__ = ["CHUNK", "DOMAIN_MARGIN", "indenter", "domain", "surface_spots", "solve_pool", "variables"]
 
@@ -91,8 +92,10 @@ def solve_pool(scenario: Scenario, forces: np.ndarray, lowest_delta: float,
     return [r for chunk in chunks for r in chunk], radius
 
 
-def _var(dims: tuple[str, ...], data: np.ndarray, long_name: str, units: str) -> tuple:
-    return (dims, np.asarray(data), {"long_name": long_name, "units": units})
+def _var(name: str, data: np.ndarray) -> tuple:
+    """A variable of contact.nc's pool: dims, units and long name from the schema."""
+    var = SCHEMA["contact"][name]
+    return (var.dims, np.asarray(data), var.attrs())
 
 
 def variables(scenario: Scenario, pool: list[dict[str, np.ndarray]], radius: float) -> tuple[dict, dict, dict]:
@@ -108,28 +111,19 @@ def variables(scenario: Scenario, pool: list[dict[str, np.ndarray]], radius: flo
     stacked = {name: np.stack([r[name] for r in pool]) for name in ("delta", "stiffness", "iterations",
                                                                     "residual", "candidates")}
     e_star, rho = scenario.material.E_star, scenario.material.rho
-    sd, ss = ("surface", "delta"), ("surface", "spot")
     data_vars = {
-        "spot_count": _var(("surface",), np.array([r["x"].size for r in pool], np.int32),
-                           "asperities of the surface that touch at some load step", "1"),
-        "asperity_x": _var(ss, x, "touching asperity position x (from the indenter's axis)", "m"),
-        "asperity_y": _var(ss, y, "touching asperity position y (from the indenter's axis)", "m"),
-        "asperity_radius": _var(("surface", "delta", "spot"), spot_radius,
-                                "contact radius sqrt(beta w) of the touching asperity (0 off contact)", "m"),
-        "discrete_approach": _var(sd, stacked["delta"], "approach of the discrete surface at the step's force "
-                                  "(tip's separation from the mean plane)", "m"),
-        "discrete_stiffness": _var(sd, stacked["stiffness"], "contact stiffness K = -dF/d delta of the "
-                                   "discrete surface (exact linearisation)", "N m-1"),
-        "discrete_barber_conductance": _var(sd, stacked["stiffness"] / (e_star * rho),
-                                            "Barber's conductance K / (E* rho*) of the discrete surface", "S"),
-        "discrete_iterations": _var(sd, stacked["iterations"].astype(np.int32),
-                                    "Newton iterations of the discrete solve", "1"),
-        "discrete_residual": _var(sd, stacked["residual"], "final relative residual of the discrete solve", "1"),
-        "discrete_candidates": _var(sd, stacked["candidates"].astype(np.int32),
-                                    "candidate asperities in the discrete solve", "1"),
+        "spot_count": _var("spot_count", np.array([r["x"].size for r in pool], np.int32)),
+        "asperity_x": _var("asperity_x", x),
+        "asperity_y": _var("asperity_y", y),
+        "asperity_radius": _var("asperity_radius", spot_radius),
+        "discrete_approach": _var("discrete_approach", stacked["delta"]),
+        "discrete_stiffness": _var("discrete_stiffness", stacked["stiffness"]),
+        "discrete_barber_conductance": _var("discrete_barber_conductance", stacked["stiffness"] / (e_star * rho)),
+        "discrete_iterations": _var("discrete_iterations", stacked["iterations"].astype(np.int32)),
+        "discrete_residual": _var("discrete_residual", stacked["residual"]),
+        "discrete_candidates": _var("discrete_candidates", stacked["candidates"].astype(np.int32)),
     }
-    coords = {"surface": ("surface", np.arange(n_s), {"long_name": "rough surface of the pool", "units": "1"}),
-              "spot": ("spot", np.arange(width), {"long_name": "touching asperity of a surface", "units": "1"})}
+    coords = {"surface": _var("surface", np.arange(n_s)), "spot": _var("spot", np.arange(width))}
     attrs = {"asperity_disc_radius": radius,
              "coupling_floor": dc.coupling_floor(scenario.roughness.beta, scenario.roughness.sigma),
              "discrete_tolerance": dc.TOLERANCE}

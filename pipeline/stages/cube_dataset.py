@@ -10,19 +10,9 @@ import xarray as xr
 from pipeline.config import Scenario
 from pipeline.stages.cube_chunks import CubeSettings
 from pipeline.stages.cube_rounds import RULE_MARGIN
+from pipeline.stages.schema import RESISTANCE_LONG_NAMES, variable
 
 __all__ = ["dataset"]
-
-_LONG_NAMES = {
-    "greenwood": "Greenwood constriction resistance R = R_self + R_int",
-    "point": "point-interaction constriction resistance R = rho* / sum f (exact solve of M f = 1)",
-}
-
-
-def _attrs(units: str, long_name: str, **extra: Any) -> dict[str, Any]:
-    """CF-style attributes ``units`` and ``long_name`` plus any ``extra`` ones."""
-    return {"units": units, "long_name": long_name, **extra}
-
 
 def dataset(
     scenario: Scenario, contact: xr.Dataset, oxide: xr.Dataset, out: dict[str, Any],
@@ -30,19 +20,21 @@ def dataset(
     counts: np.ndarray, widths: tuple[np.ndarray, np.ndarray],
 ) -> xr.Dataset:
     """Wrap the computed arrays with coordinates and CF attributes."""
-    dims = ("xi", "lambda", "delta", "realization")
-    w_unit = "m" if scenario.cube.weights == "radius" else "m2"
     ox = scenario.oxide
+
+    slots = {"resistance": RESISTANCE_LONG_NAMES[scenario.cube.model], "model": scenario.cube.model,
+             "weights_unit": "m" if scenario.cube.weights == "radius" else "m2"}
+
+    def cube(name: str, data: Any, **extra: Any) -> tuple:
+        return variable("cube", name, data, slots, **extra)
+
     coords = {
-        "xi": ("xi", oxide["xi"].values, _attrs("1", "nominal oxide fraction")),
-        "lambda": ("lambda", oxide["lambda"].values,
-                   _attrs("1", "normalized oxide correlation length l_O sqrt(eta)")),
-        "delta": ("delta", contact["delta"].values, _attrs("m", "approach delta of the sphere tip")),
-        "realization": ("realization", np.arange(out["resistance"].shape[-1]),
-                        _attrs("1", "realization index of the random field")),
-        "force": ("delta", contact["force"].values, _attrs("N", "normal force")),
-        "force_normalized": ("delta", contact["force_normalized"].values,
-                             _attrs("1", "normalized force F' = 2F / (E* sqrt(R* sigma^3))")),
+        "xi": cube("xi", oxide["xi"].values),
+        "lambda": cube("lambda", oxide["lambda"].values),
+        "delta": cube("delta", contact["delta"].values),
+        "realization": cube("realization", np.arange(out["resistance"].shape[-1])),
+        "force": cube("force", contact["force"].values),
+        "force_normalized": cube("force_normalized", contact["force_normalized"].values),
     }
     is_open = np.isposinf(out["resistance"])
     discrete = scenario.contact.model == "discrete"
@@ -52,54 +44,35 @@ def dataset(
                      f"{clean['n_drawn']} realizations of the asperity heights"
                      if scenario.contact.spots == "asperities" else "exact, every spot conducting")
     padding = "NaN beyond n_realizations(xi, lambda)"
-    grid = ("xi", "lambda")
     data_vars = {
-        "resistance": (dims, out["resistance"], _attrs(
-            "ohm", _LONG_NAMES[scenario.cube.model],
-            comment=f"+inf: open circuit (no conducting spot); {padding}")),
-        "resistance_self": (dims, out["resistance_self"],
-                            _attrs("ohm", "self term rho* / (2 sum phi a)", comment=padding)),
-        "resistance_interaction": (dims, out["resistance_interaction"], _attrs(
-            "ohm", f"interaction term rho* sum phi phi w w / d / (pi (sum phi w)^2), w in {w_unit}",
-            comment=padding)),
-        "n_conducting": (dims, out["n_conducting"].astype(np.int32),
-                         _attrs("1", "number of conducting spots", comment="-1 beyond n_realizations(xi, lambda)")),
-        "n_open": (("xi", "lambda", "delta"), is_open.sum(axis=-1).astype(np.int32),
-                   _attrs("1", "number of open-circuit realizations (R = +inf)")),
-        "n_realizations": (grid, counts.astype(np.int32), _attrs(
-            "1", "realizations used at this (xi, lambda): the leading entries of realization",
-            ensemble=ox.ensemble)),
-        "rule_alpha_half_width": (grid, widths[0], _attrs(
-            "1", "fast-rule relative half-width of alpha at n_realizations",
-            method="sinh(z std(t_r) / sqrt(n)), t_r = least-squares log-alpha weights . log R_r")),
-        "rule_gamma_half_width": (grid, widths[1], _attrs(
-            "1", "fast-rule absolute half-width of gamma at n_realizations",
-            method="z std(t_r) / sqrt(n), t_r = least-squares slope weights . log R_r")),
-        "resistance_clean": ("delta", clean["resistance"],
-                             _attrs("ohm", "resistance of the oxide-free surface", comment=clean_comment)),
-        "resistance_clean_self": ("delta", clean["self"],
-                                  _attrs("ohm", "self term of the oxide-free surface", comment=clean_comment)),
-        "resistance_clean_interaction": ("delta", clean["interaction"],
-                                         _attrs("ohm", "interaction term of the oxide-free surface")),
-        "conductance_clean": ("delta", 1.0 / clean["resistance"],
-                              _attrs("S", f"conductance of the oxide-free surface ({scenario.cube.model} model)")),
-        **{f"conductance_clean_{name}": ("delta", values, _attrs(
-            "S", f"conductance of the oxide-free surface by the {name.replace('_', ' + ')} model",
-            comment="beside contact.nc's barber_conductance (Barber's theorem); NaN where the model does not apply"))
+        "resistance": cube("resistance", out["resistance"], comment=f"+inf: open circuit (no conducting spot); {padding}"),
+        "resistance_self": cube("resistance_self", out["resistance_self"], comment=padding),
+        "resistance_interaction": cube("resistance_interaction", out["resistance_interaction"], comment=padding),
+        "n_conducting": cube("n_conducting", out["n_conducting"].astype(np.int32),
+                             comment="-1 beyond n_realizations(xi, lambda)"),
+        "n_open": cube("n_open", is_open.sum(axis=-1).astype(np.int32)),
+        "n_realizations": cube("n_realizations", counts.astype(np.int32), ensemble=ox.ensemble),
+        "rule_alpha_half_width": cube(
+            "rule_alpha_half_width", widths[0],
+            method="sinh(z std(t_r) / sqrt(n)), t_r = least-squares log-alpha weights . log R_r"),
+        "rule_gamma_half_width": cube(
+            "rule_gamma_half_width", widths[1], method="z std(t_r) / sqrt(n), t_r = least-squares slope weights . log R_r"),
+        "resistance_clean": cube("resistance_clean", clean["resistance"], comment=clean_comment),
+        "resistance_clean_self": cube("resistance_clean_self", clean["self"], comment=clean_comment),
+        "resistance_clean_interaction": cube("resistance_clean_interaction", clean["interaction"]),
+        "conductance_clean": cube("conductance_clean", 1.0 / clean["resistance"]),
+        **{f"conductance_clean_{name}": cube(
+            f"conductance_clean_{name}", values,
+            comment="beside contact.nc's barber_conductance (Barber's theorem); NaN where the model does not apply")
            for name, values in clean["models"].items()},
-        "clean_open_probability": ("delta", clean["open"], _attrs(
-            "1", "probability that the oxide-free surface is an open circuit (no touching asperity)")),
-        "crop_cells": ("delta", np.asarray(settings.crops, np.int32), _attrs(
-            "1", "side of the centred square of cells kept at each approach")),
+        "clean_open_probability": cube("clean_open_probability", clean["open"]),
+        "crop_cells": cube("crop_cells", np.asarray(settings.crops, np.int32)),
     }
     if "iterations" in out:
-        data_vars["iterations"] = (dims, out["iterations"].astype(np.int32), _attrs(
-            "1", "conjugate-gradient iterations of the point-model solve", comment="-1 beyond n_realizations(xi, lambda)"))
-        data_vars["residual"] = (dims, out["residual"], _attrs(
-            "1", "final relative residual of the point-model solve (Jacobi norm)", comment=padding))
-        data_vars["error_estimate"] = (dims, out["error_estimate"], _attrs(
-            "1", "estimated relative error of the point-model conductance (energy norm of the last step)",
-            comment=padding))
+        data_vars["iterations"] = cube("iterations", out["iterations"].astype(np.int32),
+                                       comment="-1 beyond n_realizations(xi, lambda)")
+        data_vars["residual"] = cube("residual", out["residual"], comment=padding)
+        data_vars["error_estimate"] = cube("error_estimate", out["error_estimate"], comment=padding)
     attrs = {
         "interaction_weights": scenario.cube.weights,
         "method": settings.method_used,

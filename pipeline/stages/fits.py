@@ -44,7 +44,7 @@ from pipeline.fitting.powerlaw import (
 )
 from pipeline.reductions import DIM, reduce_realizations
 from pipeline.stages.fit_steps import fitted_steps, range_label
-from pipeline.stages.schema import label_coords
+from pipeline.stages.schema import attrs, label_coords, variable
 from pipeline.store import read_stage, write_dataset
 
 __all__ = ["build", "run"]
@@ -128,18 +128,18 @@ def _clean_fit(scenario: Scenario, clean: np.ndarray, force_n: np.ndarray, mask:
     log_alpha = np.log(fit.alpha)
     bound = {"bound": ["lower", "upper"]}
     return {
-        "alpha_clean": xr.DataArray(fit.alpha, attrs={"units": "1", "long_name": "alpha of the clean surface"}),
-        "gamma_clean": xr.DataArray(fit.gamma, attrs={"units": "1", "long_name": "gamma of the clean surface"}),
+        "alpha_clean": xr.DataArray(fit.alpha, attrs=attrs("fits", "alpha_clean")),
+        "gamma_clean": xr.DataArray(fit.gamma, attrs=attrs("fits", "gamma_clean")),
         "alpha_clean_ci": xr.DataArray(
             np.exp([log_alpha - t * se_intercept, log_alpha + t * se_intercept]), dims="bound", coords=bound,
-            attrs={"units": "1", "long_name": "confidence interval of alpha_clean", "method": "least-squares Student t"},
+            attrs={**attrs("fits", "alpha_clean_ci"), "method": "least-squares Student t"},
         ),
         "gamma_clean_ci": xr.DataArray(
             [fit.gamma - t * se_slope, fit.gamma + t * se_slope], dims="bound", coords=bound,
-            attrs={"units": "1", "long_name": "confidence interval of gamma_clean", "method": "least-squares Student t"},
+            attrs={**attrs("fits", "gamma_clean_ci"), "method": "least-squares Student t"},
         ),
-        "fit_residual_clean": xr.DataArray(fit.residual, dims="delta", attrs={"units": "1", "long_name": "log residual of the clean fit"}),
-        "fit_residual_rms_clean": xr.DataArray(fit.residual_rms, attrs={"units": "1", "long_name": "RMS log residual of the clean fit"}),
+        "fit_residual_clean": xr.DataArray(fit.residual, dims="delta", attrs=attrs("fits", "fit_residual_clean")),
+        "fit_residual_rms_clean": xr.DataArray(fit.residual_rms, attrs=attrs("fits", "fit_residual_rms_clean")),
     }
 
 
@@ -151,12 +151,9 @@ def _ensemble_summary(
     g_lower, g_upper = ds["gamma_ci"].sel(bound="lower"), ds["gamma_ci"].sel(bound="upper")
     used = xr.DataArray(counts, dims=GRID)
     out = {
-        "n_realizations": used.astype(np.int32).assign_attrs(
-            units="1", long_name="realizations used per (xi, lambda)"),
-        "alpha_half_width": ((upper - lower) / (2.0 * ds["alpha"])).assign_attrs(
-            units="1", long_name="relative half-width of the alpha interval, (upper - lower) / (2 alpha)"),
-        "gamma_half_width": ((g_upper - g_lower) / 2.0).assign_attrs(
-            units="1", long_name="absolute half-width of the gamma interval, (upper - lower) / 2"),
+        "n_realizations": used.astype(np.int32).assign_attrs(attrs("fits", "n_realizations")),
+        "alpha_half_width": ((upper - lower) / (2.0 * ds["alpha"])).assign_attrs(attrs("fits", "alpha_half_width")),
+        "gamma_half_width": ((g_upper - g_lower) / 2.0).assign_attrs(attrs("fits", "gamma_half_width")),
     }
     rule = "rule_alpha_half_width" in cube
     flagged = np.zeros(used.shape, np.int8)
@@ -164,10 +161,7 @@ def _ensemble_summary(
         at_cap = counts >= int(cube.attrs["max_realizations"])
         short = ~(cube["rule_alpha_half_width"].transpose(*GRID).values <= float(cube.attrs["rule_target_half_width"]))
         flagged = at_cap & short
-    out["flagged"] = xr.DataArray(flagged.astype(np.int8), dims=GRID, attrs={
-        "units": "1",
-        "long_name": "1 where the adaptive ensemble stopped at max_realizations short of the target half-width",
-    })
+    out["flagged"] = xr.DataArray(flagged.astype(np.int8), dims=GRID, attrs=attrs("fits", "flagged"))
     if rule:
         for name in ("rule_alpha_half_width", "rule_gamma_half_width"):
             out[name] = cube[name].transpose(*GRID)
@@ -206,36 +200,33 @@ def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     bound = ("bound", ["lower", "upper"])
     level = f"{100 * scenario.fits.confidence:g} % percentile bootstrap over realizations"
 
-    ds["alpha"] = (GRID, fit.alpha, {"units": "1", "long_name": "alpha of R' = alpha F'^-gamma"})
-    ds["gamma"] = (GRID, fit.gamma, {"units": "1", "long_name": "gamma of R' = alpha F'^-gamma"})
+    ds["alpha"] = variable("fits", "alpha", fit.alpha)
+    ds["gamma"] = variable("fits", "gamma", fit.gamma)
     for name, boot in (("alpha", boot_alpha), ("gamma", boot_gamma)):
-        ds[f"{name}_ci"] = (GRID + ("bound",), _interval(boot, scenario.fits.confidence),
-                            {"units": "1", "long_name": f"confidence interval of {name}", "method": level})
+        ds[f"{name}_ci"] = variable("fits", f"{name}_ci", _interval(boot, scenario.fits.confidence), method=level)
     ds = ds.assign_coords(bound=bound[1])
     for name, value in _ensemble_summary(scenario, cube, ds, counts).items():
         ds[name] = value
-    ds["fit_residual"] = (GRID + ("delta",), fit.residual, {"units": "1", "long_name": "log(R') - log(alpha F'^-gamma) on the fitted steps"})
-    ds["fit_residual_rms"] = (GRID, fit.residual_rms, {"units": "1", "long_name": "RMS of the log residuals"})
-    ds["n_fitted"] = (GRID, fit.n_points, {"units": "1", "long_name": "finite fitted steps"})
-    ds["fitted"] = mask.astype("int8").assign_attrs(
-        units="1", long_name=f"1 where the step was fitted ({range_label(scenario)})"
-    )
+    ds["fit_residual"] = variable("fits", "fit_residual", fit.residual)
+    ds["fit_residual_rms"] = variable("fits", "fit_residual_rms", fit.residual_rms)
+    ds["n_fitted"] = variable("fits", "n_fitted", fit.n_points)
+    ds["fitted"] = mask.astype("int8").assign_attrs(attrs("fits", "fitted", fit_range=range_label(scenario)))
     interval = np.full(center.shape + (2,), np.nan)
     interval[:, :, steps] = step_band
-    ds[f"{scenario.fits.reduction}_normalized_ci"] = (GRID + ("delta", "bound"), interval, {
-        "units": "1", "long_name": f"confidence interval of the {scenario.fits.reduction} of R' at each fitted step",
-        "method": level})
+    reduction = {"reduction": scenario.fits.reduction}
+    ds[f"{scenario.fits.reduction}_normalized_ci"] = variable("fits", f"{scenario.fits.reduction}_normalized_ci",
+                                                              interval, reduction, method=level)
     _curve_vars(ds, fit_curve(force_n, center.values, scenario.fits.curve_tolerance, interval, mask.values,
-                              scenario.fits.curve_max_order), "", f"the {scenario.fits.reduction} of R'")
+                              scenario.fits.curve_max_order), "", reduction)
 
     clean = cube["resistance_clean"]
-    ds["resistance_clean"] = clean.assign_attrs(units="ohm", long_name="clean-surface resistance")
-    ds["resistance_clean_normalized"] = (clean / scale).assign_attrs(units="1", long_name="clean-surface R'")
+    ds["resistance_clean"] = clean.assign_attrs(attrs("fits", "resistance_clean"))
+    ds["resistance_clean_normalized"] = (clean / scale).assign_attrs(attrs("fits", "resistance_clean_normalized"))
     for name, value in _clean_fit(scenario, (clean / scale).values, force_n, mask.values).items():
         ds[name] = value
     _curve_vars(ds, fit_curve(force_n, (clean / scale).values, scenario.fits.curve_tolerance, None, mask.values,
-                              scenario.fits.curve_max_order), "_clean", "the clean-surface R'")
-    ds["resistance_scale"] = ((), scale, {"units": "ohm", "long_name": "2 rho*/sqrt(R* sigma): R' = R / resistance_scale"})
+                              scenario.fits.curve_max_order), "_clean", {})
+    ds["resistance_scale"] = variable("fits", "resistance_scale", scale)
     label_coords(ds)
     ds.attrs["reduction"] = scenario.fits.reduction
     ds.attrs["fit_range"] = range_label(scenario)
@@ -247,22 +238,15 @@ def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def _curve_vars(ds: xr.Dataset, curve: CurveFit, suffix: str, what: str) -> None:
-    """Store a :class:`CurveFit` of ``what`` in ``ds`` as ``curve_*<suffix>`` (and the ``power`` coordinate)."""
-    dims = GRID if curve.order.ndim == 2 else ()
-    ds.coords["power"] = ("power", np.arange(curve.coefficients.shape[-1]),
-                          {"units": "1", "long_name": "power k of ln F' in the curve model"})
-    ds[f"curve_coefficients{suffix}"] = (dims + ("power",), curve.coefficients, {
-        "units": "1", "long_name": f"coefficients c_k of ln R' = sum_k c_k (ln F')^k fitted to {what}"})
-    ds[f"curve_order{suffix}"] = (dims, curve.order.astype(np.int32), {
-        "units": "1", "long_name": f"order of the curve model of {what} (0: not fitted)"})
-    ds[f"curve_max_error{suffix}"] = (dims, curve.max_error, {
-        "units": "1", "long_name": f"largest relative error |R'_curve / R' - 1| over the fitted steps of {what}"})
-    ds[f"curve_within{suffix}"] = (dims, curve.within, {
-        "units": "1", "long_name": f"where the curve of {what} is at every fitted step: 1 within the relative "
-                                   "tolerance, 2 within max(tolerance, the step's interval) only, 0 neither"})
-    ds[f"curve_residual{suffix}"] = (dims + ("delta",), curve.residual, {
-        "units": "1", "long_name": f"ln R'_curve - ln R' of {what} on the fitted steps"})
+def _curve_vars(ds: xr.Dataset, curve: CurveFit, suffix: str, slots: dict[str, str]) -> None:
+    """Store a :class:`CurveFit` in ``ds`` as ``curve_*<suffix>`` (and the ``power`` coordinate); ``slots``
+    fill the schema's long names (the reduction fitted)."""
+    ds.coords["power"] = variable("fits", "power", np.arange(curve.coefficients.shape[-1]))
+    ds[f"curve_coefficients{suffix}"] = variable("fits", f"curve_coefficients{suffix}", curve.coefficients, slots)
+    ds[f"curve_order{suffix}"] = variable("fits", f"curve_order{suffix}", curve.order.astype(np.int32), slots)
+    ds[f"curve_max_error{suffix}"] = variable("fits", f"curve_max_error{suffix}", curve.max_error, slots)
+    ds[f"curve_within{suffix}"] = variable("fits", f"curve_within{suffix}", curve.within, slots)
+    ds[f"curve_residual{suffix}"] = variable("fits", f"curve_residual{suffix}", curve.residual, slots)
 
 
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:

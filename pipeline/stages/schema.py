@@ -19,7 +19,7 @@ from typing import Any
 
 import xarray as xr
 
-__all__ = ["Variable", "COORDINATES", "SURROGATE_COORDINATES", "SCHEMA", "attrs", "variable", "matches", "label_coords"]
+__all__ = ["Variable", "COORDINATES", "SURROGATE_COORDINATES", "RESISTANCE_LONG_NAMES", "SPOT_RADIUS_LONG_NAMES", "SCHEMA", "attrs", "variable", "array", "matches", "label_coords"]
 
 
 @dataclass(frozen=True)
@@ -97,18 +97,33 @@ _CONTACT: dict[str, Variable] = {
     "roughness_parameter": _v("delta", "1", "roughness parameter sigma R* / a^2"),
     "separation": _v("delta r", "m", "separation of the mean planes, delta + profile + displacement"),
     "spot_area": _v("delta y x", "m2", "cell contact area A*(r_i) dx^2"),
-    "spot_radius": _v("delta y x", "m", "spot radius {spots}"),
+    "spot_radius": _v("delta y x", "m", "{spot_radius}"),
     "spot_separation": _v("delta y x", "m", "separation of the mean planes at the cell centre"),
     "stiffness": _v("delta", "N m-1",
               "contact stiffness K = -dF/d delta (exact linearisation of the discretised Greenwood-Tripp system)"),
     "x": _v("x", "m", "cell centre x"),
     "y": _v("y", "m", "cell centre y"),
+    # contact.model = "discrete": the pool of surfaces (pipeline.stages.contact_discrete)
+    "surface": _v("surface", "1", "rough surface of the pool"),
+    "spot": _v("spot", "1", "touching asperity of a surface"),
+    "spot_count": _v("surface", "1", "asperities of the surface that touch at some load step"),
+    "asperity_x": _v("surface spot", "m", "touching asperity position x (from the indenter's axis)"),
+    "asperity_y": _v("surface spot", "m", "touching asperity position y (from the indenter's axis)"),
+    "asperity_radius": _v("surface delta spot", "m", "contact radius sqrt(beta w) of the touching asperity (0 off contact)"),
+    "discrete_approach": _v("surface delta", "m",
+                            "approach of the discrete surface at the step's force (tip's separation from the mean plane)"),
+    "discrete_stiffness": _v("surface delta", "N m-1",
+                             "contact stiffness K = -dF/d delta of the discrete surface (exact linearisation)"),
+    "discrete_barber_conductance": _v("surface delta", "S", "Barber's conductance K / (E* rho*) of the discrete surface"),
+    "discrete_iterations": _v("surface delta", "1", "Newton iterations of the discrete solve"),
+    "discrete_residual": _v("surface delta", "1", "final relative residual of the discrete solve"),
+    "discrete_candidates": _v("surface delta", "1", "candidate asperities in the discrete solve"),
 }
 
 _CUBE: dict[str, Variable] = {
     "clean_open_probability": _v("delta", "1",
               "probability that the oxide-free surface is an open circuit (no touching asperity)"),
-    "conductance_clean": _v("delta", "S", "conductance of the oxide-free surface (greenwood model)"),
+    "conductance_clean": _v("delta", "S", "conductance of the oxide-free surface ({model} model)"),
     "conductance_clean_greenwood": _v("delta", "S", "conductance of the oxide-free surface by the greenwood model"),
     "conductance_clean_point": _v("delta", "S", "conductance of the oxide-free surface by the point model"),
     "conductance_clean_point_lattice": _v("delta", "S",
@@ -123,7 +138,11 @@ _CUBE: dict[str, Variable] = {
     "n_realizations": _v("xi lambda", "1",
               "realizations used at this (xi, lambda): the leading entries of realization"),
     "realization": COORDINATES["realization"],
-    "resistance": _v("xi lambda delta realization", "ohm", "Greenwood constriction resistance R = R_self + R_int"),
+    "resistance": _v("xi lambda delta realization", "ohm", "{resistance}"),
+    "iterations": _v("xi lambda delta realization", "1", "conjugate-gradient iterations of the point-model solve"),
+    "residual": _v("xi lambda delta realization", "1", "final relative residual of the point-model solve (Jacobi norm)"),
+    "error_estimate": _v("xi lambda delta realization", "1",
+                         "estimated relative error of the point-model conductance (energy norm of the last step)"),
     "resistance_clean": _v("delta", "ohm", "resistance of the oxide-free surface"),
     "resistance_clean_interaction": _v("delta", "ohm", "interaction term of the oxide-free surface"),
     "resistance_clean_self": _v("delta", "ohm", "self term of the oxide-free surface"),
@@ -178,7 +197,11 @@ _FITS: dict[str, Variable] = {
     "gamma_half_width": _v("xi lambda", "1", "absolute half-width of the gamma interval, (upper - lower) / 2"),
     "geometric_mean": _v("xi lambda delta", "ohm", "geometric mean of R over realizations"),
     "geometric_mean_normalized": _v("xi lambda delta", "1", "geometric mean of R' = R sqrt(R* sigma)/(2 rho*)"),
+    "arithmetic_mean_normalized_ci": _v("xi lambda delta bound", "1",
+              "confidence interval of the {reduction} of R' at each fitted step"),
     "geometric_mean_normalized_ci": _v("xi lambda delta bound", "1",
+              "confidence interval of the {reduction} of R' at each fitted step"),
+    "median_normalized_ci": _v("xi lambda delta bound", "1",
               "confidence interval of the {reduction} of R' at each fitted step"),
     "lambda": COORDINATES["lambda"],
     "median": _v("xi lambda delta", "ohm", "median of R over realizations"),
@@ -203,9 +226,9 @@ _SURROGATE: dict[str, Variable] = {
     "alpha_clean": _v("", "1", "alpha of the clean surface"),
     "alpha_clean_ci": _v("bound", "1", "confidence interval of alpha_clean"),
     "alpha_coef_w": _v("alpha_mode alpha_power_w", "1",
-              "alpha: mode polynomials in w = log(lambda), ascending powers"),
+              "{transformed}: mode polynomials in w = log(lambda), ascending powers"),
     "alpha_coef_z": _v("alpha_mode alpha_power_z", "1",
-              "alpha: mode polynomials in z = -log(1 - xi), ascending powers"),
+              "{transformed}: mode polynomials in z = -log(1 - xi), ascending powers"),
     "alpha_cv_error": _v("lambda xi", "1", "local leave-one-line-out RMS error of ln alpha"),
     "alpha_cv_free_parameters": _v("alpha_candidate", "1", "alpha candidates: free parameters r (p + q - r)"),
     "alpha_cv_order_w": _v("alpha_candidate", "1", "alpha candidates: order in w"),
@@ -236,9 +259,9 @@ _SURROGATE: dict[str, Variable] = {
     "gamma_clean": _v("", "1", "gamma of the clean surface"),
     "gamma_clean_ci": _v("bound", "1", "confidence interval of gamma_clean"),
     "gamma_coef_w": _v("gamma_mode gamma_power_w", "1",
-              "gamma: mode polynomials in w = log(lambda), ascending powers"),
+              "{transformed}: mode polynomials in w = log(lambda), ascending powers"),
     "gamma_coef_z": _v("gamma_mode gamma_power_z", "1",
-              "gamma: mode polynomials in z = -log(1 - xi), ascending powers"),
+              "{transformed}: mode polynomials in z = -log(1 - xi), ascending powers"),
     "gamma_cv_error": _v("lambda xi", "1", "local leave-one-line-out RMS error of gamma"),
     "gamma_cv_free_parameters": _v("gamma_candidate", "1", "gamma candidates: free parameters r (p + q - r)"),
     "gamma_cv_order_w": _v("gamma_candidate", "1", "gamma candidates: order in w"),
@@ -264,6 +287,19 @@ _SURROGATE: dict[str, Variable] = {
     "xi_range": _v("end", "1", "fitted range of xi"),
 }
 
+#: The long name of contact.nc's ``spot_radius`` by ``contact.spots`` (its ``{spot_radius}`` slot).
+SPOT_RADIUS_LONG_NAMES = {
+    "mean_area": "spot radius sqrt(A_i / pi) (mean_area spots)",
+    "expected": "spot radius sqrt(beta) F_1/2(h): expected sum of asperity radii in the cell (expected spots)",
+    "asperities": "mean spot radius sqrt(beta) F_1/2(h) over realizations (asperity spots are drawn in the cube)",
+}
+
+#: The long name of the cube's ``resistance`` by ``cube.model`` (its ``{resistance}`` slot).
+RESISTANCE_LONG_NAMES = {
+    "greenwood": "Greenwood constriction resistance R = R_self + R_int",
+    "point": "point-interaction constriction resistance R = rho* / sum f (exact solve of M f = 1)",
+}
+
 #: Every stage file's variables and labelled coordinates.
 SCHEMA: dict[str, dict[str, Variable]] = {
     "contact": _CONTACT, "oxide": _OXIDE, "cube": _CUBE, "fits": _FITS, "surrogate": _SURROGATE,
@@ -275,11 +311,18 @@ def attrs(stage: str, name: str, **fields: Any) -> dict[str, str]:
     return SCHEMA[stage][name].attrs(**fields)
 
 
-def variable(stage: str, name: str, data: Any, **extra: Any) -> tuple[tuple[str, ...], Any, dict[str, Any]]:
-    """``(dims, data, attrs)`` of variable ``name`` of ``stage``'s file, for :class:`xarray.Dataset`;
-    ``extra`` attributes follow ``units`` and ``long_name``."""
+def variable(stage: str, name: str, data: Any, slots: dict[str, Any] | None = None,
+             **extra: Any) -> tuple[tuple[str, ...], Any, dict[str, Any]]:
+    """``(dims, data, attrs)`` of variable ``name`` of ``stage``'s file, for :class:`xarray.Dataset`:
+    the long name's slots filled from ``slots``, ``extra`` attributes after ``units`` and ``long_name``."""
     var = SCHEMA[stage][name]
-    return var.dims, data, {**var.attrs(), **extra}
+    return var.dims, data, {**var.attrs(**(slots or {})), **extra}
+
+
+def array(stage: str, name: str, data: Any, slots: dict[str, Any] | None = None, **extra: Any) -> xr.DataArray:
+    """Variable ``name`` of ``stage``'s file as a :class:`xarray.DataArray` (see :func:`variable`)."""
+    dims, data, found = variable(stage, name, data, slots, **extra)
+    return xr.DataArray(data, dims=dims, attrs=found)
 
 
 def matches(stage: str, name: str, dims: tuple[str, ...], found: dict[str, Any]) -> bool:

@@ -53,7 +53,8 @@ from scipy.stats import norm
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario
 from pipeline.fitting import surrogate as sg
-from pipeline.stages.schema import SURROGATE_COORDINATES
+from pipeline.stages.schema import SURROGATE_COORDINATES, array
+from pipeline.stages.schema import attrs as schema_attrs
 from pipeline.stages.surrogate_tables import band_tables, curve_tables
 from pipeline.stages.table3 import PARAMETERS, table3_csv, table3_markdown
 from pipeline.store import atomic_path, read_stage, write_dataset
@@ -123,7 +124,7 @@ def _reduced(name: str, what: str, wanted: tuple[int, ...], limits: tuple[int, .
 def _loo(name: str, matrix: np.ndarray, lam: np.ndarray, xi: np.ndarray, rank: int, order: tuple[int, int]) -> xr.DataArray:
     scan = sg.order_scan(matrix, lam, xi, rank, MAX_ORDER_W, MAX_ORDER_Z)
     configured = scan[order] if order[0] <= MAX_ORDER_W and order[1] <= MAX_ORDER_Z else np.nan
-    attrs = {"units": "1", "long_name": f"leave-one-line-out RMS relative error of {name}", "configured": configured}
+    attrs = {**schema_attrs("surrogate", f"{name}_loo"), "configured": configured}
     if np.all(np.isnan(scan)):
         attrs["verdict"] = "grid too small for leave-one-out cross-validation"
     else:
@@ -155,9 +156,9 @@ def _paper(scenario: Scenario, name: str, matrix: np.ndarray, lam: np.ndarray, x
     predictions = sg.paper_loo_predictions(matrix, lam, xi, rank, order_w, order_z)
     loo = _loo(name, matrix, lam, xi, rank, (order_w, order_z))
     variables = {
-        f"{name}_mode_lambda": xr.DataArray(model.modes_w, dims=(f"{name}_mode", "lambda"), attrs={"units": "1", "long_name": f"{name}: SVD modes u_k(lambda) = sqrt(s_k) U_k"}),
-        f"{name}_mode_xi": xr.DataArray(model.modes_z, dims=(f"{name}_mode", "xi"), attrs={"units": "1", "long_name": f"{name}: SVD modes v_k(xi) = sqrt(s_k) V_k"}),
-        f"{name}_singular_values": xr.DataArray(model.singular_values, dims=("component",), attrs={"units": "1", "long_name": f"{name}: all singular values of the grid matrix"}),
+        f"{name}_mode_lambda": array("surrogate", f"{name}_mode_lambda", model.modes_w),
+        f"{name}_mode_xi": array("surrogate", f"{name}_mode_xi", model.modes_z),
+        f"{name}_singular_values": array("surrogate", f"{name}_singular_values", model.singular_values),
         f"{name}_loo": loo,
     }
     cv_rms = float(np.sqrt(np.mean((predictions / matrix - 1.0) ** 2))) if predictions is not None else float("nan")
@@ -189,17 +190,9 @@ def _joint(scenario: Scenario, fits: xr.Dataset, name: str, matrix: np.ndarray, 
     sigma_of = {"log": relative, "identity": relative * np.abs(matrix)}
     best, tried = sg.select_model(matrix, lam, xi, specs, max_rank, max_w, max_z, sigma_of, s.cv_tolerance)
     model = sg.fit_joint(matrix, lam, xi, best.rank, best.order_w, best.order_z, best.transform, sigma_of[sg.split_spec(best.transform)[0]])
-    dim = f"{name}_candidate"
-    labels = {"transform": ("1", "transform T"), "rank": ("1", "rank r"), "order_w": ("1", "order in w"),
-              "order_z": ("1", "order in z"), "free_parameters": ("1", "free parameters r (p + q - r)")}
-    variables = {
-        f"{name}_cv_rms": xr.DataArray([c.score for c in tried], dims=(dim,), attrs={
-            "units": "1", "long_name": f"{name}: leave-one-line-out RMS relative error of each candidate model"}),
-    }
-    for key, (units, long_name) in labels.items():
-        variables[f"{name}_cv_{key}"] = xr.DataArray(
-            [getattr(c, key) for c in tried], dims=(dim,), attrs={"units": units, "long_name": f"{name} candidates: {long_name}"}
-        )
+    variables = {f"{name}_cv_rms": array("surrogate", f"{name}_cv_rms", [c.score for c in tried])}
+    for key in ("transform", "rank", "order_w", "order_z", "free_parameters"):
+        variables[f"{name}_cv_{key}"] = array("surrogate", f"{name}_cv_{key}", [getattr(c, key) for c in tried])
     info = {"transform": best.transform, "rank": model.rank, "order_w": best.order_w, "order_z": best.order_z,
             "cv_rms": best.score, "coef_w": model.coef_w, "coef_z": model.coef_z, "predictions": best.predictions}
     return variables, info
@@ -214,17 +207,15 @@ def _parameter(scenario: Scenario, fits: xr.Dataset, name: str) -> tuple[dict[st
         variables, info = _joint(scenario, fits, name, matrix, lam, xi)
     transform = str(info["transform"])
     values = sg.evaluate(info["coef_w"], info["coef_z"], lam[:, None], xi[None, :], transform)
-    what = "log " + name if transform == "log" else name
+    transformed = {"transformed": "log " + name if transform == "log" else name}
     variables.update({
-        f"{name}_coef_w": xr.DataArray(info["coef_w"], dims=(f"{name}_mode", f"{name}_power_w"), attrs={"units": "1", "long_name": f"{what}: mode polynomials in w = log(lambda), ascending powers", "transform": transform}),
-        f"{name}_coef_z": xr.DataArray(info["coef_z"], dims=(f"{name}_mode", f"{name}_power_z"), attrs={"units": "1", "long_name": f"{what}: mode polynomials in z = -log(1 - xi), ascending powers", "transform": transform}),
-        f"{name}_fit": xr.DataArray(matrix, dims=GRID, attrs={"units": "1", "long_name": f"fitted {name}"}),
-        f"{name}_surrogate": xr.DataArray(values, dims=GRID, attrs={"units": "1", "long_name": f"surrogate {name}"}),
-        f"{name}_relative_error": xr.DataArray(values / matrix - 1.0, dims=GRID, attrs={"units": "1", "long_name": f"surrogate / fitted {name} - 1"}),
-        f"{name}_cv_error": xr.DataArray(_cv_error(name, info["predictions"], matrix), dims=GRID, attrs={
-            "units": "1", "long_name": f"local leave-one-line-out RMS error of {'ln alpha' if name == 'alpha' else 'gamma'}"}),
-        f"{name}_fit_sigma": xr.DataArray(_fit_sigma(scenario, fits, name), dims=GRID, attrs={
-            "units": "1", "long_name": f"one standard deviation of {'ln alpha' if name == 'alpha' else 'gamma'} from the fit's interval"}),
+        f"{name}_coef_w": array("surrogate", f"{name}_coef_w", info["coef_w"], transformed, transform=transform),
+        f"{name}_coef_z": array("surrogate", f"{name}_coef_z", info["coef_z"], transformed, transform=transform),
+        f"{name}_fit": array("surrogate", f"{name}_fit", matrix),
+        f"{name}_surrogate": array("surrogate", f"{name}_surrogate", values),
+        f"{name}_relative_error": array("surrogate", f"{name}_relative_error", values / matrix - 1.0),
+        f"{name}_cv_error": array("surrogate", f"{name}_cv_error", _cv_error(name, info["predictions"], matrix)),
+        f"{name}_fit_sigma": array("surrogate", f"{name}_fit_sigma", _fit_sigma(scenario, fits, name)),
     })
     attrs = {
         f"{name}_transform": transform,
@@ -251,19 +242,19 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
     steps = fits["fitted"].values.astype(bool)
     force_n = fits["force_normalized"].values[steps]
     ds = ds.assign_coords(force_normalized=("step", force_n), force=("step", fits["force"].values[steps]))
-    ds["force_normalized"].attrs = {"units": "1", "long_name": "F' = 2F/(E* sqrt(R* sigma^3))"}
-    ds["force"].attrs = {"units": "N", "long_name": "normal force"}
+    ds["force_normalized"].attrs = schema_attrs("surrogate", "force_normalized")
+    ds["force"].attrs = schema_attrs("surrogate", "force")
     end = {"end": ["min", "max"]}
     ranges = {"xi": ds.xi.values, "lambda": ds["lambda"].values, "force_normalized": force_n}
     for name, values in ranges.items():
         ds[f"{name}_range"] = xr.DataArray(
-            [values.min(), values.max()], dims="end", coords=end, attrs={"units": "1", "long_name": f"fitted range of {name}"}
+            [values.min(), values.max()], dims="end", coords=end, attrs=schema_attrs("surrogate", f"{name}_range")
         )
     for name in ("xi", "lambda"):
         ds[name].attrs = SURROGATE_COORDINATES[name].attrs()
     for name in ("order_w", "order_z"):
         if name in ds.coords:
-            ds[name].attrs = {"units": "1", "long_name": f"polynomial order in {name[-1]} tried by cross-validation"}
+            ds[name].attrs = schema_attrs("surrogate", name)
     for key in ("alpha_clean", "gamma_clean", "alpha_clean_ci", "gamma_clean_ci"):
         ds[key] = fits[key]
     ds.attrs["reduction"] = fits.attrs["reduction"]

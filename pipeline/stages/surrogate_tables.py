@@ -13,6 +13,7 @@ from scipy.stats import norm
 from pipeline.config import Scenario
 from pipeline.fitting import surrogate as sg
 from pipeline.fitting.curve_model import evaluate_curve, interpolation_error
+from pipeline.stages.schema import array, attrs
 
 __all__ = ["band_tables", "curve_tables"]
 
@@ -29,9 +30,8 @@ def band_tables(fits: xr.Dataset) -> dict[str, xr.DataArray]:
     for name, value in {"band_ratio_lower": lower, "band_ratio_upper": upper, "open_probability": fits["open_probability"]}.items():
         value = value.isel(delta=steps).transpose("lambda", "xi", "delta")
         out[name] = xr.DataArray(value.values, dims=("lambda", "xi", "step"))
-    out["band_ratio_lower"].attrs = {"units": "1", "long_name": "R'_16 / R'_center"}
-    out["band_ratio_upper"].attrs = {"units": "1", "long_name": "R'_center / R'_84 (0: R_84 = inf)"}
-    out["open_probability"].attrs = {"units": "1", "long_name": "share of open-circuit realizations"}
+    for name in ("band_ratio_lower", "band_ratio_upper", "open_probability"):
+        out[name].attrs = attrs("surrogate", name)
     return out
 
 
@@ -48,11 +48,9 @@ def curve_tables(scenario: Scenario, fits: xr.Dataset) -> dict[str, xr.DataArray
         sigma = (np.log(ci.sel(bound="upper").values) - np.log(ci.sel(bound="lower").values)) / (2.0 * z)
     error = interpolation_error(ln_r, sg.to_w(fits["lambda"].values), sg.to_z(fits["xi"].values))
     return {
-        "curve_coefficients": xr.DataArray(coef, dims=("lambda", "xi", "power"), attrs={
-            "units": "1", "long_name": "curve model: ln R' = sum_k c_k (ln F')^k of each cell (fits.nc)"}),
-        "curve_fit_error": xr.DataArray(sigma, dims=("lambda", "xi", "step"), attrs={
-            "units": "1", "long_name": "one standard deviation of ln R' of the cell's mean curve at each fitted step"}),
-        "curve_interpolation_error": xr.DataArray(error, dims=("lambda", "xi"), attrs={
-            "units": "1", "long_name": "leave-one-out error of ln R' interpolated linearly in (ln lambda, -ln(1 - xi))",
-            "method": "largest over the fitted steps; RMS of the two axes; edge cells take the nearest interior value"}),
+        "curve_coefficients": array("surrogate", "curve_coefficients", coef),
+        "curve_fit_error": array("surrogate", "curve_fit_error", sigma),
+        "curve_interpolation_error": array(
+            "surrogate", "curve_interpolation_error", error,
+            method="largest over the fitted steps; RMS of the two axes; edge cells take the nearest interior value"),
     }
