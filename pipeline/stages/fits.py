@@ -32,7 +32,7 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-from pipeline.compute import ComputeOptions
+from pipeline.compute import ComputeOptions, single_threaded
 from pipeline.config import Scenario
 from pipeline.fitting.curve_model import CurveFit, fit_curve
 from pipeline.fitting.powerlaw import (
@@ -174,6 +174,7 @@ def _ensemble_summary(
     return out
 
 
+@single_threaded
 def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     """Reductions and power-law fits of a resistance cube.
 
@@ -265,6 +266,7 @@ def _curve_vars(ds: xr.Dataset, curve: CurveFit, suffix: str, what: str) -> None
         "units": "1", "long_name": f"ln R'_curve - ln R' of {what} on the fitted steps"})
 
 
+@single_threaded
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
     """Read ``cube.nc``, fit, write ``fits.nc``; returns the written path.
 
