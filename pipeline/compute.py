@@ -8,22 +8,42 @@ every dask thread also starts one BLAS thread per core).
 
 from __future__ import annotations
 
+import functools
 import os
 from contextlib import ExitStack
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable, TypeVar
 
 import dask
 from threadpoolctl import threadpool_limits
 
 from pipeline.progress import DaskProgress, ProgressLine, watch_futures
 
-__all__ = ["ComputeOptions", "compute"]
+__all__ = ["ComputeOptions", "compute", "single_threaded"]
 
 #: Runs shorter than this (s) show no progress line.
 PROGRESS_AFTER = 3.0
 #: Seconds to wait for a remote scheduler before giving up.
 CONNECT_TIMEOUT = 5.0
+
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def single_threaded(function: _F) -> _F:
+    """Run ``function`` with one BLAS/OpenMP thread (``threadpoolctl``), the previous limits restored after.
+
+    The library's entry points (each stage's ``build`` and ``run``, the predict call) wear it, so that
+    called from Python beside other work they do not start one BLAS thread per core in every dask
+    thread; their parallelism is dask's. Calls nest (an inner call changes nothing).
+    """
+
+    @functools.wraps(function)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        with threadpool_limits(limits=1):
+            return function(*args, **kwargs)
+
+    return wrapper  # type: ignore[return-value]
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,6 @@ import difflib
 import hashlib
 import json
 import math
-import os
 import tomllib
 import warnings
 from dataclasses import dataclass, field
@@ -844,8 +843,10 @@ FIELD_BYTES_PER_ENTRY = 48
 
 
 def _available_memory() -> int:
-    """Physical memory of the machine, in bytes."""
-    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    """Physical memory of the machine, in bytes (psutil: also on Windows, which has no os.sysconf)."""
+    import psutil
+
+    return int(psutil.virtual_memory().total)
 
 
 def _check_ensemble(s: Scenario) -> None:

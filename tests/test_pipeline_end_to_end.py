@@ -9,6 +9,7 @@ import pytest
 
 from pipeline import __version__
 from pipeline.cli.main import STAGES, main
+from pipeline.config import load_scenario
 from pipeline.store import read_stage
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_schema import written_against_schema
@@ -25,7 +26,8 @@ def _set_args() -> list[str]:
 def run_dir(tmp_path_factory):
     data = tmp_path_factory.mktemp("run")
     with pytest.warns(UserWarning, match=r"surrogate for alpha: rank/orders .* reduced to"):
-        status = main(["run", "--data-dir", str(data), "--no-progress", *_set_args()])
+        # the physics benchmarks (about a minute) are tested apart: test_a_second_run_computes_nothing
+        status = main(["run", "--data-dir", str(data), "--no-progress", "--no-bench", *_set_args()])
     assert status == 0
     return data
 
@@ -77,3 +79,61 @@ def test_rerun_of_a_stage_with_stale_input_is_refused(run_dir, capsys) -> None:
 
 def test_every_output_variable_is_declared_in_the_schema(run_dir) -> None:
     assert written_against_schema(run_dir) == []
+
+
+def test_a_second_run_computes_nothing(run_dir, monkeypatch, capsys) -> None:
+    """``g2tom run`` keeps stage files built from its configuration (as make does), runs the physics
+    benchmarks make run adds before the figures, and redraws figures and report."""
+    import importlib
+
+    import pipeline.bench as bench
+
+    def refuse(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        raise AssertionError("a stage computed on a second run")
+
+    for stage in STAGES:
+        module = importlib.import_module(f"pipeline.stages.{stage}")
+        monkeypatch.setattr(module, "build", refuse)
+        monkeypatch.setattr(module, "run", refuse)
+    order: list[str] = []
+    monkeypatch.setattr(bench, "physics_benchmarks", lambda scenario, data_dir: order.append("bench") or ["bench: ok"])
+    import analysis.figures
+
+    write_figures = analysis.figures.write_figures
+    monkeypatch.setattr(analysis.figures, "write_figures", lambda *a: order.append("figures") or write_figures(*a))
+    report = (run_dir / "report.md").stat().st_mtime_ns
+    assert main(["run", "--data-dir", str(run_dir), "--no-progress", *_set_args()]) == 0
+    err = capsys.readouterr().err
+    for stage in STAGES:
+        assert f"{stage}: up to date, kept {run_dir / stage}.nc" in err
+    assert order == ["bench", "figures"]
+    assert (run_dir / "report.md").stat().st_mtime_ns > report
+    # another fits parameter: fits runs again (here refused), the stages upstream of it are kept
+    with pytest.raises(AssertionError, match="a stage computed"):
+        main(["run", "--data-dir", str(run_dir), "--no-progress", "--no-bench", *_set_args(), "--set", "fits.n_bootstrap=60"])
+    err = capsys.readouterr().err
+    assert "cube: up to date" in err and "fits: up to date" not in err
+
+
+def test_physics_benchmarks_run_once_per_configuration(tmp_path, monkeypatch, small) -> None:
+    import importlib
+
+    import pipeline.bench as bench
+
+    calls: list[str] = []
+    for name in bench.PHYSICS_BENCH:
+        monkeypatch.setattr(importlib.import_module(f"pipeline.bench.{name}"), "run",
+                            lambda scenario, name=name: calls.append(name) or {"value": 1.0})
+    lines = bench.physics_benchmarks(small, tmp_path)
+    assert calls == list(bench.PHYSICS_BENCH)
+    assert lines == [f"bench {n}: wrote {tmp_path / 'bench' / n}.json" for n in bench.PHYSICS_BENCH]
+    assert json.loads((tmp_path / "bench" / "spots.json").read_text())["config_hash"] == small.config_hash()
+    assert bench.physics_benchmarks(small, tmp_path) == [
+        f"bench {n}: up to date, kept {tmp_path / 'bench' / n}.json" for n in bench.PHYSICS_BENCH]
+    assert calls == list(bench.PHYSICS_BENCH)  # nothing ran again
+    (tmp_path / "bench" / "biases.json").write_text("{truncated")
+    bench.physics_benchmarks(small, tmp_path)
+    assert calls == [*bench.PHYSICS_BENCH, "biases"]  # an unreadable one runs again
+    other = load_scenario("paper", {**SMALL_OVERRIDES, "fits.n_bootstrap": 60})
+    bench.physics_benchmarks(other, tmp_path)
+    assert calls[-2:] == list(bench.PHYSICS_BENCH)  # another configuration: both

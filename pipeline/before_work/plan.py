@@ -113,15 +113,11 @@ def realizations(scenario: Scenario) -> Realizations:
 
 
 def available_memory() -> float:
-    """Memory this machine can give a run, in bytes (``MemAvailable``, else physical memory)."""
-    try:
-        with open("/proc/meminfo") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024.0
-    except OSError:
-        pass
-    return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    """Memory this machine can give a run, in bytes (psutil's ``available``: ``MemAvailable`` on Linux;
+    also on Windows and macOS)."""
+    import psutil
+
+    return float(psutil.virtual_memory().available)
 
 
 def _cells(scenario: Scenario) -> int:

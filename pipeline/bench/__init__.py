@@ -21,12 +21,15 @@ from pipeline import __version__
 from pipeline.config import ConfigError, Scenario
 from pipeline.store import atomic_path
 
-__all__ = ["BENCHMARKS", "run_benchmarks", "summary_lines"]
+__all__ = ["BENCHMARKS", "PHYSICS_BENCH", "bench_problem", "physics_benchmarks", "run_benchmarks", "summary_lines"]
 
 BENCHMARKS: tuple[str, ...] = (
     "contact", "oxide", "cube", "point", "scaling", "predict", "convergence", "stability", "frontier", "spots",
     "biases", "discrete",
 )
+#: The physics benchmarks the report shows beside the study: ``g2tom run`` and ``make run`` (its
+#: PHYSICS_BENCH) run them before the figures and the report.
+PHYSICS_BENCH: tuple[str, ...] = ("spots", "biases")
 
 
 def _machine() -> dict[str, Any]:
@@ -81,7 +84,8 @@ def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str]
     for name in names:
         module = importlib.import_module(f"pipeline.bench.{name}")
         extra = {"data_dir": data_dir} if "data_dir" in inspect.signature(module.run).parameters else {}
-        result = {"benchmark": name, "scenario": scenario.name, "machine": _machine(), **module.run(scenario, **extra)}
+        result = {"benchmark": name, "scenario": scenario.name, "config_hash": scenario.config_hash(),
+                  "machine": _machine(), **module.run(scenario, **extra)}
         text = json.dumps(result, indent=2, sort_keys=False, default=float)
         target = out_dir / f"{name}.json"
         with atomic_path(target) as tmp:
@@ -94,3 +98,36 @@ def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str]
             print(f"bench {name}: {len(lines)} figures in {target} (`g2tom bench --only {name} --verbose` prints them)")
         written[name] = target
     return written
+
+
+def bench_problem(data_dir: str | Path, name: str, scenario: Scenario) -> str | None:
+    """Why ``<data_dir>/bench/<name>.json`` cannot be kept for ``scenario`` (one line), or None if it can.
+
+    A benchmark's JSON is kept when it is readable and records the scenario's whole configuration
+    hash (:meth:`~pipeline.config.Scenario.config_hash`).
+    """
+    path = Path(data_dir) / "bench" / f"{name}.json"
+    if not path.is_file():
+        return f"{path} is missing"
+    try:
+        found = json.loads(path.read_text()).get("config_hash")
+    except (OSError, ValueError, AttributeError):
+        return f"{path} is unreadable"
+    if found != scenario.config_hash():
+        return f"{path} was written for another configuration (config_hash {found}, needs {scenario.config_hash()})"
+    return None
+
+
+def physics_benchmarks(scenario: Scenario, data_dir: str | Path) -> list[str]:
+    """Run those of :data:`PHYSICS_BENCH` that are not current (:func:`bench_problem`), keep the others.
+
+    Returns
+    -------
+    list of str
+        One line per benchmark: ``bench spots: up to date, kept <path>`` or ``bench spots: wrote <path>``.
+    """
+    stale = [name for name in PHYSICS_BENCH if bench_problem(data_dir, name, scenario)]
+    written = run_benchmarks(scenario, data_dir, only=stale) if stale else {}
+    return [f"bench {name}: wrote {written[name]}" if name in written
+            else f"bench {name}: up to date, kept {Path(data_dir) / 'bench' / f'{name}.json'}"
+            for name in PHYSICS_BENCH]

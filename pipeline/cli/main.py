@@ -123,8 +123,21 @@ def _cmd_run(args: argparse.Namespace, scenario: Scenario) -> None:
     if args.check:
         print("run: every check before work passed (configuration, surrogate grid, plan, scene)", file=sys.stderr)
         return
-    for name in STAGES:
+    from pipeline.config import STAGE_UPSTREAM
+    from pipeline.store import stage_path, stage_problem
+
+    rebuilt: set[str] = set()
+    for name in STAGES:  # as make: a stage file built from this configuration, on kept inputs, is kept
+        if stage_problem(args.data_dir, name, scenario) is None and not rebuilt & set(STAGE_UPSTREAM[name]):
+            print(f"{name}: up to date, kept {stage_path(args.data_dir, name)}", file=sys.stderr)
+            continue
         _run_stage(name, scenario, args)
+        rebuilt.add(name)
+    if not args.no_bench:  # what make run adds to the report (the Makefile's PHYSICS_BENCH)
+        from pipeline.bench import physics_benchmarks
+
+        for line in physics_benchmarks(scenario, args.data_dir):
+            print(line, file=sys.stderr)
     _cmd_figures(args, scenario)
     _cmd_report(args, scenario)
 
@@ -368,9 +381,11 @@ def _parser() -> argparse.ArgumentParser:
 
     for stage in STAGES:
         add(stage, _cmd_stage, f"run the {stage} stage", compute=True)
-    run = add("run", _cmd_run, "run every stage, the figures and the report", compute=True)
+    run = add("run", _cmd_run, "run every stage not up to date, the physics benchmarks, the figures and the report", compute=True)
     run.add_argument("--check", action="store_true",
                      help="only the checks a run makes before work (make run calls it before the first stage)")
+    run.add_argument("--no-bench", action="store_true",
+                     help="leave out the physics benchmarks the report shows (spots, biases; about a minute)")
     add("figures", _cmd_figures, "write the figures under <data-dir>/figures")
     add("report", _cmd_report, "write <data-dir>/report.md and report.html")
     bench = add("bench", _cmd_bench, "benchmarks: run time against error, printed and saved")

@@ -11,17 +11,17 @@ import json
 import sys
 import warnings
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import xarray as xr
 
 from pipeline.before_work.preflight import check_output_file
 from pipeline.config import ConfigError, Scenario, read_input_text
-from pipeline.predict.domain import check_surface, with_measured_roughness
-from pipeline.predict.predictor import predict
+from pipeline.predict.answer import choose_surrogate, predict_with
+from pipeline.predict.atlas import NOT_IN_ATLAS
+from pipeline.predict.domain import with_measured_roughness
 from pipeline.predict.queries import OUTPUT_COLUMNS, check_values
-from pipeline.predict.surrogate_file import SurrogateTables, load_surrogate
+from pipeline.predict.surrogate_file import SurrogateTables
 
 __all__ = ["predict_cli", "to_csv", "to_json", "to_table", "INPUT_ALIASES", "TABLE_COLUMNS"]
 
@@ -89,11 +89,6 @@ def _read_csv(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return out[0], out[1], out[2]
 
 
-def _default_surrogate(data_dir: Path) -> Path:
-    json_path = Path(data_dir) / "surrogate.json"
-    return json_path if json_path.is_file() else Path(data_dir) / "surrogate.nc"
-
-
 #: The columns of the table printed on a terminal (every column: CSV or --json).
 TABLE_COLUMNS = ("force", "xi", "lambda", "resistance", "lower", "upper", "open_probability")
 #: Significant digits in that table.
@@ -144,31 +139,6 @@ def to_table(ds: xr.Dataset) -> str:
     return "\n".join("  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells) + "\n"
 
 
-def _chosen_surrogate(args: argparse.Namespace, scenario: Scenario) -> Any:
-    """The surrogate that answers: ``--surrogate`` (either kind), else the run's own when it is of
-    this surface, else the atlas's (``<data-dir>/atlas/surrogate.json``, else the one shipped in
-    the package) when there is one."""
-    from pipeline.predict.atlas import is_atlas_document, load_atlas_surrogate, shipped_path
-
-    if args.surrogate is not None:
-        path = Path(args.surrogate)
-        if path.suffix == ".json" and path.is_file() and is_atlas_document(read_input_text("--surrogate", path)):
-            return load_atlas_surrogate(path)
-        return load_surrogate(path)
-    own = _default_surrogate(args.data_dir)
-    data_atlas = Path(args.data_dir) / "atlas" / "surrogate.json"
-    atlas = data_atlas if data_atlas.is_file() else shipped_path()
-    if own.is_file():
-        tables = load_surrogate(own)
-        try:
-            check_surface(tables, scenario, extrapolate=False)
-            return tables
-        except ConfigError:
-            if atlas is None:
-                return tables  # predict refuses the surface, naming the run's own surrogate
-    return load_atlas_surrogate(atlas) if atlas is not None else load_surrogate(own)
-
-
 def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
     """``g2tom predict``: R_el, its band and the band's components as CSV (a short table on a terminal,
     JSON with ``--json``), to stdout or ``--output``; warnings and notes on stderr."""
@@ -180,19 +150,13 @@ def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
         scenario = with_measured_roughness(scenario, args.roughness, args.pixel_size)
     elif args.pixel_size is not None:
         raise ConfigError("--pixel-size is only used with --roughness FILE")
-    answer = _chosen_surrogate(args, scenario)
+    chosen = choose_surrogate(scenario, args.data_dir, args.surrogate, option="--surrogate")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
-        if isinstance(answer, SurrogateTables):
-            result = predict(answer, scenario, force, xi, lam, extrapolate=args.extrapolate,
-                             model=args.model)
-        else:
-            from pipeline.predict.atlas import NOT_IN_ATLAS, predict_atlas
-
-            result = predict_atlas(answer, scenario, force, xi, lam, extrapolate=args.extrapolate)
-            result = result.drop_vars(NOT_IN_ATLAS)
-            print(f"g2tom: note: the atlas surrogate holds no realization spread, fit interval or open-circuit share: "
-                  f"columns {', '.join(NOT_IN_ATLAS)} left out; its band is its held-out error", file=sys.stderr)
+        result = predict_with(chosen, scenario, force, xi, lam, model=args.model, extrapolate=args.extrapolate)
+    if not isinstance(chosen, SurrogateTables):
+        print(f"g2tom: note: the atlas surrogate holds no realization spread, fit interval or open-circuit share: "
+              f"columns {', '.join(NOT_IN_ATLAS)} left out; its band is its held-out error", file=sys.stderr)
     for w in caught:
         print(f"g2tom: warning: {w.message}", file=sys.stderr)
     print(f"g2tom: answered by {result.attrs['answered_by']}", file=sys.stderr)

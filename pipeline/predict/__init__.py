@@ -1,3 +1,20 @@
 """The predictor (Eq. 27) from a written surrogate: ``predictor`` (R_el and its band), ``queries``
 (the grid of queries and their ranges), ``domain`` (which surface a query is on),
-``surrogate_file`` (surrogate.json) and ``atlas`` (the shipped atlas surrogate over mu and Pi)."""
+``surrogate_file`` (surrogate.json), ``atlas`` (the shipped atlas surrogate over mu and Pi) and
+``answer`` (the surrogate ``g2tom predict`` chooses for a surface, and its answer).
+
+:func:`predict_resistance` is the one call for Python users (also ``pipeline.predict_resistance``).
+It is imported on first use, so that importing a submodule stays as light as it was.
+"""
+
+from typing import Any
+
+__all__ = ["predict_resistance"]
+
+
+def __getattr__(name: str) -> Any:
+    if name == "predict_resistance":
+        from pipeline.predict.answer import predict_resistance
+
+        return predict_resistance
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

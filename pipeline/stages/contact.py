@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from pipeline.compute import ComputeOptions
+from pipeline.compute import ComputeOptions, single_threaded
 from pipeline.config import AUTO, ConfigError, Scenario
 from pipeline.contact_solution import indenter_profile, radial_grid, solve, solve_with_stiffness
 from pipeline.before_work.domains import resolve
@@ -102,6 +102,7 @@ def _var(name: str, data: np.ndarray, **slots: str) -> tuple:
     return (var.dims, np.asarray(data), {"long_name": var.long_name.format(**slots), "units": var.units})
 
 
+@single_threaded
 def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=False)) -> xr.Dataset:
     """Solve the contact problem of ``scenario`` and collect every field (pure, in memory).
 
@@ -186,6 +187,7 @@ def _scalar_vars(scenario: Scenario, force: np.ndarray, sols: list[gt.Solution])
     }
 
 
+@single_threaded
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
     """Build the contact dataset and write ``<data_dir>/contact.nc`` atomically.
 

@@ -31,7 +31,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline import store
-from pipeline.compute import ComputeOptions
+from pipeline.compute import ComputeOptions, single_threaded
 from pipeline.config import Scenario
 from pipeline.physics import constriction
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
@@ -216,6 +216,7 @@ def clean_conductances(scenario: Scenario, contact: xr.Dataset,
     return _clean_models(radius, weights, settings, _clean_draws(scenario), known or {})
 
 
+@single_threaded
 def build(
     scenario: Scenario,
     contact: xr.Dataset,
@@ -267,6 +268,7 @@ def build(
     return dataset(scenario, contact, oxide, out, clean, settings, measured, counts, last)
 
 
+@single_threaded
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
     """Read contact.nc and oxide.nc, build the cube and write ``<data_dir>/cube.nc`` atomically."""
     contact = store.read_stage(data_dir, "contact", scenario)

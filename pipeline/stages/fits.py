@@ -32,7 +32,7 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-from pipeline.compute import ComputeOptions
+from pipeline.compute import ComputeOptions, single_threaded
 from pipeline.config import Scenario
 from pipeline.fitting.curve_model import CurveFit, fit_curve
 from pipeline.fitting.powerlaw import (
@@ -168,6 +168,7 @@ def _ensemble_summary(
     return out
 
 
+@single_threaded
 def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     """Reductions and power-law fits of a resistance cube.
 
@@ -249,6 +250,7 @@ def _curve_vars(ds: xr.Dataset, curve: CurveFit, suffix: str, slots: dict[str, s
     ds[f"curve_residual{suffix}"] = variable("fits", f"curve_residual{suffix}", curve.residual, slots)
 
 
+@single_threaded
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
     """Read ``cube.nc``, fit, write ``fits.nc``; returns the written path.
 

@@ -27,7 +27,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline import store
-from pipeline.compute import ComputeOptions, compute
+from pipeline.compute import ComputeOptions, compute, single_threaded
 from pipeline.config import Scenario
 from pipeline.physics.grid import cell_centres
 from pipeline.scene import FieldSource, bands, threshold_block
@@ -177,6 +177,7 @@ def _dataset(scenario: Scenario, psi: np.ndarray, threshold: np.ndarray, fractio
     return xr.Dataset(data_vars, coords=coords, attrs=dataset_attrs)
 
 
+@single_threaded
 def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=False)) -> xr.Dataset:
     """Compute the oxide ensemble of ``scenario`` with dask over realization chunks.
 
@@ -225,6 +226,7 @@ def _computed(
     return out
 
 
+@single_threaded
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
     """Build the ensemble and write ``<data_dir>/oxide.nc`` atomically; return its path."""
     return store.write_dataset(build(scenario, options), data_dir, "oxide", scenario)

@@ -50,7 +50,7 @@ import numpy as np
 import xarray as xr
 from scipy.stats import norm
 
-from pipeline.compute import ComputeOptions
+from pipeline.compute import ComputeOptions, single_threaded
 from pipeline.config import ConfigError, Scenario
 from pipeline.fitting import surrogate as sg
 from pipeline.stages.schema import SURROGATE_COORDINATES, array
@@ -229,6 +229,7 @@ def _parameter(scenario: Scenario, fits: xr.Dataset, name: str) -> tuple[dict[st
     return variables, attrs
 
 
+@single_threaded
 def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
     """The surrogate dataset of a fits dataset (see the module docstring)."""
     ds = xr.Dataset(coords={"lambda": fits["lambda"].values, "xi": fits["xi"].values})
@@ -271,6 +272,7 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
     return ds
 
 
+@single_threaded
 def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
     """Read ``fits.nc``; write ``surrogate.nc``, ``surrogate.json``, ``table3.csv`` and ``table3.md``.
 

@@ -1,0 +1,70 @@
+"""Library entry points run with one BLAS thread (issue 32): ``pipeline.compute.single_threaded``."""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pytest
+from threadpoolctl import threadpool_info, threadpool_limits
+
+from pipeline.compute import single_threaded
+
+STAGE_MODULES = ("contact", "oxide", "cube", "fits", "surrogate")
+
+
+def _blas_threads() -> list[int]:
+    np.ones(1) @ np.ones(1)  # numpy's BLAS loaded
+    counts = [info["num_threads"] for info in threadpool_info() if info["user_api"] == "blas"]
+    assert counts, "no BLAS library found by threadpoolctl"
+    return counts
+
+
+def test_one_blas_thread_inside_the_limits_restored_after() -> None:
+    seen: list[list[int]] = []
+
+    @single_threaded
+    def probe(x: int, y: int = 0) -> int:
+        """A probe."""
+        seen.append(_blas_threads())
+        return x + y
+
+    with threadpool_limits(limits=2, user_api="blas"):
+        assert _blas_threads() == [2] * len(_blas_threads())
+        assert probe(1, y=2) == 3
+        assert seen[-1] == [1] * len(seen[-1])
+        single_threaded(lambda: probe(0))()  # nested calls
+        assert seen[-1] == [1] * len(seen[-1])
+        assert _blas_threads() == [2] * len(_blas_threads())  # restored
+    assert probe.__doc__ == "A probe." and probe.__name__ == "probe"
+
+
+@pytest.mark.parametrize("name", STAGE_MODULES)
+def test_every_stage_build_and_run_and_the_predict_call_wear_it(name: str) -> None:
+    wrapper_code = single_threaded(lambda: None).__code__
+    module = importlib.import_module(f"pipeline.stages.{name}")
+    for function in (module.build, module.run):
+        assert function.__code__ is wrapper_code, f"{name}.{function.__name__} is not single_threaded"
+    from pipeline.predict.answer import predict_resistance, predict_with
+
+    assert predict_resistance.__code__ is wrapper_code and predict_with.__code__ is wrapper_code
+
+
+def test_a_stage_build_runs_single_threaded(monkeypatch, small) -> None:
+    """Inside a real stage call (fits.build), BLAS runs one thread."""
+    from pipeline.stages import fits
+    from tests.test_fits_stage import synthetic_cube
+
+    seen: list[list[int]] = []
+    original = fits.fitted_steps
+
+    def spy(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        seen.append(_blas_threads())
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(fits, "fitted_steps", spy)
+    cube = synthetic_cube(small, noise=0.2)
+    with threadpool_limits(limits=2, user_api="blas"):
+        fits.build(small, cube)
+        assert _blas_threads() == [2] * len(_blas_threads())
+    assert seen and all(c == [1] * len(c) for c in seen)
