@@ -13,8 +13,10 @@ from pathlib import Path
 import matplotlib
 import matplotlib.pyplot as plt
 from cycler import cycler
+from matplotlib.axis import Axis
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
-__all__ = ["ONE_COLUMN", "TWO_COLUMNS", "COLORS", "RC", "LABELS", "context", "equals", "size", "save", "grey_level"]
+__all__ = ["ONE_COLUMN", "TWO_COLUMNS", "COLORS", "RC", "LABELS", "context", "equals", "size", "save", "plain_log_ticks", "grey_level"]
 
 #: Widths of one and of two paper columns, in inches.
 ONE_COLUMN = 3.4
@@ -122,6 +124,17 @@ def save(fig: plt.Figure, path: Path) -> Path:
     fig.savefig(path)
     plt.close(fig)
     return Path(path)
+
+
+def plain_log_ticks(axis: Axis) -> None:
+    """Label a log ``axis`` at 1, 2 and 5 x 10^k in plain numbers (0.5, 20), nothing on minor ticks.
+
+    A log axis spanning less than a decade otherwise labels its minor ticks in scientific
+    notation (``4 x 10^-1``), and those labels run into each other.
+    """
+    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_formatter(NullFormatter())
 
 
 def grey_level(color: str) -> float:
