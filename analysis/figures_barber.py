@@ -44,7 +44,7 @@ def _draw(result: dict, target: Path) -> Path:
                 continue
             for ax in (full, near):
                 ax.plot(entry["force_N"], values, STYLES[model], color=colour, marker=".",
-                        label=f"{spots}, {model.replace('_', ' + ')}")
+                        label=f"{spots.replace('_', ' ')}, {model.replace('_', ' + ')}")
     for ax in (full, near):
         ax.axhline(1.0, color="k", lw=0.8)
         ax.set_xscale("log")
