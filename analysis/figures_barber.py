@@ -14,7 +14,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from analysis.style import LABELS, context, save, size
+from analysis.style import LABELS, context, plain_log_ticks, save, size
 from pipeline.config import Scenario
 
 __all__ = ["write"]
@@ -50,6 +50,7 @@ def _draw(result: dict, target: Path) -> Path:
         ax.set_xscale("log")
         ax.set_xlabel(LABELS["force"])
     full.set_yscale("log")
+    plain_log_ticks(full.yaxis)
     full.set_ylabel(LABELS["kappa_barber"])
     full.set_title("clean, every discretization")
     near.set_ylim(0.9, 1.1)

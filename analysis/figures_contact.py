@@ -84,7 +84,7 @@ def _fig4(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
         a.semilogy(d[hertz > 0], hertz[hertz > 0], "s--", label="Hertz, same interpenetration")
     a.invert_xaxis()
     a.set(xlabel=LABELS["delta_sigma"], ylabel=LABELS["force"], title="(f) force")
-    a.legend()
+    a.legend(loc="upper left")  # the force rises to the right: the corner stays empty
     note = "" if sphere else f" — {scenario.indenter.shape}: Hertz and Eq. 22 apply to the sphere only, not drawn"
     fig.suptitle(f"Greenwood–Tripp contact ({scenario.name}): {title}{note}")
     return save(fig, path)
@@ -107,9 +107,11 @@ def _fig5(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
         one = ds.isel(delta=_nearest(ds, target))
         image = ax.imshow(one.spot_radius.transpose("y", "x").values / scenario.cell_size, origin="lower",
                           extent=extent, cmap="Greys", vmin=0.0, vmax=ratio_max, interpolation="nearest")
-        for value, style, label in ((one.hertz_radius, "C0", "Hertz"), (one.holm_radius, "C3", "Holm–Greenwood")):
+        for value, colour, dashes, label in ((one.hertz_radius, "C3", "--", "Hertz"),
+                                             (one.holm_radius, "C1", "-", "Holm–Greenwood")):
             if np.isfinite(value):
-                ax.add_patch(plt.Circle((0, 0), 1e3 * float(value), fill=False, color=style, lw=1.5, label=label))
+                ax.add_patch(plt.Circle((0, 0), 1e3 * float(value), fill=False, color=colour, ls=dashes, lw=1.2,
+                                        label=label))
         ax.set(xlim=extent[:2], ylim=extent[2:], aspect="equal", xlabel=LABELS["x"],
                title=f"{equals('delta_sigma', float(one.delta_sigma), '.2f')}, $F$ = {float(one.force):.0f} N")
     axes[0].set_ylabel(LABELS["y"])

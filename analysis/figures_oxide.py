@@ -77,7 +77,7 @@ def _draw(scenario: Scenario, fig: plt.Figure, axes: np.ndarray, centres: np.nda
         axes[0, col].set_title(equals("lambda", lam))
         axes[1, col].imshow(image >= psi0, origin="lower", extent=extent, cmap="Greys", vmin=0, vmax=1.6)
         yy, xx = np.nonzero(cells >= psi0)
-        axes[1, col].plot(centres[xx] / h, centres[yy] / h, ".", color="tab:red", markersize=1.5)
+        axes[1, col].plot(centres[xx] / h, centres[yy] / h, ".", color="tab:red", markersize=0.6)
         axes[1, col].set_title(f"{equals('xi', xi)}, cells covered {np.mean(cells >= psi0):.1%}")
     for ax in axes.flat:
         ax.set_xlabel(LABELS["x_cells"])

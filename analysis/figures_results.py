@@ -214,8 +214,8 @@ def fig11_barber(path: Path, fits: xr.Dataset) -> Path:
         ax.set(xscale="log", yscale="log", xlabel=LABELS["force_normalized"],
                title=f"({letter}) {equals('lambda', lam)}, $s = {'' if s_ratio == 1 else f'{s_ratio:g}'}\\sigma$, "
                      f"$p = {p:g}$")
-        plain_log_ticks(ax.xaxis)
-        plain_log_ticks(ax.yaxis)
+        plain_log_ticks(ax.xaxis, subs=(1.0, 2.0, 5.0))
+        plain_log_ticks(ax.yaxis, subs=(1.0, 2.0, 5.0))
         ax.grid(True, which="major", alpha=0.3)
     axes[0].set_ylabel(LABELS["conductance_short"])
     fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncols=3)

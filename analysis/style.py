@@ -12,9 +12,10 @@ from pathlib import Path
 
 import matplotlib
 import matplotlib.pyplot as plt
+import numpy as np
 from cycler import cycler
 from matplotlib.axis import Axis
-from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+from matplotlib.ticker import Formatter, FuncFormatter, LogLocator
 
 __all__ = ["ONE_COLUMN", "TWO_COLUMNS", "COLORS", "RC", "LABELS", "context", "equals", "size", "save", "plain_log_ticks", "grey_level"]
 
@@ -126,15 +127,44 @@ def save(fig: plt.Figure, path: Path) -> Path:
     return Path(path)
 
 
-def plain_log_ticks(axis: Axis) -> None:
-    """Label a log ``axis`` at 1, 2 and 5 x 10^k in plain numbers (0.5, 20), nothing on minor ticks.
+class _MinorLogLabels(Formatter):
+    """Plain labels of a log axis' minor ticks, only where the view spans less than a decade.
 
-    A log axis spanning less than a decade otherwise labels its minor ticks in scientific
-    notation (``4 x 10^-1``), and those labels run into each other.
+    There, the ticks at mantissas 2, 3 and 5 are labelled; every minor tick is when that leaves
+    fewer than two labels in view (with the decades), or when matplotlib has fallen back to
+    linear minor ticks (1.2, 1.4, ...). Nothing is labelled on a longer view.
     """
-    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+
+    labelled: tuple[float, ...] = ()
+
+    def set_locs(self, locs) -> None:
+        """Choose the labelled ticks among ``locs`` for the current view."""
+        super().set_locs(locs)
+        low, high = sorted(self.axis.get_view_interval())
+        if low <= 0 or high / low >= 10.0:
+            self.labelled = ()
+            return
+        shown = np.asarray([v for v in locs if low <= v <= high], float)
+        mantissa = np.round(shown / 10.0 ** np.floor(np.log10(shown) + 1e-9), 6)
+        decades = np.floor(np.log10(high) + 1e-9) - np.ceil(np.log10(low) - 1e-9) + 1
+        chosen = shown[np.isin(mantissa, (2.0, 3.0, 5.0))]
+        linear = np.any(mantissa != np.round(mantissa))
+        self.labelled = tuple(shown if linear or chosen.size + decades < 2 else chosen)
+
+    def __call__(self, x: float, pos: int | None = None) -> str:
+        return f"{x:g}" if np.any(np.isclose(x, self.labelled, rtol=1e-9, atol=0.0)) else ""
+
+
+def plain_log_ticks(axis: Axis, subs: tuple[float, ...] = (1.0,)) -> None:
+    """Plain numbers (0.5, 20) on a log ``axis``: major ticks at ``subs`` x 10^k, minor labels
+    only where the view spans less than a decade (:class:`_MinorLogLabels`).
+
+    Matplotlib otherwise labels the minor ticks of a short log axis in scientific notation
+    (``4 x 10^-1``, ``6 x 10^-1``), and at a paper's column width those labels run into each other.
+    """
+    axis.set_major_locator(LogLocator(subs=subs))
     axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-    axis.set_minor_formatter(NullFormatter())
+    axis.set_minor_formatter(_MinorLogLabels())
 
 
 def grey_level(color: str) -> float:

@@ -176,6 +176,10 @@ def test_validate_ticks_are_apart_and_the_legend_is_outside_every_panel(forces, 
     fig = _validate_figure(forces, tmp_path / "validate.png")
     assert tick_label_overlaps(fig) == []
     renderer = _renderer(fig)
+    for ax in fig.axes:  # plain labels, and at least two per axis however short the span
+        for axis in (ax.xaxis, ax.yaxis) if ax.axison else ():
+            labels = [label.get_text() for label, _ in _shown_tick_labels(ax, axis, renderer)]
+            assert len(labels) >= 2 and not any("times" in text for text in labels), labels
     assert not any(ax.get_legend() for ax in fig.axes) and len(fig.legends) == 1
     legend = fig.legends[0].get_window_extent(renderer)
     for ax in fig.axes:
