@@ -62,7 +62,6 @@ LABELS: dict[str, str] = {
     "lambda": r"$\lambda = l_O\sqrt{\eta}$",
     "alpha": r"$\alpha$",
     "gamma": r"$\gamma$",
-    "s_sigma": r"$s/\sigma$",
     "delta_sigma": r"$\delta/\sigma$",
     "radius_normalized": r"$r/\sqrt{R^*\sigma}$",
     "pressure_normalized": r"$p/(E^*\sqrt{\sigma/R^*})$",
