@@ -24,6 +24,7 @@ FAMILIES: tuple[str, ...] = (
     "analysis.figures_results",
     "analysis.figures_point",
     "analysis.figures_barber",
+    "analysis.figures_validate",
 )
 
 

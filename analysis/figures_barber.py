@@ -14,12 +14,13 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
+from analysis.style import LABELS, context, plain_log_ticks, save, size
 from pipeline.config import Scenario
 
 __all__ = ["write"]
 
 STYLES = {"greenwood": "-", "point": "--", "point_lattice": ":"}
-COLOURS = {"mean_area": "tab:red", "expected": "tab:blue", "asperities": "tab:green"}
+COLOURS = {"mean_area": "C0", "expected": "C2", "asperities": "C3"}
 
 
 def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
@@ -28,7 +29,13 @@ def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
     if not path.is_file():
         return []
     result = json.loads(path.read_text())
-    fig, (full, near) = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
+    with context():
+        return [_draw(result, out_dir / "barber_spots.png")]
+
+
+def _draw(result: dict, target: Path) -> Path:
+    """Both panels (all ratios, and near 1) from the benchmark's ``result``, saved to ``target``."""
+    fig, (full, near) = plt.subplots(1, 2, figsize=size(2, 2.9), layout="constrained")
     for spots, colour in COLOURS.items():
         entry = result[spots]
         for model, ratio in entry["barber_ratio"].items():
@@ -37,17 +44,16 @@ def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
                 continue
             for ax in (full, near):
                 ax.plot(entry["force_N"], values, STYLES[model], color=colour, marker=".",
-                        label=f"{spots}, {model.replace('_', ' + ')}")
+                        label=f"{spots.replace('_', ' ')}, {model.replace('_', ' + ')}")
     for ax in (full, near):
         ax.axhline(1.0, color="k", lw=0.8)
         ax.set_xscale("log")
-        ax.set_xlabel("F (N)")
+        ax.set_xlabel(LABELS["force"])
     full.set_yscale("log")
-    full.set_ylabel("kappa / kappa_Barber (clean)")
+    plain_log_ticks(full.yaxis)
+    full.set_ylabel(LABELS["kappa_barber"])
+    full.set_title("clean, every discretization")
     near.set_ylim(0.9, 1.1)
     near.set_title("near 1 (expected and asperities)")
-    full.legend(fontsize=7)
-    target = out_dir / "barber_spots.png"
-    fig.savefig(target, dpi=120)
-    plt.close(fig)
-    return [target]
+    fig.legend(*full.get_legend_handles_labels(), loc="outside right center")
+    return save(fig, target)

@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
+from analysis.style import LABELS, context, equals, save, size
 from pipeline.config import Scenario
 from pipeline.physics.asperity import area_fraction
 from pipeline.physics.hertz import hertz_force
@@ -40,13 +41,13 @@ def _fig4(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
     sphere = scenario.indenter.shape == "sphere"
     extent = float(one.hertz_radius) if sphere else _contact_radius(one)
     keep = rn <= 3.5 * max(1.0, extent / np.sqrt(radius * sigma))
-    fig, ax = plt.subplots(2, 3, figsize=(13, 7.5), constrained_layout=True)
-    title = f"delta/sigma = {float(one.delta_sigma):.2f}, F = {float(one.force):.0f} N"
+    fig, ax = plt.subplots(2, 3, figsize=size(2, 4.6), layout="constrained")
+    title = f"{equals('delta_sigma', float(one.delta_sigma), '.2f')}, $F$ = {float(one.force):.0f} N"
     a = ax[0, 0]
     a.plot(rn[keep], one.pressure[keep] / p_bar, label="Greenwood–Tripp")
     if sphere:
         a.plot(rn[keep], one.hertz_pressure[keep] / p_bar, "--", label="Hertz, same force")
-    a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$p/(E^*\sqrt{\sigma/R^*})$", title="(a) pressure")
+    a.set(xlabel=LABELS["radius_normalized"], ylabel=LABELS["pressure_normalized"], title="(a) pressure")
     a.legend()
     a = ax[0, 1]
     a.plot(rn[keep], (one.delta.values + one.profile[keep]) / sigma, "k--", label="initial (rigid)")
@@ -54,27 +55,26 @@ def _fig4(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
     if sphere:
         a.plot(rn[keep], one.hertz_separation[keep] / sigma, ":", label="Hertz")
     a.axhline(0, color="0.6", lw=0.8)
-    a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"gap above mean plane / $\sigma$",
-          title="(b) configuration")
+    a.set(xlabel=LABELS["radius_normalized"], ylabel=LABELS["gap_normalized"], title="(b) gap above the mean plane")
     a.legend()
     a = ax[0, 2]
     a.plot(rn[keep], one.displacement[keep] / sigma, label="Greenwood–Tripp")
     if sphere:
         a.plot(rn[keep], one.hertz_displacement[keep] / sigma, "--", label="Hertz")
-    a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$u/\sigma$", title="(c) displacement")
+    a.set(xlabel=LABELS["radius_normalized"], ylabel=LABELS["displacement_normalized"], title="(c) displacement")
     a.legend()
     a = ax[1, 0]
     a.plot(rn[keep], one.area_fraction[keep], label=r"$A^*$")
     if sphere:
         a.axvline(float(one.hertz_radius) / np.sqrt(radius * sigma), color="C1", ls="--", label="Hertz radius")
-    a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$A^*$", title="(d) area fraction")
+    a.set(xlabel=LABELS["radius_normalized"], ylabel=LABELS["area_fraction"], title="(d) area fraction")
     a.legend()
     a = ax[1, 1]
     rigid = area_fraction(one.delta.values + one.profile.values, sigma, rough.eta, rough.beta)
     a.semilogy(rn, one.area_fraction, label=r"$A^*$")
     a.semilogy(rn, rigid, "--", label="Eq. 22 (rigid, with the 1/2)" if sphere else f"rigid {scenario.indenter.shape}")
     a.set_ylim(1e-30, 1.0)
-    a.set(xlabel=r"$r/\sqrt{R^*\sigma}$", ylabel=r"$A^*$", title="(e) area fraction, semi-log")
+    a.set(xlabel=LABELS["radius_normalized"], ylabel=LABELS["area_fraction"], title="(e) area fraction, semi-log")
     a.legend()
     a = ax[1, 2]
     d = ds.delta_sigma.values
@@ -83,13 +83,11 @@ def _fig4(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
         hertz = hertz_force(-ds.delta.values, radius, e_star)
         a.semilogy(d[hertz > 0], hertz[hertz > 0], "s--", label="Hertz, same interpenetration")
     a.invert_xaxis()
-    a.set(xlabel=r"$\delta/\sigma$", ylabel="force, N", title="(f) force")
-    a.legend()
+    a.set(xlabel=LABELS["delta_sigma"], ylabel=LABELS["force"], title="(f) force")
+    a.legend(loc="upper left")  # the force rises to the right: the corner stays empty
     note = "" if sphere else f" — {scenario.indenter.shape}: Hertz and Eq. 22 apply to the sphere only, not drawn"
     fig.suptitle(f"Greenwood–Tripp contact ({scenario.name}): {title}{note}")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save(fig, path)
 
 
 def _contact_radius(one: xr.Dataset) -> float:
@@ -104,24 +102,24 @@ def _fig5(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
     half = 0.5 * (x_mm[1] - x_mm[0]) if x_mm.size > 1 else 0.5
     extent = (x_mm[0] - half, x_mm[-1] + half, x_mm[0] - half, x_mm[-1] + half)
     ratio_max = float(ds.spot_radius.max()) / scenario.cell_size
-    fig, axes = plt.subplots(1, 4, figsize=(16, 4.4), constrained_layout=True)
+    fig, axes = plt.subplots(1, 4, figsize=size(2, 2.3), layout="constrained")
     for ax, target in zip(axes, FIG5_DELTAS):
         one = ds.isel(delta=_nearest(ds, target))
         image = ax.imshow(one.spot_radius.transpose("y", "x").values / scenario.cell_size, origin="lower",
                           extent=extent, cmap="Greys", vmin=0.0, vmax=ratio_max, interpolation="nearest")
-        for value, style, label in ((one.hertz_radius, "C0", "Hertz"), (one.holm_radius, "C3", "Holm–Greenwood")):
+        for value, colour, dashes, label in ((one.hertz_radius, "C3", "--", "Hertz"),
+                                             (one.holm_radius, "C1", "-", "Holm–Greenwood")):
             if np.isfinite(value):
-                ax.add_patch(plt.Circle((0, 0), 1e3 * float(value), fill=False, color=style, lw=1.5, label=label))
-        ax.set(xlim=extent[:2], ylim=extent[2:], aspect="equal", xlabel="x, mm",
-               title=f"delta/sigma = {float(one.delta_sigma):.2f}, F = {float(one.force):.0f} N")
-    axes[0].set_ylabel("y, mm")
-    axes[0].legend(loc="upper right", fontsize=8)
-    fig.colorbar(image, ax=axes, shrink=0.8, label=r"spot radius $a_i\,\sqrt{\eta}$")
+                ax.add_patch(plt.Circle((0, 0), 1e3 * float(value), fill=False, color=colour, ls=dashes, lw=1.2,
+                                        label=label))
+        ax.set(xlim=extent[:2], ylim=extent[2:], aspect="equal", xlabel=LABELS["x"],
+               title=f"{equals('delta_sigma', float(one.delta_sigma), '.2f')}, $F$ = {float(one.force):.0f} N")
+    axes[0].set_ylabel(LABELS["y"])
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncols=2)
+    fig.colorbar(image, ax=axes, shrink=0.8, label=LABELS["spot_radius"])
     hertz = "" if scenario.indenter.shape == "sphere" else " (Hertz: sphere only)"
-    fig.suptitle(f"Contact spots, one per cell of side 1/sqrt(eta), radius as grey level ({scenario.name}){hertz}")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    fig.suptitle(f"Contact spots, one per cell of side $1/\\sqrt{{\\eta}}$, radius as grey level ({scenario.name}){hertz}")
+    return save(fig, path)
 
 
 def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
@@ -129,4 +127,5 @@ def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
     ds = read_stage(data_dir, "contact", scenario)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    return [_fig4(ds, scenario, out_dir / "fig4_contact.png"), _fig5(ds, scenario, out_dir / "fig5_spots.png")]
+    with context():
+        return [_fig4(ds, scenario, out_dir / "fig4_contact.png"), _fig5(ds, scenario, out_dir / "fig5_spots.png")]

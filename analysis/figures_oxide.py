@@ -12,6 +12,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
+from analysis.style import LABELS, context, equals, save, size
 from pipeline.config import Scenario
 from pipeline.physics import oxide_field
 from pipeline.physics.grid import cell_centres
@@ -57,27 +58,32 @@ def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
     half = n * h / 2.0
     display = (np.arange(n * SUPERSAMPLING) + 0.5) * (2.0 * half / (n * SUPERSAMPLING)) - half
     extent = np.array([-half, half, -half, half]) / h
-    fig, axes = plt.subplots(2, 3, figsize=(11.0, 7.6), constrained_layout=True)
+    with context():
+        fig, axes = plt.subplots(2, 3, figsize=size(2, 4.9), layout="constrained")
+        _draw(scenario, fig, axes, centres, display, extent)
+        return [save(fig, Path(out_dir) / "fig6_oxide.png")]
+
+
+def _draw(scenario: Scenario, fig: plt.Figure, axes: np.ndarray, centres: np.ndarray, display: np.ndarray,
+          extent: np.ndarray) -> None:
+    """The fields (upper row) and their oxides with the oxidized cell centres (lower row)."""
+    n, h = scenario.n_cells, scenario.cell_size
     for col, (lam, xi) in enumerate(zip(LAMBDAS, FRACTIONS)):
         modes, coeffs = _field(scenario, lam)
         image = oxide_field.field_at_points(modes, coeffs, display[None, :], display[:, None])
         cells = oxide_field.cell_values(modes, coeffs, n).astype(np.float32)
         psi0 = _threshold(scenario, cells, xi)
         top = axes[0, col].imshow(image, origin="lower", extent=extent, cmap="RdBu_r", vmin=-3, vmax=3)
-        axes[0, col].set_title(f"$\\lambda = l_O\\sqrt{{\\eta}} = {lam:g}$")
+        axes[0, col].set_title(equals("lambda", lam))
         axes[1, col].imshow(image >= psi0, origin="lower", extent=extent, cmap="Greys", vmin=0, vmax=1.6)
         yy, xx = np.nonzero(cells >= psi0)
-        axes[1, col].plot(centres[xx] / h, centres[yy] / h, ".", color="tab:red", markersize=1.5)
-        axes[1, col].set_title(f"$\\xi$ = {xi:.0%}, cells covered {np.mean(cells >= psi0):.1%}")
+        axes[1, col].plot(centres[xx] / h, centres[yy] / h, ".", color="tab:red", markersize=0.6)
+        axes[1, col].set_title(f"{equals('xi', xi)}, cells covered {np.mean(cells >= psi0):.1%}")
     for ax in axes.flat:
-        ax.set_xlabel("$x\\sqrt{\\eta}$")
-        ax.set_ylabel("$y\\sqrt{\\eta}$")
-    fig.colorbar(top, ax=axes[0, :], label="$\\psi$", shrink=0.8)
+        ax.set_xlabel(LABELS["x_cells"])
+        ax.set_ylabel(LABELS["y_cells"])
+    fig.colorbar(top, ax=axes[0, :], label=LABELS["field"], shrink=0.8)
     fig.suptitle(
-        f"Oxide fields (H = {scenario.oxide.hurst:g}, $k_s/k_1$ = {scenario.oxide.ks_ratio:g}, "
+        f"Oxide fields ($H$ = {scenario.oxide.hurst:g}, $k_s/k_1$ = {scenario.oxide.ks_ratio:g}, "
         f"{scenario.oxide.amplitudes} amplitudes); grey: oxide, red dots: oxidized cell centres"
     )
-    path = Path(out_dir) / "fig6_oxide.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return [path]

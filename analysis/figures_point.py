@@ -20,6 +20,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
+from analysis.style import LABELS, context, equals, save, size
 from pipeline.config import Scenario
 from pipeline.physics import point_model
 
@@ -114,44 +115,38 @@ def film_sweep(data_dir: Path, films: np.ndarray | None = None) -> dict[str, np.
 
 
 def _alpha_gamma(fits: dict[str, xr.Dataset], path: Path) -> Path:
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    fig, axes = plt.subplots(1, 2, figsize=size(2, 2.8), layout="constrained")
     g, p = fits["greenwood"], fits["point"]
     ratio = (p["alpha"] / g["alpha"]).transpose("xi", "lambda")
     shift = (p["gamma"] - g["gamma"]).transpose("xi", "lambda")
     lam = g["lambda"].values
     for i, xi in enumerate(g["xi"].values):
-        color = plt.cm.viridis(i / max(1, g["xi"].size - 1))
-        axes[0].plot(lam, ratio.values[i], "o-", color=color, label=f"xi = {xi:g}")
+        color = plt.cm.viridis(0.85 * i / max(1, g["xi"].size - 1))
+        axes[0].plot(lam, ratio.values[i], "o-", color=color, label=equals("xi", xi))
         axes[1].plot(lam, shift.values[i], "o-", color=color)
     clean_ratio = float(p["alpha_clean"] / g["alpha_clean"])
     clean_shift = float(p["gamma_clean"] - g["gamma_clean"])
     axes[0].axhline(clean_ratio, color="k", ls="--", label="clean")
     axes[1].axhline(clean_shift, color="k", ls="--")
-    axes[0].set(xlabel="lambda", ylabel="alpha_point / alpha_greenwood")
-    axes[1].set(xlabel="lambda", ylabel="gamma_point - gamma_greenwood")
-    axes[0].legend(fontsize=7, ncol=2)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    axes[0].set(xlabel=LABELS["lambda"], ylabel=LABELS["alpha_ratio"])
+    axes[1].set(xlabel=LABELS["lambda"], ylabel=LABELS["gamma_shift"])
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside right center")
+    return save(fig, path)
 
 
 def _film(sweep: dict[str, np.ndarray], path: Path) -> Path:
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    fig, ax = plt.subplots(figsize=size(1, 3.8), layout="constrained")
     for i, (xi, lam) in enumerate(sweep["cases"]):
         color = f"C{i}"
-        ax.loglog(sweep["film"], sweep["point"][i], "o-", color=color, label=f"point, xi = {xi:g}, lambda = {lam:g}")
+        ax.loglog(sweep["film"], sweep["point"][i], "o-", color=color,
+                  label=f"point, {equals('xi', xi)}, {equals('lambda', lam)}")
         ax.loglog(sweep["film"], sweep["greenwood"][i], "x:", color=color, label="Greenwood (films)")
         ax.axhline(sweep["point_clean"][i], color=color, lw=0.6, ls="--")
         if np.isfinite(sweep["point_insulating"][i]):
             ax.axhline(sweep["point_insulating"][i], color=color, lw=0.6, ls="-.")
-    ax.set(xlabel="film specific resistance r_f (ohm m^2)", ylabel="geometric-mean R at the heaviest load (ohm)",
-           title="clean (--) to insulating (-.) oxide")
-    ax.legend(fontsize=6)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    ax.set(xlabel=LABELS["film"], ylabel=LABELS["resistance_heaviest"], title="clean (--) to insulating (-.) oxide")
+    fig.legend(loc="outside lower center")
+    return save(fig, path)
 
 
 def write(scenario: Scenario, data_dir: Path, out_dir: Path, films: np.ndarray | None = None) -> list[Path]:
@@ -159,8 +154,9 @@ def write(scenario: Scenario, data_dir: Path, out_dir: Path, films: np.ndarray |
     fits = load_comparison(data_dir)
     if fits is None:
         return []
-    written = [_alpha_gamma(fits, out_dir / "point_alpha_gamma.png")]
     sweep = film_sweep(data_dir, films)
-    if sweep is not None:
-        written.append(_film(sweep, out_dir / "point_film.png"))
+    with context():
+        written = [_alpha_gamma(fits, out_dir / "point_alpha_gamma.png")]
+        if sweep is not None:
+            written.append(_film(sweep, out_dir / "point_film.png"))
     return written
