@@ -14,6 +14,7 @@ import xarray as xr
 from pipeline.cli.main import main
 from pipeline.config import ConfigError
 from pipeline.reference import cases, scene
+from analysis.figures_validate import figure
 from pipeline.reference.validate import chosen_set, run_validation
 
 TINY = dataclasses.replace(scene.QUICK, radius=1e-3, deltas=(1.0, 0.0), realizations=(0, 1), n_grid=96,
@@ -52,7 +53,7 @@ def test_default_and_quick_sets_meet_the_issue() -> None:
 def tiny_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("validate")
     log = io.StringIO()
-    run_validation(TINY, out, stream=log)
+    run_validation(TINY, out, stream=log, draw=figure)
     return out, log.getvalue()
 
 
@@ -123,7 +124,7 @@ def test_a_rerun_resumes_from_the_stored_cases(tiny_run) -> None:
     damaged = out / "cases" / f"{cases.Case(1, 0, TINY.n_grid, True).name}.json"
     damaged.write_text("{ truncated")
     log = io.StringIO()
-    run_validation(TINY, out, stream=log)
+    run_validation(TINY, out, stream=log, draw=figure)
     text = log.getvalue()
     assert "5 of 6 cases already stored, 1 to run" in text and "case 1/1 r1_load0_n96" in text
     after = xr.open_dataset(out / "validate.nc").load()
@@ -175,7 +176,7 @@ def test_a_tiny_random_process_run(tmp_path) -> None:
     vset = dataclasses.replace(random_process_set(TINY, rms=20e-6), convergence_grid=0,  # 48^2 cannot hold the band
                                discretizations=("expected", "asperities"))  # its asperities are not known
     paths = run_validation(vset, tmp_path, stream=io.StringIO())
-    text = paths[2].read_text()
+    text = paths[1].read_text()
     assert "self-affine" in text and "summit statistics" in text
     with xr.open_dataset(paths[0]) as ds:
         assert ds.attrs["scene_surface"] == "random_process"

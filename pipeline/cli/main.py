@@ -296,7 +296,9 @@ def _cmd_validate(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.reference.validate import chosen_set, output_folder, run_validation
 
     vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads)
-    run_validation(vset, output_folder(args.data_dir, args.surface), progress=not args.no_progress)
+    from analysis.figures_validate import figure
+
+    run_validation(vset, output_folder(args.data_dir, args.surface), progress=not args.no_progress, draw=figure)
 
 
 def _version() -> str:

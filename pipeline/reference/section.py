@@ -1,4 +1,4 @@
-"""The validation's figure (R' against F', full field and g2tom) and its report section (markdown)."""
+"""The validation's report section (markdown); its figure is drawn by :mod:`analysis.figures_validate`."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import xarray as xr
 from pipeline.reference.summary import ratios
 from pipeline.store import atomic_path
 
-__all__ = ["figure", "markdown", "CLEAN_LIMIT", "OXIDE_LIMIT", "MEANINGS"]
+__all__ = ["markdown", "CLEAN_LIMIT", "OXIDE_LIMIT", "MEANINGS"]
 
 #: What each discretization is, for the section's legend.
 MEANINGS = {
@@ -27,56 +27,6 @@ MEANINGS = {
 #: Relative deviations of the default discretization that the section's first lines flag.
 CLEAN_LIMIT = 0.10
 OXIDE_LIMIT = 0.20
-
-
-def _panels(ds: xr.Dataset) -> list[tuple[str, xr.DataArray, xr.DataArray]]:
-    """(title, reference R (realization, load), g2tom R (discretization, model, realization?, load))."""
-    out = [("clean", ds["resistance_reference_clean"], ds["resistance_g2tom_clean"])]
-    for xi in ds["xi"].values:
-        for lam in ds["lambda"].values:
-            sel = {"xi": xi, "lambda": lam}
-            out.append((f"xi {xi:g}, lambda {lam:g}", ds["resistance_reference"].sel(sel),
-                        ds["resistance_g2tom"].sel(sel)))
-    return out
-
-
-def figure(ds: xr.Dataset, path: Path) -> Path:
-    """R' against F' per case: every realization of the full field, and g2tom's curves; written atomically."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    panels = _panels(ds)
-    cols = min(3, len(panels))
-    rows = -(-len(panels) // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.6 * rows), squeeze=False)
-    f = ds["force_normalized"].values
-    scale = ds.attrs["resistance_scale"]
-    for ax, (title, ref, g2) in zip(axes.ravel(), panels):
-        ax.loglog(np.broadcast_to(f, ref.shape).ravel(), ref.values.ravel() / scale, "ko", ms=4,
-                  label="full field (each realization)")
-        for d in ds["discretization"].values:
-            for m in ds["model"].values:
-                curve = g2.sel(discretization=d, model=m)
-                if not np.isfinite(curve.values).any():  # a combination g2tom refuses
-                    continue
-                if "realization" in curve.dims:  # geometric mean over conducting realizations
-                    curve = ratios(curve.transpose("realization", "load").values)[0]
-                ax.loglog(f, np.asarray(curve) / scale, "-" if m == "greenwood" else "--", marker=".",
-                          label=f"g2tom {d}, {m}")
-        ax.set_title(title)
-        ax.set_xlabel("F' = 2F / (E* sqrt(R* sigma^3))")
-        ax.set_ylabel("R' = R sqrt(R* sigma) / (2 rho*)")
-        ax.grid(True, which="both", alpha=0.3)
-    for ax in axes.ravel()[len(panels):]:
-        ax.axis("off")
-    axes.ravel()[0].legend(fontsize=7)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=110)
-    plt.close(fig)
-    return path
 
 
 def _cell(gm: float, lo: float, hi: float, count: int, total: int, error: float = np.nan) -> str:

@@ -12,9 +12,10 @@ import dataclasses
 import sys
 import time
 from pathlib import Path
-from typing import TextIO
+from typing import Callable, TextIO
 
 import numpy as np
+import xarray as xr
 
 from pipeline.config import ConfigError, load_scenario
 from pipeline.progress import format_duration
@@ -103,10 +104,11 @@ def _g2tom_side(vset: scene.ValidationSet) -> dict:
     return {"force": forces[0], "clean": clean, "resistance": oxidized, "skipped": skipped}
 
 
-def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.stderr,
-                   progress: bool = True) -> list[Path]:
+def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.stderr, progress: bool = True,
+                   draw: Callable[[xr.Dataset, Path], Path] | None = None) -> list[Path]:
     """Run the set into ``out`` (plan, g2tom, every case, outputs); return the written files
-    (``progress``: one line per finished case)."""
+    (``progress``: one line per finished case; ``draw(ds, path)`` draws ``validate.png``, e.g.
+    :func:`analysis.figures_validate.figure`, which the CLI passes: the library draws nothing)."""
     start = time.perf_counter()
     out = Path(out)
     case_dir = out / "cases"
@@ -134,12 +136,13 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
                   f"elapsed {format_duration(elapsed)}, ~{format_duration(max(left, 0.0))} left",
                   file=stream, flush=True)
     ds = summary.dataset(vset, everything, done, g2tom, default_discretization())
-    paths = [out / "validate.nc", out / "validate.png", out / "validate.md"]
+    paths = [out / "validate.nc", out / "validate.md"]
     with atomic_path(paths[0]) as tmp:
         ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4")
-    section.figure(ds, paths[1])
-    with atomic_path(paths[2]) as tmp:
+    with atomic_path(paths[1]) as tmp:
         tmp.write_text(section.markdown(ds))
+    if draw is not None:
+        paths.append(draw(ds, out / "validate.png"))
     print(f"validate: wrote {', '.join(map(str, paths))} in {format_duration(time.perf_counter() - start)}",
           file=stream, flush=True)
     return paths
