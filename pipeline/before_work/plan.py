@@ -51,6 +51,21 @@ TYPICAL_TARGET = 0.025
 #: lambda's fields serve all its open fractions; 56 % of the cells stopped at the first batch).
 TYPICAL_COMPUTED = 386_200 / 108
 TYPICAL_FIELDS = 171_200 / 12
+#: The same for the discrete model with the disc rule and the point model (contact.model =
+#: "discrete"), estimated from a fixed 64-realization cube of paper_discrete: per cell
+#: 64 (w / (0.9 x 0.025))^2 from its fast-rule half-widths w, clipped to [400, 30,000]: 146,587
+#: realizations over the 108 cells, 188,200 computed in whole batches, 39,800 fields.
+DISCRETE_TYPICAL_REALIZATIONS = 146_587 / 108
+DISCRETE_TYPICAL_COMPUTED = 188_200 / 108
+DISCRETE_TYPICAL_FIELDS = 39_800 / 12
+#: One thread's time per discrete surface and load step of the contact solve (s): the median of
+#: `g2tom bench --only discrete` on the paper's scene, 3.85 ms.
+DISCRETE_SOLVE_S = 3.85e-3
+#: One thread's time per (xi, field) of the cube on discrete spots (s) by (oxide.spot_rule,
+#: cube.model): the fixed 64-realization cube of paper_discrete (disc, point) took 25 ms per
+#: field of 9 xi on two threads; the other pairs scaled by `g2tom bench --only discrete`'s ratios.
+DISCRETE_XI_MAP_S = {("disc", "point"): 5.5e-3, ("centre", "point"): 3.0e-3,
+                     ("disc", "greenwood"): 2.8e-3, ("centre", "greenwood"): 0.75e-3}
 #: Speed-up of the local threaded scheduler over one thread on folded maps (small windows),
 #: measured on 2 cores on the paper's scene (49^2 cells): a fixed 400-realization cube took 18.7 s
 #: on one thread and 12.1 s on two; the adaptive default 164.5 s for 196.5 s of CPU (its late
@@ -108,6 +123,9 @@ def realizations(scenario: Scenario) -> Realizations:
     def clip(value: float) -> float:
         return min(max(value * scale, ox.min_realizations), ox.max_realizations)
 
+    if scenario.contact.model == "discrete":
+        return Realizations(ox.min_realizations, clip(DISCRETE_TYPICAL_REALIZATIONS), ox.max_realizations, True,
+                            clip(DISCRETE_TYPICAL_COMPUTED), clip(DISCRETE_TYPICAL_FIELDS))
     return Realizations(ox.min_realizations, clip(TYPICAL_REALIZATIONS), ox.max_realizations, True,
                         clip(TYPICAL_COMPUTED), clip(TYPICAL_FIELDS))
 
@@ -236,6 +254,10 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     per_field = _field_seconds(scenario, n) / speedup
     per_realization = per_map + per_field
     cube_s = per_map * counts.computed + per_field * counts.fields
+    if scenario.contact.model == "discrete":  # the pool's solves; one dense solve set per (xi, field)
+        contact_s += DISCRETE_SOLVE_S * scenario.contact.surfaces * n_delta / t
+        per_realization = n_xi * n_lam * DISCRETE_XI_MAP_S[(ox.spot_rule, scenario.cube.model)] / t
+        cube_s = per_realization * counts.computed
     # fits: the cube's terms, the bootstrap's resample counts and means.
     boot = scenario.fits.n_bootstrap
     fits_mem = 3.0 * results + 8.0 * boot * (n_cube + 3 * n_xi * n_lam * n_delta)
@@ -389,7 +411,8 @@ def format_plan(scenario: Scenario, workers: int | None = None) -> list[str]:
     if counts.adaptive:
         lines.append(
             f"adaptive ensemble: {counts.low * n_cells} .. {counts.high * n_cells} realizations in all, typical "
-            f"{counts.typical * n_cells:.0f} (the paper's scene: {TYPICAL_REALIZATIONS * 108:.0f} at "
+            f"{counts.typical * n_cells:.0f} (the paper's scene: "
+            f"{(DISCRETE_TYPICAL_REALIZATIONS if scenario.contact.model == 'discrete' else TYPICAL_REALIZATIONS) * 108:.0f} at "
             f"target_half_width {TYPICAL_TARGET:g}, scaled by (target ratio)^2), computed in whole batches: "
             f"typical {counts.computed * n_cells:.0f}; times below are typical "
             f"(range: every cell at oxide.min_realizations .. at oxide.max_realizations); memory is for the cap")
