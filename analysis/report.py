@@ -560,8 +560,16 @@ def build_blocks(scenario: Scenario, data_dir: str | Path, started: float | None
     return head + _contents_blocks(head, body) + body
 
 
+def _md_text(text: str) -> str:
+    """Inline text as Markdown: a single ``*`` (E*, R*, rho*) escaped outside code spans, so that
+    only ``**bold**`` and backtick code spans are markup."""
+    parts = re.split(r"(`[^`]*`)", text)
+    return "".join(part if k % 2 else re.sub(r"(?<!\*)\*(?!\*)", r"\\*", part) for k, part in enumerate(parts))
+
+
 def _md_cell(text: str) -> str:
-    return text.replace("|", "\\|")
+    """A table cell as Markdown: inline text with ``|`` escaped."""
+    return _md_text(text).replace("|", "\\|")
 
 
 def to_markdown(blocks: list[Block]) -> str:
@@ -569,15 +577,16 @@ def to_markdown(blocks: list[Block]) -> str:
     out: list[str] = []
     for b in blocks:
         if b.kind in ("h1", "h2", "h3", "h4"):
-            out.append("#" * int(b.kind[1]) + " " + b.text)
+            out.append("#" * int(b.kind[1]) + " " + _md_text(b.text))
         elif b.kind == "p":
-            out.append(b.text)
+            out.append(_md_text(b.text))
         elif b.kind == "pre":
             out.append("```\n" + b.text + "\n```")
         elif b.kind == "list":
-            out.append("\n".join("    " * int(level) + "- " + text for level, text in b.rows))
+            out.append("\n".join("    " * int(level) + "- " + _md_text(text) for level, text in b.rows))
         elif b.kind == "img":
-            out.append(f"![{b.text}]({b.src})\n\n*{b.text}*")
+            caption = _md_text(b.text)
+            out.append(f"![{caption}]({b.src})\n\n*{caption}*")
         elif b.kind == "table":
             header, *rows = b.rows
             lines = ["| " + " | ".join(_md_cell(c) for c in header) + " |", "|" + "---|" * len(header)]

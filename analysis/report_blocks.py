@@ -12,8 +12,8 @@ __all__ = ["Block", "fmt", "table", "markdown_blocks"]
 class Block:
     """One report element.
 
-    ``kind`` is ``h1`` to ``h4``, ``p`` (Markdown spans allowed: ``**bold**``, ```code```,
-    links), ``table`` (``rows[0]`` is the header), ``list`` (``rows`` = (level, text) items,
+    ``kind`` is ``h1`` to ``h4``, ``p`` (Markdown spans allowed: ``**bold**``, backtick
+    code, links; a single ``*`` is text), ``table`` (``rows[0]`` is the header), ``list`` (``rows`` = (level, text) items,
     level 0 outermost), ``img`` (``text`` = caption, ``src`` = relative path) or ``pre``.
     """
 

@@ -86,6 +86,10 @@ def test_renderers_escape() -> None:
     blocks = [Block("h1", "a <b>"), Block("table", rows=(("x|y", "z"), ("1", "<2>")))]
     assert "x\\|y" in to_markdown(blocks)
     assert "&lt;2&gt;" in to_html(blocks, "t")
+    # a single * is a star (E*, R*), not emphasis; **bold** and `code` stay markup
+    page = to_html([Block("p", "K / (E* rho*) with **bold** and `A*`"), Block("table", rows=(("R*",), ("*",)))], "t")
+    assert "K / (E* rho*) with <strong>bold</strong> and <code>A*</code>" in page and "<em>" not in page
+    assert "<th>R*</th>" in page and "<td>*</td>" in page
     with pytest.raises(ValueError, match="unknown block"):
         to_markdown([Block("video")])
 
@@ -185,3 +189,15 @@ def test_report_lists_benchmarks_and_renders_code(run_dir: Path, small: Scenario
     # Markdown rendered: backticks become <code>, tables and ids are HTML
     assert "<code>make validate</code>" in page and "`" not in page
     assert "<table>" in page and 'id="summary"' in page and "overflow-wrap:anywhere" in page
+
+
+def test_summary_quotes_the_validation_flags(tmp_path, small: Scenario) -> None:
+    from analysis.report import _summary_blocks
+    from analysis.report_physics import validation_blocks
+
+    (tmp_path / "validate").mkdir()
+    (tmp_path / "validate" / "validate.md").write_text("## How right?\n\n**Clean: off by +40 %.**\nScene: mu = 8.\n")
+    heading, items = _summary_blocks(small, None, None, validation_blocks(tmp_path))
+    texts = [text for _level, text in items.rows]
+    assert heading.text == "Summary" and "Against the full elastic contact (GW surface): **Clean: off by +40 %.**" in texts
+    assert not any("Scene: mu" in t for t in texts) and any("fits stage" in t for t in texts)
