@@ -1,8 +1,8 @@
 """``make report``: ``<data_dir>/report.md`` and ``report.html`` from one block structure.
 
 The report is a list of blocks (heading, paragraph, table, image, preformatted text);
-:func:`to_markdown` and :func:`to_html` render the same list, so the two files always agree
-and no Markdown library is needed. Sections whose input file is missing or stale say so
+:func:`to_markdown` writes them as Markdown and :func:`to_html` renders that Markdown with
+python-markdown, so the two files always agree. Sections whose input file is missing or stale say so
 instead of failing, so a partial run still gets a report.
 """
 
@@ -15,6 +15,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+import markdown
+from markdown.extensions.toc import slugify, unique
 import numpy as np
 import xarray as xr
 from scipy.stats import norm
@@ -48,8 +50,6 @@ CAPTIONS = {
 }
 
 
-#: Benchmarks with a section of their own (not dumped with the other benchmark results).
-OWN_SECTIONS = ("frontier", "stability", "biases")
 #: Figures of the frontier benchmark, shown in "How fast, how accurate".
 FRONTIER_FIGURES = {
     "frontier_contact": "Contact: error of the force and of the real contact area against solve time, per "
@@ -279,9 +279,9 @@ def _smoothness(fits: xr.Dataset) -> str:
             f"alone; the physical curvature of alpha(lambda) counts too where intervals are below 0.5 %).")
 
 
-def _surrogate_blocks(sur: xr.Dataset) -> list[Block]:
-    blocks = _surrogate_model_blocks(sur)
-    blocks.append(Block("h2", "Table 3: fitted and surrogate alpha, gamma"))
+def _surrogate_table_blocks(sur: xr.Dataset) -> list[Block]:
+    """The surrogate's long tables: Table 3, Table 4 and the cross-validation scores (for the appendix)."""
+    blocks = [Block("h2", "Table 3: fitted and surrogate alpha, gamma")]
     header = ["xi", "lambda"] + [f"{p} {c}" for p in PARAMETERS for c in ("fit", "surrogate", "err %")]
     rows = [[r["xi"], r["lambda"]] + [f"{r[f'{p}_{c}']:.4f}" if c != "error_percent" else f"{r[f'{p}_{c}']:+.2f}"
                                       for p in PARAMETERS for c in ("fit", "surrogate", "error_percent")]
@@ -348,13 +348,36 @@ def _point_blocks(data_dir: Path) -> list[Block]:
     return blocks
 
 
-def _json_blocks(title: str, data: Any) -> list[Block]:
-    if isinstance(data, dict) and all(not isinstance(v, (dict, list)) for v in data.values()):
-        return [Block("p", title), _table(["key", "value"], [[k, v] for k, v in data.items()])]
-    if isinstance(data, list) and data and all(isinstance(r, dict) for r in data):
-        keys = list(dict.fromkeys(k for r in data for k in r))
-        return [Block("p", title), _table(keys, [[r.get(k, "") for k in keys] for r in data])]
-    return [Block("p", title), Block("pre", json.dumps(data, indent=1, sort_keys=True))]
+def _size(n_bytes: int) -> str:
+    """A file size as text: bytes below 1 kB, else kB or MB with one decimal."""
+    if n_bytes < 1000:
+        return f"{n_bytes} B"
+    return f"{n_bytes / 1e3:.1f} kB" if n_bytes < 1e6 else f"{n_bytes / 1e6:.1f} MB"
+
+
+def _benchmark_blocks(data_dir: Path) -> list[Block]:
+    """Section "Benchmarks": one line per raw record ``bench/*.json`` (name, path, size), not its contents.
+
+    Parameters
+    ----------
+    data_dir : Path
+        The report's folder; the paths are relative to it.
+
+    Returns
+    -------
+    list of Block
+        The heading and the list (or a note that there are no records).
+    """
+    blocks = [Block("h2", "Benchmarks")]
+    files = sorted((data_dir / "bench").glob("*.json"))
+    if not files:
+        return blocks + [Block("p", "No benchmark records: run `make bench`.")]
+    blocks.append(Block("p", "The raw records of `g2tom bench`, one JSON file per benchmark (relative to this report):"))
+    items = []
+    for path in files:
+        relative = path.relative_to(data_dir).as_posix()
+        items.append(f"{path.stem}: [{relative}]({relative}), {_size(path.stat().st_size)}")
+    return blocks + [Block("list", rows=tuple((0, item) for item in items))]
 
 
 def _timing_blocks(scenario: Scenario, data_dir: Path, report_seconds: float) -> list[Block]:
@@ -384,67 +407,186 @@ def _timing_blocks(scenario: Scenario, data_dir: Path, report_seconds: float) ->
     return blocks
 
 
-def _run_blocks(scenario: Scenario, data_dir: Path, started: float) -> list[Block]:
-    blocks = _timing_blocks(scenario, data_dir, time.perf_counter() - started)
-    bench = [p for p in sorted((data_dir / "bench").glob("*.json")) if p.stem not in OWN_SECTIONS]
-    if bench:
-        blocks.append(Block("h2", "Benchmarks"))
-        for path in bench:
-            blocks += _json_blocks(path.name, json.loads(path.read_text()))
-    blocks.append(Block("h2", "Parameters"))
+def _parameter_blocks(scenario: Scenario) -> list[Block]:
+    """Section "Parameters": every parameter of the scenario with its value, unit and meaning."""
     values = scenario.flat()
-    blocks.append(_table(
+    return [Block("h2", "Parameters"), _table(
         ["parameter", "value", "unit", "meaning"],
         [[key, values[key], unit, doc] for key, _default, unit, _allowed, doc in parameter_table()],
-    ))
-    return blocks
+    )]
+
+
+def _span(values: np.ndarray, digits: int = 4) -> str:
+    """``min-max`` of finite values as text (one value when they are equal)."""
+    lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
+    return f"{lo:.{digits}g}" if lo == hi else f"{lo:.{digits}g}-{hi:.{digits}g}"
+
+
+def _summary_blocks(scenario: Scenario, fits: xr.Dataset | None, sur: xr.Dataset | None,
+                    validation: list[Block]) -> list[Block]:
+    """Section "Summary": what was computed, the key numbers and how right they are.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The run's configuration (name, description, models).
+    fits, sur : xarray.Dataset or None
+        The fits and surrogate stages' outputs, None where not available.
+    validation : list of Block
+        The validation section's blocks; its bold paragraphs are the comparison's flag lines.
+
+    Returns
+    -------
+    list of Block
+        The heading and a list of statements, read from the stages' outputs (nothing recomputed).
+    """
+    items = [f"**Computed:** scenario '{scenario.name}': {scenario.description} (g2tom {__version__}, "
+             f"configuration hash {scenario.config_hash()}); contact model {scenario.contact.model} with "
+             f"{scenario.contact.spots} spots, resistance model {scenario.cube.model}."]
+    if fits is None:
+        items.append("**Not available:** the fits stage's output (run `g2tom fits`).")
+    else:
+        xi, lam = fits["xi"].values, fits["lambda"].values
+        grid = f"{xi.size} xi ({_span(xi)}) x {lam.size} lambda ({_span(lam)})"
+        if "force" in fits.coords and "force_normalized" in fits.coords:
+            grid += (f"; {fits.sizes['delta']} load steps, F = {_span(fits['force'].values)} N, "
+                     f"F' = {_span(fits['force_normalized'].values)}")
+        if "n_realizations" in fits:
+            grid += f"; realizations used per cell {_span(fits['n_realizations'].values)}"
+        items.append(f"**Grid:** {grid}.")
+        ci = {k: fits[f"{k}_clean_ci"].values for k in ("alpha", "gamma")}
+        items.append(f"**Clean fit:** alpha = {float(fits['alpha_clean']):.4g} [{ci['alpha'][0]:.4g}, "
+                     f"{ci['alpha'][1]:.4g}], gamma = {float(fits['gamma_clean']):.4g} [{ci['gamma'][0]:.4g}, "
+                     f"{ci['gamma'][1]:.4g}] ({100 * scenario.fits.confidence:g} % intervals).")
+        if "flagged" in fits:
+            items.append(f"**Flagged cells** (stopped at the cap short of the confidence target): "
+                         f"{int(fits['flagged'].sum())} of {fits['flagged'].size}.")
+    if sur is not None:
+        worst = ", ".join(f"{p} {100 * float(np.nanmax(np.abs(sur[f'{p}_relative_error'].values))):.2f} %"
+                          for p in PARAMETERS)
+        items.append(f"**Surrogate (Eq. 26):** worst relative error on the grid: {worst}.")
+    label, flags = "", []
+    for b in validation:
+        if b.kind == "h3":
+            label = b.text
+        elif b.kind == "p" and b.text.startswith("**"):
+            flags.append(f"Against the full elastic contact ({label}): {b.text}")
+    items += flags or ["Against the full elastic contact: not run (`make validate`)."]
+    return [Block("h2", "Summary"), Block("list", rows=tuple((0, item) for item in items))]
+
+
+def _contents_blocks(before: list[Block], after: list[Block]) -> list[Block]:
+    """Section "Contents": links to the sections in ``after`` (and the Appendix's subsections).
+
+    Parameters
+    ----------
+    before, after : list of Block
+        The report's blocks before and after the contents; the anchors count every heading in
+        order, as python-markdown's ``toc`` extension (and GitHub) number repeated titles.
+
+    Returns
+    -------
+    list of Block
+        The heading and a nested list of ``[title](#anchor)`` links.
+    """
+    contents = Block("h2", "Contents")
+    ids: set[str] = set()
+    items, section = [], ""
+    for b in [*before, contents, *after]:
+        if b.kind not in ("h1", "h2", "h3", "h4"):
+            continue
+        anchor = unique(slugify(b.text, "-"), ids)
+        if b.kind == "h2":
+            section = b.text
+        if b.kind == "h2" and b is not contents:
+            items.append((0, f"[{b.text}](#{anchor})"))
+        elif b.kind == "h3" and section == "Appendix":
+            items.append((1, f"[{b.text}](#{anchor})"))
+    return [contents, Block("list", rows=tuple(items))]
+
+
+def _demote(blocks: list[Block]) -> list[Block]:
+    """The blocks with every heading one level lower (h2 to h3, h3 to h4), to nest them in a section."""
+    lower = {"h2": "h3", "h3": "h4"}
+    return [Block(lower.get(b.kind, b.kind), b.text, b.rows, b.src) for b in blocks]
 
 
 def build_blocks(scenario: Scenario, data_dir: str | Path, started: float | None = None) -> list[Block]:
-    """The whole report as blocks (figures linked relative to ``data_dir``).
+    """The whole report as blocks, in reading order (figures linked relative to ``data_dir``).
 
-    ``started`` (a :func:`time.perf_counter` value) is when the report began, for its own
-    row in the timings table; default: now.
+    Title, Summary (what was computed, the key numbers, how right they are), Contents, Figures,
+    the physics sections, then an Appendix with the long tables and the list of raw benchmark
+    records.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The run's configuration.
+    data_dir : str or Path
+        The folder of the stage outputs, where the report is written.
+    started : float, optional
+        A :func:`time.perf_counter` value: when the report began, for its own row in the
+        timings table; default: now.
+
+    Returns
+    -------
+    list of Block
+        The report's blocks.
     """
     started = time.perf_counter() if started is None else started
     data_dir = Path(data_dir)
-    blocks = [
-        Block("h1", f"g2tom report: scenario '{scenario.name}'"),
-        Block("p", f"{scenario.description} (g2tom {__version__}, configuration hash {scenario.config_hash()})."),
-    ]
-    fits, missing = _load(data_dir, "fits", scenario)
-    blocks += missing if fits is None else _fit_blocks(fits, scenario) + _ensemble_blocks(fits, scenario) + curve_blocks(fits)
-    sur, missing = _load(data_dir, "surrogate", scenario)
-    blocks += missing if sur is None else _surrogate_blocks(sur)
-    blocks += bias_blocks(data_dir) + barber_blocks(data_dir, scenario) + validation_blocks(data_dir)
-    blocks += atlas_blocks(data_dir)
-    blocks += _point_blocks(data_dir)
-    blocks.append(Block("h2", "Figures"))
+    fits, missing_fits = _load(data_dir, "fits", scenario)
+    sur, missing_sur = _load(data_dir, "surrogate", scenario)
+    validation = validation_blocks(data_dir)
+    physics = missing_fits if fits is None else (
+        _fit_blocks(fits, scenario) + _ensemble_blocks(fits, scenario) + curve_blocks(fits))
+    physics += missing_sur if sur is None else _surrogate_model_blocks(sur)
+    physics += bias_blocks(data_dir) + barber_blocks(data_dir, scenario) + validation
+    physics += atlas_blocks(data_dir) + _point_blocks(data_dir)
     figures = sorted((p for p in (data_dir / "figures").glob("*.png") if p.stem not in FRONTIER_FIGURES),
                      key=_figure_order)
-    blocks += [Block("img", CAPTIONS.get(p.stem, p.stem), src=p.relative_to(data_dir).as_posix()) for p in figures]
+    body = [Block("h2", "Figures")]
+    body += [Block("img", CAPTIONS.get(p.stem, p.stem), src=p.relative_to(data_dir).as_posix()) for p in figures]
     if not figures:
-        blocks.append(Block("p", "No figures: run `g2tom figures` first."))
-    blocks += _frontier_blocks(data_dir) + _stability_blocks(data_dir)
-    return blocks + _run_blocks(scenario, data_dir, started)
+        body.append(Block("p", "No figures: run `g2tom figures` first."))
+    appendix = [] if sur is None else _surrogate_table_blocks(sur)
+    appendix += _frontier_blocks(data_dir) + _stability_blocks(data_dir) + _parameter_blocks(scenario)
+    appendix += _benchmark_blocks(data_dir)
+    appendix += _timing_blocks(scenario, data_dir, time.perf_counter() - started)  # last: it times the rest
+    body += physics + [Block("h2", "Appendix"), Block("p", "The long tables and the raw records.")]
+    body += _demote(appendix)
+    head = [Block("h1", f"g2tom report: scenario '{scenario.name}'")]
+    head += _summary_blocks(scenario, fits, sur, validation)
+    return head + _contents_blocks(head, body) + body
+
+
+def _md_text(text: str) -> str:
+    """Inline text as Markdown: a single ``*`` (E*, R*, rho*) escaped outside code spans, so that
+    only ``**bold**`` and backtick code spans are markup."""
+    parts = re.split(r"(`[^`]*`)", text)
+    return "".join(part if k % 2 else re.sub(r"(?<!\*)\*(?!\*)", r"\\*", part) for k, part in enumerate(parts))
 
 
 def _md_cell(text: str) -> str:
-    return text.replace("|", "\\|")
+    """A table cell as Markdown: inline text with ``|`` escaped."""
+    return _md_text(text).replace("|", "\\|")
 
 
 def to_markdown(blocks: list[Block]) -> str:
     """Render blocks as Markdown."""
     out: list[str] = []
     for b in blocks:
-        if b.kind in ("h1", "h2", "h3"):
-            out.append("#" * int(b.kind[1]) + " " + b.text)
+        if b.kind in ("h1", "h2", "h3", "h4"):
+            out.append("#" * int(b.kind[1]) + " " + _md_text(b.text))
         elif b.kind == "p":
-            out.append(b.text)
+            out.append(_md_text(b.text))
         elif b.kind == "pre":
             out.append("```\n" + b.text + "\n```")
+        elif b.kind == "list":
+            out.append("\n".join("    " * int(level) + "- " + _md_text(text) for level, text in b.rows))
         elif b.kind == "img":
-            out.append(f"![{b.text}]({b.src})\n\n*{b.text}*")
+            caption = _md_text(b.text)
+            out.append(f"![{caption}]({b.src})\n\n*{caption}*")
         elif b.kind == "table":
             header, *rows = b.rows
             lines = ["| " + " | ".join(_md_cell(c) for c in header) + " |", "|" + "---|" * len(header)]
@@ -455,34 +597,34 @@ def to_markdown(blocks: list[Block]) -> str:
     return "\n\n".join(out) + "\n"
 
 
-def _strong(text: str) -> str:
-    """Markdown's ``**bold**`` spans as HTML ``<strong>``."""
-    return re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", text)
+#: The page's style: a readable measure, tables that scroll sideways, figures and formulas that fit.
+STYLE = ("body{font-family:sans-serif;max-width:60em;margin:2em auto;padding:0 1em;line-height:1.4}"
+         "table{display:block;overflow-x:auto;border-collapse:collapse;margin:1em 0}"
+         "td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}"
+         "img{max-width:100%}"
+         "code,pre{overflow-wrap:anywhere;white-space:pre-wrap}"
+         "pre{background:#f6f6f6;padding:0.5em}")
 
 
 def to_html(blocks: list[Block], title: str) -> str:
-    """Render blocks as a standalone HTML page."""
-    e = html.escape
-    body: list[str] = []
-    for b in blocks:
-        if b.kind in ("h1", "h2", "h3", "p"):
-            body.append(f"<{b.kind}>{_strong(e(b.text))}</{b.kind}>")
-        elif b.kind == "pre":
-            body.append(f"<pre>{e(b.text)}</pre>")
-        elif b.kind == "img":
-            body.append(f'<figure><img src="{e(b.src)}" alt="{e(b.text)}"><figcaption>{e(b.text)}</figcaption></figure>')
-        elif b.kind == "table":
-            header, *rows = b.rows
-            head = "".join(f"<th>{e(c)}</th>" for c in header)
-            cells = "".join("<tr>" + "".join(f"<td>{e(c)}</td>" for c in row) + "</tr>" for row in rows)
-            body.append(f"<table><thead><tr>{head}</tr></thead><tbody>{cells}</tbody></table>")
-        else:
-            raise ValueError(f"unknown block kind {b.kind!r}")
-    style = ("body{font-family:sans-serif;max-width:70em;margin:2em auto}"
-             "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}"
-             "img{max-width:100%}")
-    return (f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{e(title)}</title>"
-            f"<style>{style}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n")
+    """Render blocks as a standalone HTML page, through their Markdown.
+
+    Parameters
+    ----------
+    blocks : list of Block
+        The report's blocks.
+    title : str
+        The page's ``<title>``.
+
+    Returns
+    -------
+    str
+        The page: :func:`to_markdown`'s text rendered by python-markdown (``tables``, ``toc``
+        for the headings' ids, ``fenced_code``), with :data:`STYLE`.
+    """
+    body = markdown.markdown(to_markdown(blocks), extensions=["tables", "toc", "fenced_code"])
+    return (f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{html.escape(title)}</title>"
+            f"<style>{STYLE}</style></head><body>\n{body}\n</body></html>\n")
 
 
 def write_report(scenario: Scenario, data_dir: str | Path) -> list[Path]:

@@ -12,8 +12,9 @@ __all__ = ["Block", "fmt", "table", "markdown_blocks"]
 class Block:
     """One report element.
 
-    ``kind`` is ``h1``, ``h2``, ``h3``, ``p`` (``**bold**`` spans allowed), ``table``
-    (``rows[0]`` is the header), ``img`` (``text`` = caption, ``src`` = relative path) or ``pre``.
+    ``kind`` is ``h1`` to ``h4``, ``p`` (Markdown spans allowed: ``**bold**``, backtick
+    code, links; a single ``*`` is text), ``table`` (``rows[0]`` is the header), ``list`` (``rows`` = (level, text) items,
+    level 0 outermost), ``img`` (``text`` = caption, ``src`` = relative path) or ``pre``.
     """
 
     kind: str

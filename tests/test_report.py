@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import warnings
 from pathlib import Path
 
@@ -33,6 +34,10 @@ def run_dir(tmp_path_factory, small: Scenario) -> Path:
             assert main([stage, "--data-dir", str(data), "--no-progress", *cli_overrides(small)]) == 0
     (data / "bench").mkdir()
     (data / "bench" / "cube.json").write_text(json.dumps([{"method": "fft", "seconds": 1.5}]))
+    # a nested record, as `g2tom bench` writes them: the report lists it, it does not print it
+    record = {"spots": {name: {"per_step_seconds": [0.1 * k for k in range(12)], "ratio": [1 + 0.01 * k for k in range(12)]}
+                        for name in ("expected", "asperities", "grid")}}
+    (data / "bench" / "spots.json").write_text(json.dumps(record))
     return data
 
 
@@ -59,7 +64,7 @@ def test_report_has_everything(run_dir: Path, small: Scenario) -> None:
     md = (run_dir / "report.md").read_text()
     page = (run_dir / "report.html").read_text()
     for text in ("Clean-surface fit", "Table 3", "Table 4", "cross-validation", "Timings", "Benchmarks",
-                 "fits.min_force", "figures/extra_stage_figure.png", "fft"):
+                 "fits.min_force", "figures/extra_stage_figure.png", "bench/cube.json", "bench/spots.json"):
         assert text in md and text in page, text
     assert md.count("![") == page.count("<img") == len(list(out.glob("*.png")))
     # figures in numeric order, captioned; the bootstrap intervals are described
@@ -81,6 +86,10 @@ def test_renderers_escape() -> None:
     blocks = [Block("h1", "a <b>"), Block("table", rows=(("x|y", "z"), ("1", "<2>")))]
     assert "x\\|y" in to_markdown(blocks)
     assert "&lt;2&gt;" in to_html(blocks, "t")
+    # a single * is a star (E*, R*), not emphasis; **bold** and `code` stay markup
+    page = to_html([Block("p", "K / (E* rho*) with **bold** and `A*`"), Block("table", rows=(("R*",), ("*",)))], "t")
+    assert "K / (E* rho*) with <strong>bold</strong> and <code>A*</code>" in page and "<em>" not in page
+    assert "<th>R*</th>" in page and "<td>*</td>" in page
     with pytest.raises(ValueError, match="unknown block"):
         to_markdown([Block("video")])
 
@@ -135,3 +144,60 @@ def test_a_stage_markdown_section_becomes_headings_paragraphs_and_tables(tmp_pat
     (tmp_path / "validate" / "validate.md").write_text(text)
     kinds = [b.kind for b in validation_blocks(tmp_path)]
     assert kinds[:2] == ["h2", "h3"] and "pre" not in kinds and "table" in kinds
+
+
+def _report(run_dir: Path, small: Scenario) -> tuple[str, str]:
+    """report.md and report.html of the small run, written by the CLI."""
+    assert main(["report", "--data-dir", str(run_dir), *cli_overrides(small)]) == 0
+    return (run_dir / "report.md").read_text(), (run_dir / "report.html").read_text()
+
+
+def test_report_reads_top_to_bottom(run_dir: Path, small: Scenario) -> None:
+    md, _ = _report(run_dir, small)
+    lines = md.splitlines()
+    first_table = next(i for i, line in enumerate(lines) if line.startswith("|"))
+    at = {title: lines.index(title) for title in ("## Summary", "## Contents", "## Figures", "## Appendix",
+                                                   "### Table 3: fitted and surrogate alpha, gamma")}
+    assert lines[0].startswith("# g2tom report")
+    assert at["## Summary"] < at["## Contents"] < at["## Figures"] < first_table
+    assert at["## Appendix"] < at["### Table 3: fitted and surrogate alpha, gamma"]
+    assert not [line for line in lines[at["## Appendix"] + 1:] if line.startswith("## ")]  # the appendix is last
+    summary = md[md.index("## Summary"):md.index("## Contents")]
+    for text in ("scenario 'paper'", "3 xi", "3 lambda", "F = 20-5000 N", "F' = ", "realizations used per cell 8",
+                 "alpha = 0.8", "gamma = 0.23", "worst relative error on the grid", "0 of 9", "greenwood_tripp"):
+        assert text in summary, text
+
+
+def test_report_contents_links_resolve(run_dir: Path, small: Scenario) -> None:
+    md, page = _report(run_dir, small)
+    contents = md[md.index("## Contents"):md.index("## Figures")]
+    anchors = re.findall(r"\]\(#([^)]+)\)", contents)
+    assert len(anchors) == contents.count("\n- ") + contents.count("\n    - ") > 10
+    assert "table-3-fitted-and-surrogate-alpha-gamma" in anchors
+    ids = set(re.findall(r'<h[1-4] id="([^"]+)"', page))
+    assert set(anchors) <= ids, set(anchors) - ids
+
+
+def test_report_lists_benchmarks_and_renders_code(run_dir: Path, small: Scenario) -> None:
+    md, page = _report(run_dir, small)
+    # the nested record is listed, not printed: no raw JSON lines, and the report is shorter than the
+    # 393 lines the same run gave when records were dumped (issue 32)
+    assert '{"' not in md and "{" not in md.splitlines() and "per_step_seconds" not in md
+    size = (run_dir / "bench" / "spots.json").stat().st_size
+    assert size < 1000 and f"- spots: [bench/spots.json](bench/spots.json), {size} B" in md
+    assert len(md.splitlines()) < 393
+    # Markdown rendered: backticks become <code>, tables and ids are HTML
+    assert "<code>make validate</code>" in page and "`" not in page
+    assert "<table>" in page and 'id="summary"' in page and "overflow-wrap:anywhere" in page
+
+
+def test_summary_quotes_the_validation_flags(tmp_path, small: Scenario) -> None:
+    from analysis.report import _summary_blocks
+    from analysis.report_physics import validation_blocks
+
+    (tmp_path / "validate").mkdir()
+    (tmp_path / "validate" / "validate.md").write_text("## How right?\n\n**Clean: off by +40 %.**\nScene: mu = 8.\n")
+    heading, items = _summary_blocks(small, None, None, validation_blocks(tmp_path))
+    texts = [text for _level, text in items.rows]
+    assert heading.text == "Summary" and "Against the full elastic contact (GW surface): **Clean: off by +40 %.**" in texts
+    assert not any("Scene: mu" in t for t in texts) and any("fits stage" in t for t in texts)
