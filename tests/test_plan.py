@@ -159,3 +159,13 @@ def test_plan_of_the_discrete_model_counts_its_pool_and_maps() -> None:
     assert discrete["contact"].seconds - grid["contact"].seconds == pytest.approx(256 * 20 * 3.85e-3 / 2, rel=1e-9)
     # 188,200 computed (xi, field) pairs at 5.5 ms on two workers: 518 s
     assert discrete["cube"].seconds == pytest.approx(188_200 * 5.5e-3 / 2, rel=1e-9)
+
+
+#: The default `make run` from a fresh clone (2026-11-25, 2 cores, data/timings.json), seconds.
+MEASURED_DEFAULT_RUN = {"contact": 2.12, "oxide": 2.27, "cube": 221.3, "fits": 17.4, "surrogate": 11.6}
+
+
+def test_every_stage_time_within_1_5x_of_the_measured_default_run():
+    for estimate in plan.estimate(resolve(load_scenario("paper"))):
+        measured = MEASURED_DEFAULT_RUN[estimate.stage]
+        assert 1 / 1.5 <= estimate.seconds / measured <= 1.5, (estimate.stage, estimate.seconds, measured)
