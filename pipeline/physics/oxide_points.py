@@ -6,10 +6,14 @@ coordinates to ``2 pi x / L`` makes the sum a type-2 non-uniform FFT, which FINU
 any points to a stated relative tolerance in about ``O(M log M + P w^2)`` (``M`` table entries,
 ``P`` points, ``w`` the spreading width) instead of the ``O(M P)`` of the direct sum
 (:func:`pipeline.physics.oxide_field.field_at_points`, the slow reference). One call per field,
-so a field's values never depend on which other fields or points share its task.
+so a field's values never depend on which other fields or points share its task; one thread
+per call (the cube runs one task per core, and at a few thousand points FINUFFT's threads
+cost more than they save).
 """
 
 from __future__ import annotations
+
+import threading
 
 import finufft
 import numpy as np
@@ -55,7 +59,21 @@ def values_at_points(modes: Band, coeffs: np.ndarray, x: np.ndarray, y: np.ndarr
         px = np.remainder(scale * x.ravel() + np.pi, 2.0 * np.pi) - np.pi
         py = np.remainder(scale * y.ravel() + np.pi, 2.0 * np.pi) - np.pi
         table = np.zeros((size, size), dtype=complex)  # [j + size/2, i + size/2]
+        plan = _plan(size, tolerance)
+        plan.setpts(py, px)
         for b, c in enumerate(flat):
             table[modes.j + size // 2, modes.i + size // 2] = c
-            out[b] = finufft.nufft2d2(py, px, table, eps=tolerance, isign=1).real
+            out[b] = plan.execute(table).real
     return out.reshape(lead + shape)
+
+
+_PLANS = threading.local()
+
+
+def _plan(size: int, tolerance: float) -> finufft.Plan:
+    """This thread's type-2 plan for a ``size`` x ``size`` table (kept: making one costs about
+    as much as a transform of ten thousand points, and plans are not shared between threads)."""
+    plans = _PLANS.__dict__.setdefault("plans", {})
+    if (size, tolerance) not in plans:
+        plans[size, tolerance] = finufft.Plan(2, (size, size), eps=tolerance, isign=1, nthreads=1)
+    return plans[size, tolerance]
