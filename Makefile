@@ -106,8 +106,9 @@ validate: | $(VENV)/.installed
 params: | $(VENV)/.installed
 	$(G2TOM) params $(ARGS)
 
+# One pytest worker per core (pytest-xdist); `.venv/bin/python -m pytest` alone runs serially.
 test: | $(VENV)/.installed
-	$(VENV)/bin/python -m pytest
+	$(VENV)/bin/python -m pytest -n auto
 
 # Long numerical-stability sweeps (pytest marker `stress`; a fast subset runs in `make test`).
 stress: | $(VENV)/.installed
