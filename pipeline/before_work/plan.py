@@ -8,8 +8,8 @@ parameter, a run whose estimate exceeds the machine's memory or :data:`MAX_SECON
 An adaptive ensemble's realization count is known only after the work, so its estimates
 carry a range (every cell stopped at ``oxide.min_realizations`` .. every cell at the cap
 ``oxide.max_realizations``) and a central value typical of the paper's scene
-(:func:`realizations`); memory is always checked at the cap, the padded realization axis
-the cube and fits hold in the worst case.
+(:func:`realizations`); memory is checked at the typical counts (a run refused), and at the
+cap, the padded realization axis the cube and fits hold in the worst case (a warning).
 :func:`prepare` is what the CLI runs before any stage: the checks, then the resolution of
 ``auto`` domains (:func:`pipeline.before_work.domains.resolve`), then the checks on the resolved cell count.
 """
@@ -20,6 +20,7 @@ import dataclasses
 import math
 import os
 import sys
+import warnings
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -28,8 +29,9 @@ from pipeline.config import AUTO, ConfigError, Scenario, load_scenario
 __all__ = ["StageEstimate", "Realizations", "realizations", "estimate", "check_resources", "prepare", "format_plan",
            "available_memory", "MAX_SECONDS", "BASE_BYTES"]
 
-#: Resident memory of a process that imported numpy, scipy, xarray, dask and netCDF4 (measured).
-BASE_BYTES = 150 * 2**20
+#: Resident memory of a g2tom stage's process with its small arrays: the surrogate stage of the
+#: default run peaked at 217 MiB (process tree, sampled every 0.1 s; 2026-11-25).
+BASE_BYTES = 210 * 2**20
 #: Longest estimated run time accepted (s): beyond it a run is refused before work.
 MAX_SECONDS = 7 * 24 * 3600.0
 #: Seconds per flop-like unit of the models below (measured on the reference machine, one thread).
@@ -51,6 +53,9 @@ TYPICAL_TARGET = 0.025
 #: lambda's fields serve all its open fractions; 56 % of the cells stopped at the first batch).
 TYPICAL_COMPUTED = 386_200 / 108
 TYPICAL_FIELDS = 171_200 / 12
+#: The largest count over the 108 cells of the default run (its padded realization axis): a cell
+#: reached the cap (make run from a fresh clone, 2026-11-25, cube.nc: 30,000; 361,115 in all).
+TYPICAL_LARGEST = 30_000
 #: The same for the discrete model with the disc rule and the point model (contact.model =
 #: "discrete"), estimated from a fixed 64-realization cube of paper_discrete: per cell
 #: 64 (w / (0.9 x 0.025))^2 from its fast-rule half-widths w, clipped to [400, 30,000]: 146,587
@@ -58,6 +63,9 @@ TYPICAL_FIELDS = 171_200 / 12
 DISCRETE_TYPICAL_REALIZATIONS = 146_587 / 108
 DISCRETE_TYPICAL_COMPUTED = 188_200 / 108
 DISCRETE_TYPICAL_FIELDS = 39_800 / 12
+#: The largest count over the cells of the adaptive paper_discrete cube (2026-11-25, cube.nc's
+#: realization axis at lambda 23, xi 0.9; 175,096 realizations kept in all).
+DISCRETE_TYPICAL_LARGEST = 9_569
 #: One thread's time per discrete surface and load step of the contact solve (s): the median of
 #: `g2tom bench --only discrete` on the paper's scene, 3.85 ms.
 DISCRETE_SOLVE_S = 3.85e-3
@@ -75,6 +83,14 @@ CONTACT_CALIBRATION = 2.12 / 0.604
 OXIDE_CALIBRATION = 2.27 / 1.14
 FITS_CALIBRATION = 17.4 / 0.578
 SURROGATE_SECONDS_PER_CELL = 11.6 / 108
+#: The fits stage's peak resident memory in the default run (2,812 MiB, process tree sampled every
+#: 0.1 s, 2026-11-25) less BASE_BYTES, over what the model gives for it (7,527 MiB: the model
+#: counts three full copies of the results where the bootstrap holds about one).
+FITS_MEMORY_CALIBRATION = (2812 - 210) / 7527
+#: Copies of the cube's results (five float64 terms on the padded axis) at its peak: the default
+#: run peaked at 3,470 MiB (process tree with its two workers, 2026-11-25), i.e. its 2,470 MiB of
+#: results 1.27 times over the 210 + 119 MiB of the rest (the model said 2 copies).
+CUBE_RESULT_COPIES = (3470 - 210 - 119) / 2470
 #: Speed-up of the local threaded scheduler over one thread on folded maps (small windows),
 #: measured on 2 cores on the paper's scene (49^2 cells): a fixed 400-realization cube took 18.7 s
 #: on one thread and 12.1 s on two; the adaptive default 164.5 s for 196.5 s of CPU (its late
@@ -95,15 +111,18 @@ class StageEstimate:
     seconds: float
     #: Run-time range (s) of an adaptive ensemble: all cells at min_realizations .. at the cap.
     seconds_range: tuple[float, float] | None = None
+    #: Peak memory (bytes) of an adaptive ensemble if a cell ran to oxide.max_realizations.
+    peak_bytes_cap: float | None = None
 
 
 @dataclass(frozen=True)
 class Realizations:
     """Realizations per (xi, lambda): the fewest, the most and the central (typical) count.
 
-    ``computed`` is the typical count the cube evaluates per (xi, lambda) (whole batches) and
-    ``fields`` the typical count of fields it generates per lambda; both are ``low`` and
-    ``high`` at the ends of the range.
+    ``computed`` is the typical count the cube evaluates per (xi, lambda) (whole batches),
+    ``fields`` the typical count of fields it generates per lambda and ``largest`` the typical
+    largest count over the cells (the cube's padded realization axis, which sets the cube's and
+    the fits' memory); all are ``low`` and ``high`` at the ends of the range.
     """
 
     low: int
@@ -112,6 +131,7 @@ class Realizations:
     adaptive: bool
     computed: float
     fields: float
+    largest: float
 
 
 def realizations(scenario: Scenario) -> Realizations:
@@ -126,7 +146,7 @@ def realizations(scenario: Scenario) -> Realizations:
     ox = scenario.oxide
     if ox.ensemble != "adaptive":
         n = ox.n_realizations
-        return Realizations(n, float(n), n, False, float(n), float(n))
+        return Realizations(n, float(n), n, False, float(n), float(n), float(n))
     scale = (TYPICAL_TARGET / ox.target_half_width) ** 2
 
     def clip(value: float) -> float:
@@ -134,9 +154,10 @@ def realizations(scenario: Scenario) -> Realizations:
 
     if scenario.contact.model == "discrete":
         return Realizations(ox.min_realizations, clip(DISCRETE_TYPICAL_REALIZATIONS), ox.max_realizations, True,
-                            clip(DISCRETE_TYPICAL_COMPUTED), clip(DISCRETE_TYPICAL_FIELDS))
+                            clip(DISCRETE_TYPICAL_COMPUTED), clip(DISCRETE_TYPICAL_FIELDS),
+                            clip(DISCRETE_TYPICAL_LARGEST))
     return Realizations(ox.min_realizations, clip(TYPICAL_REALIZATIONS), ox.max_realizations, True,
-                        clip(TYPICAL_COMPUTED), clip(TYPICAL_FIELDS))
+                        clip(TYPICAL_COMPUTED), clip(TYPICAL_FIELDS), clip(TYPICAL_LARGEST))
 
 
 def available_memory() -> float:
@@ -229,7 +250,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     ox, t = scenario.oxide, _threads(workers)
     n_xi, n_lam, n_real = len(ox.xi), len(ox.lambda_), ox.n_realizations  # n_real: fields in oxide.nc
     counts = realizations(scenario)
-    n_cube = counts.high  # the padded realization axis of the cube, at its largest
+    n_cube, n_cap = counts.largest, counts.high  # the cube's padded realization axis: typical, at the cap
     n_delta, n_r = scenario.loading.n_delta, scenario.contact.n_radial
     # contact: influence matrix and its Newton copies; spot maps over delta; the resolve grid.
     contact_mem = 8.0 * (7 * n_r * n_r + 10 * n_delta * cells + 8 * 4 * cells)
@@ -245,7 +266,10 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     # cube: psi read whole, per task the masks and one block of work, the cached operators,
     # the results (five float64 terms, concatenated once). Measured on the 583^2 scene
     # (2 xi x 2 lambda x 50): contact 767 MiB, oxide 953 MiB, cube 1215 MiB peak RSS.
-    results = 8.0 * 5 * n_xi * n_lam * n_delta * n_cube
+    def results_of(n_axis: float) -> float:
+        return 8.0 * 5 * n_xi * n_lam * n_delta * n_axis
+
+    results = results_of(n_cube)
     block = block_size(n)
     task_cube = n_xi * n_lam * min(scenario.cube.chunk, n_cube) * cells * 1.0 + block * (
         work_bytes_per_map(n) + 9.0 * cells)
@@ -256,7 +280,8 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
         operators = n_delta * 8.0 * p * p  # the cached interleaved spectrum, one per crop size
     # contact's spot maps: read (radius, area) and as float64 maps, and three per-task copies
     spot_maps = 8.0 * n_delta * cells
-    cube_mem = psi + t * (task_cube + 3 * spot_maps) + 4 * spot_maps + operators + 2.0 * results
+    cube_fixed = psi + t * (task_cube + 3 * spot_maps) + 4 * spot_maps + operators
+    cube_mem = cube_fixed + CUBE_RESULT_COPIES * results
     # the maps of every computed realization (whole batches) and the fields regenerated per lambda
     speedup = _map_speedup(n, workers, ox.ensemble)
     per_map = n_xi * n_lam * n_delta * _per_map_seconds(n) / speedup
@@ -269,7 +294,10 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
         cube_s = per_realization * counts.computed
     # fits: the cube's terms, the bootstrap's resample counts and means.
     boot = scenario.fits.n_bootstrap
-    fits_mem = 3.0 * results + 8.0 * boot * (n_cube + 3 * n_xi * n_lam * n_delta)
+    def fits_mem_of(n_axis: float) -> float:
+        return FITS_MEMORY_CALIBRATION * (3.0 * results_of(n_axis) + 8.0 * boot * (n_axis + 3 * n_xi * n_lam * n_delta))
+
+    fits_mem = fits_mem_of(n_cube)
     fits_per_realization = FITS_CALIBRATION * 1e-8 * n_xi * n_lam * n_delta * boot / 50
     fits_s = fits_per_realization * counts.typical
 
@@ -280,8 +308,10 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     return [
         StageEstimate("contact", BASE_BYTES + contact_mem, contact_s),
         StageEstimate("oxide", BASE_BYTES + oxide_mem, oxide_s),
-        StageEstimate("cube", BASE_BYTES + cube_mem, cube_s, spread(per_realization)),
-        StageEstimate("fits", BASE_BYTES + fits_mem, fits_s, spread(fits_per_realization)),
+        StageEstimate("cube", BASE_BYTES + cube_mem, cube_s, spread(per_realization),
+                      BASE_BYTES + cube_fixed + CUBE_RESULT_COPIES * results_of(n_cap) if counts.adaptive else None),
+        StageEstimate("fits", BASE_BYTES + fits_mem, fits_s, spread(fits_per_realization),
+                      BASE_BYTES + fits_mem_of(n_cap) if counts.adaptive else None),
         StageEstimate("surrogate", BASE_BYTES + surrogate_mem, SURROGATE_SECONDS_PER_CELL * n_xi * n_lam),
     ]
 
@@ -344,6 +374,10 @@ def _stage_measure(stage: str, field: str, workers: int | None) -> Callable[[Sce
 def check_resources(scenario: Scenario, workers: int | None = None, memory: float | None = None) -> list[StageEstimate]:
     """Refuse a run that cannot fit in memory (or would run longer than :data:`MAX_SECONDS`).
 
+    An adaptive ensemble is judged at its typical counts; where a cell running to
+    ``oxide.max_realizations`` would not fit, a warning says so (the run goes on: a typical run
+    stops far below the cap).
+
     Parameters
     ----------
     scenario
@@ -372,6 +406,12 @@ def check_resources(scenario: Scenario, workers: int | None = None, memory: floa
         if not e.peak_bytes <= limit:
             raise _refuse(scenario, f"{e.stage} stage", e.peak_bytes, limit, "bytes",
                           _stage_measure(e.stage, "peak_bytes", workers))
+    for e in estimates:
+        if e.peak_bytes_cap is not None and not e.peak_bytes_cap <= limit:
+            warnings.warn(f"the {e.stage} stage would need about {e.peak_bytes_cap / 2**30:.3g} GiB if a cell ran to "
+                          f"oxide.max_realizations = {scenario.oxide.max_realizations}, more than the "
+                          f"{limit / 2**30:.3g} GiB available (typical runs need {e.peak_bytes / 2**30:.3g} GiB); "
+                          f"lower oxide.max_realizations if cells may run that far", ResourceWarning, stacklevel=2)
     total = sum(e.seconds for e in estimates)
     if not total <= MAX_SECONDS:
         worst = max(estimates, key=lambda e: e.seconds)
@@ -424,14 +464,17 @@ def format_plan(scenario: Scenario, workers: int | None = None) -> list[str]:
             f"{(DISCRETE_TYPICAL_REALIZATIONS if scenario.contact.model == 'discrete' else TYPICAL_REALIZATIONS) * 108:.0f} at "
             f"target_half_width {TYPICAL_TARGET:g}, scaled by (target ratio)^2), computed in whole batches: "
             f"typical {counts.computed * n_cells:.0f}; times below are typical "
-            f"(range: every cell at oxide.min_realizations .. at oxide.max_realizations); memory is for the cap")
+            f"(range: every cell at oxide.min_realizations .. at oxide.max_realizations); so is memory "
+            f"(in brackets: a cell at oxide.max_realizations)")
     lines.append(f"{'stage':10s} {'peak memory':>14s} {'time':>12s}")
     total, low, high = 0.0, 0.0, 0.0
     for e in estimate(scenario, workers):
         lo, hi = e.seconds_range or (e.seconds, e.seconds)
         total, low, high = total + e.seconds, low + lo, high + hi
         span = f"   ({lo:.3g} .. {hi:.3g} s)" if e.seconds_range else ""
-        lines.append(f"{e.stage:10s} {e.peak_bytes / 2**20:11.0f} MiB {e.seconds:10.3g} s{span}")
+        cap = (f"   [{e.peak_bytes_cap / 2**20:.0f} MiB]"
+               if e.peak_bytes_cap is not None and e.peak_bytes_cap > e.peak_bytes else "")
+        lines.append(f"{e.stage:10s} {e.peak_bytes / 2**20:11.0f} MiB {e.seconds:10.3g} s{span}{cap}")
     span = f"   ({low:.3g} .. {high:.3g} s)" if counts.adaptive else ""
     lines.append(f"{'total':10s} {'':>14s} {total:10.3g} s{span} (model constants measured on a 2-core machine)")
     return lines
