@@ -106,9 +106,10 @@ validate: | $(VENV)/.installed
 params: | $(VENV)/.installed
 	$(G2TOM) params $(ARGS)
 
-# One pytest worker per core (pytest-xdist); `.venv/bin/python -m pytest` alone runs serially.
+# One pytest worker per core (pytest-xdist); a test file stays on one worker, in order (some
+# modules' tests build on their module's earlier ones). `.venv/bin/python -m pytest` runs serially.
 test: | $(VENV)/.installed
-	$(VENV)/bin/python -m pytest -n auto
+	$(VENV)/bin/python -m pytest -n auto --dist loadfile
 
 # Long numerical-stability sweeps (pytest marker `stress`; a fast subset runs in `make test`).
 stress: | $(VENV)/.installed

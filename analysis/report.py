@@ -181,17 +181,35 @@ def _fit_blocks(fits: xr.Dataset, scenario: Scenario) -> list[Block]:
     ]
 
 
+def surrogate_half_width(sur: xr.Dataset, parameter: str, z: float) -> np.ndarray:
+    """Relative confidence half-width (lambda, xi) of the fitted ``alpha`` or ``gamma`` of each cell
+    (``z`` standard errors of the fit)."""
+    sigma = sur[f"{parameter}_fit_sigma"].values * z
+    return np.expm1(sigma) if parameter == "alpha" else sigma / sur[f"{parameter}_fit"].values
+
+
+def surrogate_misses(sur: xr.Dataset, parameter: str, z: float) -> list[str]:
+    """The cells where the surrogate of ``parameter`` misses max(3 %, the cell's half-width), as text."""
+    err = np.abs(sur[f"{parameter}_relative_error"])
+    bound = np.fmax(0.03, surrogate_half_width(sur, parameter, z))
+    out = []
+    for i, j in zip(*np.nonzero(err.values > bound)):
+        out.append(f"{parameter} at xi {float(sur['xi'][j]):g}, lambda {float(sur['lambda'][i]):g}: "
+                   f"{100 * float(err.values[i, j]):.2f} % against {100 * float(bound[i, j]):.2f} %")
+    return out
+
+
 def _surrogate_model_blocks(sur: xr.Dataset) -> list[Block]:
     """Method, model sizes, errors and the closed formulas of the surrogate."""
     z_c = float(norm.ppf(0.5 + float(sur.attrs.get("fit_confidence", 0.95)) / 2.0))
     method = sur.attrs.get("method", "paper")
-    rows = []
+    rows, misses = [], []
     for p in PARAMETERS:
         a = sur.attrs
         err = np.abs(sur[f"{p}_relative_error"].values)
-        sigma = sur[f"{p}_fit_sigma"].values * z_c
-        half = np.expm1(sigma) if p == "alpha" else sigma / sur[f"{p}_fit"].values  # relative 95 % half-width
+        half = surrogate_half_width(sur, p, z_c)
         met = int(np.sum(err <= np.fmax(0.03, half)))
+        misses += surrogate_misses(sur, p, z_c)
         transform, w_map = sg.split_spec(str(a.get(f"{p}_transform", "identity")))
         rows.append([p, transform, sg.W_TEXT[w_map], int(a.get(f"{p}_rank", 0)), int(a.get(f"{p}_order_w", 0)),
                      int(a.get(f"{p}_order_z", 0)), int(a.get(f"{p}_free_parameters", 0)), f"{100 * float(a.get(f'{p}_cv_rms', np.nan)):.2f}",
@@ -210,6 +228,8 @@ def _surrogate_model_blocks(sur: xr.Dataset) -> list[Block]:
                    f"{100 * float(sur.attrs.get('fit_confidence', 0.95)):g} % half-width)."),
         _table(["parameter", "transform T", "w", "rank r", "order w", "order z", "free parameters", "CV RMS %",
                 "max |error| %", "RMS error %", "cells within target"], rows),
+        Block("p", "Cells outside the target (flagged; the predictor's band carries the local cross-validated error "
+                   "there): " + "; ".join(misses) + "." if misses else "Every cell is within the target."),
         Block("p", "Closed formulas (w = LN(lambda) where written in w, z = -LN(1 - xi); also in surrogate.json with everything the "
                    "predictor needs):"),
         Block("pre", formulas),

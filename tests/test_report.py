@@ -201,3 +201,20 @@ def test_summary_quotes_the_validation_flags(tmp_path, small: Scenario) -> None:
     texts = [text for _level, text in items.rows]
     assert heading.text == "Summary" and "Against the full elastic contact (GW surface): **Clean: off by +40 %.**" in texts
     assert not any("Scene: mu" in t for t in texts) and any("fits stage" in t for t in texts)
+
+
+def test_surrogate_cells_outside_the_target_are_named() -> None:
+    import xarray as xr
+
+    from analysis.report import surrogate_misses
+
+    lam, xi = [1.0, 5.0], [0.3, 0.5, 0.9]
+    sigma = np.full((2, 3), 0.01)  # 2 % half-width at z = 2: the bound is the 3 % floor
+    error = np.array([[0.01, -0.029, 0.02], [0.0, 0.055, -0.031]])
+    sur = xr.Dataset({"alpha_relative_error": (("lambda", "xi"), error),
+                      "alpha_fit_sigma": (("lambda", "xi"), sigma),
+                      "alpha_fit": (("lambda", "xi"), np.ones((2, 3)))}, coords={"lambda": lam, "xi": xi})
+    assert surrogate_misses(sur, "alpha", 2.0) == ["alpha at xi 0.5, lambda 5: 5.50 % against 3.00 %",
+                                                   "alpha at xi 0.9, lambda 5: 3.10 % against 3.00 %"]
+    sur["alpha_fit_sigma"][1, 1] = 0.03  # a wide interval (6.2 %) covers the 5.5 % miss
+    assert surrogate_misses(sur, "alpha", 2.0) == ["alpha at xi 0.9, lambda 5: 3.10 % against 3.00 %"]
