@@ -110,3 +110,12 @@ def test_pool_variables_are_the_schemas(pool):
                  "surface", "spot"):
         var = pool[name]
         assert matches("contact", name, var.dims, var.attrs), name
+
+
+def test_pool_kernels_are_made_once_per_surface_and_exact(pool):
+    surfaces = cube_discrete.DiscretePool.of(pool)
+    first = surfaces.kernel(3)
+    x, y, _ = surfaces.spots(3)
+    np.testing.assert_array_equal(first, interaction_kernel(x, y, surfaces.floor))
+    assert surfaces.kernel(3 + surfaces.size) is first  # realization k + S meets surface k again
+    assert surfaces == cube_discrete.DiscretePool.of(pool)  # the cache is not part of the pool's value
