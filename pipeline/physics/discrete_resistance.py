@@ -138,18 +138,17 @@ def _ordered_total_currents(kernel: np.ndarray, a: np.ndarray) -> np.ndarray:
     rest = (a > 0) & ~inside
     width = rest.sum(axis=2).max(axis=1)  # (batch,)
     nested = n ** 3 / 3 + sets * (width * width * n + width ** 3) <= sets * n ** 3 / 3
-    nested = slice(None) if nested.all() else np.flatnonzero(nested)  # a view where it can
+    nested = slice(None) if nested.all() else nested  # a view in the rule
     lower = _bordered_factor(kernel[nested], top[nested])
+    factored = np.isfinite(lower[:, n, n])
     definite = np.zeros(batch, bool)
-    definite[nested] = np.isfinite(lower[:, n, n])
-    out = np.zeros((batch, sets))
-    if (~definite).any():
-        out[~definite] = _whole_sets(kernel[~definite], a[~definite])
-    if definite.all():
+    definite[nested] = factored
+    if definite.all():  # the rule: no copies
         return _schur_sums(lower, kernel, a, inside, rest)
+    out = np.zeros((batch, sets))
+    out[~definite] = _whole_sets(kernel[~definite], a[~definite])
     if definite.any():
-        keep = np.isfinite(lower[:, n, n])
-        out[definite] = _schur_sums(lower[keep], kernel[definite], a[definite], inside[definite], rest[definite])
+        out[definite] = _schur_sums(lower[factored], kernel[definite], a[definite], inside[definite], rest[definite])
     return out
 
 
@@ -159,16 +158,22 @@ def _bordered_factor(kernel: np.ndarray, top: np.ndarray) -> np.ndarray:
     The last row holds ``L^-1 1`` (over the spots with ``top > 0``; the others get an identity
     row). A ``U`` that is not positive definite gets a factor of NaN.
     """
-    batch, n = top.shape
     live = top > 0
-    bordered = np.zeros((batch, n + 1, n + 1))
-    bordered[:, :n, :n] = kernel
     if not live.all():
-        bordered[:, :n, :n] *= live[:, :, None] & live[:, None, :]
-    bordered[:, np.arange(n), np.arange(n)] = 1.0 / (2.0 * np.where(live, top, 0.5))
-    bordered[:, n, :n] = bordered[:, :n, n] = live
-    bordered[:, n, n] = _CORNER
-    return _factor_definite(bordered)
+        kernel = kernel * (live[:, :, None] & live[:, None, :])
+    return _factor_definite(_bordered(kernel, 1.0 / (2.0 * np.where(live, top, 0.5)), live))
+
+
+def _bordered(kernel: np.ndarray, diagonal: np.ndarray, border: np.ndarray) -> np.ndarray:
+    """``[[K + diag(d), e], [e^T, _CORNER]]``: kernels (..., n, n) with ``diagonal`` (..., n) on
+    their diagonal, bordered by ``border`` (..., n; ones where a spot conducts)."""
+    n = diagonal.shape[-1]
+    out = np.zeros(diagonal.shape[:-1] + (n + 1, n + 1))
+    out[..., :n, :n] = kernel
+    out[..., np.arange(n), np.arange(n)] = diagonal
+    out[..., n, :n] = out[..., :n, n] = border
+    out[..., n, n] = _CORNER
+    return out
 
 
 def _factor_definite(matrices: np.ndarray) -> np.ndarray:
@@ -223,16 +228,10 @@ def _whole_sets(kernel: np.ndarray, a: np.ndarray) -> np.ndarray:
     batch, sets, n = a.shape
     out = np.zeros((batch, sets))
     conducting = a > 0
-    diagonal = np.arange(n)
+    diagonal = np.where(conducting, 1.0 / (2.0 * np.where(conducting, a, 1.0)), 1.0 / NEGLIGIBLE)
     for b in range(batch):
-        bordered = np.zeros((sets, n + 1, n + 1))
-        bordered[:, :n, :n] = kernel[b]
-        bordered[:, diagonal, diagonal] = np.where(conducting[b], 1.0 / (2.0 * np.where(conducting[b], a[b], 1.0)),
-                                                   1.0 / NEGLIGIBLE)
-        bordered[:, n, :n] = bordered[:, :n, n] = conducting[b]
-        bordered[:, n, n] = _CORNER
         try:
-            lower = np.linalg.cholesky(bordered)
+            lower = np.linalg.cholesky(_bordered(kernel[b], diagonal[b], conducting[b]))
             out[b] = np.einsum("sn,sn->s", lower[:, n, :n], lower[:, n, :n])
             continue
         except np.linalg.LinAlgError:
