@@ -42,10 +42,15 @@ def bands(scenario: Scenario) -> list[oxide_field.Band]:
 def threshold_block(psi: np.ndarray, *, xi: np.ndarray, rule: str) -> np.ndarray:
     """float32 thresholds (xi, lambda, realization) of a chunk of fields."""
     if rule == "theoretical":
-        value = oxide_field.theoretical_threshold(xi).astype(np.float32)
-        return np.broadcast_to(value[:, None, None], (xi.size,) + psi.shape[:2]).copy()
+        return _theoretical(xi, psi.shape[:2])
     flat = psi.reshape(psi.shape[:2] + (-1,))
     return np.stack([oxide_field.empirical_threshold(f, xi) for f in flat], axis=1)  # one lambda at a time
+
+
+def _theoretical(xi: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """float32 theoretical thresholds of ``xi``, shape (xi,) + ``shape``."""
+    value = oxide_field.theoretical_threshold(xi).astype(np.float32)
+    return np.broadcast_to(value.reshape((-1,) + (1,) * len(shape)), (xi.size,) + shape).copy()
 
 
 @dataclass(frozen=True)
@@ -81,3 +86,10 @@ class FieldSource:
         """Fields (realization, y, x) and their float32 thresholds (xi, realization) at lambda ``index``."""
         psi = self.psi(index, realizations)
         return psi, threshold_block(psi[None], xi=self.xi, rule=self.rule)[:, 0]
+
+    def thresholds(self, index: int, realizations: np.ndarray) -> np.ndarray:
+        """float32 thresholds (xi, realization) at lambda ``index``: the theoretical rule's without
+        synthesizing the fields, the empirical rule's from them."""
+        if self.rule == "theoretical":
+            return _theoretical(self.xi, (np.size(realizations),))
+        return self.fields(index, realizations)[1]

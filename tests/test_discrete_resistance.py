@@ -86,3 +86,31 @@ def test_answer_does_not_depend_on_the_order_of_the_spots():
     np.testing.assert_allclose(dr.total_currents(kernel[None], radii[None]),
                                dr.total_currents(kernel[np.ix_(turn, turn)][None], radii[None][..., turn]),
                                rtol=1e-12)
+
+
+def test_many_layouts_solved_together_equal_each_alone_bitwise():
+    """A layout's answer does not depend on the other layouts of the call (the cube's chunking)."""
+    rng = np.random.default_rng(21)
+    kernels, radii = [], []
+    for n in (3, 17, 40, 70):
+        kernel, a = layout(rng, n, 9 * 5, 3e-5, nested=True)
+        a = a.reshape(9, 5, n)
+        a[:, 0] = 0.0  # a step where no spot conducts
+        kernels.append(kernel)
+        radii.append(a)
+    together = dr.layout_resistances(kernels, radii, RHO)
+    for kernel, a, got in zip(kernels, radii, together):
+        alone = dr.layout_resistances([kernel], [a], RHO)[0]
+        np.testing.assert_array_equal(got, alone)
+        assert np.all(np.isinf(got[:, 0]))
+        with np.errstate(divide="ignore"):
+            for step in range(1, 5):
+                np.testing.assert_allclose(got[:, step], RHO / direct(kernel, a[:, step]), rtol=1e-10)
+
+
+def test_bucket_pads_by_at_most_an_eighth():
+    size = np.arange(0, 600)
+    padded = dr.bucket(size)
+    assert np.all(padded >= size) and np.all(padded[:17] == size[:17])
+    assert np.all(padded <= np.ceil(size * 1.125))
+    assert np.all(np.diff(padded) >= 0)

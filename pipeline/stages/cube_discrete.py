@@ -30,7 +30,7 @@ import xarray as xr
 
 from pipeline.physics import oxide_field
 from pipeline.physics.discrete_contact import interaction_kernel
-from pipeline.physics.discrete_resistance import resistances
+from pipeline.physics.discrete_resistance import layout_resistances
 from pipeline.physics.oxide_points import values_at_points
 from pipeline.physics.spot_share import DEFAULT_RINGS, DiscRule, clean_share, spot_points
 
@@ -147,10 +147,10 @@ def clean_shares(modes: oxide_field.Band, coeffs: np.ndarray, x: np.ndarray, y: 
     return out
 
 
-def _terms(kernel: np.ndarray, radius: np.ndarray, rho: float, model: str) -> dict[str, np.ndarray]:
-    """Resistance terms of spot radii (..., spot) on one surface: R, its self term, the rest, the count."""
+def _terms(resistance: np.ndarray, radius: np.ndarray, rho: float) -> dict[str, np.ndarray]:
+    """Resistance terms of one surface's spot radii (..., spot) and their resistances R (...):
+    R, its self term, the rest, the count."""
     total = radius.sum(axis=-1)
-    resistance = resistances(kernel, radius, rho, model)
     with np.errstate(divide="ignore"):
         own = rho / (2.0 * total)
     open_ = ~np.isfinite(resistance)
@@ -160,32 +160,40 @@ def _terms(kernel: np.ndarray, radius: np.ndarray, rho: float, model: str) -> di
             "crop_bound": np.zeros(resistance.shape)}
 
 
+def _stacked_terms(kernels: list[np.ndarray], radii: list[np.ndarray], rho: float, model: str,
+                   axis: int) -> dict[str, np.ndarray]:
+    """The terms of many surfaces' radii (xi, delta, spot), solved together, stacked along ``axis``."""
+    pieces = [_terms(r, a, rho) for r, a in zip(layout_resistances(kernels, radii, rho, model), radii)]
+    return {name: np.stack([p[name] for p in pieces], axis=axis) for name in pieces[0]}
+
+
 def discrete_chunk(source: Any, index: int, realizations: np.ndarray, xi_index: np.ndarray,
                    pool: DiscretePool, settings: "CubeSettings") -> dict[str, Any]:
     """The terms (xi, delta, realization) of the fields of ``realizations`` at lambda number ``index``.
 
     ``source`` is a :class:`pipeline.scene.FieldSource` (or the record in front of one):
-    its thresholds and its fields' coefficients.
+    its thresholds and its fields' coefficients. The point solves of the whole chunk run
+    together (:func:`pipeline.physics.discrete_resistance.layout_resistances`), each
+    realization's answer independent of the chunk.
     """
     base = getattr(source, "source", source)
     modes, lam = base.modes[index], base.lambdas[index]
-    _, thresholds = source.fields(index, realizations)
-    thresholds = thresholds[xi_index]
-    pieces = []
+    thresholds = source.thresholds(index, realizations)[xi_index]
+    kernels, radii = [], []
     for column, k in enumerate(realizations):
         x, y, radius = pool.spots(int(k))
         coeffs = oxide_field.coefficients(modes, oxide_field.field_stream(base.seed, lam, int(k)), base.amplitudes)
         share = clean_shares(modes, coeffs, x, y, radius, thresholds[:, column], settings.spot_rule,
                              lam * base.cell_size)
-        pieces.append(_terms(pool.kernel(int(k)), radius[None] * np.sqrt(share), settings.rho, settings.model))
-    out: dict[str, Any] = {name: np.stack([p[name] for p in pieces], axis=-1) for name in pieces[0]}
+        kernels.append(pool.kernel(int(k)))
+        radii.append(radius[None] * np.sqrt(share))
+    out: dict[str, Any] = _stacked_terms(kernels, radii, settings.rho, settings.model, axis=-1)
     out["n_uncropped"] = 0
     return out
 
 
 def clean_pool(pool: DiscretePool, rho: float, model: str) -> dict[str, np.ndarray]:
     """The oxide-free terms of every surface of the pool, each (surface, delta)."""
-    pieces = []
-    for s in range(pool.size):
-        pieces.append(_terms(pool.kernel(s), pool.spots(s)[2], rho, model))
-    return {name: np.stack([p[name] for p in pieces]) for name in pieces[0]}
+    kernels = [pool.kernel(s) for s in range(pool.size)]
+    radii = [pool.spots(s)[2][None] for s in range(pool.size)]
+    return {name: value[0] for name, value in _stacked_terms(kernels, radii, rho, model, axis=1).items()}

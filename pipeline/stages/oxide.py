@@ -81,6 +81,12 @@ class RecordedFields:
             return self.psi[index, realizations], self.threshold[:, index, realizations]
         return self.source.fields(index, realizations)
 
+    def thresholds(self, index: int, realizations: np.ndarray) -> np.ndarray:
+        """As :meth:`FieldSource.thresholds`: from the record when it holds every realization asked."""
+        if realizations.size and int(realizations.max()) < self.psi.shape[1]:
+            return self.threshold[:, index, realizations]
+        return self.source.thresholds(index, realizations)
+
 
 #: Largest float32 fields of one chunk (all lambdas), bytes: bounds the stage's peak on large grids.
 CHUNK_BYTES = 64 * 2**20
