@@ -1,6 +1,9 @@
 """Independent references the tests check the production code against (slow or simple on purpose).
 
 * :func:`fine_grid`: oxide fields synthesised on a fine pixel image by one inverse FFT.
+* :func:`spot_points`, :func:`clean_share`: the disc rule's points and clean shares, spot by
+  spot in plain NumPy (the compiled :func:`pipeline.physics.spot_share.disc_points` and
+  :func:`~pipeline.physics.spot_share.disc_shares` equal them).
 * :func:`roughness_parameters`: Greenwood–Williamson parameters of a height map from
   finite-difference moments, independent of the spectral estimator of
   :mod:`pipeline.physics.surface_spectrum`:
@@ -33,6 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from pipeline.physics.oxide_field import Band
+from pipeline.physics.spot_share import DiscRule
 from pipeline.physics.roughness import detrend, validated_heights
 
 
@@ -149,3 +153,48 @@ def roughness_parameters(heights: ArrayLike, pixel_size: float) -> RoughnessPara
         eta=float(np.sqrt(3.0) / (18.0 * np.pi) * m4 / m2),
         beta=float(0.737 / np.sqrt(m4)),
     )
+
+
+def spot_points(x: np.ndarray, y: np.ndarray, a: np.ndarray, rule: DiscRule) -> tuple[np.ndarray, np.ndarray]:
+    """The rule's points on every spot: ``(x_i + a_i u, y_i + a_i v)``.
+
+    Parameters
+    ----------
+    x, y
+        Spot centres, m, shape (n_spots,).
+    a
+        Spot radii, m, shape (n_spots,).
+    rule
+        The quadrature pattern.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Point coordinates x and y, m, each shape (n_spots, rule.size).
+    """
+    u, v = rule.offsets()
+    a = np.asarray(a, float)[:, None]
+    return np.asarray(x, float)[:, None] + a * u, np.asarray(y, float)[:, None] + a * v
+
+
+def clean_share(values: np.ndarray, threshold: np.ndarray | float, weights: np.ndarray) -> np.ndarray:
+    """Weighted share of every spot's quadrature points where the field is clean (``psi < psi0``).
+
+    Parameters
+    ----------
+    values
+        Field values at the spots' points, dimensionless, shape (..., n_spots, n_quad).
+    threshold
+        Oxide threshold psi0, dimensionless, broadcastable to ``values`` (e.g. shape (..., 1, 1)).
+    weights
+        Quadrature weights summing to 1, shape (n_quad,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Clean share f in [0, 1], float64, shape (..., n_spots): exactly 1 where every point is
+        clean (the spot keeps its own radius, whatever the rounding of the weights' sum), exactly
+        0 where none is.
+    """
+    clean = np.asarray(values) < threshold
+    return np.where(clean.all(axis=-1), 1.0, clean.astype(float) @ np.asarray(weights, float))

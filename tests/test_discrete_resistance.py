@@ -33,37 +33,60 @@ def layout(rng: np.random.Generator, n: int, sets: int, floor: float, nested: bo
     return interaction_kernel(x, y, floor), rng.uniform(1e-6, 2e-5, n) * np.sqrt(share)
 
 
+def solved(kernel: np.ndarray, radii: np.ndarray) -> tuple[np.ndarray, int]:
+    """The compiled solve of one step's sets (rows of ``radii``) and the path it took."""
+    total, path = dr.currents(kernel, radii[:, None, :])
+    return total[:, 0], int(path[0])
+
+
 @pytest.mark.parametrize("nested", [True, False])
 @pytest.mark.parametrize("floor", [3e-5, 1e-6])  # 1e-6: close large caps leave some unions indefinite
-def test_batched_total_currents_equal_the_direct_solve(nested, floor):
+def test_every_path_equals_the_direct_solve(nested, floor):
     rng = np.random.default_rng(11 + nested)
-    indefinite = 0
-    for _ in range(40):
-        batch, size, sets = rng.integers(1, 5), rng.integers(1, 40), rng.integers(1, 10)
-        kernels, radii = np.zeros((batch, size, size)), np.zeros((batch, sets, size))
-        for b in range(batch):
-            n = rng.integers(1, size + 1)
-            kernels[b, :n, :n], radii[b, :, :n] = layout(rng, n, sets, floor, nested)
-            union = kernels[b].copy()
-            top = radii[b].max(axis=0)
-            union[np.diag_indices(size)] = np.where(top > 0, 1.0 / (2.0 * np.where(top > 0, top, 1.0)), 1.0)
-            indefinite += np.linalg.eigvalsh(union).min() <= 0
-        got = dr.total_currents(kernels, radii)
-        want = np.array([direct(k, r) for k, r in zip(kernels, radii)])
-        np.testing.assert_allclose(got, want, rtol=1e-10, atol=0.0)
+    paths = set()
+    for _ in range(60):
+        n, sets = rng.integers(1, 40), rng.integers(1, 10)
+        kernel, radii = layout(rng, n, sets, floor, nested)
+        got, path = solved(kernel, radii)
+        paths.add(path)
+        np.testing.assert_allclose(got, direct(kernel, radii), rtol=1e-10, atol=0.0)
     if floor < 1e-5:
-        assert indefinite > 0  # the LU path was exercised
+        assert dr.INDEFINITE in paths  # the LU path was exercised
+    assert dr.NESTED in paths
 
 
-def test_wide_partial_sets_take_the_whole_path_with_the_same_answer(monkeypatch):
+def test_wide_partial_sets_are_solved_alone_with_the_same_answer():
     rng = np.random.default_rng(3)
     kernel, radii = layout(rng, 30, 9, 3e-5, nested=False)
     radii = radii * rng.uniform(0.5, 0.99, radii.shape)  # every spot below its largest radius somewhere
-    calls = []
-    whole = dr._whole_sets
-    monkeypatch.setattr(dr, "_whole_sets", lambda k, a: calls.append(a.shape) or whole(k, a))
-    np.testing.assert_allclose(dr.total_currents(kernel[None], radii[None])[0], direct(kernel, radii), rtol=1e-10)
-    assert calls  # the flop rule chose LU
+    got, path = solved(kernel, radii)
+    assert path == dr.WHOLE  # the flop rule chose one factorization per set
+    np.testing.assert_allclose(got, direct(kernel, radii), rtol=1e-10)
+
+
+def test_nested_sets_share_one_factorization_with_the_same_answer():
+    rng = np.random.default_rng(4)
+    kernel, radii = layout(rng, 60, 9, 3e-5, nested=True)
+    radii = radii.max(axis=0) * (np.sort(rng.uniform(size=(9, 60)), axis=0) > 0.4)  # whole spots, nested
+    radii[:, :3] *= 0.7 ** np.arange(9)[:, None]  # and three partial ones
+    got, path = solved(kernel, radii)
+    assert path == dr.NESTED
+    np.testing.assert_allclose(got, direct(kernel, radii), rtol=1e-10)
+
+
+def test_a_set_with_no_spot_and_no_step_conducting():
+    rng = np.random.default_rng(9)
+    kernel, radii = layout(rng, 12, 3, 3e-5, nested=True)
+    radii[1] = 0.0
+    got, path = solved(kernel, radii)
+    assert got[1] == 0.0 and path in (dr.NESTED, dr.WHOLE)
+    total, paths = dr.currents(kernel, np.zeros((3, 2, 12)))
+    assert np.all(total == 0.0) and np.all(paths == dr.NONE)
+
+
+def test_one_spot_is_a_disc():
+    kernel = np.zeros((1, 1))
+    np.testing.assert_allclose(dr.resistances(kernel, np.array([[2e-6]]), RHO), [RHO / (2 * 2e-6)], rtol=1e-14)
 
 
 def test_resistances_solve_each_step_and_its_sets_exactly():
@@ -79,38 +102,30 @@ def test_resistances_solve_each_step_and_its_sets_exactly():
     assert np.all(np.isinf(got[:, 2]))
 
 
+def test_greenwood_form_is_the_rayleigh_quotient_and_bounds_the_point_model():
+    rng = np.random.default_rng(6)
+    kernel, a = layout(rng, 30, 5, 3e-5, nested=True)
+    greenwood = dr.resistances(kernel, a, RHO, "greenwood")
+    point = dr.resistances(kernel, a, RHO, "point")
+    for row, r_g in zip(a, greenwood):
+        if row.sum() == 0:
+            assert np.isinf(r_g)
+            continue
+        matrix = kernel + np.diag(np.where(row > 0, 1.0 / (2.0 * np.where(row > 0, row, 1.0)), 0.0))
+        np.testing.assert_allclose(r_g, RHO * (row @ matrix @ row) / row.sum() ** 2, rtol=1e-12)
+    assert np.all(greenwood >= point * (1 - 1e-12))
+
+
 def test_answer_does_not_depend_on_the_order_of_the_spots():
     rng = np.random.default_rng(8)
     kernel, radii = layout(rng, 40, 9, 3e-5, nested=True)
     turn = rng.permutation(40)
-    np.testing.assert_allclose(dr.total_currents(kernel[None], radii[None]),
-                               dr.total_currents(kernel[np.ix_(turn, turn)][None], radii[None][..., turn]),
+    np.testing.assert_allclose(solved(kernel, radii)[0], solved(kernel[np.ix_(turn, turn)], radii[:, turn])[0],
                                rtol=1e-12)
 
 
-def test_many_layouts_solved_together_equal_each_alone_bitwise():
-    """A layout's answer does not depend on the other layouts of the call (the cube's chunking)."""
-    rng = np.random.default_rng(21)
-    kernels, radii = [], []
-    for n in (3, 17, 40, 70):
-        kernel, a = layout(rng, n, 9 * 5, 3e-5, nested=True)
-        a = a.reshape(9, 5, n)
-        a[:, 0] = 0.0  # a step where no spot conducts
-        kernels.append(kernel)
-        radii.append(a)
-    together = dr.layout_resistances(kernels, radii, RHO)
-    for kernel, a, got in zip(kernels, radii, together):
-        alone = dr.layout_resistances([kernel], [a], RHO)[0]
-        np.testing.assert_array_equal(got, alone)
-        assert np.all(np.isinf(got[:, 0]))
-        with np.errstate(divide="ignore"):
-            for step in range(1, 5):
-                np.testing.assert_allclose(got[:, step], RHO / direct(kernel, a[:, step]), rtol=1e-10)
-
-
-def test_bucket_pads_by_at_most_an_eighth():
-    size = np.arange(0, 600)
-    padded = dr.bucket(size)
-    assert np.all(padded >= size) and np.all(padded[:17] == size[:17])
-    assert np.all(padded <= np.ceil(size * 1.125))
-    assert np.all(np.diff(padded) >= 0)
+def test_bad_shapes_and_models_are_refused():
+    with pytest.raises(ValueError, match="model"):
+        dr.resistances(np.zeros((2, 2)), np.ones(2), RHO, "exact")
+    with pytest.raises(ValueError, match="must be"):
+        dr.currents(np.zeros((2, 2)), np.ones((1, 1, 3)))

@@ -7,7 +7,8 @@ import pytest
 
 from pipeline.physics import oxide_field as of
 from pipeline.physics.oxide_points import values_at_points
-from pipeline.physics.spot_share import DEFAULT_RINGS, DiscRule, clean_share, effective_radius, spot_points
+from pipeline.physics.spot_share import DEFAULT_RINGS, DiscRule, disc_points, disc_shares, effective_radius
+from tests.oracles import clean_share, spot_points
 
 N_CELLS = 57  # the paper scenario's window
 CELL = 1.0 / np.sqrt(2e8)  # m
@@ -159,3 +160,39 @@ def test_centre_rule_and_full_share_keep_the_radius() -> None:
     radius = effective_radius(a, f)
     np.testing.assert_array_equal(radius[1], np.where(centre_clean, a, 0.0))  # f = 1: the spot's own radius
     np.testing.assert_allclose(effective_radius(a, 0.25), a / 2, rtol=1e-15)
+
+
+def test_compiled_disc_points_and_shares_equal_the_spot_by_spot_definition() -> None:
+    lam = 3.0
+    modes = _paper_band(lam)
+    coeffs = _coeffs(modes, lam, 1)[0]
+    rng = np.random.default_rng(12)
+    n, steps = 40, 5
+    xc, yc = rng.uniform(-20 * CELL, 20 * CELL, (2, n))
+    radius = rng.uniform(0.0, 0.6 * lam * CELL, (steps, n)) * (rng.uniform(size=(steps, n)) > 0.3)
+    rings = rng.integers(0, DEFAULT_RINGS + 1, (steps, n))
+    thresholds = of.theoretical_threshold(np.array([0.1, 0.5, 0.9])).astype(np.float32)
+    px, py = disc_points(xc, yc, radius, rings)
+    values = values_at_points(modes, coeffs, px, py).astype(np.float32)
+    shares = disc_shares(values, thresholds, radius, rings)
+    assert shares.shape == (3, steps, n)
+    start = 0
+    for d, i in zip(*np.nonzero(radius > 0)):  # (step, spot) order
+        rule = DiscRule(int(rings[d, i]))
+        x, y = spot_points(xc[i:i + 1], yc[i:i + 1], radius[d, i:i + 1], rule)
+        np.testing.assert_array_equal(px[start:start + rule.size], x[0])
+        np.testing.assert_array_equal(py[start:start + rule.size], y[0])
+        block = values[start:start + rule.size]
+        start += rule.size
+        want = clean_share(block[None], thresholds[:, None], rule.weights())
+        np.testing.assert_allclose(shares[:, d, i], want, rtol=1e-14, atol=0)
+    assert start == px.size
+    assert np.all(shares[:, radius == 0] == 0.0)
+    assert 0 < np.mean((shares > 0) & (shares < 1))  # some discs are cut
+
+
+def test_disc_rings_out_of_range_are_refused() -> None:
+    with pytest.raises(ValueError, match="rings"):
+        disc_points(np.zeros(2), np.zeros(2), np.ones((1, 2)), np.full((1, 2), DEFAULT_RINGS + 1))
+    with pytest.raises(ValueError, match="rings"):
+        disc_points(np.zeros(2), np.zeros(2), np.ones((1, 2)), np.zeros((2, 2)))

@@ -21,15 +21,22 @@ turned by ``k (sqrt(5) - 1) / 2`` of its sector width, so no two rings' points l
 Every ring's points sum to zero, so the pattern's mean offset vanishes and its second moment
 ``sum w u^2`` is exactly that of the unit disc (1/4) but for the central cell's share
 ``1 / (4 N^2)``.
+
+Many discs at once, each with its own pattern (the cube's spots at every load step):
+:func:`disc_points` lays out their points and :func:`disc_shares` counts their clean shares, in
+compiled loops (numba, ``nogil``), equal to the plain NumPy definitions ``spot_points`` and
+``clean_share`` of tests/oracles.py applied disc by disc.
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
-__all__ = ["DiscRule", "DEFAULT_RINGS", "spot_points", "clean_share", "effective_radius"]
+__all__ = ["DiscRule", "DEFAULT_RINGS", "disc_points", "disc_shares", "effective_radius"]
 
 #: Rings of the default pattern (217 points). On discs of radius half the correlation length
 #: cut by oxide edges, the clean share's absolute error against a 200 x 200 image of the disc is
@@ -79,49 +86,110 @@ class DiscRule:
         return np.full(self.size, 1.0 / self.size)
 
 
-def spot_points(x: np.ndarray, y: np.ndarray, a: np.ndarray, rule: DiscRule) -> tuple[np.ndarray, np.ndarray]:
-    """The rule's points on every spot: ``(x_i + a_i u, y_i + a_i v)``.
+@functools.cache
+def _patterns() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Offsets (u, v) of the patterns of 0 .. :data:`DEFAULT_RINGS` rings, concatenated, and where
+    each starts (n_rings + 2,): pattern n is ``[start[n], start[n + 1])``."""
+    rules = [DiscRule(n) for n in range(DEFAULT_RINGS + 1)]
+    u, v = (np.concatenate(part) for part in zip(*(rule.offsets() for rule in rules)))
+    return u, v, np.concatenate([[0], np.cumsum([rule.size for rule in rules])])
+
+
+def disc_points(x: np.ndarray, y: np.ndarray, radius: np.ndarray, rings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pattern points of every disc of ``radius > 0``: each disc's pattern scaled by its radius.
 
     Parameters
     ----------
     x, y
-        Spot centres, m, shape (n_spots,).
-    a
-        Spot radii, m, shape (n_spots,).
-    rule
-        The quadrature pattern.
+        Spot centres, m, shape (n,).
+    radius
+        Disc radii, m, shape (steps, n); discs of radius 0 have no points.
+    rings
+        Each disc's pattern, ``DiscRule(rings)``, integers 0 .. :data:`DEFAULT_RINGS`, shape (steps, n).
 
     Returns
     -------
     tuple of numpy.ndarray
-        Point coordinates x and y, m, each shape (n_spots, rule.size).
+        x and y of the points, m, flat: disc by disc in (step, spot) order, each disc's pattern
+        in :meth:`DiscRule.offsets` order.
     """
-    u, v = rule.offsets()
-    a = np.asarray(a, float)[:, None]
-    return np.asarray(x, float)[:, None] + a * u, np.asarray(y, float)[:, None] + a * v
+    u, v, start = _patterns()
+    return _disc_points(np.asarray(x, float), np.asarray(y, float), np.ascontiguousarray(radius, float),
+                        _checked_rings(rings, np.shape(radius)), u, v, start)
 
 
-def clean_share(values: np.ndarray, threshold: np.ndarray | float, weights: np.ndarray) -> np.ndarray:
-    """Weighted share of every spot's quadrature points where the field is clean (``psi < psi0``).
+def disc_shares(values: np.ndarray, thresholds: np.ndarray, radius: np.ndarray, rings: np.ndarray) -> np.ndarray:
+    """Clean share of every disc at every threshold: the share of its pattern's points where the field is clean.
 
     Parameters
     ----------
     values
-        Field values at the spots' points, dimensionless, shape (..., n_spots, n_quad).
-    threshold
-        Oxide threshold psi0, dimensionless, broadcastable to ``values`` (e.g. shape (..., 1, 1)).
-    weights
-        Quadrature weights summing to 1, shape (n_quad,).
+        Field values at :func:`disc_points`' points, dimensionless, flat, compared in their own
+        dtype (float32 in the cube).
+    thresholds
+        Oxide thresholds psi0, shape (sets,), of ``values``' dtype.
+    radius, rings
+        As for :func:`disc_points`.
 
     Returns
     -------
     numpy.ndarray
-        Clean share f in [0, 1], float64, shape (..., n_spots): exactly 1 where every point is
-        clean (the spot keeps its own radius, whatever the rounding of the weights' sum), exactly
-        0 where none is.
+        Clean shares f in [0, 1], shape (sets, steps, n): the share of the disc's points where
+        ``value < threshold`` (exactly 1 where every point is clean), 0 where the radius is 0.
     """
-    clean = np.asarray(values) < threshold
-    return np.where(clean.all(axis=-1), 1.0, clean.astype(float) @ np.asarray(weights, float))
+    _, _, start = _patterns()
+    values = np.ascontiguousarray(values)
+    thresholds = np.asarray(thresholds, dtype=values.dtype)
+    return _disc_shares(values, thresholds, np.ascontiguousarray(radius, float), _checked_rings(rings, np.shape(radius)),
+                        start)
+
+
+def _checked_rings(rings: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    rings = np.ascontiguousarray(rings, dtype=np.int64)
+    if rings.shape != shape or rings.size and not 0 <= rings.min() <= rings.max() <= DEFAULT_RINGS:
+        raise ValueError(f"rings must be integers 0 .. {DEFAULT_RINGS} of the radii's shape {shape}")
+    return rings
+
+
+@numba.njit(cache=True, nogil=True)
+def _disc_points(x: np.ndarray, y: np.ndarray, radius: np.ndarray, rings: np.ndarray, u: np.ndarray,
+                 v: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    steps, n = radius.shape
+    total = 0
+    for d in range(steps):
+        for i in range(n):
+            if radius[d, i] > 0.0:
+                total += start[rings[d, i] + 1] - start[rings[d, i]]
+    px, py = np.empty(total), np.empty(total)
+    p = 0
+    for d in range(steps):
+        for i in range(n):
+            a = radius[d, i]
+            if a > 0.0:
+                for k in range(start[rings[d, i]], start[rings[d, i] + 1]):
+                    px[p] = x[i] + a * u[k]
+                    py[p] = y[i] + a * v[k]
+                    p += 1
+    return px, py
+
+
+@numba.njit(cache=True, nogil=True)
+def _disc_shares(values: np.ndarray, thresholds: np.ndarray, radius: np.ndarray, rings: np.ndarray,
+                 start: np.ndarray) -> np.ndarray:
+    steps, n = radius.shape
+    out = np.zeros((thresholds.size, steps, n))
+    p = 0
+    for d in range(steps):
+        for i in range(n):
+            if radius[d, i] > 0.0:
+                size = start[rings[d, i] + 1] - start[rings[d, i]]
+                for s in range(thresholds.size):
+                    clean = 0
+                    for k in range(p, p + size):
+                        clean += values[k] < thresholds[s]
+                    out[s, d, i] = 1.0 if clean == size else clean / size
+                p += size
+    return out
 
 
 def effective_radius(a: np.ndarray, f: np.ndarray) -> np.ndarray:
