@@ -176,13 +176,6 @@ def test_spectral_period_has_modes_at_any_lambda() -> None:
     assert bands(scenario)[0].size > 100
 
 
-@pytest.mark.parametrize("lam", [1.0, 3.0, 13.0, 19.0, 23.0, 50.0, 60.0])
-def test_config_mode_count_is_the_band_size(paper: Scenario, lam: float) -> None:
-    from pipeline.config import _modes_in_band
-
-    assert _modes_in_band(paper, lam) == oxide_field.band(paper.n_cells, paper.cell_size, lam, 3.0, 0.5).size
-
-
 def test_adaptive_record_is_the_first_batch_and_cube_regenerates_it(small: Scenario) -> None:
     scenario = dataclasses.replace(
         small, oxide=dataclasses.replace(small.oxide, ensemble="adaptive", min_realizations=5, chunk=2,

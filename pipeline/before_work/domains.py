@@ -26,7 +26,8 @@ import math
 
 import numpy as np
 
-from pipeline.config import AUTO, ConfigError, Scenario, check_domains
+from pipeline.before_work.window_checks import check_domains
+from pipeline.config import AUTO, ConfigError, Scenario
 from pipeline.contact_solution import indenter_profile, solve
 from pipeline.physics import constriction, spot_models, spots
 from pipeline.physics.asperity import log_asperity_integral
