@@ -13,6 +13,7 @@ from pipeline import store
 from pipeline.compute import ComputeOptions
 from pipeline.config import load_scenario
 from pipeline.physics import constriction, oxide_field, point_model, spot_models
+from pipeline.physics.interaction import AUTO_METHOD
 from pipeline.stages import contact, cube
 from pipeline.stages import oxide as oxide_stage
 
@@ -114,7 +115,7 @@ def test_layout_units_and_attrs(built):
     for name in list(built.data_vars) + list(built.coords):
         assert "units" in built[name].attrs and "long_name" in built[name].attrs, name
     assert built["resistance"].attrs["units"] == "ohm"
-    assert built.attrs["crop_tolerance"] == 1e-6 and built.attrs["method"] == constriction.AUTO_METHOD
+    assert built.attrs["crop_tolerance"] == 1e-6 and built.attrs["method"] == AUTO_METHOD
     assert 0 <= built.attrs["crop_error_measured"] <= built.attrs["crop_tolerance"]
     assert built.attrs["crop_error_bound"] <= built.attrs["crop_tolerance"]
     assert built["crop_cells"].values.min() < N  # the light loads are cropped

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from pipeline.physics import constriction, point_model
+from pipeline.physics.crops import choose_crops
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
 from pipeline.stages import contact
 from tests.test_point_model import PITCH, RHO, _random_case, _whole
@@ -89,7 +90,7 @@ def test_expected_spots_with_the_lattice_term_obey_barber(paper):
     barber = ds["barber_conductance"].values * RHO  # conductance x rho*, m
     radius, dx = ds["spot_radius"].values, paper.cell_size
     masks = np.ones((1, paper.n_cells, paper.n_cells), bool)
-    crops = constriction.choose_crops(radius, radius, dx, 1e-9)
+    crops = choose_crops(radius, radius, dx, 1e-9)
 
     def conductance(c):
         res = point_model.resistance(masks, radius, radius, dx, RHO, crops, 1e-9, lattice_constant=c)

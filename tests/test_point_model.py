@@ -11,7 +11,8 @@ from pipeline.cli import main as cli
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, load_scenario
 from pipeline.physics import constriction, point_model, point_solve
-from pipeline.physics.interaction_fft import (
+from pipeline.physics.crops import choose_crops
+from pipeline.physics.interaction_folded import (
     interaction_apply,
     interaction_apply_columns,
     interaction_apply_dense,
@@ -187,7 +188,7 @@ def test_cropping_bound_holds():
     contact = _contact(n=15, n_delta=5)
     radius = contact["spot_radius"].values
     masks = np.random.default_rng(2).random((8, 15, 15)) > 0.4
-    crops = constriction.choose_crops(radius, radius, PITCH, 1e-3)
+    crops = choose_crops(radius, radius, PITCH, 1e-3)
     assert crops.min() < 15
     cropped = point_model.resistance(masks, radius, radius, PITCH, RHO, crops, 1e-3)
     whole = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0)
@@ -200,7 +201,7 @@ def test_cropping_bound_holds():
 def test_no_current_inside_the_crop_is_solved_on_the_whole_window():
     contact = _contact(n=15, n_delta=5)
     radius = contact["spot_radius"].values
-    crops = constriction.choose_crops(radius, radius, PITCH, 1e-3)
+    crops = choose_crops(radius, radius, PITCH, 1e-3)
     edge = (15 - crops.min()) // 2
     mask = np.zeros((1, 15, 15), bool)
     mask[0, :edge, :] = True  # current only outside the smallest crop

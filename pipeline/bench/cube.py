@@ -21,6 +21,7 @@ import xarray as xr
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
 from pipeline.physics import constriction
+from pipeline.physics.crops import choose_crops
 from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube
 from pipeline.stages import oxide as oxide_stage
@@ -75,7 +76,7 @@ def _paths(
     n = radius.shape[-1]
     whole = np.full(radius.shape[0], n)
     tol = scenario.cube.crop_tolerance
-    crops = constriction.choose_crops(radius, weights, pitch, tol)
+    crops = choose_crops(radius, weights, pitch, tol)
     spectral = ("folded", "dft_gemm", "fft")
     paths = {f"{m}_uncropped": (m, whole, 0.0) for m in spectral + ("gemm",)}
     paths.update({f"{m}_cropped": (m, crops, tol) for m in spectral})

@@ -23,6 +23,7 @@ from pipeline.bench.cube import _max_rel_error, _subset_masks
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
 from pipeline.physics import constriction, point_model
+from pipeline.physics.crops import choose_crops
 from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube
 from pipeline.stages import oxide as oxide_stage
@@ -74,7 +75,7 @@ def _cropping(scenario: Scenario, contact: Any, oxide: Any) -> dict[str, Any]:
     radius, _, pitch = cube.spot_maps(scenario, contact)
     rho, tol = scenario.material.rho, scenario.cube.crop_tolerance
     masks = _subset_masks(oxide, N_CROP_MASKS, seed=3)
-    crops = constriction.choose_crops(radius, radius, pitch, tol)
+    crops = choose_crops(radius, radius, pitch, tol)
     whole = np.full(radius.shape[0], radius.shape[-1])
     start = time.perf_counter()
     solver = {"solver_tolerance": scenario.cube.solver_tolerance, "criterion": scenario.cube.solver_criterion}

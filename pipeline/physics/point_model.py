@@ -25,7 +25,7 @@ the exact one (:func:`greenwood_resistance` takes no lattice term: see there).
 :func:`resistance` solves ``M f = 1`` matrix-free for a batch of oxide masks at every load step,
 with the calling convention of :func:`pipeline.physics.constriction.resistance`:
 ``M f = f / (2a) + film term + (K * f) / pi``, ``K * f`` from
-:func:`pipeline.physics.interaction_fft.interaction_apply`, by a Jacobi-preconditioned
+:func:`pipeline.physics.interaction_folded.interaction_apply`, by a Jacobi-preconditioned
 conjugate gradient batched over the maps, started from the previous load step's solution. The
 conductance is the variational estimate ``J(f) = 2 sum f - f^T M f``, exact to second order in
 the residual, and by default the solve stops when CG's own energy-norm record says ``J`` is
@@ -45,7 +45,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.physics.constriction import ChunkResult, _blocks, block_size
+from pipeline.physics.constriction import ChunkResult, _blocks
+from pipeline.physics.interaction import block_size
 from pipeline.physics.point_solve import RECORDS, solve_block
 from pipeline.physics.point_system import OPERATORS, checked_settings, spot_states, system_matrix
 
@@ -173,7 +174,7 @@ def resistance(
     rho
         Effective resistivity rho*, in ohm m.
     crops
-        Crop size per load step (:func:`pipeline.physics.constriction.choose_crops`).
+        Crop size per load step (:func:`pipeline.physics.crops.choose_crops`).
     tolerance
         Entries whose crop bound exceeds this are solved again on the whole window.
     method
