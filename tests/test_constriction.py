@@ -14,6 +14,7 @@ from pipeline.physics import constriction as cn
 from pipeline.physics import crops as cc
 from pipeline.physics import interaction as ia
 from pipeline.physics import interaction_fft as fi
+from pipeline.physics.spot_geometry import SpotGeometry
 
 RHO = 7.2e-7  # ohm m
 PITCH = 7.0e-5  # m
@@ -30,9 +31,6 @@ def _gaussian_spots(n: int, widths: tuple[float, ...], peak: float = 2e-6) -> np
 def _weights(radius: np.ndarray, kind: str) -> np.ndarray:
     return radius if kind == "radius" else np.pi * radius**2
 
-
-def _whole(radius: np.ndarray) -> np.ndarray:
-    return np.full(radius.shape[0], radius.shape[-1])
 
 
 def _rel(a: np.ndarray, b: np.ndarray) -> float:
@@ -70,9 +68,9 @@ def test_resistance_fast_equals_direct(case, kind):
     radius = rng.random((3, n, n)) * 1e-6 * (rng.random((3, n, n)) < 0.9)
     masks = rng.random((batch, n, n)) < p
     weights = _weights(radius, kind)
-    ref = cn.resistance(masks, radius, weights, PITCH, RHO, _whole(radius), 0.0, "direct")
+    ref = cn.resistance(masks, SpotGeometry.whole_window(radius, weights, PITCH), RHO, "direct")
     for method in FAST + ("auto",):
-        got = cn.resistance(masks, radius, weights, PITCH, RHO, _whole(radius), 0.0, method)
+        got = cn.resistance(masks, SpotGeometry.whole_window(radius, weights, PITCH), RHO, method)
         assert _rel(got.resistance, ref.resistance) <= 1e-12
         assert _rel(got.resistance_interaction + got.resistance_self, ref.resistance) <= 1e-12
         np.testing.assert_array_equal(got.n_conducting, ref.n_conducting)
@@ -82,7 +80,7 @@ def test_single_spot_is_rho_over_2a():
     radius = np.zeros((1, 5, 5))
     radius[0, 1, 3] = 3e-6
     for method in FAST + ("direct",):
-        res = cn.resistance(np.ones((1, 5, 5), bool), radius, radius, PITCH, RHO, [5], 0.0, method)
+        res = cn.resistance(np.ones((1, 5, 5), bool), SpotGeometry(radius, radius, PITCH, [5], 0.0), RHO, method)
         assert res.resistance[0, 0] == pytest.approx(RHO / (2 * 3e-6), rel=1e-15)
         assert res.resistance_interaction[0, 0] == 0.0
         assert res.n_conducting[0, 0] == 1
@@ -96,14 +94,15 @@ def test_two_spots_by_hand(kind):
     w1, w2 = (a1, a2) if kind == "radius" else (math.pi * a1**2, math.pi * a2**2)
     d = PITCH * math.hypot(4, 3)
     expected = RHO / (2 * (a1 + a2)) + RHO * 2 * w1 * w2 / d / (math.pi * (w1 + w2) ** 2)
+    spots = SpotGeometry(radius, _weights(radius, kind), PITCH, [6], 0.0)
     for method in FAST + ("direct",):
-        res = cn.resistance(np.ones((1, 6, 6), bool), radius, _weights(radius, kind), PITCH, RHO, [6], 0.0, method)
+        res = cn.resistance(np.ones((1, 6, 6), bool), spots, RHO, method)
         assert res.resistance[0, 0] == pytest.approx(expected, rel=1e-14)
 
 
 def test_all_oxidized_is_open_circuit():
     radius = _gaussian_spots(7, (1.0, 3.0))
-    res = cn.resistance(np.zeros((2, 7, 7), bool), radius, radius, PITCH, RHO, [7, 7], 1e-6)
+    res = cn.resistance(np.zeros((2, 7, 7), bool), SpotGeometry(radius, radius, PITCH, [7, 7], 1e-6), RHO)
     for term in (res.resistance, res.resistance_self, res.resistance_interaction):
         assert np.all(np.isposinf(term))
     assert np.all(res.n_conducting == 0)
@@ -126,8 +125,8 @@ def test_resistance_scales_with_rho():
     rng = np.random.default_rng(4)
     radius = _gaussian_spots(9, (1.5, 3.0))
     masks = rng.random((5, 9, 9)) < 0.5
-    one = cn.resistance(masks, radius, radius, PITCH, 1.0, [9, 9], 0.0)
-    scaled = cn.resistance(masks, radius, radius, PITCH, 3.5, [9, 9], 0.0)
+    one = cn.resistance(masks, SpotGeometry(radius, radius, PITCH, [9, 9], 0.0), 1.0)
+    scaled = cn.resistance(masks, SpotGeometry(radius, radius, PITCH, [9, 9], 0.0), 3.5)
     np.testing.assert_allclose(scaled.resistance, 3.5 * one.resistance, rtol=1e-15)
 
 
@@ -139,13 +138,14 @@ def test_results_bit_identical_whatever_the_batch(kind, p):
     weights = _weights(radius, kind)
     masks = rng.random((300, 13, 13)) < p
     crops = cc.choose_crops(radius, weights, PITCH, 1e-6)
-    full = cn.resistance(masks, radius, weights, PITCH, RHO, crops, 1e-6)
+    spots = SpotGeometry(radius, weights, PITCH, crops, 1e-6)
+    full = cn.resistance(masks, spots, RHO)
     assert (full.n_uncropped > 0) == (kind == "area")
     whole = full.resistance
-    pieces = [cn.resistance(masks[i : i + 7], radius, weights, PITCH, RHO, crops, 1e-6).resistance for i in range(0, 300, 7)]
+    pieces = [cn.resistance(masks[i : i + 7], spots, RHO).resistance for i in range(0, 300, 7)]
     np.testing.assert_array_equal(np.concatenate(pieces), whole)
     perm = rng.permutation(300)
-    np.testing.assert_array_equal(cn.resistance(masks[perm], radius, weights, PITCH, RHO, crops, 1e-6).resistance, whole[perm])
+    np.testing.assert_array_equal(cn.resistance(masks[perm], spots, RHO).resistance, whole[perm])
 
 
 @settings(max_examples=20, deadline=None)
@@ -162,8 +162,8 @@ def test_crop_error_within_tolerance_and_bound(seed, kind, tolerance, p, n):
     weights = _weights(radius, kind)
     masks = rng.random((12, n, n)) < p
     crops = cc.choose_crops(radius, weights, PITCH, tolerance)
-    exact = cn.resistance(masks, radius, weights, PITCH, RHO, _whole(radius), 0.0, "direct").resistance
-    cropped = cn.resistance(masks, radius, weights, PITCH, RHO, crops, tolerance)
+    exact = cn.resistance(masks, SpotGeometry.whole_window(radius, weights, PITCH), RHO, "direct").resistance
+    cropped = cn.resistance(masks, SpotGeometry(radius, weights, PITCH, crops, tolerance), RHO)
     finite = np.isfinite(exact)
     error = np.abs(cropped.resistance[finite] / exact[finite] - 1.0)
     assert np.all(error <= tolerance)
@@ -186,7 +186,7 @@ def test_radius_crops_need_no_recomputation():
     radius = _gaussian_spots(17, (1.0, 3.0))
     masks = rng.random((40, 17, 17)) < 0.05
     crops = cc.choose_crops(radius, radius, PITCH, 1e-6)
-    assert cn.resistance(masks, radius, radius, PITCH, RHO, crops, 1e-6).n_uncropped == 0
+    assert cn.resistance(masks, SpotGeometry(radius, radius, PITCH, crops, 1e-6), RHO).n_uncropped == 0
 
 
 def test_area_entries_above_tolerance_are_recomputed():
@@ -198,8 +198,8 @@ def test_area_entries_above_tolerance_are_recomputed():
     c = cc.crop_slice(15, int(crops[0]))
     masks = np.ones((2, 15, 15), bool)
     masks[0, c, c] = False
-    res = cn.resistance(masks, radius, weights, PITCH, RHO, crops, 1e-6)
-    exact = cn.resistance(masks, radius, weights, PITCH, RHO, [15], 0.0, "direct")
+    res = cn.resistance(masks, SpotGeometry(radius, weights, PITCH, crops, 1e-6), RHO)
+    exact = cn.resistance(masks, SpotGeometry(radius, weights, PITCH, [15], 0.0), RHO, "direct")
     assert res.n_uncropped == 1
     assert res.resistance[0, 0] == pytest.approx(exact.resistance[0, 0], rel=1e-13)
     assert res.resistance[1, 0] == pytest.approx(exact.resistance[1, 0], rel=1e-6)
@@ -209,8 +209,8 @@ def test_interaction_weights_change_only_the_interaction_term():
     rng = np.random.default_rng(7)
     radius = _gaussian_spots(11, (1.0, 3.0))
     masks = rng.random((6, 11, 11)) < 0.5
-    by_radius = cn.resistance(masks, radius, radius, PITCH, RHO, [11, 11], 0.0)
-    by_area = cn.resistance(masks, radius, _weights(radius, "area"), PITCH, RHO, [11, 11], 0.0)
+    by_radius = cn.resistance(masks, SpotGeometry(radius, radius, PITCH, [11, 11], 0.0), RHO)
+    by_area = cn.resistance(masks, SpotGeometry(radius, _weights(radius, "area"), PITCH, [11, 11], 0.0), RHO)
     np.testing.assert_array_equal(by_radius.resistance_self, by_area.resistance_self)
     assert not np.allclose(by_radius.resistance_interaction, by_area.resistance_interaction)
 
@@ -250,8 +250,7 @@ def test_algorithm_choice_changes_nothing_beyond_1e_12(n):
     sums = {m: ia.interaction_sum(u, 2e-5, m) for m in ("auto", "folded", "fft")}
     for m in ("folded", "fft"):
         np.testing.assert_allclose(sums[m], sums["auto"], rtol=1e-12, atol=0)
-    whole = np.full(1, n)
-    r = {m: cn.resistance(masks, radius, radius, 2e-5, 7.2e-7, whole, 0.0, m).resistance
+    r = {m: cn.resistance(masks, SpotGeometry.whole_window(radius, radius, 2e-5), 7.2e-7, m).resistance
          for m in ("auto", "folded", "fft")}
     for m in ("folded", "fft"):
         np.testing.assert_allclose(r[m], r["auto"], rtol=1e-12, atol=0)
@@ -297,15 +296,15 @@ def test_fft_steps_agree_with_the_folded_path_and_the_batch():
     radius = 1e-5 * np.exp(-decay * (x[None, :] ** 2 + x[:, None] ** 2)[None])
     crops = np.array([ia.FFT_FROM - 2, ia.FFT_FROM, n - 6, n - 4, n])
     masks = rng.random((ia.block_size(n) * 2 + 3, n, n)) < 0.6
-    auto = cn.resistance(masks, radius, radius, 2e-5, 7.2e-7, crops, 1.0).resistance
-    folded = cn.resistance(masks, radius, radius, 2e-5, 7.2e-7, crops, 1.0, "folded").resistance
+    auto = cn.resistance(masks, SpotGeometry(radius, radius, 2e-5, crops, 1.0), 7.2e-7).resistance
+    folded = cn.resistance(masks, SpotGeometry(radius, radius, 2e-5, crops, 1.0), 7.2e-7, "folded").resistance
     np.testing.assert_allclose(auto, folded, rtol=1e-12, atol=0)
     # the FFT steps are bit-identical whatever the batch (one transform per map; with fewer than
     # four load steps BLAS sums the spot counts by a kernel that depends on the row)
     fft = crops >= ia.FFT_FROM
-    pieces = [cn.resistance(masks[i : i + 5], radius[fft], radius[fft], 2e-5, 7.2e-7, crops[fft], 1.0).resistance
-              for i in range(0, masks.shape[0], 5)]
-    whole = cn.resistance(masks, radius[fft], radius[fft], 2e-5, 7.2e-7, crops[fft], 1.0).resistance
+    spots = SpotGeometry(radius[fft], radius[fft], 2e-5, crops[fft], 1.0)
+    pieces = [cn.resistance(masks[i : i + 5], spots, 7.2e-7).resistance for i in range(0, masks.shape[0], 5)]
+    whole = cn.resistance(masks, spots, 7.2e-7).resistance
     np.testing.assert_array_equal(np.concatenate(pieces), whole)
 
 
@@ -320,14 +319,16 @@ def test_per_map_spots_equal_one_call_per_map(n, method):
     masks = rng.random((batch, n, n)) < 0.7
     groups = rng.integers(0, n_groups, batch)
     crops = cc.choose_crops(base, base, PITCH, 1e-6)
-    got = cn.resistance(masks, radius, radius, PITCH, RHO, crops, 1e-6, method, groups=groups)
+    spots = SpotGeometry(radius, radius, PITCH, crops, 1e-6)
+    got = cn.resistance(masks, spots, RHO, method, groups=groups)
     for b in range(batch):
-        own = cn.resistance(masks[b : b + 1], radius[groups[b]], radius[groups[b]], PITCH, RHO, _whole(base), 0.0, "direct")
+        mine = radius[groups[b]]
+        own = cn.resistance(masks[b : b + 1], SpotGeometry.whole_window(mine, mine, PITCH), RHO, "direct")
         assert _rel(got.resistance[b], own.resistance[0]) <= 1e-6  # the crop tolerance
         np.testing.assert_array_equal(got.n_conducting[b], own.n_conducting[0])
     # a map's result does not depend on the others in its batch
     order = rng.permutation(batch)
-    again = cn.resistance(masks[order], radius, radius, PITCH, RHO, crops, 1e-6, method, groups=groups[order])
+    again = cn.resistance(masks[order], spots, RHO, method, groups=groups[order])
     np.testing.assert_array_equal(again.resistance, got.resistance[order])
-    first = cn.resistance(masks[:4], radius, radius, PITCH, RHO, crops, 1e-6, method, groups=groups[:4])
+    first = cn.resistance(masks[:4], spots, RHO, method, groups=groups[:4])
     np.testing.assert_array_equal(first.resistance, got.resistance[:4])

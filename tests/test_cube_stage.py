@@ -14,6 +14,7 @@ from pipeline.compute import ComputeOptions
 from pipeline.config import load_scenario
 from pipeline.physics import constriction, oxide_field, point_model, spot_models
 from pipeline.physics.interaction import AUTO_METHOD
+from pipeline.physics.spot_geometry import SpotGeometry
 from pipeline.stages import contact, cube
 from pipeline.stages import oxide as oxide_stage
 
@@ -280,8 +281,8 @@ def test_asperity_spots_are_the_drawn_surface(asperity_inputs):
             mask = psi[a, k] < threshold[z_i, a, k]
             expected_count = np.count_nonzero((radius > 0) & mask[None], axis=(1, 2))
             np.testing.assert_array_equal(built["n_conducting"].values[z_i, a, :, k], expected_count)
-            ref = constriction.resistance(mask[None], radius, radius, scenario.cell_size, scenario.material.rho,
-                                np.full(radius.shape[0], n), 0.0, "direct").resistance[0]
+            spots = SpotGeometry.whole_window(radius, radius, scenario.cell_size)
+            ref = constriction.resistance(mask[None], spots, scenario.material.rho, "direct").resistance[0]
             got = built["resistance"].values[z_i, a, :, k]
             finite = np.isfinite(ref)
             np.testing.assert_array_equal(np.isfinite(got), finite)

@@ -30,6 +30,7 @@ from pipeline.config import Scenario, load_scenario
 from pipeline.before_work.domains import resolve
 from pipeline.physics import constriction, interaction
 from pipeline.physics.crops import choose_crops
+from pipeline.physics.spot_geometry import SpotGeometry
 from pipeline.physics import interaction_fft as fft
 from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube
@@ -58,7 +59,8 @@ def _scene(eta: float) -> Scenario:
 
 
 def _kernel_inputs(s: Scenario) -> tuple:
-    """The cube kernel's arguments on the scene's real masks (tiled to whole blocks) and crops."""
+    """The cube kernel's arguments (masks, spots, rho) on the scene's real masks (tiled to whole
+    blocks) and crops."""
     quiet = ComputeOptions(progress=False)
     contact, oxide = contact_stage.build(s), oxide_stage.build(s, quiet)
     radius, weights, pitch = cube.spot_maps(s, contact)
@@ -69,7 +71,7 @@ def _kernel_inputs(s: Scenario) -> tuple:
     count = block * math.ceil(masks.shape[0] / block)  # no padded (wasted) maps in the timing
     masks = masks[np.arange(count) % masks.shape[0]]
     crops = choose_crops(radius, weights, pitch, s.cube.crop_tolerance)
-    return masks, radius, weights, pitch, s.material.rho, crops, s.cube.crop_tolerance
+    return masks, SpotGeometry(radius, weights, pitch, crops, s.cube.crop_tolerance), s.material.rho
 
 
 def _interleaved(jobs: dict[str, tuple]) -> dict[str, float]:
@@ -118,7 +120,7 @@ def run(scenario: Scenario) -> dict[str, Any]:
     rows = []
     for s, eta in zip(scenes, ETAS):
         n = s.n_cells
-        masks, radius, *_, crops, _tol = inputs[n]
+        masks, spots, _ = inputs[n]
         block = interaction.block_size(n)
         estimates = {e.stage: e for e in plan.estimate(resolve(load_scenario("paper", {"roughness.eta": eta})))}
         rows.append({
@@ -127,9 +129,9 @@ def run(scenario: Scenario) -> dict[str, Any]:
             "auto_method": interaction.auto_method(n),
             "block_size": block,
             "per_map_seconds": {name: seconds[f"{n}_{name}"] / block for name in ("folded", "fft")},
-            "seconds_per_simulation": seconds[f"{n}_simulation"] / (masks.shape[0] * radius.shape[0]),
-            "crop_cells_max": int(crops.max()),
-            "crop_cells_min": int(crops.min()),
+            "seconds_per_simulation": seconds[f"{n}_simulation"] / (masks.shape[0] * spots.radius.shape[0]),
+            "crop_cells_max": int(spots.crops.max()),
+            "crop_cells_min": int(spots.crops.min()),
             "paper_study_estimate": {
                 "cube_seconds": estimates["cube"].seconds,
                 "cube_peak_mib": estimates["cube"].peak_bytes / 2**20,

@@ -95,6 +95,7 @@ def evaluate(case: Case) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         ``area_fraction``, ``separation`` over (delta, r), ``converged`` over delta.
     """
     from pipeline.physics import constriction
+    from pipeline.physics.spot_geometry import SpotGeometry
     from pipeline.stages import contact
 
     record: dict[str, Any] = {"status": "refused", "message": "", "iterations": 0, "residual": math.nan,
@@ -118,8 +119,8 @@ def evaluate(case: Case) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     radius = np.asarray(ds["spot_radius"].values, float)
     pitch = float(np.diff(ds["x"].values)[0])
     n = radius.shape[-1]
-    clean = constriction.resistance(np.ones((1, n, n), bool), radius, radius, pitch, scenario.material.rho,
-                                    np.full(radius.shape[0], n), 0.0, scenario.cube.method).resistance[:, 0]
+    clean = constriction.resistance(np.ones((1, n, n), bool), SpotGeometry.whole_window(radius, radius, pitch),
+                                    scenario.material.rho, scenario.cube.method).resistance[:, 0]
     record["seconds"] = round(time.perf_counter() - start, 4)
     arrays = {"force": ds["force"].values, "resistance_clean": np.asarray(clean, float),
               "converged": ds["converged"].values.astype(bool)}

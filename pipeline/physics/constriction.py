@@ -33,6 +33,7 @@ from pipeline.physics.interaction import BLOCK, auto_method, block_size, interac
 from pipeline.physics.interaction import FFT_FROM, work_bytes_per_map  # noqa: F401
 from pipeline.physics.interaction_fft import fft_weights, interaction_fft_filled
 from pipeline.physics.scratch import scratch
+from pipeline.physics.spot_geometry import SpotGeometry
 
 __all__ = [
     "greenwood_terms",
@@ -230,12 +231,8 @@ def _spot_sums(
 
 def resistance(
     masks: np.ndarray,
-    radius: np.ndarray,
-    weights: np.ndarray,
-    pitch: float,
+    spots: SpotGeometry,
     rho: float,
-    crops: np.ndarray,
-    tolerance: float,
     method: str = "auto",
     *,
     groups: np.ndarray | None = None,
@@ -246,21 +243,14 @@ def resistance(
     ----------
     masks
         Cells whose spot centre is free of oxide, bool, shape (batch, n, n) as (y, x).
-    radius
-        Spot radii ``a_i`` per load step, shape (n_delta, n, n), in m; 0 means no spot. With
-        ``groups``: one such set per group, shape (n_groups, n_delta, n, n).
-    weights
-        Interaction weights per load step, same shape: ``radius`` or the cell contact areas.
-    pitch
-        Cell pitch, in m.
+    spots
+        Spot radii and interaction weights per load step (with ``groups``: one set per group),
+        the cell pitch, the crop per load step and the crop tolerance: entries whose crop bound
+        exceeds it are recomputed on the whole window.
     rho
         Effective resistivity rho*, in ohm m.
-    crops
-        Crop size per load step (see :func:`choose_crops`); ``n`` everywhere disables cropping.
-    tolerance
-        Entries whose crop bound exceeds this are recomputed on the whole window.
     method
-        Interaction algorithm (see :func:`interaction_sum`).
+        Interaction algorithm (see :func:`pipeline.physics.interaction.interaction_sum`).
     groups
         Which set of spots each map has, int (batch,), for spots that differ between maps (the
         ``asperities`` discretization draws them per realization); None: one set for all. A
@@ -271,6 +261,7 @@ def resistance(
     ChunkResult
         Arrays of shape (batch, n_delta).
     """
+    radius, weights, pitch, crops = spots.radius, spots.weights, spots.pitch, spots.crops
     batch, n = masks.shape[0], masks.shape[-1]
     n_delta = radius.shape[-3]
     size = block_size(n)
@@ -296,7 +287,7 @@ def resistance(
     n_cond = np.rint(count).astype(np.int32)
     r_crop = greenwood_terms(s_a, s_w, pair, n_cond, rho)[0]
     bound = crop_error_bound(s_a, s_w, eps, r_crop, pitch, rho)
-    redo = bound > tolerance
+    redo = bound > spots.tolerance
     if redo.any():
         _recompute_uncropped(masks, weights, pair, redo, pitch, method, groups)
         bound = np.where(redo, 0.0, bound)
