@@ -17,7 +17,7 @@ from pipeline.bench.schema import FRONTIER
 from pipeline.bench.timing import median_time
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
-from pipeline.physics import greenwood_tripp as gt
+from pipeline.physics.radial_grid import force_weights
 from pipeline.stages.schema import labelled
 
 __all__ = ["contact_frontier", "cube_frontier", "ensemble_frontier", "NODES", "TOLERANCES", "METHODS", "CROPS"]
@@ -50,7 +50,7 @@ def _force_and_area(scenario: Scenario, r: np.ndarray, sols: list) -> tuple[np.n
     from pipeline.stages import contact
 
     f = contact.fields(scenario, r, sols)
-    return f["force"], f["area"] @ gt.force_weights(r)
+    return f["force"], f["area"] @ force_weights(r)
 
 
 def contact_frontier(scenario: Scenario) -> list[dict[str, Any]]:

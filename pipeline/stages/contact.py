@@ -17,6 +17,7 @@ from pipeline.config import AUTO, ConfigError, Scenario
 from pipeline.contact_solution import indenter_profile, radial_grid, solve, solve_with_stiffness
 from pipeline.before_work.domains import resolve
 from pipeline.physics import greenwood_tripp as gt
+from pipeline.physics import radial_grid as rg
 from pipeline.physics import hertz, spot_models, spots
 from pipeline.physics.asperity import area_fraction, asperity_pressure
 from pipeline.physics.grid import cell_centres
@@ -50,7 +51,7 @@ def fields(scenario: Scenario, r: np.ndarray, sols: list[gt.Solution]) -> dict[s
         "h": h,
         "p": p,
         "area": area_fraction(h, rough.sigma, rough.eta, rough.beta),
-        "force": p @ gt.force_weights(r),
+        "force": p @ rg.force_weights(r),
     }
 
 
