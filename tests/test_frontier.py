@@ -88,10 +88,11 @@ def test_contact_sweep_errors_fall_with_nodes_and_tolerance(monkeypatch) -> None
 def test_report_sections_show_the_frontier_and_the_stability_map(tmp_path) -> None:
     import json
 
-    from analysis.report import _frontier_blocks, _stability_blocks, to_markdown
+    from analysis.report_appendix import frontier_blocks, stability_blocks
+    from analysis.report_render import to_markdown
     from pipeline.bench import stability
 
-    assert "Not available" in to_markdown(_frontier_blocks(tmp_path) + _stability_blocks(tmp_path))
+    assert "Not available" in to_markdown(frontier_blocks(tmp_path) + stability_blocks(tmp_path))
     rec = frontier.recommend(CONTACT, CUBE, _ensemble([0.2, 0.09, 0.04, 0.02]))
     (tmp_path / "bench").mkdir()
     (tmp_path / "bench" / "frontier.json").write_text(json.dumps({"recommended": rec}))
@@ -108,7 +109,7 @@ def test_report_sections_show_the_frontier_and_the_stability_map(tmp_path) -> No
                                                        "message": "oxide.lambda = 200 is out of range"}),
     ]
     stability.write_map(results, tmp_path / "bench" / "stability.nc")
-    md = to_markdown(_frontier_blocks(tmp_path) + _stability_blocks(tmp_path))
+    md = to_markdown(frontier_blocks(tmp_path) + stability_blocks(tmp_path))
     assert "## How fast, how accurate" in md and "## Stability map" in md
     for use in frontier.USES:
         assert f"| {use} |" in md

@@ -68,7 +68,8 @@ def test_prefix_curve_of_an_adaptive_cube(adaptive_dir) -> None:
 
 
 def test_prefix_curve_written_plotted_and_reported(adaptive_dir, tmp_path) -> None:
-    from analysis.report import _frontier_blocks, to_markdown
+    from analysis.report_appendix import frontier_blocks
+    from analysis.report_render import to_markdown
     from tests.test_frontier import CONTACT, CUBE, _ensemble
 
     curve, note = frontier_prefix.adaptive_prefix(_scenario(), adaptive_dir)
@@ -83,7 +84,7 @@ def test_prefix_curve_written_plotted_and_reported(adaptive_dir, tmp_path) -> No
     assert paths[-1].name == "frontier_prefix.png" and paths[-1].stat().st_size > 10_000
     summary = frontier_prefix.prefix_summary(curve, note)
     (tmp_path / "bench" / "frontier.json").write_text(json.dumps({"prefix": summary}))
-    md = to_markdown(_frontier_blocks(tmp_path))
+    md = to_markdown(frontier_blocks(tmp_path))
     assert f"over 4 (xi, lambda) cells of {summary['count_min']} .. {summary['count_max']} realizations" in md
     assert "(figures/frontier_prefix.png)" in md
 
@@ -93,6 +94,7 @@ def test_prefix_curve_skipped_with_a_note(tmp_path) -> None:
     assert curve is None and note.startswith("prefix curve skipped:") and "cube.nc is missing" in note
     (tmp_path / "bench").mkdir()
     (tmp_path / "bench" / "frontier.json").write_text(json.dumps({"prefix": frontier_prefix.prefix_summary(None, note)}))
-    from analysis.report import _frontier_blocks, to_markdown
+    from analysis.report_appendix import frontier_blocks
+    from analysis.report_render import to_markdown
 
-    assert "prefix curve skipped:" in to_markdown(_frontier_blocks(tmp_path))
+    assert "prefix curve skipped:" in to_markdown(frontier_blocks(tmp_path))

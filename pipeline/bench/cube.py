@@ -110,7 +110,7 @@ def _compare(scenario: Scenario, contact: xr.Dataset, oxide: xr.Dataset) -> dict
             "max_relative_error_vs_direct": _max_rel_error(res.resistance, ref.resistance),
             "seconds_per_simulation_one_thread_best": per_sim,
             "speedup_vs_direct": direct_per_sim / per_sim,
-            "cropped": bool(tol > 0),
+            "cropped": bool(spots.tolerance > 0),
         }
     return out
 
