@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pipeline.physics.oxide_field import Band
+from pipeline.physics.oxide_band import Band
 from pipeline.physics.roughness import detrend, validated_heights
 
 

@@ -59,11 +59,11 @@ def check_domains(s: Scenario) -> None:
 
 def _modes_in_band(s: Scenario, lam: float) -> int:
     """Independent modes of ``lam``'s band on the window's lattice: the size of
-    :func:`pipeline.physics.oxide_field.band`, 0 where it holds none."""
-    from pipeline.physics import oxide_field  # here, not above: import pipeline stays free of numpy
+    :func:`pipeline.physics.oxide_band.band`, 0 where it holds none."""
+    from pipeline.physics import oxide_band  # here, not above: import pipeline stays free of numpy
 
     try:
-        return oxide_field.band(s.n_cells, s.cell_size, lam, s.oxide.ks_ratio, s.oxide.hurst).size
+        return oxide_band.band(s.n_cells, s.cell_size, lam, s.oxide.ks_ratio, s.oxide.hurst).size
     except ValueError:  # the band holds no lattice mode (every other argument is in range here)
         return 0
 
