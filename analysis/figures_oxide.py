@@ -14,7 +14,7 @@ import numpy as np
 
 from analysis.style import LABELS, context, equals, save, size
 from pipeline.config import Scenario
-from pipeline.physics import oxide_field
+from pipeline.physics import oxide_band, oxide_field
 from pipeline.physics.grid import cell_centres
 
 __all__ = ["write", "LAMBDAS", "FRACTIONS"]
@@ -26,11 +26,11 @@ FRACTIONS: tuple[float, ...] = (0.5, 0.2, 0.1)
 SUPERSAMPLING = 4
 
 
-def _field(scenario: Scenario, lam: float) -> tuple[oxide_field.Band, np.ndarray]:
+def _field(scenario: Scenario, lam: float) -> tuple[oxide_band.Band, np.ndarray]:
     """Band and coefficients of realization 0 at ``lam``, as the stage draws them."""
     ox = scenario.oxide
-    modes = oxide_field.band(scenario.n_cells, scenario.cell_size, lam, ox.ks_ratio, ox.hurst)
-    coeffs = oxide_field.coefficients(modes, oxide_field.field_stream(ox.seed, lam, 0), ox.amplitudes)
+    modes = oxide_band.band(scenario.n_cells, scenario.cell_size, lam, ox.ks_ratio, ox.hurst)
+    coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(ox.seed, lam, 0), ox.amplitudes)
     return modes, coeffs
 
 

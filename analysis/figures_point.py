@@ -23,6 +23,7 @@ import xarray as xr
 from analysis.style import LABELS, context, equals, save, size
 from pipeline.config import Scenario
 from pipeline.physics import point_model
+from pipeline.physics.spot_geometry import SpotGeometry
 
 __all__ = ["COMPARE", "MODELS", "load_comparison", "film_sweep", "write"]
 
@@ -97,7 +98,7 @@ def film_sweep(data_dir: Path, films: np.ndarray | None = None) -> dict[str, np.
                                                               _nearest(oxide["lambda"].values, lam)][:, None, None]
             for xi, lam in cases])
     pitch = float(x[1] - x[0])
-    whole = np.full(1, radius.shape[-1])
+    whole = SpotGeometry.whole_window(radius, radius, pitch)
 
     def gmean(r: np.ndarray) -> np.ndarray:
         return np.exp(np.log(r.reshape(len(cases), -1)).mean(axis=1))
@@ -105,11 +106,10 @@ def film_sweep(data_dir: Path, films: np.ndarray | None = None) -> dict[str, np.
     films = FILM_VALUES if films is None else np.asarray(films, float)
     out: dict[str, np.ndarray] = {"film": films, "cases": np.asarray(cases)}
     for name, func in (("point", point_model.resistance), ("greenwood", point_model.greenwood_resistance)):
-        rows = [gmean(func(masks, radius, radius, pitch, rho, whole, 0.0, film_resistance=f).resistance)
-                for f in films]
+        rows = [gmean(func(masks, whole, rho, film_resistance=f).resistance) for f in films]
         out[name] = np.stack(rows, axis=1)
-        out[f"{name}_clean"] = gmean(func(np.ones_like(masks), radius, radius, pitch, rho, whole, 0.0).resistance)
-        insulating = func(masks, radius, radius, pitch, rho, whole, 0.0).resistance
+        out[f"{name}_clean"] = gmean(func(np.ones_like(masks), whole, rho).resistance)
+        insulating = func(masks, whole, rho).resistance
         out[f"{name}_insulating"] = gmean(insulating) if np.all(np.isfinite(insulating)) else np.full(len(cases), np.inf)
     return out
 

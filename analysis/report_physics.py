@@ -1,5 +1,6 @@
-"""Report sections on the physics: Barber's check of the clean surface, and how g2tom's numbers
-differ from the paper's (the chain of biases measured by ``g2tom bench --only biases``)."""
+"""Report sections on the physics: Barber's check of the clean surface, how g2tom's numbers differ from
+the paper's (the chain of biases measured by ``g2tom bench --only biases``), the curve model, the
+validation against the full elastic contact, the atlas, and Greenwood's form against the point model."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from analysis.report_blocks import Block, markdown_blocks, table
 from pipeline.config import Scenario
 from pipeline.store import StaleInputError, read_stage
 
-__all__ = ["atlas_blocks", "barber_blocks", "bias_blocks", "curve_blocks", "validation_blocks"]
+__all__ = ["atlas_blocks", "barber_blocks", "bias_blocks", "curve_blocks", "point_blocks", "validation_blocks"]
 
 
 def atlas_blocks(data_dir: Path) -> list[Block]:
@@ -161,3 +162,34 @@ def _worst(ratio: np.ndarray) -> str:
         return "not applicable"
     worst = finite[np.argmax(np.abs(finite - 1.0))]
     return f"{worst:.4f} ({100 * (worst - 1):+.2f} %)"
+
+
+def point_blocks(data_dir: Path) -> list[Block]:
+    """alpha and gamma of both models on ``make compare``'s shared ensemble, and their ratio."""
+    from analysis.figures_point import COMPARE, load_comparison
+
+    try:
+        fits = load_comparison(data_dir)
+    except ValueError as exc:
+        return [Block("h2", "Greenwood's closed form against the point-interaction model"), Block("p", f"Not available: {exc}")]
+    if fits is None:
+        return []
+    g, p = fits["greenwood"], fits["point"]
+    blocks = [
+        Block("h2", "Greenwood's closed form against the point-interaction model"),
+        Block("p", f"Both models on one ensemble of {g.attrs['oxide.n_realizations']} realizations "
+                   f"(`make compare`, data under {COMPARE}/greenwood and {COMPARE}/point). Greenwood's form is "
+                   "the Rayleigh quotient of the exact point-interaction system, so its resistance is an upper "
+                   "bound: alpha_point / alpha_greenwood < 1 where gamma is unchanged."),
+    ]
+    rows = [["clean", "", float(g["alpha_clean"]), float(p["alpha_clean"]),
+             float(p["alpha_clean"] / g["alpha_clean"]), float(g["gamma_clean"]), float(p["gamma_clean"]),
+             float(p["gamma_clean"] - g["gamma_clean"])]]
+    for xi in g["xi"].values:
+        for lam in g["lambda"].values:
+            a_g, a_p = float(g["alpha"].sel(xi=xi, **{"lambda": lam})), float(p["alpha"].sel(xi=xi, **{"lambda": lam}))
+            c_g, c_p = float(g["gamma"].sel(xi=xi, **{"lambda": lam})), float(p["gamma"].sel(xi=xi, **{"lambda": lam}))
+            rows.append([float(xi), float(lam), a_g, a_p, a_p / a_g, c_g, c_p, c_p - c_g])
+    blocks.append(table(["xi", "lambda", "alpha G", "alpha point", "ratio", "gamma G", "gamma point",
+                          "gamma difference"], rows))
+    return blocks

@@ -12,6 +12,7 @@ import numpy as np
 
 from pipeline.config import AUTO, Scenario
 from pipeline.physics import greenwood_tripp as gt
+from pipeline.physics import radial_grid as rg
 from pipeline.physics.indenter import profile
 
 __all__ = ["indenter_profile", "radial_grid", "layer", "solve", "solve_with_stiffness"]
@@ -39,12 +40,12 @@ def radial_grid(scenario: Scenario, n_radial: int | None = None) -> np.ndarray:
     n = c.n_radial if n_radial is None else n_radial
     r_max = c.r_max * scenario.indenter.radius
     if c.radial_grid == "uniform":
-        return gt.radial_nodes(n, r_max)
+        return rg.radial_nodes(n, r_max)
     probe = np.linspace(0.0, r_max, 4097)
     gap = min(scenario.deltas) + indenter_profile(scenario, probe)
     reach = gap < _FINE_GAP * scenario.roughness.sigma
     r_fine = probe[np.nonzero(reach)[0][-1]] + probe[1] if reach.any() else probe[1]
-    return gt.graded_nodes(n, r_max, r_fine)
+    return rg.graded_nodes(n, r_max, r_fine)
 
 
 def layer(scenario: Scenario) -> gt.Layer:
@@ -61,7 +62,7 @@ def _solve(
     if c.r_max == AUTO:
         raise ValueError("contact.r_max = 'auto' must be resolved first (pipeline.before_work.domains.resolve)")
     r = radial_grid(scenario, n_radial)
-    matrix = gt.influence_matrix(r, scenario.material.E_star)
+    matrix = rg.influence_matrix(r, scenario.material.E_star)
     sols = gt.solve(
         matrix,
         indenter_profile(scenario, r),

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.config import Scenario
-from pipeline.physics import oxide_field
+from pipeline.physics import oxide_band, oxide_field
 from pipeline.physics.groups import Groups, groups
 
 __all__ = ["scene_groups", "bands", "threshold_block", "FieldSource"]
@@ -22,11 +22,11 @@ def scene_groups(scenario: Scenario) -> Groups:
     return groups(rough.sigma, rough.eta, rough.beta, scenario.indenter.radius)
 
 
-def bands(scenario: Scenario) -> list[oxide_field.Band]:
+def bands(scenario: Scenario) -> list[oxide_band.Band]:
     """The wave-vector band of every correlation length of the scenario, in ``oxide.lambda`` order.
 
     ``oxide.period = "window"`` puts the modes on the window's lattice (the published fields);
-    ``"spectral"`` on the lattice of :func:`oxide_field.spectral_period` at
+    ``"spectral"`` on the lattice of :func:`oxide_band.spectral_period` at
     ``oxide.spectral_resolution``.
     """
     ox = scenario.oxide
@@ -34,8 +34,8 @@ def bands(scenario: Scenario) -> list[oxide_field.Band]:
     for lam in ox.lambda_:
         period = None
         if ox.period == "spectral":
-            period = oxide_field.spectral_period(scenario.n_cells, lam, ox.spectral_resolution)
-        out.append(oxide_field.band(scenario.n_cells, scenario.cell_size, lam, ox.ks_ratio, ox.hurst, period))
+            period = oxide_band.spectral_period(scenario.n_cells, lam, ox.spectral_resolution)
+        out.append(oxide_band.band(scenario.n_cells, scenario.cell_size, lam, ox.ks_ratio, ox.hurst, period))
     return out
 
 
@@ -61,7 +61,7 @@ class FieldSource:
     bit-identical to the one recorded in oxide.nc.
     """
 
-    modes: tuple[oxide_field.Band, ...]
+    modes: tuple[oxide_band.Band, ...]
     lambdas: tuple[float, ...]
     xi: np.ndarray
     seed: int

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pipeline.physics.oxide_field import Band
+from pipeline.physics.oxide_band import Band
 from pipeline.physics.spot_share import DiscRule
 from pipeline.physics.roughness import detrend, validated_heights
 

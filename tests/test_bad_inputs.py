@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from pipeline.cli.main import main
-from pipeline.config import SECTIONS, _key, load_scenario
+from pipeline.config import SECTIONS, load_scenario, parameter_key
 from pipeline.store import stage_path, write_dataset
 from tests.conftest import SMALL_OVERRIDES
 
@@ -44,7 +44,7 @@ def _range_cases() -> list[Case]:
     cases = []
     for section, cls in SECTIONS.items():
         for f in dataclasses.fields(cls):
-            key = f"{section}.{_key(f)}"
+            key = f"{section}.{parameter_key(f)}"
             meta, ann = f.metadata, str(f.type)
             is_list = ann.startswith("list")
             wrap = (lambda v: f"[{v}]") if is_list else (lambda v: v)

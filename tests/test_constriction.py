@@ -1,4 +1,5 @@
-"""Greenwood's multi-spot resistance: the double sum, the fast exact paths and cropping."""
+"""Greenwood's multi-spot resistance: the double sum, the fast exact paths (interaction, interaction_fft)
+and cropping (crops)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pipeline.physics import constriction as cn
+from pipeline.physics import crops as cc
+from pipeline.physics import interaction as ia
 from pipeline.physics import interaction_fft as fi
+from pipeline.physics.spot_geometry import SpotGeometry
 
 RHO = 7.2e-7  # ohm m
 PITCH = 7.0e-5  # m
@@ -27,9 +31,6 @@ def _gaussian_spots(n: int, widths: tuple[float, ...], peak: float = 2e-6) -> np
 def _weights(radius: np.ndarray, kind: str) -> np.ndarray:
     return radius if kind == "radius" else np.pi * radius**2
 
-
-def _whole(radius: np.ndarray) -> np.ndarray:
-    return np.full(radius.shape[0], radius.shape[-1])
 
 
 def _rel(a: np.ndarray, b: np.ndarray) -> float:
@@ -52,10 +53,10 @@ def test_fast_paths_equal_double_sum(case, pitch):
     n, batch, p, seed = case
     rng = np.random.default_rng(seed)
     u = rng.lognormal(-12.0, 2.0, (batch, n, n)) * (rng.random((batch, n, n)) < p)
-    reference = cn.interaction_direct(u, pitch)
+    reference = ia.interaction_direct(u, pitch)
     scale = np.sum(u, axis=(1, 2)) ** 2 / pitch  # |Q| <= scale
     for method in FAST:
-        q = cn.interaction_sum(u, pitch, method)
+        q = ia.interaction_sum(u, pitch, method)
         assert np.all(np.abs(q - reference) <= 1e-13 * scale), method
 
 
@@ -67,9 +68,9 @@ def test_resistance_fast_equals_direct(case, kind):
     radius = rng.random((3, n, n)) * 1e-6 * (rng.random((3, n, n)) < 0.9)
     masks = rng.random((batch, n, n)) < p
     weights = _weights(radius, kind)
-    ref = cn.resistance(masks, radius, weights, PITCH, RHO, _whole(radius), 0.0, "direct")
+    ref = cn.resistance(masks, SpotGeometry.whole_window(radius, weights, PITCH), RHO, "direct")
     for method in FAST + ("auto",):
-        got = cn.resistance(masks, radius, weights, PITCH, RHO, _whole(radius), 0.0, method)
+        got = cn.resistance(masks, SpotGeometry.whole_window(radius, weights, PITCH), RHO, method)
         assert _rel(got.resistance, ref.resistance) <= 1e-12
         assert _rel(got.resistance_interaction + got.resistance_self, ref.resistance) <= 1e-12
         np.testing.assert_array_equal(got.n_conducting, ref.n_conducting)
@@ -79,7 +80,7 @@ def test_single_spot_is_rho_over_2a():
     radius = np.zeros((1, 5, 5))
     radius[0, 1, 3] = 3e-6
     for method in FAST + ("direct",):
-        res = cn.resistance(np.ones((1, 5, 5), bool), radius, radius, PITCH, RHO, [5], 0.0, method)
+        res = cn.resistance(np.ones((1, 5, 5), bool), SpotGeometry(radius, radius, PITCH, [5], 0.0), RHO, method)
         assert res.resistance[0, 0] == pytest.approx(RHO / (2 * 3e-6), rel=1e-15)
         assert res.resistance_interaction[0, 0] == 0.0
         assert res.n_conducting[0, 0] == 1
@@ -93,14 +94,15 @@ def test_two_spots_by_hand(kind):
     w1, w2 = (a1, a2) if kind == "radius" else (math.pi * a1**2, math.pi * a2**2)
     d = PITCH * math.hypot(4, 3)
     expected = RHO / (2 * (a1 + a2)) + RHO * 2 * w1 * w2 / d / (math.pi * (w1 + w2) ** 2)
+    spots = SpotGeometry(radius, _weights(radius, kind), PITCH, [6], 0.0)
     for method in FAST + ("direct",):
-        res = cn.resistance(np.ones((1, 6, 6), bool), radius, _weights(radius, kind), PITCH, RHO, [6], 0.0, method)
+        res = cn.resistance(np.ones((1, 6, 6), bool), spots, RHO, method)
         assert res.resistance[0, 0] == pytest.approx(expected, rel=1e-14)
 
 
 def test_all_oxidized_is_open_circuit():
     radius = _gaussian_spots(7, (1.0, 3.0))
-    res = cn.resistance(np.zeros((2, 7, 7), bool), radius, radius, PITCH, RHO, [7, 7], 1e-6)
+    res = cn.resistance(np.zeros((2, 7, 7), bool), SpotGeometry(radius, radius, PITCH, [7, 7], 1e-6), RHO)
     for term in (res.resistance, res.resistance_self, res.resistance_interaction):
         assert np.all(np.isposinf(term))
     assert np.all(res.n_conducting == 0)
@@ -110,21 +112,21 @@ def test_spot_permutation_and_grid_symmetries():
     rng = np.random.default_rng(3)
     x, y, w = rng.random(30), rng.random(30), rng.random(30)
     perm = rng.permutation(30)
-    assert cn.pair_sum_points(x[perm], y[perm], w[perm]) == pytest.approx(cn.pair_sum_points(x, y, w), rel=1e-14)
+    assert ia.pair_sum_points(x[perm], y[perm], w[perm]) == pytest.approx(ia.pair_sum_points(x, y, w), rel=1e-14)
     u = rng.random((1, 9, 9)) * (rng.random((1, 9, 9)) < 0.5)
     iy, ix = np.nonzero(u[0])
-    points = cn.pair_sum_points(ix * PITCH, iy * PITCH, u[0, iy, ix])
+    points = ia.pair_sum_points(ix * PITCH, iy * PITCH, u[0, iy, ix])
     for image in (u, u[:, ::-1], u[:, :, ::-1], u.transpose(0, 2, 1)):
         for method in FAST:
-            assert cn.interaction_sum(np.ascontiguousarray(image), PITCH, method)[0] == pytest.approx(points, rel=1e-13)
+            assert ia.interaction_sum(np.ascontiguousarray(image), PITCH, method)[0] == pytest.approx(points, rel=1e-13)
 
 
 def test_resistance_scales_with_rho():
     rng = np.random.default_rng(4)
     radius = _gaussian_spots(9, (1.5, 3.0))
     masks = rng.random((5, 9, 9)) < 0.5
-    one = cn.resistance(masks, radius, radius, PITCH, 1.0, [9, 9], 0.0)
-    scaled = cn.resistance(masks, radius, radius, PITCH, 3.5, [9, 9], 0.0)
+    one = cn.resistance(masks, SpotGeometry(radius, radius, PITCH, [9, 9], 0.0), 1.0)
+    scaled = cn.resistance(masks, SpotGeometry(radius, radius, PITCH, [9, 9], 0.0), 3.5)
     np.testing.assert_allclose(scaled.resistance, 3.5 * one.resistance, rtol=1e-15)
 
 
@@ -135,14 +137,15 @@ def test_results_bit_identical_whatever_the_batch(kind, p):
     radius = _gaussian_spots(13, (1.0, 2.0, 4.0))
     weights = _weights(radius, kind)
     masks = rng.random((300, 13, 13)) < p
-    crops = cn.choose_crops(radius, weights, PITCH, 1e-6)
-    full = cn.resistance(masks, radius, weights, PITCH, RHO, crops, 1e-6)
+    crops = cc.choose_crops(radius, weights, PITCH, 1e-6)
+    spots = SpotGeometry(radius, weights, PITCH, crops, 1e-6)
+    full = cn.resistance(masks, spots, RHO)
     assert (full.n_uncropped > 0) == (kind == "area")
     whole = full.resistance
-    pieces = [cn.resistance(masks[i : i + 7], radius, weights, PITCH, RHO, crops, 1e-6).resistance for i in range(0, 300, 7)]
+    pieces = [cn.resistance(masks[i : i + 7], spots, RHO).resistance for i in range(0, 300, 7)]
     np.testing.assert_array_equal(np.concatenate(pieces), whole)
     perm = rng.permutation(300)
-    np.testing.assert_array_equal(cn.resistance(masks[perm], radius, weights, PITCH, RHO, crops, 1e-6).resistance, whole[perm])
+    np.testing.assert_array_equal(cn.resistance(masks[perm], spots, RHO).resistance, whole[perm])
 
 
 @settings(max_examples=20, deadline=None)
@@ -158,9 +161,9 @@ def test_crop_error_within_tolerance_and_bound(seed, kind, tolerance, p, n):
     radius = _gaussian_spots(n, tuple(rng.uniform(0.7, 4.0, 3))) * rng.uniform(0.5, 1.5, (3, n, n))
     weights = _weights(radius, kind)
     masks = rng.random((12, n, n)) < p
-    crops = cn.choose_crops(radius, weights, PITCH, tolerance)
-    exact = cn.resistance(masks, radius, weights, PITCH, RHO, _whole(radius), 0.0, "direct").resistance
-    cropped = cn.resistance(masks, radius, weights, PITCH, RHO, crops, tolerance)
+    crops = cc.choose_crops(radius, weights, PITCH, tolerance)
+    exact = cn.resistance(masks, SpotGeometry.whole_window(radius, weights, PITCH), RHO, "direct").resistance
+    cropped = cn.resistance(masks, SpotGeometry(radius, weights, PITCH, crops, tolerance), RHO)
     finite = np.isfinite(exact)
     error = np.abs(cropped.resistance[finite] / exact[finite] - 1.0)
     assert np.all(error <= tolerance)
@@ -170,9 +173,9 @@ def test_crop_error_within_tolerance_and_bound(seed, kind, tolerance, p, n):
 
 def test_crops_shrink_with_tolerance_and_vanish_at_zero():
     radius = _gaussian_spots(21, (1.0, 2.0, 5.0))
-    assert list(cn.choose_crops(radius, radius, PITCH, 0.0)) == [21, 21, 21]
-    loose = cn.choose_crops(radius, radius, PITCH, 1e-2)
-    tight = cn.choose_crops(radius, radius, PITCH, 1e-8)
+    assert list(cc.choose_crops(radius, radius, PITCH, 0.0)) == [21, 21, 21]
+    loose = cc.choose_crops(radius, radius, PITCH, 1e-2)
+    tight = cc.choose_crops(radius, radius, PITCH, 1e-8)
     assert np.all(loose <= tight) and loose[0] < 21
     assert np.all(np.diff(tight) >= 0)
 
@@ -182,21 +185,21 @@ def test_radius_crops_need_no_recomputation():
     rng = np.random.default_rng(6)
     radius = _gaussian_spots(17, (1.0, 3.0))
     masks = rng.random((40, 17, 17)) < 0.05
-    crops = cn.choose_crops(radius, radius, PITCH, 1e-6)
-    assert cn.resistance(masks, radius, radius, PITCH, RHO, crops, 1e-6).n_uncropped == 0
+    crops = cc.choose_crops(radius, radius, PITCH, 1e-6)
+    assert cn.resistance(masks, SpotGeometry(radius, radius, PITCH, crops, 1e-6), RHO).n_uncropped == 0
 
 
 def test_area_entries_above_tolerance_are_recomputed():
     """Only spots outside the crop conduct: the bound fails and the whole window is used."""
     radius = _gaussian_spots(15, (1.5,))
     weights = _weights(radius, "area")
-    crops = cn.choose_crops(radius, weights, PITCH, 1e-6)
+    crops = cc.choose_crops(radius, weights, PITCH, 1e-6)
     assert crops[0] < 15
-    c = cn.crop_slice(15, int(crops[0]))
+    c = cc.crop_slice(15, int(crops[0]))
     masks = np.ones((2, 15, 15), bool)
     masks[0, c, c] = False
-    res = cn.resistance(masks, radius, weights, PITCH, RHO, crops, 1e-6)
-    exact = cn.resistance(masks, radius, weights, PITCH, RHO, [15], 0.0, "direct")
+    res = cn.resistance(masks, SpotGeometry(radius, weights, PITCH, crops, 1e-6), RHO)
+    exact = cn.resistance(masks, SpotGeometry(radius, weights, PITCH, [15], 0.0), RHO, "direct")
     assert res.n_uncropped == 1
     assert res.resistance[0, 0] == pytest.approx(exact.resistance[0, 0], rel=1e-13)
     assert res.resistance[1, 0] == pytest.approx(exact.resistance[1, 0], rel=1e-6)
@@ -206,8 +209,8 @@ def test_interaction_weights_change_only_the_interaction_term():
     rng = np.random.default_rng(7)
     radius = _gaussian_spots(11, (1.0, 3.0))
     masks = rng.random((6, 11, 11)) < 0.5
-    by_radius = cn.resistance(masks, radius, radius, PITCH, RHO, [11, 11], 0.0)
-    by_area = cn.resistance(masks, radius, _weights(radius, "area"), PITCH, RHO, [11, 11], 0.0)
+    by_radius = cn.resistance(masks, SpotGeometry(radius, radius, PITCH, [11, 11], 0.0), RHO)
+    by_area = cn.resistance(masks, SpotGeometry(radius, _weights(radius, "area"), PITCH, [11, 11], 0.0), RHO)
     np.testing.assert_array_equal(by_radius.resistance_self, by_area.resistance_self)
     assert not np.allclose(by_radius.resistance_interaction, by_area.resistance_interaction)
 
@@ -225,18 +228,18 @@ def test_padded_length_avoids_wrap():
 
 def test_unknown_method_is_rejected():
     with pytest.raises(ValueError, match="method"):
-        cn.interaction_sum(np.zeros((1, 3, 3)), PITCH, "magic")
+        ia.interaction_sum(np.zeros((1, 3, 3)), PITCH, "magic")
 
 
 def test_auto_method_follows_the_measured_crossover():
-    assert cn.auto_method(cn.FFT_FROM - 1) == "folded" and cn.auto_method(cn.FFT_FROM) == "fft"
+    assert ia.auto_method(ia.FFT_FROM - 1) == "folded" and ia.auto_method(ia.FFT_FROM) == "fft"
     # blocks stay within the work budget at every size and keep the paper's 128 on small windows
-    assert cn.block_size(57) == cn.BLOCK
+    assert ia.block_size(57) == ia.BLOCK
     for n in (57, 229, 583, 1201):
-        assert cn.block_size(n) * cn.work_bytes_per_map(n) <= max(cn.WORK_BYTES, cn.work_bytes_per_map(n))
+        assert ia.block_size(n) * ia.work_bytes_per_map(n) <= max(ia.WORK_BYTES, ia.work_bytes_per_map(n))
 
 
-@pytest.mark.parametrize("n", [cn.FFT_FROM - 2, cn.FFT_FROM])
+@pytest.mark.parametrize("n", [ia.FFT_FROM - 2, ia.FFT_FROM])
 def test_algorithm_choice_changes_nothing_beyond_1e_12(n):
     """Either side of the crossover, auto, folded and fft agree to 1e-12 (relative) per map and in R."""
     rng = np.random.default_rng(n)
@@ -244,11 +247,10 @@ def test_algorithm_choice_changes_nothing_beyond_1e_12(n):
     radius = 1e-5 * np.exp(-4.0 * (x[None, :] ** 2 + x[:, None] ** 2))[None]
     masks = rng.random((3, n, n)) < 0.6
     u = masks * radius
-    sums = {m: cn.interaction_sum(u, 2e-5, m) for m in ("auto", "folded", "fft")}
+    sums = {m: ia.interaction_sum(u, 2e-5, m) for m in ("auto", "folded", "fft")}
     for m in ("folded", "fft"):
         np.testing.assert_allclose(sums[m], sums["auto"], rtol=1e-12, atol=0)
-    whole = np.full(1, n)
-    r = {m: cn.resistance(masks, radius, radius, 2e-5, 7.2e-7, whole, 0.0, m).resistance
+    r = {m: cn.resistance(masks, SpotGeometry.whole_window(radius, radius, 2e-5), 7.2e-7, m).resistance
          for m in ("auto", "folded", "fft")}
     for m in ("folded", "fft"):
         np.testing.assert_allclose(r[m], r["auto"], rtol=1e-12, atol=0)
@@ -259,9 +261,9 @@ def test_truncation_bounds_match_choose_crops():
     n = 21
     x = np.arange(n) - n // 2
     a = 1e-5 * np.exp(-0.05 * (x[None, :] ** 2 + x[:, None] ** 2)) * rng.random((n, n))
-    bounds = cn.truncation_bounds(a, a, 1e-4, 1.0)
+    bounds = cc.truncation_bounds(a, a, 1e-4, 1.0)
     for tol in (1e-1, 1e-3, 1e-6):
-        size = cn.choose_crops(a[None], a[None], 1e-4, tol)[0]
+        size = cc.choose_crops(a[None], a[None], 1e-4, tol)[0]
         k = int(np.flatnonzero(bounds <= tol)[0])
         assert size == 2 * k + 1
     # by hand: the square of side 2k+1 drops the weight outside it
@@ -288,21 +290,21 @@ def test_fft_steps_agree_with_the_folded_path_and_the_batch():
     """Crops either side of the crossover in one call (FFT steps run load step by load step,
     the others block by block), a short last block: per entry as the folded path, 1e-12."""
     rng = np.random.default_rng(8)
-    n = cn.FFT_FROM + 8
+    n = ia.FFT_FROM + 8
     x = (np.arange(n) - n // 2) / (n // 2)
     decay = np.array([4.0, 3.0, 2.5, 2.0, 1.0])[:, None, None]
     radius = 1e-5 * np.exp(-decay * (x[None, :] ** 2 + x[:, None] ** 2)[None])
-    crops = np.array([cn.FFT_FROM - 2, cn.FFT_FROM, n - 6, n - 4, n])
-    masks = rng.random((cn.block_size(n) * 2 + 3, n, n)) < 0.6
-    auto = cn.resistance(masks, radius, radius, 2e-5, 7.2e-7, crops, 1.0).resistance
-    folded = cn.resistance(masks, radius, radius, 2e-5, 7.2e-7, crops, 1.0, "folded").resistance
+    crops = np.array([ia.FFT_FROM - 2, ia.FFT_FROM, n - 6, n - 4, n])
+    masks = rng.random((ia.block_size(n) * 2 + 3, n, n)) < 0.6
+    auto = cn.resistance(masks, SpotGeometry(radius, radius, 2e-5, crops, 1.0), 7.2e-7).resistance
+    folded = cn.resistance(masks, SpotGeometry(radius, radius, 2e-5, crops, 1.0), 7.2e-7, "folded").resistance
     np.testing.assert_allclose(auto, folded, rtol=1e-12, atol=0)
     # the FFT steps are bit-identical whatever the batch (one transform per map; with fewer than
     # four load steps BLAS sums the spot counts by a kernel that depends on the row)
-    fft = crops >= cn.FFT_FROM
-    pieces = [cn.resistance(masks[i : i + 5], radius[fft], radius[fft], 2e-5, 7.2e-7, crops[fft], 1.0).resistance
-              for i in range(0, masks.shape[0], 5)]
-    whole = cn.resistance(masks, radius[fft], radius[fft], 2e-5, 7.2e-7, crops[fft], 1.0).resistance
+    fft = crops >= ia.FFT_FROM
+    spots = SpotGeometry(radius[fft], radius[fft], 2e-5, crops[fft], 1.0)
+    pieces = [cn.resistance(masks[i : i + 5], spots, 7.2e-7).resistance for i in range(0, masks.shape[0], 5)]
+    whole = cn.resistance(masks, spots, 7.2e-7).resistance
     np.testing.assert_array_equal(np.concatenate(pieces), whole)
 
 
@@ -316,15 +318,17 @@ def test_per_map_spots_equal_one_call_per_map(n, method):
     radius = base[None] * (rng.random((n_groups, 1, n, n)) < 0.6) * rng.lognormal(0.0, 0.5, (n_groups, 1, n, n))
     masks = rng.random((batch, n, n)) < 0.7
     groups = rng.integers(0, n_groups, batch)
-    crops = cn.choose_crops(base, base, PITCH, 1e-6)
-    got = cn.resistance(masks, radius, radius, PITCH, RHO, crops, 1e-6, method, groups=groups)
+    crops = cc.choose_crops(base, base, PITCH, 1e-6)
+    spots = SpotGeometry(radius, radius, PITCH, crops, 1e-6)
+    got = cn.resistance(masks, spots, RHO, method, groups=groups)
     for b in range(batch):
-        own = cn.resistance(masks[b : b + 1], radius[groups[b]], radius[groups[b]], PITCH, RHO, _whole(base), 0.0, "direct")
+        mine = radius[groups[b]]
+        own = cn.resistance(masks[b : b + 1], SpotGeometry.whole_window(mine, mine, PITCH), RHO, "direct")
         assert _rel(got.resistance[b], own.resistance[0]) <= 1e-6  # the crop tolerance
         np.testing.assert_array_equal(got.n_conducting[b], own.n_conducting[0])
     # a map's result does not depend on the others in its batch
     order = rng.permutation(batch)
-    again = cn.resistance(masks[order], radius, radius, PITCH, RHO, crops, 1e-6, method, groups=groups[order])
+    again = cn.resistance(masks[order], spots, RHO, method, groups=groups[order])
     np.testing.assert_array_equal(again.resistance, got.resistance[order])
-    first = cn.resistance(masks[:4], radius, radius, PITCH, RHO, crops, 1e-6, method, groups=groups[:4])
+    first = cn.resistance(masks[:4], spots, RHO, method, groups=groups[:4])
     np.testing.assert_array_equal(first.resistance, got.resistance[:4])

@@ -13,6 +13,8 @@ from pipeline import store
 from pipeline.compute import ComputeOptions
 from pipeline.config import load_scenario
 from pipeline.physics import constriction, oxide_field, point_model, spot_models
+from pipeline.physics.interaction import AUTO_METHOD
+from pipeline.physics.spot_geometry import SpotGeometry
 from pipeline.stages import contact, cube
 from pipeline.stages import oxide as oxide_stage
 
@@ -114,7 +116,7 @@ def test_layout_units_and_attrs(built):
     for name in list(built.data_vars) + list(built.coords):
         assert "units" in built[name].attrs and "long_name" in built[name].attrs, name
     assert built["resistance"].attrs["units"] == "ohm"
-    assert built.attrs["crop_tolerance"] == 1e-6 and built.attrs["method"] == constriction.AUTO_METHOD
+    assert built.attrs["crop_tolerance"] == 1e-6 and built.attrs["method"] == AUTO_METHOD
     assert 0 <= built.attrs["crop_error_measured"] <= built.attrs["crop_tolerance"]
     assert built.attrs["crop_error_bound"] <= built.attrs["crop_tolerance"]
     assert built["crop_cells"].values.min() < N  # the light loads are cropped
@@ -279,8 +281,8 @@ def test_asperity_spots_are_the_drawn_surface(asperity_inputs):
             mask = psi[a, k] < threshold[z_i, a, k]
             expected_count = np.count_nonzero((radius > 0) & mask[None], axis=(1, 2))
             np.testing.assert_array_equal(built["n_conducting"].values[z_i, a, :, k], expected_count)
-            ref = constriction.resistance(mask[None], radius, radius, scenario.cell_size, scenario.material.rho,
-                                np.full(radius.shape[0], n), 0.0, "direct").resistance[0]
+            spots = SpotGeometry.whole_window(radius, radius, scenario.cell_size)
+            ref = constriction.resistance(mask[None], spots, scenario.material.rho, "direct").resistance[0]
             got = built["resistance"].values[z_i, a, :, k]
             finite = np.isfinite(ref)
             np.testing.assert_array_equal(np.isfinite(got), finite)

@@ -8,7 +8,7 @@ import pytest
 from pipeline.compute import ComputeOptions
 from pipeline.config import load_scenario
 from pipeline.before_work.domains import resolve
-from pipeline.physics import oxide_field
+from pipeline.physics import oxide_band
 from pipeline.physics.discrete_contact import interaction_kernel
 from pipeline.physics.discrete_resistance import resistances
 from pipeline.physics.spot_share import DEFAULT_RINGS
@@ -56,7 +56,7 @@ def test_pool_is_independent_of_the_chunking(scene, pool, monkeypatch):
 def test_disc_with_every_spot_clean_equals_centre():
     scene = resolve(load_scenario("paper", DISCRETE))
     modes = bands(scene)[0]
-    coeffs = oxide_field.coefficients(modes, oxide_field.field_stream(1, 1.0, 0))
+    coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(1, 1.0, 0))
     x, y = np.array([0.0, 1e-4, -2e-4]), np.array([0.0, 5e-5, 1e-4])
     radius = np.array([[1e-5, 0.0, 2e-5], [3e-5, 1e-5, 4e-5]])
     clean = np.array([np.inf], np.float32)

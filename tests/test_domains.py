@@ -11,6 +11,7 @@ from pipeline.before_work import domains
 from pipeline.config import AUTO, ConfigError, load_scenario
 from pipeline.before_work.domains import resolve
 from pipeline.physics import constriction
+from pipeline.physics.spot_geometry import SpotGeometry
 from pipeline.stages import contact
 
 FAST = {"loading.n_delta": 4, "contact.n_radial": 240}
@@ -27,8 +28,8 @@ def _clean_resistance(scenario) -> np.ndarray:
     a = ds["spot_radius"].transpose("delta", "y", "x").values
     n = a.shape[-1]
     mask = np.ones((1, n, n), dtype=bool)
-    return constriction.resistance(mask, a, a, scenario.cell_size, scenario.material.rho,
-                                   np.full(a.shape[0], n), 0.0).resistance[0]
+    spots = SpotGeometry.whole_window(a, a, scenario.cell_size)
+    return constriction.resistance(mask, spots, scenario.material.rho).resistance[0]
 
 
 @pytest.mark.parametrize("overrides", SHAPES.values(), ids=SHAPES.keys())

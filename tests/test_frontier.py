@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.bench import frontier
+from pipeline.bench import frontier, frontier_plot, frontier_sweeps
 from pipeline.before_work.domains import resolve
 from pipeline.config import load_scenario
 
@@ -66,17 +66,17 @@ def test_frontier_file_and_figures(tmp_path) -> None:
         assert ds["contact_seconds"].attrs["units"] == "s"
         for name, var in ds.variables.items():
             assert "units" in var.attrs and "long_name" in var.attrs, name
-        paths = frontier.plot(ds.load(), tmp_path / "figures")
+        paths = frontier_plot.plot(ds.load(), tmp_path / "figures")
     assert [p.name for p in paths] == ["frontier_contact.png", "frontier_cube.png", "frontier_ensemble.png"]
     assert all(p.stat().st_size > 10_000 for p in paths)
 
 
 def test_contact_sweep_errors_fall_with_nodes_and_tolerance(monkeypatch) -> None:
-    monkeypatch.setattr(frontier, "NODES", (20, 160))
-    monkeypatch.setattr(frontier, "TOLERANCES", (1e-3, 1e-10))
-    monkeypatch.setattr(frontier, "REPEATS", 1)
+    monkeypatch.setattr(frontier_sweeps, "NODES", (20, 160))
+    monkeypatch.setattr(frontier_sweeps, "TOLERANCES", (1e-3, 1e-10))
+    monkeypatch.setattr(frontier_sweeps, "REPEATS", 1)
     scenario = load_scenario("paper", {"contact.n_radial": 160, "loading.n_delta": 6})
-    rows = {(r["solver"], r["n_radial"], r["tolerance"]): r for r in frontier.contact_frontier(scenario)}
+    rows = {(r["solver"], r["n_radial"], r["tolerance"]): r for r in frontier_sweeps.contact_frontier(scenario)}
     fine, coarse = rows["newton", 160, 1e-10], rows["newton", 20, 1e-10]
     assert fine["force_error"] < coarse["force_error"] and fine["area_error"] < coarse["area_error"]
     assert fine["force_error"] < 1e-3  # 4x refinement of the same graded grid: close already
@@ -88,16 +88,17 @@ def test_contact_sweep_errors_fall_with_nodes_and_tolerance(monkeypatch) -> None
 def test_report_sections_show_the_frontier_and_the_stability_map(tmp_path) -> None:
     import json
 
-    from analysis.report import _frontier_blocks, _stability_blocks, to_markdown
+    from analysis.report_appendix import frontier_blocks, stability_blocks
+    from analysis.report_render import to_markdown
     from pipeline.bench import stability
 
-    assert "Not available" in to_markdown(_frontier_blocks(tmp_path) + _stability_blocks(tmp_path))
+    assert "Not available" in to_markdown(frontier_blocks(tmp_path) + stability_blocks(tmp_path))
     rec = frontier.recommend(CONTACT, CUBE, _ensemble([0.2, 0.09, 0.04, 0.02]))
     (tmp_path / "bench").mkdir()
     (tmp_path / "bench" / "frontier.json").write_text(json.dumps({"recommended": rec}))
     with xr.open_dataset(frontier.write(CONTACT, CUBE, _ensemble([0.2, 0.1]), tmp_path / "bench" / "frontier.nc"),
                          decode_timedelta=False) as ds:
-        frontier.plot(ds.load(), tmp_path / "figures")
+        frontier_plot.plot(ds.load(), tmp_path / "figures")
     base = {"status": "converged", "message": "", "iterations": 7, "residual": 3e-11, "seconds": 0.1,
             "finite_nonnegative": True, "force_monotone": True, "resistance_falls": True,
             "hertz_ratio": 0.9, "roughness_parameter": 0.01, "open_circuits": 2}
@@ -108,7 +109,7 @@ def test_report_sections_show_the_frontier_and_the_stability_map(tmp_path) -> No
                                                        "message": "oxide.lambda = 200 is out of range"}),
     ]
     stability.write_map(results, tmp_path / "bench" / "stability.nc")
-    md = to_markdown(_frontier_blocks(tmp_path) + _stability_blocks(tmp_path))
+    md = to_markdown(frontier_blocks(tmp_path) + stability_blocks(tmp_path))
     assert "## How fast, how accurate" in md and "## Stability map" in md
     for use in frontier.USES:
         assert f"| {use} |" in md
@@ -122,18 +123,18 @@ def test_report_sections_show_the_frontier_and_the_stability_map(tmp_path) -> No
 
 
 def test_cube_and_ensemble_sweeps_measure_real_errors(monkeypatch) -> None:
-    monkeypatch.setattr(frontier, "CUBE_REALIZATIONS", 6)
-    monkeypatch.setattr(frontier, "METHODS", ("folded",))
-    monkeypatch.setattr(frontier, "CROPS", (0.0, 1e-2))
-    monkeypatch.setattr(frontier, "REPEATS", 1)
-    monkeypatch.setattr(frontier, "ENSEMBLE_REALIZATIONS", 24)
-    monkeypatch.setattr(frontier, "ENSEMBLE_COUNTS", (6, 24, 400))
+    monkeypatch.setattr(frontier_sweeps, "CUBE_REALIZATIONS", 6)
+    monkeypatch.setattr(frontier_sweeps, "METHODS", ("folded",))
+    monkeypatch.setattr(frontier_sweeps, "CROPS", (0.0, 1e-2))
+    monkeypatch.setattr(frontier_sweeps, "REPEATS", 1)
+    monkeypatch.setattr(frontier_sweeps, "ENSEMBLE_REALIZATIONS", 24)
+    monkeypatch.setattr(frontier_sweeps, "ENSEMBLE_COUNTS", (6, 24, 400))
     scenario = resolve(load_scenario("paper", {"contact.n_radial": 160, "loading.n_delta": 6}))
-    rows = {(r["crop_tolerance"], r["precision"]): r for r in frontier.cube_frontier(scenario)}
+    rows = {(r["crop_tolerance"], r["precision"]): r for r in frontier_sweeps.cube_frontier(scenario)}
     assert rows[0.0, "float64"]["resistance_error"] < 1e-12  # exact algorithm against the dense sum
     assert 1e-8 < rows[1e-2, "float64"]["resistance_error"] <= 1e-2  # cropping error within its tolerance
     assert 0 < rows[0.0, "float32"]["resistance_error"] < 1e-6  # float32 spot maps: rounding only
-    ens = frontier.ensemble_frontier(scenario)
+    ens = frontier_sweeps.ensemble_frontier(scenario)
     assert list(ens["n_realizations"].values) == [6, 24]  # counts beyond the ensemble are dropped
     for name in ("alpha", "gamma"):
         width = ens[f"{name}_halfwidth"]

@@ -11,6 +11,7 @@ from scipy.special import ellipkm1, i0e
 
 from pipeline.config import load_scenario
 from pipeline.physics import greenwood_tripp as gt
+from pipeline.physics import radial_grid as rg
 from pipeline.physics.asperity import asperity_pressure
 from pipeline.physics.hertz import (
     hertz_approach,
@@ -35,9 +36,9 @@ def _quad_displacement(r_nodes, p_nodes, r, e_star):
 
 
 def test_influence_matrix_matches_quadrature_of_linear_pressure():
-    r = gt.radial_nodes(41, 4.0)
+    r = rg.radial_nodes(41, 4.0)
     p = np.exp(-r**2) * (1 + r)
-    u = gt.influence_matrix(r, 2.0) @ p
+    u = rg.influence_matrix(r, 2.0) @ p
     for i in (0, 1, 2, 7, 25, 40):
         assert u[i] == pytest.approx(_quad_displacement(r, p, r[i], 2.0), rel=1e-8)
 
@@ -46,40 +47,40 @@ def test_influence_matrix_gaussian_pressure_converges_second_order():
     """p = exp(-r^2/s^2) gives u = sqrt(pi) s e^{-r^2/2s^2} I0(r^2/2s^2) / E*."""
     errors = []
     for n in (100, 200, 400):
-        r = gt.radial_nodes(n, 6.0)
+        r = rg.radial_nodes(n, 6.0)
         exact = math.sqrt(math.pi) * i0e(r**2 / 2)
-        errors.append(np.max(np.abs(gt.influence_matrix(r, 1.0) @ np.exp(-r**2) - exact)) / exact.max())
+        errors.append(np.max(np.abs(rg.influence_matrix(r, 1.0) @ np.exp(-r**2) - exact)) / exact.max())
     assert errors[-1] < 3e-5
     assert 3.5 < errors[0] / errors[1] < 4.5 and 3.5 < errors[1] / errors[2] < 4.5
 
 
 def test_influence_matrix_hertz_displacement():
     a, p0, e_star = 2.0, 1.0, 1.0
-    r = gt.radial_nodes(400, 6.0)
-    u = gt.influence_matrix(r, e_star) @ (p0 * np.sqrt(np.clip(1 - r**2 / a**2, 0, None)))
+    r = rg.radial_nodes(400, 6.0)
+    u = rg.influence_matrix(r, e_star) @ (p0 * np.sqrt(np.clip(1 - r**2 / a**2, 0, None)))
     inside = r <= a
     exact = math.pi * p0 * (2 * a**2 - r[inside] ** 2) / (4 * a * e_star)
     np.testing.assert_allclose(u[inside], exact, rtol=2e-3)  # sqrt edge: O(h^1.5)
 
 
 def test_force_weights_exact_for_linear_pressure():
-    r = gt.graded_nodes(50, 3.0, 1.0)
-    assert gt.force_weights(r) @ (1 - r / 3.0) == pytest.approx(math.pi * 9 / 3, rel=1e-13)
+    r = rg.graded_nodes(50, 3.0, 1.0)
+    assert rg.force_weights(r) @ (1 - r / 3.0) == pytest.approx(math.pi * 9 / 3, rel=1e-13)
 
 
 def test_graded_nodes():
-    r = gt.graded_nodes(100, 3.0, 2.0)
+    r = rg.graded_nodes(100, 3.0, 2.0)
     steps = np.diff(r)
     assert len(r) == 100 and r[0] == 0 and r[-1] == 3.0 and np.all(steps > 0)
     assert steps[-1] / steps[0] == pytest.approx(4.0, rel=0.1)
-    np.testing.assert_array_equal(gt.graded_nodes(10, 3.0, 5.0), gt.radial_nodes(10, 3.0))
+    np.testing.assert_array_equal(rg.graded_nodes(10, 3.0, 5.0), rg.radial_nodes(10, 3.0))
 
 
 @pytest.mark.parametrize("bad", [{"n": 1}, {"r_max": 0.0}, {"r_max": float("nan")}])
 def test_radial_nodes_validation(bad):
     args = {"n": 10, "r_max": 1.0, **bad}
     with pytest.raises(ValueError, match="out of range"):
-        gt.radial_nodes(args["n"], args["r_max"])
+        rg.radial_nodes(args["n"], args["r_max"])
 
 
 def test_solver_validation():
@@ -90,7 +91,7 @@ def test_solver_validation():
 def _check_residual(scenario, r, sols):
     """Recompute max|u - M p(u)| / max|M p(u)| independently of the solver."""
     rough = scenario.roughness
-    m = gt.influence_matrix(r, scenario.material.E_star)
+    m = rg.influence_matrix(r, scenario.material.E_star)
     z = profile(r, radius=scenario.indenter.radius)
     for delta, sol in zip(scenario.deltas, sols):
         image = m @ asperity_pressure(delta + z + sol.displacement, rough.sigma, rough.eta,
@@ -121,10 +122,10 @@ def test_fixed_point_not_converged_is_reported():
 def test_fixed_point_stops_at_the_papers_criterion():
     """Stop at the first k with ||u'_{k+1} - u_k|| <= zeta eps ||u_k|| (Sect. 2.5.1), not before."""
     sc = load_scenario("published", {"loading.n_delta": 1, "loading.delta_max": -2.0})
-    r = gt.radial_nodes(sc.contact.n_radial, sc.contact.r_max * sc.indenter.radius)
+    r = rg.radial_nodes(sc.contact.n_radial, sc.contact.r_max * sc.indenter.radius)
     rough = sc.roughness
     layer = gt.Layer(rough.sigma, rough.eta, rough.beta, sc.material.E_star)
-    args = (gt.influence_matrix(r, layer.e_star), profile(r, radius=sc.indenter.radius), [-2 * rough.sigma], layer)
+    args = (rg.influence_matrix(r, layer.e_star), profile(r, radius=sc.indenter.radius), [-2 * rough.sigma], layer)
     zeta, eps = 0.3, 1e-3
     (done,) = gt.solve(*args, solver="fixed_point", relaxation=zeta, fixed_point_tolerance=eps)
     n = done.iterations
@@ -145,11 +146,11 @@ def test_hertz_fields_against_the_influence_matrix():
     """Hertz displacement (inside and outside a) = M p_Hertz; the deformed gap closes inside a."""
     radius, e_star, force = 1.0, 1.0, 1e-3
     a = float(hertz_radius(force, radius, e_star))
-    r = gt.radial_nodes(801, 4 * a)
+    r = rg.radial_nodes(801, 4 * a)
     p = hertz_pressure(r, a, force)
-    assert gt.force_weights(r) @ p == pytest.approx(force, rel=1e-3)
+    assert rg.force_weights(r) @ p == pytest.approx(force, rel=1e-3)
     u = hertz_displacement(r, a, force, e_star)
-    np.testing.assert_allclose(u, gt.influence_matrix(r, e_star) @ p, rtol=1e-3)
+    np.testing.assert_allclose(u, rg.influence_matrix(r, e_star) @ p, rtol=1e-3)
     gap = profile(r, radius=radius) - hertz_approach(a, radius) + u
     np.testing.assert_allclose(gap[r <= a], 0.0, atol=1e-12 * a)
     assert np.all(gap[r > a] > 0)
@@ -192,7 +193,7 @@ def test_roughness_parameter_at_minus_two_sigma():
     rough, e_star, radius = sc.roughness, sc.material.E_star, sc.indenter.radius
     p = asperity_pressure(-2 * rough.sigma + profile(r, radius=radius) + sol.displacement,
                           rough.sigma, rough.eta, rough.beta, e_star)
-    a = hertz_radius(gt.force_weights(r) @ p, radius, e_star)
+    a = hertz_radius(rg.force_weights(r) @ p, radius, e_star)
     assert roughness_parameter(rough.sigma, radius, a) == pytest.approx(0.361, rel=0.01)
 
 
@@ -200,12 +201,12 @@ def _limit_force(stiffening: float) -> tuple[float, float]:
     """Force of a smooth (sigma = 1 nm), stiffened layer and Hertz's at the same interpenetration."""
     radius, e_star, delta = 10e-3, 1.15e11, -20e-6
     layer = gt.Layer(sigma=1e-9, eta=2e8 * stiffening, beta=30e-6, e_star=e_star)
-    r = gt.radial_nodes(400, 1e-3)
-    (sol,) = gt.solve(gt.influence_matrix(r, e_star), profile(r, radius=radius), [delta], layer)
+    r = rg.radial_nodes(400, 1e-3)
+    (sol,) = gt.solve(rg.influence_matrix(r, e_star), profile(r, radius=radius), [delta], layer)
     assert sol.converged
     p = asperity_pressure(delta + profile(r, radius=radius) + sol.displacement,
                           layer.sigma, layer.eta, layer.beta, e_star)
-    return float(gt.force_weights(r) @ p), float(hertz_force(-delta, radius, e_star))
+    return float(rg.force_weights(r) @ p), float(hertz_force(-delta, radius, e_star))
 
 
 def test_hertz_limit():
@@ -220,7 +221,7 @@ def _scene(scenario):
     """Nodes, influence matrix, profile and layer of a scenario's solve."""
     r = radial_grid(scenario)
     layer = _layer(scenario)
-    return r, gt.influence_matrix(r, layer.e_star), indenter_profile(scenario, r), layer
+    return r, rg.influence_matrix(r, layer.e_star), indenter_profile(scenario, r), layer
 
 
 def test_stiffness_against_a_central_difference_of_fine_steps(small):
@@ -233,7 +234,7 @@ def test_stiffness_against_a_central_difference_of_fine_steps(small):
     def force(delta):
         (sol,) = gt.solve(m, z, [delta], layer, tolerance=1e-14)
         assert sol.converged
-        return gt.force_weights(r) @ asperity_pressure(delta + z + sol.displacement, layer.sigma,
+        return rg.force_weights(r) @ asperity_pressure(delta + z + sol.displacement, layer.sigma,
                                                        layer.eta, layer.beta, layer.e_star)
 
     difference = np.array([(force(d - e) - force(d + e)) / (2 * e) for d in deltas])
@@ -244,8 +245,8 @@ def test_stiffness_against_a_central_difference_of_fine_steps(small):
 def test_stiffness_of_a_stiff_smooth_layer_is_hertz():
     """As the layer stiffens K -> dF_Hertz/d delta = 2 E* a, a = sqrt(R |delta|)."""
     radius, e_star, delta = 10e-3, 1.15e11, -20e-6
-    r = gt.radial_nodes(400, 1e-3)
-    m, z = gt.influence_matrix(r, e_star), profile(r, radius=radius)
+    r = rg.radial_nodes(400, 1e-3)
+    m, z = rg.influence_matrix(r, e_star), profile(r, radius=radius)
     errors = []
     for stiffening in (1e2, 1e6):
         layer = gt.Layer(sigma=1e-9, eta=2e8 * stiffening, beta=30e-6, e_star=e_star)

@@ -1,4 +1,4 @@
-"""Oxide random fields (pipeline.physics.oxide_field): exact point values, spectrum, statistics."""
+"""Oxide random fields (pipeline.physics.oxide_band, oxide_field): exact point values, spectrum, statistics."""
 
 from __future__ import annotations
 
@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
+from pipeline.physics import oxide_band as ob
 from pipeline.physics import oxide_field as of
 from pipeline.physics.grid import cell_centres
 from tests.oracles import fine_grid
@@ -16,9 +17,9 @@ STRIDE = 18  # 57 * 18 = 1026 pixels: the fine image contains every cell centre
 
 
 def _fields(lam: float, count: int, *, hurst: float = 0.5, amplitudes: str = "ideal", seed: int = 11):
-    modes = of.band(N_CELLS, CELL, lam, 3.0, hurst)
+    modes = ob.band(N_CELLS, CELL, lam, 3.0, hurst)
     coeffs = np.stack(
-        [of.coefficients(modes, of.field_stream(seed, lam, r), amplitudes) for r in range(count)]
+        [ob.coefficients(modes, ob.field_stream(seed, lam, r), amplitudes) for r in range(count)]
     )
     return modes, coeffs
 
@@ -43,7 +44,7 @@ def test_folding_is_needed_above_nyquist() -> None:
     modes, coeffs = _fields(1.0, 1)
     assert np.abs(modes.i).max() > N_CELLS // 2  # the band really reaches past Nyquist
     below = (np.abs(modes.i) <= N_CELLS // 2) & (modes.j <= N_CELLS // 2)
-    naive = of.Band(modes.i[below], modes.j[below], modes.weight[below], modes.period)
+    naive = ob.Band(modes.i[below], modes.j[below], modes.weight[below], modes.period)
     exact = of.cell_values(modes, coeffs, N_CELLS)
     assert np.abs(of.cell_values(naive, coeffs[:, below], N_CELLS) - exact).max() > 0.5
 
@@ -98,7 +99,7 @@ def test_power_spectrum_band_and_slope(hurst: float, amplitudes: str) -> None:
 
 def test_band_edges_are_inclusive() -> None:
     """k1 <= |k| <= ks with both cut-offs on lattice radii: 15 cells, lambda = 1.5 -> k1 = 5, ks = 15."""
-    modes = of.band(15, CELL, 1.5, 3.0, 0.5)
+    modes = ob.band(15, CELL, 1.5, 3.0, 0.5)
     j, i = np.meshgrid(np.arange(0, 16), np.arange(-15, 16), indexing="ij")
     r2 = i**2 + j**2  # exact integers: no rounding at the edges
     keep = ((j > 0) | (i > 0)) & (r2 >= 5**2) & (r2 <= 15**2)
@@ -171,7 +172,7 @@ def test_empirical_threshold_covers_exactly_round_xi_n() -> None:
 
 def test_streams_are_keyed_on_lambda_value_and_realization() -> None:
     def draw(lam: float, r: int, seed: int = 5) -> np.ndarray:
-        return of.field_stream(seed, lam, r).random(4)
+        return ob.field_stream(seed, lam, r).random(4)
 
     np.testing.assert_array_equal(draw(3.0, 7), draw(3.0, 7))
     distinct = [draw(3.0, 7), draw(3.0, 8), draw(5.0, 7), draw(3.0, 7, seed=6)]
@@ -193,21 +194,21 @@ def test_streams_are_keyed_on_lambda_value_and_realization() -> None:
 def test_band_rejects_bad_parameters(kwargs: dict, name: str) -> None:
     args = {"n_cells": N_CELLS, "cell_size": CELL, "lam": 2.0, "ks_ratio": 3.0, "hurst": 0.5} | kwargs
     with pytest.raises(ValueError, match=name):
-        of.band(**args)
+        ob.band(**args)
 
 
 def test_unknown_amplitude_model_is_rejected() -> None:
-    modes = of.band(N_CELLS, CELL, 5.0, 3.0, 0.5)
+    modes = ob.band(N_CELLS, CELL, 5.0, 3.0, 0.5)
     with pytest.raises(ValueError, match="amplitudes"):
-        of.coefficients(modes, of.field_stream(0, 5.0, 0), "gaussian")
+        ob.coefficients(modes, ob.field_stream(0, 5.0, 0), "gaussian")
 
 
 # ------------------------------------------------------------------ spectral period
 def _spectral(lam: float, count: int, resolution: float, n_cells: int = N_CELLS, amplitudes: str = "ideal"):
-    period = of.spectral_period(n_cells, lam, resolution)
-    modes = of.band(n_cells, CELL, lam, 3.0, 0.5, period)
+    period = ob.spectral_period(n_cells, lam, resolution)
+    modes = ob.band(n_cells, CELL, lam, 3.0, 0.5, period)
     coeffs = np.stack(
-        [of.coefficients(modes, of.field_stream(5, lam, r), amplitudes) for r in range(count)]
+        [ob.coefficients(modes, ob.field_stream(5, lam, r), amplitudes) for r in range(count)]
     )
     return period, modes, coeffs
 
@@ -223,9 +224,9 @@ def test_centre_values_equal_direct_summation(lam: float) -> None:
 def test_spectral_period_grows_with_lambda_and_keeps_thousands_of_modes() -> None:
     sizes = []
     for lam in (1.0, 13.0, 15.0, 21.0, 23.0, 50.0):
-        period = of.spectral_period(N_CELLS, lam, 16.0)
+        period = ob.spectral_period(N_CELLS, lam, 16.0)
         assert period >= N_CELLS and period / (2 * lam) >= 16.0
-        sizes.append(of.band(N_CELLS, CELL, lam, 3.0, 0.5, period).size)
+        sizes.append(ob.band(N_CELLS, CELL, lam, 3.0, 0.5, period).size)
     assert min(sizes) > 3000  # against 20 .. 62 modes on the window's lattice at lambda 13 .. 23
 
 

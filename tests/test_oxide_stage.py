@@ -17,7 +17,7 @@ from pipeline.bench import oxide as bench_oxide
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario, load_scenario
 from pipeline.before_work.domains import resolve
-from pipeline.physics import oxide_field
+from pipeline.physics import oxide_band, oxide_field
 from pipeline.physics.grid import cell_centres
 from pipeline.scene import FieldSource, bands
 from pipeline.stages import oxide
@@ -62,8 +62,8 @@ def test_theoretical_thresholds_and_fractions_follow_the_rule(built: xr.Dataset)
 def test_stage_fields_are_the_physics_fields(small: Scenario, built: xr.Dataset) -> None:
     ox = small.oxide
     lam, r = ox.lambda_[0], 5
-    modes = oxide_field.band(small.n_cells, small.cell_size, lam, ox.ks_ratio, ox.hurst)
-    coeffs = oxide_field.coefficients(modes, oxide_field.field_stream(ox.seed, lam, r), ox.amplitudes)
+    modes = oxide_band.band(small.n_cells, small.cell_size, lam, ox.ks_ratio, ox.hurst)
+    coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(ox.seed, lam, r), ox.amplitudes)
     direct = oxide_field.field_at_points(modes, coeffs, built["x"].values[None, :], built["y"].values[:, None])
     np.testing.assert_allclose(built["psi"].sel({"lambda": lam, "realization": r}), direct, atol=2e-6, rtol=0)
 
@@ -162,7 +162,7 @@ def test_window_smaller_than_correlation_length_warns_with_mode_count() -> None:
     lam = 60.0  # l_O = 60 cells > the 57-cell window
     with pytest.warns(UserWarning, match=r"oxide.lambda = 60.*only (\d+) independent Fourier modes") as record:
         scenario = resolve(load_scenario("paper", {"oxide.lambda": [5.0, lam], "oxide.period": "window"}))
-    modes = oxide_field.band(scenario.n_cells, scenario.cell_size, lam, 3.0, 0.5)
+    modes = oxide_band.band(scenario.n_cells, scenario.cell_size, lam, 3.0, 0.5)
     assert f"only {modes.size} independent" in str(record[0].message)
 
 
@@ -174,13 +174,6 @@ def test_window_without_modes_is_an_error() -> None:
 def test_spectral_period_has_modes_at_any_lambda() -> None:
     scenario = resolve(load_scenario("paper", {"oxide.lambda": [500.0], "oxide.spectral_resolution": 4.0}))
     assert bands(scenario)[0].size > 100
-
-
-@pytest.mark.parametrize("lam", [1.0, 3.0, 13.0, 19.0, 23.0, 50.0, 60.0])
-def test_config_mode_count_is_the_band_size(paper: Scenario, lam: float) -> None:
-    from pipeline.config import _modes_in_band
-
-    assert _modes_in_band(paper, lam) == oxide_field.band(paper.n_cells, paper.cell_size, lam, 3.0, 0.5).size
 
 
 def test_adaptive_record_is_the_first_batch_and_cube_regenerates_it(small: Scenario) -> None:
@@ -196,7 +189,7 @@ def test_adaptive_record_is_the_first_batch_and_cube_regenerates_it(small: Scena
         np.testing.assert_array_equal(psi, record["psi"].values[a, 2:5])
         np.testing.assert_array_equal(threshold, record["threshold"].values[:, a, 2:5])
     assert record["period_cells"].values.tolist() == [
-        oxide_field.spectral_period(scenario.n_cells, lam, 16.0) for lam in scenario.oxide.lambda_
+        oxide_band.spectral_period(scenario.n_cells, lam, 16.0) for lam in scenario.oxide.lambda_
     ]
 
 

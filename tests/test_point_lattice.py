@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 
 from pipeline.physics import constriction, point_model
+from pipeline.physics.crops import choose_crops
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
+from pipeline.physics.spot_geometry import SpotGeometry
 from pipeline.stages import contact
 from tests.test_point_model import PITCH, RHO, _random_case, _whole
 
@@ -17,7 +19,7 @@ def test_lattice_term_matches_the_dense_solve(film):
     """Matrix-free with the lattice term against the dense Cholesky solve of the same M."""
     masks, radius = _random_case(4)
     c = SQUARE_LATTICE_CONSTANT
-    res = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0,
+    res = point_model.resistance(masks, _whole(radius), RHO,
                                  film_resistance=film, lattice_constant=c)
     dense, _ = point_model.resistance_dense(masks, radius, PITCH, RHO, film, lattice_constant=c)
     plain, _ = point_model.resistance_dense(masks, radius, PITCH, RHO, film)
@@ -31,7 +33,7 @@ def test_lattice_term_of_one_spot_is_in_series():
     """One spot: R = rho* (1/(2a) + C/(pi dx)), the term in series with the spot's own resistance."""
     radius = np.zeros((1, 5, 5))
     radius[0, 2, 1] = 4e-6
-    res = point_model.resistance(np.ones((1, 5, 5), bool), radius, radius, PITCH, RHO, _whole(radius), 0.0,
+    res = point_model.resistance(np.ones((1, 5, 5), bool), _whole(radius), RHO,
                                  lattice_constant=2.5)
     assert res.resistance[0, 0] == pytest.approx(RHO * (1 / 8e-6 + 2.5 / (np.pi * PITCH)), rel=1e-14)
 
@@ -40,7 +42,7 @@ def test_lattice_term_of_one_spot_is_in_series():
 def test_bad_lattice_constant_is_refused(value):
     masks, radius = _random_case(0, n=3, n_delta=1, batch=1)
     with pytest.raises(ValueError, match=f"lattice_constant = {value!r} is out of range"):
-        point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, lattice_constant=value)
+        point_model.resistance(masks, _whole(radius), RHO, lattice_constant=value)
     with pytest.raises(ValueError, match="lattice_constant"):
         point_model.resistance_dense(masks, radius, PITCH, RHO, lattice_constant=value)
 
@@ -56,8 +58,8 @@ def test_vanishing_radii_count_as_no_spot(film, lattice_constant):
     removed = np.where(floored == 1e-323, 0.0, floored)
     # the crop is the whole window, so the tiny spots are inside the solve
     kwargs = {"film_resistance": film, "lattice_constant": lattice_constant}
-    got = point_model.resistance(masks, floored, floored, PITCH, RHO, _whole(radius), 0.0, **kwargs)
-    want = point_model.resistance(masks, removed, removed, PITCH, RHO, _whole(radius), 0.0, **kwargs)
+    got = point_model.resistance(masks, SpotGeometry.whole_window(floored, floored, PITCH), RHO, **kwargs)
+    want = point_model.resistance(masks, SpotGeometry.whole_window(removed, removed, PITCH), RHO, **kwargs)
     assert not np.isnan(got.resistance).any() and np.all(np.isinf(got.resistance[:, 0]))
     np.testing.assert_allclose(got.resistance, want.resistance, rtol=1e-12)
     np.testing.assert_array_equal(got.n_conducting, want.n_conducting)
@@ -70,13 +72,13 @@ def test_vanishing_radii_count_as_no_spot(film, lattice_constant):
 def test_greenwood_closed_form_with_vanishing_radii_is_finite():
     masks, radius = _random_case(8, n=11)
     floored = np.where(radius == 0, 1e-323, radius)
-    removed = point_model.greenwood_resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0,
+    removed = point_model.greenwood_resistance(masks, _whole(radius), RHO,
                                                film_resistance=3e-11)
-    got = point_model.greenwood_resistance(masks, floored, floored, PITCH, RHO, _whole(radius), 0.0,
+    got = point_model.greenwood_resistance(masks, SpotGeometry.whole_window(floored, floored, PITCH), RHO,
                                            film_resistance=3e-11)
     np.testing.assert_allclose(got.resistance, removed.resistance, rtol=1e-12)
-    insulating = constriction.resistance(masks, floored, floored, PITCH, RHO, _whole(radius), 0.0)
-    plain = constriction.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    insulating = constriction.resistance(masks, SpotGeometry.whole_window(floored, floored, PITCH), RHO)
+    plain = constriction.resistance(masks, _whole(radius), RHO)
     np.testing.assert_allclose(insulating.resistance, plain.resistance, rtol=1e-12)
 
 
@@ -89,10 +91,10 @@ def test_expected_spots_with_the_lattice_term_obey_barber(paper):
     barber = ds["barber_conductance"].values * RHO  # conductance x rho*, m
     radius, dx = ds["spot_radius"].values, paper.cell_size
     masks = np.ones((1, paper.n_cells, paper.n_cells), bool)
-    crops = constriction.choose_crops(radius, radius, dx, 1e-9)
+    crops = choose_crops(radius, radius, dx, 1e-9)
 
     def conductance(c):
-        res = point_model.resistance(masks, radius, radius, dx, RHO, crops, 1e-9, lattice_constant=c)
+        res = point_model.resistance(masks, SpotGeometry(radius, radius, dx, crops, 1e-9), RHO, lattice_constant=c)
         return RHO / res.resistance[0]
 
     assert np.max(np.abs(conductance(SQUARE_LATTICE_CONSTANT) / barber - 1)) < 1e-4
@@ -108,10 +110,9 @@ def test_per_map_spots_equal_one_solve_per_map(film):
     radius = 2e-6 * base[None, None] * (rng.random((n_groups, 2, n, n)) < 0.6) * np.array([0.5, 1.0])[None, :, None, None]
     masks = rng.random((batch, n, n)) < 0.7
     groups = rng.integers(0, n_groups, batch)
-    whole = np.full(2, n)
-    got = point_model.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=film,
+    got = point_model.resistance(masks, _whole(radius), RHO, film_resistance=film,
                                  solver_tolerance=1e-13, groups=groups)
-    green = point_model.greenwood_resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=film,
+    green = point_model.greenwood_resistance(masks, _whole(radius), RHO, film_resistance=film,
                                              groups=groups)
     for b in range(batch):
         dense, dense_green = point_model.resistance_dense(masks[b : b + 1], radius[groups[b]], PITCH, RHO, film)

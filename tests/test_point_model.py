@@ -11,12 +11,14 @@ from pipeline.cli import main as cli
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, load_scenario
 from pipeline.physics import constriction, point_model, point_solve
-from pipeline.physics.interaction_fft import (
+from pipeline.physics.crops import choose_crops
+from pipeline.physics.interaction_folded import (
     interaction_apply,
     interaction_apply_columns,
     interaction_apply_dense,
     interaction_folded,
 )
+from pipeline.physics.spot_geometry import SpotGeometry
 from tests.test_cube_stage import N, N_REAL, _build, _contact, _oxide
 
 RHO = 7.2e-7  # ohm m
@@ -24,8 +26,9 @@ PITCH = 7.07e-5  # m
 OPTIONS = ComputeOptions(progress=False)
 
 
-def _whole(radius: np.ndarray) -> np.ndarray:
-    return np.full(radius.shape[0], radius.shape[-1])
+def _whole(radius: np.ndarray) -> SpotGeometry:
+    """Spots of radius ``radius`` (also their weights) on the whole window."""
+    return SpotGeometry.whole_window(radius, radius, PITCH)
 
 
 def _random_case(seed: int, n: int = 9, n_delta: int = 3, batch: int = 6):
@@ -57,9 +60,9 @@ def test_apply_in_float32_stays_float32_and_close(n):
 def test_one_spot_conducts_2a_over_rho():
     radius = np.zeros((1, 5, 5))
     radius[0, 1, 3] = 4e-6
-    res = point_model.resistance(np.ones((1, 5, 5), bool), radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    res = point_model.resistance(np.ones((1, 5, 5), bool), _whole(radius), RHO)
     assert res.resistance[0, 0] == pytest.approx(RHO / (2 * 4e-6), rel=1e-14)
-    greenwood = point_model.greenwood_resistance(np.ones((1, 5, 5), bool), radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    greenwood = point_model.greenwood_resistance(np.ones((1, 5, 5), bool), _whole(radius), RHO)
     assert greenwood.resistance[0, 0] == pytest.approx(RHO / (2 * 4e-6), rel=1e-14)
 
 
@@ -71,9 +74,9 @@ def test_two_spots_match_the_2x2_solve_by_hand():
     m11, m22 = 1.0 / (2 * a1), 1.0 / (2 * a2)
     det = m11 * m22 - m12**2
     total = (m22 - m12 + m11 - m12) / det  # sum of M^-1 [1, 1]
-    res = point_model.resistance(np.ones((1, 3, 3), bool), radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    res = point_model.resistance(np.ones((1, 3, 3), bool), _whole(radius), RHO)
     assert res.resistance[0, 0] == pytest.approx(RHO / total, rel=1e-12)
-    greenwood = constriction.resistance(np.ones((1, 3, 3), bool), radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    greenwood = constriction.resistance(np.ones((1, 3, 3), bool), _whole(radius), RHO)
     assert greenwood.resistance[0, 0] > res.resistance[0, 0] * (1 + 1e-6)  # strictly above for two spots
 
 
@@ -81,16 +84,15 @@ def test_two_spots_match_the_2x2_solve_by_hand():
 @pytest.mark.parametrize("film", [np.inf, 0.0, 3e-11])
 def test_matches_dense_cholesky_solve(seed, film):
     masks, radius = _random_case(seed)
-    whole = _whole(radius)
-    res = point_model.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=film)
+    res = point_model.resistance(masks, _whole(radius), RHO, film_resistance=film)
     dense, greenwood = point_model.resistance_dense(masks, radius, PITCH, RHO, film)
     assert np.array_equal(np.isinf(res.resistance), np.isinf(dense))
     finite = np.isfinite(dense)
     assert np.max(np.abs(res.resistance[finite] / dense[finite] - 1), initial=0) <= 1e-10  # the solver tolerance
     assert np.all(res.error_estimate <= 1e-10) and res.n_breakdown == 0
-    closed = point_model.greenwood_resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=film)
+    closed = point_model.greenwood_resistance(masks, _whole(radius), RHO, film_resistance=film)
     np.testing.assert_allclose(closed.resistance[finite], greenwood[finite], rtol=1e-12)
-    by_residual = point_model.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=film,
+    by_residual = point_model.resistance(masks, _whole(radius), RHO, film_resistance=film,
                                          criterion="residual")
     assert np.all(by_residual.residual <= 1e-10)
     assert np.max(np.abs(by_residual.resistance[finite] / dense[finite] - 1), initial=0) <= 1e-12
@@ -109,29 +111,29 @@ def _cluster_case(seed: int, n: int = 21, batch: int = 8):
 def test_error_criterion_keeps_its_promise(tolerance):
     """The measured relative error of R never exceeds the tolerance of the energy-norm rule."""
     masks, radius = _cluster_case(int(-np.log10(tolerance)))
-    res = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, solver_tolerance=tolerance)
+    res = point_model.resistance(masks, _whole(radius), RHO, solver_tolerance=tolerance)
     dense, _ = point_model.resistance_dense(masks, radius, PITCH, RHO)
     finite = np.isfinite(dense)
     error = np.abs(res.resistance[finite] / dense[finite] - 1)
     assert error.max() <= tolerance and np.all(res.error_estimate <= tolerance)
-    loose = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0,
+    loose = point_model.resistance(masks, _whole(radius), RHO,
                                    solver_tolerance=tolerance, criterion="residual")
     assert res.iterations.sum() < loose.iterations.sum()  # the point of the error rule
 
 
 def test_single_precision_rounds_match_double_precision(monkeypatch):
     masks, radius = _cluster_case(4)
-    single = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, solver_tolerance=1e-12)
+    single = point_model.resistance(masks, _whole(radius), RHO, solver_tolerance=1e-12)
     monkeypatch.setattr(point_solve, "SINGLE_PRECISION_DIAGONAL", 0.0)  # every round in float64
-    double = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, solver_tolerance=1e-12)
+    double = point_model.resistance(masks, _whole(radius), RHO, solver_tolerance=1e-12)
     finite = np.isfinite(double.resistance)
     assert np.max(np.abs(single.resistance[finite] / double.resistance[finite] - 1)) <= 2e-12
 
 
 def test_dense_operator_gives_the_same_solution():
     masks, radius = _random_case(7)
-    fast = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0)
-    dense = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, "gemm")
+    fast = point_model.resistance(masks, _whole(radius), RHO)
+    dense = point_model.resistance(masks, _whole(radius), RHO, "gemm")
     np.testing.assert_allclose(fast.resistance, dense.resistance, rtol=1e-10)
 
 
@@ -141,9 +143,8 @@ def test_greenwood_never_below_the_point_resistance(seed, n, oxide):
     rng = np.random.default_rng(seed)
     radius = rng.uniform(0.0, 0.45 * PITCH, (2, n, n)) * (rng.random((2, n, n)) > 0.2)
     masks = rng.random((3, n, n)) >= oxide
-    whole = _whole(radius)
-    point = point_model.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0).resistance
-    greenwood = constriction.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0).resistance
+    point = point_model.resistance(masks, _whole(radius), RHO).resistance
+    greenwood = constriction.resistance(masks, _whole(radius), RHO).resistance
     assert np.array_equal(np.isinf(point), np.isinf(greenwood))
     finite = np.isfinite(point)
     assert np.all(greenwood[finite] >= point[finite] * (1 - 1e-12))
@@ -151,10 +152,9 @@ def test_greenwood_never_below_the_point_resistance(seed, n, oxide):
 
 def test_film_limits_clean_and_insulating():
     masks, radius = _random_case(11)
-    whole = _whole(radius)
 
     def r(mask, film):
-        return point_model.resistance(mask, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=film).resistance
+        return point_model.resistance(mask, _whole(radius), RHO, film_resistance=film).resistance
 
     clean = r(np.ones_like(masks), np.inf)
     np.testing.assert_allclose(r(masks, 0.0), clean, rtol=1e-9)
@@ -171,13 +171,12 @@ def test_film_limits_clean_and_insulating():
 
 def test_greenwood_with_films_is_the_rayleigh_quotient_and_reduces_to_eq13():
     masks, radius = _random_case(5)
-    whole = _whole(radius)
-    plain = constriction.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0)
-    same = point_model.greenwood_resistance(masks, radius, radius, PITCH, RHO, whole, 0.0)
+    plain = constriction.resistance(masks, _whole(radius), RHO)
+    same = point_model.greenwood_resistance(masks, _whole(radius), RHO)
     np.testing.assert_allclose(same.resistance, plain.resistance, rtol=1e-12)
     np.testing.assert_allclose(same.resistance_self, plain.resistance_self, rtol=1e-12)
-    film = point_model.greenwood_resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=2e-11)
-    exact = point_model.resistance(masks, radius, radius, PITCH, RHO, whole, 0.0, film_resistance=2e-11)
+    film = point_model.greenwood_resistance(masks, _whole(radius), RHO, film_resistance=2e-11)
+    exact = point_model.resistance(masks, _whole(radius), RHO, film_resistance=2e-11)
     _, dense_greenwood = point_model.resistance_dense(masks, radius, PITCH, RHO, 2e-11)
     np.testing.assert_allclose(film.resistance, dense_greenwood, rtol=1e-12)
     assert np.all(film.resistance >= exact.resistance * (1 - 1e-12))
@@ -187,10 +186,10 @@ def test_cropping_bound_holds():
     contact = _contact(n=15, n_delta=5)
     radius = contact["spot_radius"].values
     masks = np.random.default_rng(2).random((8, 15, 15)) > 0.4
-    crops = constriction.choose_crops(radius, radius, PITCH, 1e-3)
+    crops = choose_crops(radius, radius, PITCH, 1e-3)
     assert crops.min() < 15
-    cropped = point_model.resistance(masks, radius, radius, PITCH, RHO, crops, 1e-3)
-    whole = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    cropped = point_model.resistance(masks, SpotGeometry(radius, radius, PITCH, crops, 1e-3), RHO)
+    whole = point_model.resistance(masks, _whole(radius), RHO)
     finite = np.isfinite(whole.resistance)
     error = np.abs(cropped.resistance[finite] / whole.resistance[finite] - 1)
     assert np.all(error <= cropped.crop_bound[finite] + 1e-9) and np.all(cropped.crop_bound <= 1e-3)
@@ -200,11 +199,11 @@ def test_cropping_bound_holds():
 def test_no_current_inside_the_crop_is_solved_on_the_whole_window():
     contact = _contact(n=15, n_delta=5)
     radius = contact["spot_radius"].values
-    crops = constriction.choose_crops(radius, radius, PITCH, 1e-3)
+    crops = choose_crops(radius, radius, PITCH, 1e-3)
     edge = (15 - crops.min()) // 2
     mask = np.zeros((1, 15, 15), bool)
     mask[0, :edge, :] = True  # current only outside the smallest crop
-    res = point_model.resistance(mask, radius, radius, PITCH, RHO, crops, 1e-3)
+    res = point_model.resistance(mask, SpotGeometry(radius, radius, PITCH, crops, 1e-3), RHO)
     dense, _ = point_model.resistance_dense(mask, radius, PITCH, RHO)
     finite = np.isfinite(dense)
     assert finite[0, 0] and np.array_equal(finite, np.isfinite(res.resistance))
@@ -215,7 +214,7 @@ def test_tiny_spots_neither_underflow_nor_stop_early():
     """Spots of 1e-30 m (edge cells of a light contact reach 1e-51 m) are solved like any other."""
     masks, radius = _random_case(9, n=11)
     radius = radius * 1e-30 / PITCH
-    res = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    res = point_model.resistance(masks, _whole(radius), RHO)
     dense, _ = point_model.resistance_dense(masks, radius, PITCH, RHO)
     finite = np.isfinite(dense)
     assert np.array_equal(finite, np.isfinite(res.resistance))
@@ -227,7 +226,7 @@ def test_current_appearing_at_a_later_load_step_is_solved_to_the_tolerance():
     """No current at the first step (no spot yet), some at the second: the warm start is empty."""
     masks, radius = _cluster_case(6)
     radius = np.concatenate([np.zeros_like(radius[:1]), radius[1:]])
-    res = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0)
+    res = point_model.resistance(masks, _whole(radius), RHO)
     dense, _ = point_model.resistance_dense(masks, radius, PITCH, RHO)
     finite = np.isfinite(dense)
     assert not finite[:, 0].any() and finite[:, 1].all()
@@ -236,7 +235,7 @@ def test_current_appearing_at_a_later_load_step_is_solved_to_the_tolerance():
 
 def test_iteration_cap_is_recorded_not_hidden():
     masks, radius = _random_case(3, n=11)
-    res = point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, max_iterations=1)
+    res = point_model.resistance(masks, _whole(radius), RHO, max_iterations=1)
     assert np.all(res.iterations <= 1) and np.any(res.residual > 1e-10)
 
 
@@ -245,7 +244,7 @@ def test_iteration_cap_is_recorded_not_hidden():
 def test_physics_rejects_bad_settings(kwargs):
     masks, radius = _random_case(0)
     with pytest.raises(ValueError):
-        point_model.resistance(masks, radius, radius, PITCH, RHO, _whole(radius), 0.0, **kwargs)
+        point_model.resistance(masks, _whole(radius), RHO, **kwargs)
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,9 @@ import numpy as np
 import pytest
 
 from analysis import figures_results
-from analysis.report import Block, to_html, to_markdown, write_report
+from analysis.report import write_report
+from analysis.report_blocks import Block
+from analysis.report_render import to_html, to_markdown
 from pipeline.cli.main import main
 from pipeline.config import Scenario, load_scenario
 from pipeline.stages import fits as fits_stage
@@ -206,7 +208,7 @@ def test_summary_quotes_the_validation_flags(tmp_path, small: Scenario) -> None:
 def test_surrogate_cells_outside_the_target_are_named() -> None:
     import xarray as xr
 
-    from analysis.report import surrogate_misses
+    from analysis.report_results import surrogate_misses
 
     lam, xi = [1.0, 5.0], [0.3, 0.5, 0.9]
     sigma = np.full((2, 3), 0.01)  # 2 % half-width at z = 2: the bound is the 3 % floor

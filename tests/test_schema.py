@@ -1,4 +1,5 @@
-"""The variable schema (pipeline.stages.schema) against its stored list, and the files against the schema."""
+"""The variable schemas (pipeline.stages.schema, pipeline.bench.schema) against their stored lists, and the
+files against the schema."""
 
 from __future__ import annotations
 
@@ -7,9 +8,11 @@ from pathlib import Path
 
 import xarray as xr
 
+from pipeline.bench.schema import FRONTIER, STABILITY
 from pipeline.stages.schema import SCHEMA, matches
 
 STORED = Path(__file__).parent / "fixtures" / "schema.json"
+BENCH_STORED = Path(__file__).parent / "fixtures" / "bench_schema.json"
 
 
 def test_schema_is_the_stored_list() -> None:
@@ -17,6 +20,14 @@ def test_schema_is_the_stored_list() -> None:
     rows = [[stage, name, list(v.dims), v.units, v.long_name] for stage, vs in SCHEMA.items() for name, v in sorted(vs.items())]
     assert rows == json.loads(STORED.read_text())
 
+
+
+def test_bench_schema_is_the_stored_list() -> None:
+    """The benchmark files' variables as they were written before the schema (the sweep tables'
+    columns are made per key by pipeline.bench.schema.sweep_column)."""
+    declared = {"frontier": FRONTIER, "stability": STABILITY}
+    rows = [[name, var, list(v.dims), v.units, v.long_name] for name, vs in declared.items() for var, v in sorted(vs.items())]
+    assert rows == json.loads(BENCH_STORED.read_text())
 
 def written_against_schema(data_dir: Path) -> list[str]:
     """The variables of the stage files under ``data_dir`` that their schema lacks or labels otherwise."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pipeline.physics import oxide_band as ob
 from pipeline.physics import oxide_field as of
 from pipeline.physics.oxide_points import values_at_points
 from pipeline.physics.spot_share import DEFAULT_RINGS, DiscRule, disc_points, disc_shares, effective_radius
@@ -14,18 +15,18 @@ N_CELLS = 57  # the paper scenario's window
 CELL = 1.0 / np.sqrt(2e8)  # m
 
 
-def _paper_band(lam: float) -> of.Band:
+def _paper_band(lam: float) -> ob.Band:
     """The paper scene's band at lambda, on the spectral period of resolution 16."""
-    return of.band(N_CELLS, CELL, lam, 3.0, 0.5, of.spectral_period(N_CELLS, lam, 16))
+    return ob.band(N_CELLS, CELL, lam, 3.0, 0.5, ob.spectral_period(N_CELLS, lam, 16))
 
 
-def _coeffs(modes: of.Band, lam: float, count: int, seed: int = 7) -> np.ndarray:
-    return np.stack([of.coefficients(modes, of.field_stream(seed, lam, r)) for r in range(count)])
+def _coeffs(modes: ob.Band, lam: float, count: int, seed: int = 7) -> np.ndarray:
+    return np.stack([ob.coefficients(modes, ob.field_stream(seed, lam, r)) for r in range(count)])
 
 
 @pytest.mark.parametrize("lam, spectral", [(1.0, False), (5.0, True), (23.0, True)])
 def test_values_at_points_equal_direct_sum(lam: float, spectral: bool) -> None:
-    modes = _paper_band(lam) if spectral else of.band(N_CELLS, CELL, lam, 3.0, 0.5)
+    modes = _paper_band(lam) if spectral else ob.band(N_CELLS, CELL, lam, 3.0, 0.5)
     coeffs = _coeffs(modes, lam, 6).reshape(2, 3, -1)  # any leading shape
     rng = np.random.default_rng(3)
     x, y = rng.uniform(-40 * CELL, 40 * CELL, (2, 5, 140))  # also outside the window
@@ -103,7 +104,7 @@ def test_disc_inside_clean_or_oxide_gives_one_or_zero() -> None:
     np.testing.assert_array_equal(f, [0.0, 1.0])  # oxide on the peak, clean in the trough
 
 
-def _fine_share(modes: of.Band, coeffs: np.ndarray, xc: float, yc: float, a: float,
+def _fine_share(modes: ob.Band, coeffs: np.ndarray, xc: float, yc: float, a: float,
                 thresholds: np.ndarray) -> np.ndarray:
     """Clean share of the disc from a 200 x 200 image of its bounding square (pixel centres)."""
     t = (np.arange(200) + 0.5) / 100.0 - 1.0

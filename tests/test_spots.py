@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from pipeline.physics import spots
-from pipeline.physics.constriction import pair_sum_points
+from pipeline.physics.interaction import pair_sum_points
 
 
 def test_holm_greenwood_two_spots():

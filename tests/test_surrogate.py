@@ -10,6 +10,8 @@ from scipy.optimize import least_squares
 from pipeline.config import ConfigError, load_scenario
 from pipeline.before_work.domains import resolve
 from pipeline.fitting import surrogate as sg
+from pipeline.fitting import surrogate_joint as sg_joint
+from pipeline.fitting import surrogate_paper as sg_paper
 from pipeline.stages import fits, surrogate, table3
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import assert_labelled, synthetic_cube, true_alpha
@@ -26,7 +28,7 @@ def separable_rank2(lam: np.ndarray, xi: np.ndarray) -> np.ndarray:
 
 def test_reproduces_separable_rank2_field_exactly() -> None:
     matrix = separable_rank2(LAM, XI)
-    model = sg.fit_surrogate(matrix, LAM, XI, rank=2, order_w=3, order_z=2)
+    model = sg_paper.fit_surrogate(matrix, LAM, XI, rank=2, order_w=3, order_z=2)
     np.testing.assert_allclose(model(LAM[:, None], XI[None, :]), matrix, rtol=1e-10)
     # ...and between grid points, since the modes are exact polynomials
     np.testing.assert_allclose(model(4.0, 0.45), separable_rank2(np.array([4.0]), np.array([0.45]))[0, 0], rtol=1e-9)
@@ -36,16 +38,16 @@ def test_reproduces_separable_rank2_field_exactly() -> None:
 
 def test_rank_one_is_not_enough_for_rank_two() -> None:
     matrix = separable_rank2(LAM, XI)
-    model = sg.fit_surrogate(matrix, LAM, XI, rank=1, order_w=3, order_z=2)
+    model = sg_paper.fit_surrogate(matrix, LAM, XI, rank=1, order_w=3, order_z=2)
     assert np.max(np.abs(model(LAM[:, None], XI[None, :]) / matrix - 1)) > 1e-3
 
 
 def test_loo_prefers_sufficient_orders() -> None:
     matrix = separable_rank2(LAM, XI)
-    assert sg.loo_error(matrix, LAM, XI, 2, 3, 2) < 1e-9
-    scan = sg.order_scan(matrix, LAM, XI, 2, 4, 3)
+    assert sg_paper.loo_error(matrix, LAM, XI, 2, 3, 2) < 1e-9
+    scan = sg_paper.order_scan(matrix, LAM, XI, 2, 4, 3)
     assert scan[3, 2] < 1e-9 and scan[1, 1] > 1e-3
-    assert np.isnan(sg.loo_error(matrix[:3, :3], LAM[:3], XI[:3], 2, 2, 1))
+    assert np.isnan(sg_paper.loo_error(matrix[:3, :3], LAM[:3], XI[:3], 2, 2, 1))
 
 
 def test_loo_matches_explicit_refits() -> None:
@@ -56,26 +58,26 @@ def test_loo_matches_explicit_refits() -> None:
     rel = []
     for i in range(LAM.size):
         keep = np.arange(LAM.size) != i
-        model = sg.fit_surrogate(matrix[keep], LAM[keep], XI, rank, ow, oz)
+        model = sg_paper.fit_surrogate(matrix[keep], LAM[keep], XI, rank, ow, oz)
         rel.append(model(LAM[i], XI) / matrix[i] - 1)
     for j in range(XI.size):
         keep = np.arange(XI.size) != j
-        model = sg.fit_surrogate(matrix[:, keep], LAM, XI[keep], rank, ow, oz)
+        model = sg_paper.fit_surrogate(matrix[:, keep], LAM, XI[keep], rank, ow, oz)
         rel.append(model(LAM, XI[j]) / matrix[:, j] - 1)
     expected = np.sqrt(np.mean(np.concatenate(rel) ** 2))
-    assert sg.loo_error(matrix, LAM, XI, rank, ow, oz) == pytest.approx(expected, rel=1e-9)
-    in_sample = sg.fit_surrogate(matrix, LAM, XI, rank, ow, oz)(LAM[:, None], XI[None, :]) / matrix - 1
+    assert sg_paper.loo_error(matrix, LAM, XI, rank, ow, oz) == pytest.approx(expected, rel=1e-9)
+    in_sample = sg_paper.fit_surrogate(matrix, LAM, XI, rank, ow, oz)(LAM[:, None], XI[None, :]) / matrix - 1
     assert expected > np.sqrt(np.mean(in_sample**2))
 
 
 def test_bad_input() -> None:
     matrix = separable_rank2(LAM, XI)
     with pytest.raises(ValueError, match="orders"):
-        sg.fit_surrogate(matrix[:3], LAM[:3], XI, 2, 3, 2)
+        sg_paper.fit_surrogate(matrix[:3], LAM[:3], XI, 2, 3, 2)
     bad = matrix.copy()
     bad[0, 0] = np.nan
     with pytest.raises(ValueError, match="non-finite"):
-        sg.fit_surrogate(bad, LAM, XI, 2, 3, 2)
+        sg_paper.fit_surrogate(bad, LAM, XI, 2, 3, 2)
 
 
 def test_paper_stage_builds_table3_and_cv(tmp_path, small) -> None:
@@ -103,7 +105,7 @@ def test_paper_stage_builds_table3_and_cv(tmp_path, small) -> None:
 def test_published_surrogate_numbers_unchanged_by_the_joint_method() -> None:
     """The paper method's coefficients are the plain SVD-then-polyfit of Sect. 3.1, bit for bit."""
     matrix = separable_rank2(LAM, XI) * np.exp(0.05 * np.random.default_rng(2).standard_normal((LAM.size, XI.size)))
-    model = sg.fit_surrogate(matrix, LAM, XI, 2, 3, 2)
+    model = sg_paper.fit_surrogate(matrix, LAM, XI, 2, 3, 2)
     U, s, Vt = np.linalg.svd(matrix, full_matrices=False)
     u, v = U[:, :2] * np.sqrt(s[:2]), Vt[:2].T * np.sqrt(s[:2])
     flip = np.where(v.sum(axis=0) < 0, -1.0, 1.0)
@@ -120,7 +122,7 @@ def test_joint_stage_on_small_grid(small) -> None:
     # 3 x 3 grid: orders <= 1 can be cross-validated; the chosen model is reported with its size
     for p in ("alpha", "gamma"):
         assert ds.attrs[f"{p}_order_w"] <= 1 and ds.attrs[f"{p}_order_z"] <= 1
-        assert ds.attrs[f"{p}_free_parameters"] == sg.free_parameters(ds.attrs[f"{p}_rank"], ds.attrs[f"{p}_order_w"], ds.attrs[f"{p}_order_z"])
+        assert ds.attrs[f"{p}_free_parameters"] == sg_joint.free_parameters(ds.attrs[f"{p}_rank"], ds.attrs[f"{p}_order_w"], ds.attrs[f"{p}_order_z"])
         assert np.isfinite(ds[f"{p}_cv_error"]).all() and np.isfinite(ds.attrs[f"{p}_cv_rms"])
         assert ds[f"{p}_cv_rms"].dims == (f"{p}_candidate",)
         # the candidate chosen scores what the attribute says
@@ -145,16 +147,16 @@ def log_rank2(lam: np.ndarray, xi: np.ndarray) -> np.ndarray:
 
 
 def test_free_parameters() -> None:
-    assert sg.free_parameters(2, 3, 2) == 10  # not the paper's 2 (4 + 3) = 14
-    assert sg.free_parameters(2, 2, 1) == 6  # = the full 3 x 2 tensor polynomial
-    assert sg.free_parameters(3, 2, 1) == 6
-    assert sg.free_parameters(1, 0, 0) == 1
+    assert sg_joint.free_parameters(2, 3, 2) == 10  # not the paper's 2 (4 + 3) = 14
+    assert sg_joint.free_parameters(2, 2, 1) == 6  # = the full 3 x 2 tensor polynomial
+    assert sg_joint.free_parameters(3, 2, 1) == 6
+    assert sg_joint.free_parameters(1, 0, 0) == 1
 
 
 def test_joint_recovers_separable_rank2_in_log_exactly() -> None:
     field = log_rank2(LAM, XI)
     sigma = np.random.default_rng(3).uniform(0.005, 0.2, field.shape)  # unequal weights: the ALS path
-    model = sg.fit_joint(field, LAM, XI, 2, 3, 2, "log", sigma)
+    model = sg_joint.fit_joint(field, LAM, XI, 2, 3, 2, "log", sigma)
     assert model.iterations > 0
     np.testing.assert_allclose(model(LAM[:, None], XI[None, :]), field, rtol=1e-9)
     np.testing.assert_allclose(model(4.0, 0.45), log_rank2(np.array([4.0]), np.array([0.45]))[0, 0], rtol=1e-9)
@@ -170,7 +172,7 @@ def test_joint_fit_reaches_the_weighted_optimum() -> None:
     rng = np.random.default_rng(5)
     field = log_rank2(LAM, XI) * np.exp(0.05 * rng.standard_normal((LAM.size, XI.size)))
     sigma = rng.uniform(0.01, 0.1, field.shape)
-    model = sg.fit_joint(field, LAM, XI, 2, 3, 2, "log", sigma)
+    model = sg_joint.fit_joint(field, LAM, XI, 2, 3, 2, "log", sigma)
     A, B = np.vander(np.log(LAM), 4, increasing=True), np.vander(-np.log1p(-XI), 3, increasing=True)
     t = np.log(field)
 
@@ -183,7 +185,7 @@ def test_joint_fit_reaches_the_weighted_optimum() -> None:
                   for _ in range(5))
     assert als <= general * (1 + 1e-8)
     # ...and it is a better weighted fit than the paper's SVD-then-polyfit of the same orders
-    paper = sg.fit_surrogate(field, LAM, XI, 2, 3, 2)(LAM[:, None], XI[None, :])
+    paper = sg_paper.fit_surrogate(field, LAM, XI, 2, 3, 2)(LAM[:, None], XI[None, :])
     assert als < np.sum(((t - np.log(paper)) / sigma) ** 2)
 
 
@@ -199,13 +201,13 @@ def test_grid_error_bounded_on_smooth_noisy_field() -> None:
     half = 0.004 + 0.02 * (XI[None, :] ** 2) * np.ones((LAM.size, 1))  # relative 95 % half-widths, larger at high xi
     data = truth * np.exp(half / 1.96 * rng.standard_normal(truth.shape))
     sigma = np.fmax(half, 0.01)
-    best, _ = sg.select_model(data, LAM, XI, ("log",), 3, 4, 3, {"log": sigma}, 0.05)
-    model = sg.fit_joint(data, LAM, XI, best.rank, best.order_w, best.order_z, "log", sigma)
+    best, _ = sg_joint.select_model(data, LAM, XI, ("log",), 3, 4, 3, {"log": sigma}, 0.05)
+    model = sg_joint.fit_joint(data, LAM, XI, best.rank, best.order_w, best.order_z, "log", sigma)
     error = np.abs(model(LAM[:, None], XI[None, :]) / data - 1)
     assert np.all(error <= np.fmax(0.03, half)), error.max()
     assert best.score <= 0.05
     # the paper's method with its orders misses the same field by more
-    paper = sg.fit_surrogate(data, LAM, XI, 2, 3, 2)(LAM[:, None], XI[None, :])
+    paper = sg_paper.fit_surrogate(data, LAM, XI, 2, 3, 2)(LAM[:, None], XI[None, :])
     assert np.abs(paper / data - 1).max() > error.max()
 
 
@@ -217,7 +219,7 @@ def test_cross_validation_picks_the_true_orders(rank: int, order_w: int, order_z
     coef_z = rng.uniform(-1, 1, (rank, order_z + 1))
     log_field = sum(P.polyval(w, cw) * P.polyval(z, cz) for cw, cz in zip(coef_w, coef_z))
     field = np.exp(log_field + 0.002 * rng.standard_normal(log_field.shape))
-    best, tried = sg.select_model(field, LAM, XI, ("log",), 3, 4, 3, None, 0.05)
+    best, tried = sg_joint.select_model(field, LAM, XI, ("log",), 3, 4, 3, None, 0.05)
     assert (best.rank, best.order_w, best.order_z) == (rank, order_w, order_z)
     assert len(tried) > 20 and best.score < 0.01
 
@@ -226,24 +228,24 @@ def test_cross_validate_matches_explicit_refits() -> None:
     field = log_rank2(LAM, XI) * np.exp(0.05 * np.random.default_rng(4).standard_normal((LAM.size, XI.size)))
     sigma = np.full(field.shape, 0.02)
     sigma[:, -1] = 0.1
-    pred = sg.cross_validate(field, LAM, XI, 2, 2, 1, "log", sigma)
+    pred = sg_joint.cross_validate(field, LAM, XI, 2, 2, 1, "log", sigma)
     keep = np.arange(LAM.size) != 5
-    row = sg.fit_joint(field[keep], LAM[keep], XI, 2, 2, 1, "log", sigma[keep])(LAM[5], XI)
+    row = sg_joint.fit_joint(field[keep], LAM[keep], XI, 2, 2, 1, "log", sigma[keep])(LAM[5], XI)
     np.testing.assert_allclose(pred[0, 5], row, rtol=1e-12)
     keep = np.arange(XI.size) != 8
-    col = sg.fit_joint(field[:, keep], LAM, XI[keep], 2, 2, 1, "log", sigma[:, keep])(LAM, XI[8])
+    col = sg_joint.fit_joint(field[:, keep], LAM, XI[keep], 2, 2, 1, "log", sigma[:, keep])(LAM, XI[8])
     np.testing.assert_allclose(pred[1, :, 8], col, rtol=1e-12)
-    assert sg.cross_validate(field[:3], LAM[:3], XI, 1, 2, 1) is None
+    assert sg_joint.cross_validate(field[:3], LAM[:3], XI, 1, 2, 1) is None
 
 
 def test_joint_bad_input() -> None:
     field = log_rank2(LAM, XI)
     with pytest.raises(ValueError, match="orders"):
-        sg.fit_joint(field[:3], LAM[:3], XI, 2, 3, 2)
+        sg_joint.fit_joint(field[:3], LAM[:3], XI, 2, 3, 2)
     with pytest.raises(ValueError, match="positive"):
-        sg.fit_joint(-field, LAM, XI, 2, 3, 2, "log")
+        sg_joint.fit_joint(-field, LAM, XI, 2, 3, 2, "log")
     with pytest.raises(ValueError, match="sigma"):
-        sg.fit_joint(field, LAM, XI, 2, 3, 2, "log", np.zeros_like(field))
+        sg_joint.fit_joint(field, LAM, XI, 2, 3, 2, "log", np.zeros_like(field))
 
 
 def test_stage_rejects_unfitted_cells(small) -> None:
@@ -256,9 +258,9 @@ def test_stage_rejects_unfitted_cells(small) -> None:
 def test_cross_validation_picks_the_better_transform() -> None:
     w, z = np.log(LAM)[:, None], -np.log1p(-XI)[None, :]
     linear = 0.23 + 0.1 * z + 0.02 * w * z  # exact in gamma itself, rank 2, orders (1, 1)
-    best, _ = sg.select_model(linear, LAM, XI, sg.TRANSFORMS, 3, 4, 3, None, 0.05)
+    best, _ = sg_joint.select_model(linear, LAM, XI, sg.TRANSFORMS, 3, 4, 3, None, 0.05)
     assert (best.transform, best.order_w, best.order_z) == ("identity", 1, 1) and best.score < 1e-10
-    best, _ = sg.select_model(np.exp(linear), LAM, XI, sg.TRANSFORMS, 3, 4, 3, None, 0.05)
+    best, _ = sg_joint.select_model(np.exp(linear), LAM, XI, sg.TRANSFORMS, 3, 4, 3, None, 0.05)
     assert (best.transform, best.order_w, best.order_z) == ("log", 1, 1) and best.score < 1e-10
 
 
@@ -270,8 +272,8 @@ def test_weights_keep_an_uncertain_cell_from_pulling_the_fit() -> None:
     sigma[-1, -1] = 10.0
     rest = np.ones(field.shape, dtype=bool)
     rest[-1, -1] = False
-    weighted = sg.fit_joint(data, LAM, XI, 2, 3, 2, "log", sigma)(LAM[:, None], XI[None, :])
-    plain = sg.fit_joint(data, LAM, XI, 2, 3, 2, "log")(LAM[:, None], XI[None, :])
+    weighted = sg_joint.fit_joint(data, LAM, XI, 2, 3, 2, "log", sigma)(LAM[:, None], XI[None, :])
+    plain = sg_joint.fit_joint(data, LAM, XI, 2, 3, 2, "log")(LAM[:, None], XI[None, :])
     assert np.abs(weighted / field - 1)[rest].max() < 1e-4
     assert np.abs(plain / field - 1)[rest].max() > 1e-2
 
@@ -295,10 +297,10 @@ def test_polynomial_in_lambda_recovered_exactly_and_chosen_by_cross_validation()
     log_field = (-1.4 + 0.01 * lam) * (1 - 0.3 * z) + (0.002 * lam**2) * (z**2 - 0.1 * z)  # rank 2, orders (2, 2) in lambda
     field = np.exp(log_field)
     sigma = np.random.default_rng(5).uniform(0.005, 0.2, field.shape)
-    model = sg.fit_joint(field, LAM, XI, 2, 2, 2, "log;w=lambda", sigma)
+    model = sg_joint.fit_joint(field, LAM, XI, 2, 2, 2, "log;w=lambda", sigma)
     np.testing.assert_allclose(model(LAM[:, None], XI[None, :]), field, rtol=1e-9)
     # in log(lambda) the same orders cannot represent it
-    assert np.abs(sg.fit_joint(field, LAM, XI, 2, 2, 2, "log", sigma)(LAM[:, None], XI[None, :]) / field - 1).max() > 1e-3
+    assert np.abs(sg_joint.fit_joint(field, LAM, XI, 2, 2, 2, "log", sigma)(LAM[:, None], XI[None, :]) / field - 1).max() > 1e-3
     # the closed formula is written in lambda itself and is the model
     formula = sg.closed_formula(model.coef_w, model.coef_z, model.transform, "alpha").split("=", 1)[1]
     assert "w" not in formula.replace("EXP", "")
@@ -307,7 +309,7 @@ def test_polynomial_in_lambda_recovered_exactly_and_chosen_by_cross_validation()
     assert value == pytest.approx(float(model(6.5, 0.45)), rel=1e-12)
     # cross-validation over the maps picks lambda with the true orders
     specs = tuple(sg.model_spec("log", m) for m in sg.W_MAPS)
-    best, _ = sg.select_model(field, LAM, XI, specs, 3, 4, 3, None, 0.05)
+    best, _ = sg_joint.select_model(field, LAM, XI, specs, 3, 4, 3, None, 0.05)
     assert (best.transform, best.rank, best.order_w, best.order_z) == ("log;w=lambda", 2, 2, 2) and best.score < 1e-9
 
 

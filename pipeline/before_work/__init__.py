@@ -1,4 +1,6 @@
-"""Everything that runs before work: ``domains`` (the auto domains and the cell count),
-``plan`` (each stage's memory and run time against the machine), ``preflight`` (the data
-directory, the inputs and the cluster) and ``surrogate_grid`` (the surrogate's limits on the
-oxide grid). The checks of a scenario's own parameters run as it is loaded (:mod:`pipeline.config`)."""
+"""Everything that runs before work: ``scenario_checks`` (settings that rule each other out, run as
+a scenario is loaded), ``window_checks`` (the window, the radial domain and the oxide band once they
+are numbers), ``domains`` (the auto domains and the cell count), ``plan`` (each stage's memory and
+run time against the machine), ``preflight`` (the data directory, the inputs and the cluster) and
+``surrogate_grid`` (the surrogate's limits on the oxide grid). The range of each single parameter
+is checked from its declaration, as it is loaded (:mod:`pipeline.config.validation`)."""

@@ -5,7 +5,7 @@ resolved once, up front, from a fast solve at the heaviest approach (:func:`reso
 
 * **window**: the smallest odd square of cells outside of which the spots cannot change
   ``R`` by more than ``cube.crop_tolerance`` for any oxide mask (the cropping bound of
-  :func:`pipeline.physics.constriction.truncation_bounds`, with the scenario's interaction
+  :func:`pipeline.physics.crops.truncation_bounds`, with the scenario's interaction
   weights), at every approach (the heaviest needs the most).
 * **r_max**: far enough that the window's corner cells lie inside the radial domain (with a
   margin of :data:`MARGIN_CELLS` cells) and the pressure at ``r_max`` is below
@@ -26,9 +26,10 @@ import math
 
 import numpy as np
 
-from pipeline.config import AUTO, ConfigError, Scenario, check_domains
+from pipeline.before_work.window_checks import check_domains
+from pipeline.config import AUTO, ConfigError, Scenario
 from pipeline.contact_solution import indenter_profile, solve
-from pipeline.physics import constriction, spot_models, spots
+from pipeline.physics import crops, spot_models, spots
 from pipeline.physics.asperity import log_asperity_integral
 from pipeline.physics.grid import cell_centres
 
@@ -84,14 +85,14 @@ def _weights(scenario: Scenario, radius: np.ndarray) -> tuple[np.ndarray, float]
     """Interaction weights of ``radius`` under ``cube.weights`` and the bound's margin."""
     if scenario.cube.weights == "radius":
         return radius, 1.0
-    return np.pi * radius**2, constriction.CROP_MARGIN
+    return np.pi * radius**2, crops.CROP_MARGIN
 
 
 def _needed_cells(scenario: Scenario, radius: np.ndarray, tolerance: float) -> tuple[int, np.ndarray]:
     """Smallest odd side keeping every map's bound within ``tolerance``, and the bounds per side."""
     weights, margin = _weights(scenario, radius)
     bounds = np.max(
-        [constriction.truncation_bounds(a, w, scenario.cell_size, margin) for a, w in zip(radius, weights)],
+        [crops.truncation_bounds(a, w, scenario.cell_size, margin) for a, w in zip(radius, weights)],
         axis=0,
     )
     k = int(np.flatnonzero(bounds <= tolerance)[0])
@@ -165,7 +166,7 @@ def check_cell_count(scenario: Scenario, memory: float) -> None:
 def estimate_cells(scenario: Scenario) -> int:
     """Cheap upper estimate of the ``auto`` window's cells per side (no solve, 1-D rigid gap).
 
-    The bound of :func:`pipeline.physics.constriction.truncation_bounds` with the rigid gap's
+    The bound of :func:`pipeline.physics.crops.truncation_bounds` with the rigid gap's
     spots (an upper bound of the solved ones) summed over rings of radius r (2 pi r dr / h^2
     cells), the square of half-side r containing the disc of radius r.
     """

@@ -198,7 +198,7 @@ def _field_seconds(scenario: Scenario, n: int) -> float:
 
 
 def _per_map_seconds(n: int) -> float:
-    from pipeline.physics.constriction import auto_method
+    from pipeline.physics.interaction import auto_method
     from pipeline.physics.interaction_fft import padded_length
 
     if auto_method(n) == "folded":
@@ -216,7 +216,7 @@ def _map_speedup(n: int, workers: int | None, ensemble: str) -> float:
     on FFT maps (whose constant was fitted on two threads) scale with the workers; the threaded
     scheduler on folded maps by :data:`THREADED_FOLDED_SPEEDUP` (measured)."""
     from pipeline.compute import _distributed_available
-    from pipeline.physics.constriction import auto_method
+    from pipeline.physics.interaction import auto_method
 
     if _threads(workers) == 1:
         return 1.0
@@ -241,7 +241,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     list of StageEstimate
         contact, oxide, cube, fits, surrogate, in order.
     """
-    from pipeline.physics.constriction import FFT_FROM, block_size, work_bytes_per_map
+    from pipeline.physics.interaction import FFT_FROM, block_size, work_bytes_per_map
     from pipeline.physics.interaction_fft import padded_length
     from pipeline.stages.oxide import CHUNK_BYTES
 

@@ -4,7 +4,9 @@ Each module ``pipeline.bench.<name>`` exposes ``run(scenario) -> dict`` returnin
 figures (medians of repeated timings, errors, ratios to a reference run in the same process).
 :func:`run_benchmarks` saves ``<data_dir>/bench/<name>.json`` (and prints them with ``verbose``). Modules whose
 ``run`` also takes ``data_dir`` save labelled data there too: ``frontier`` (the accuracy–time
-frontier, ``bench/frontier.nc`` and its figures) and ``stability`` (``bench/stability.nc``).
+frontier, ``bench/frontier.nc`` and its figures; its sweeps, prefix curve and figures in
+``frontier_sweeps``, ``frontier_prefix`` and ``frontier_plot``) and ``stability``
+(``bench/stability.nc``); ``schema`` declares those files' variables.
 """
 
 from __future__ import annotations

@@ -21,6 +21,8 @@ import xarray as xr
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
 from pipeline.physics import constriction
+from pipeline.physics.crops import choose_crops
+from pipeline.physics.spot_geometry import SpotGeometry
 from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube
 from pipeline.stages import oxide as oxide_stage
@@ -70,15 +72,14 @@ def _max_rel_error(value: np.ndarray, reference: np.ndarray) -> float:
 
 def _paths(
     scenario: Scenario, radius: np.ndarray, weights: np.ndarray, pitch: float
-) -> dict[str, tuple[str, np.ndarray, float]]:
-    """Named fast paths: (method, crop sizes, tolerance)."""
-    n = radius.shape[-1]
-    whole = np.full(radius.shape[0], n)
+) -> dict[str, tuple[str, SpotGeometry]]:
+    """Named fast paths: (method, the spots with their crops and tolerance)."""
+    whole = SpotGeometry.whole_window(radius, weights, pitch)
     tol = scenario.cube.crop_tolerance
-    crops = constriction.choose_crops(radius, weights, pitch, tol)
+    cropped = SpotGeometry(radius, weights, pitch, choose_crops(radius, weights, pitch, tol), tol)
     spectral = ("folded", "dft_gemm", "fft")
-    paths = {f"{m}_uncropped": (m, whole, 0.0) for m in spectral + ("gemm",)}
-    paths.update({f"{m}_cropped": (m, crops, tol) for m in spectral})
+    paths = {f"{m}_uncropped": (m, whole) for m in spectral + ("gemm",)}
+    paths.update({f"{m}_cropped": (m, cropped) for m in spectral})
     return paths
 
 
@@ -86,11 +87,9 @@ def _compare(scenario: Scenario, contact: xr.Dataset, oxide: xr.Dataset) -> dict
     """Each path against the direct double sum on the same subset of entries."""
     radius, weights, pitch = cube.spot_maps(scenario, contact)
     rho = scenario.material.rho
-    n = radius.shape[-1]
     masks = _subset_masks(oxide, N_SUBSET_MASKS)
-    whole = np.full(radius.shape[0], n)
     ref, t_direct = _timed(
-        constriction.resistance, masks, radius, weights, pitch, rho, whole, 0.0, "direct"
+        constriction.resistance, masks, SpotGeometry.whole_window(radius, weights, pitch), rho, "direct"
     )
     n_sims = masks.shape[0] * radius.shape[0]
     direct_per_sim = t_direct / n_sims
@@ -100,10 +99,10 @@ def _compare(scenario: Scenario, contact: xr.Dataset, oxide: xr.Dataset) -> dict
         "direct_seconds_per_simulation": direct_per_sim,
         "paths": {},
     }
-    for name, (method, crops, tol) in _paths(scenario, radius, weights, pitch).items():
-        res = constriction.resistance(masks, radius, weights, pitch, rho, crops, tol, method)
+    for name, (method, spots) in _paths(scenario, radius, weights, pitch).items():
+        res = constriction.resistance(masks, spots, rho, method)
         seconds = min(
-            _timed(constriction.resistance, timed_masks, radius, weights, pitch, rho, crops, tol, method)[1]
+            _timed(constriction.resistance, timed_masks, spots, rho, method)[1]
             for _ in range(REPEATS)
         )
         per_sim = seconds / (timed_masks.shape[0] * radius.shape[0])
@@ -111,7 +110,7 @@ def _compare(scenario: Scenario, contact: xr.Dataset, oxide: xr.Dataset) -> dict
             "max_relative_error_vs_direct": _max_rel_error(res.resistance, ref.resistance),
             "seconds_per_simulation_one_thread_best": per_sim,
             "speedup_vs_direct": direct_per_sim / per_sim,
-            "cropped": bool(tol > 0),
+            "cropped": bool(spots.tolerance > 0),
         }
     return out
 

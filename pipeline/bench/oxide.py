@@ -17,7 +17,7 @@ import numpy as np
 
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
-from pipeline.physics import oxide_field
+from pipeline.physics import oxide_band, oxide_field
 from pipeline.physics.grid import cell_centres
 from pipeline.scene import FieldSource, bands
 from pipeline.stages import oxide
@@ -53,7 +53,7 @@ def _direct_subset(scenario: Scenario, psi: np.ndarray) -> tuple[float, float]:
     start = time.perf_counter()
     for a, (lam, modes) in enumerate(zip(ox.lambda_, bands(scenario))):
         for r in range(min(SUBSET_REALIZATIONS, psi.shape[1])):
-            coeffs = oxide_field.coefficients(modes, oxide_field.field_stream(ox.seed, lam, r), ox.amplitudes)
+            coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(ox.seed, lam, r), ox.amplitudes)
             direct = oxide_field.field_at_points(modes, coeffs, x[None, :], x[:, None])
             error = max(error, float(np.max(np.abs(direct - psi[a, r]))))
             fields += 1

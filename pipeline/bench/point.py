@@ -23,6 +23,8 @@ from pipeline.bench.cube import _max_rel_error, _subset_masks
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
 from pipeline.physics import constriction, point_model
+from pipeline.physics.crops import choose_crops
+from pipeline.physics.spot_geometry import SpotGeometry
 from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube
 from pipeline.stages import oxide as oxide_stage
@@ -53,12 +55,11 @@ def _dense_agreement(scenario: Scenario, contact: Any, oxide: Any) -> dict[str, 
     radius, _, pitch = cube.spot_maps(scenario, contact)
     radius = radius[::DELTA_STRIDE]
     masks = _subset_masks(oxide, N_DENSE_MASKS, seed=2)
-    whole = np.full(radius.shape[0], radius.shape[-1])
+    whole = SpotGeometry.whole_window(radius, radius, pitch)
     rho = scenario.material.rho
-    fast = point_model.resistance(masks, radius, radius, pitch, rho, whole, 0.0,
-                                  solver_tolerance=scenario.cube.solver_tolerance,
+    fast = point_model.resistance(masks, whole, rho, solver_tolerance=scenario.cube.solver_tolerance,
                                   criterion=scenario.cube.solver_criterion)
-    closed = point_model.greenwood_resistance(masks, radius, radius, pitch, rho, whole, 0.0)
+    closed = point_model.greenwood_resistance(masks, whole, rho)
     start = time.perf_counter()
     dense, greenwood = point_model.resistance_dense(masks, radius, pitch, rho)
     t_dense = time.perf_counter() - start
@@ -74,16 +75,16 @@ def _cropping(scenario: Scenario, contact: Any, oxide: Any) -> dict[str, Any]:
     radius, _, pitch = cube.spot_maps(scenario, contact)
     rho, tol = scenario.material.rho, scenario.cube.crop_tolerance
     masks = _subset_masks(oxide, N_CROP_MASKS, seed=3)
-    crops = constriction.choose_crops(radius, radius, pitch, tol)
-    whole = np.full(radius.shape[0], radius.shape[-1])
+    crops = choose_crops(radius, radius, pitch, tol)
+    whole = SpotGeometry.whole_window(radius, radius, pitch)
     start = time.perf_counter()
     solver = {"solver_tolerance": scenario.cube.solver_tolerance, "criterion": scenario.cube.solver_criterion}
-    cropped = point_model.resistance(masks, radius, radius, pitch, rho, crops, tol, **solver)
+    cropped = point_model.resistance(masks, SpotGeometry(radius, radius, pitch, crops, tol), rho, **solver)
     t_cropped = time.perf_counter() - start
     start = time.perf_counter()
-    exact = point_model.resistance(masks, radius, radius, pitch, rho, whole, 0.0, **solver)
+    exact = point_model.resistance(masks, whole, rho, **solver)
     t_whole = time.perf_counter() - start
-    greenwood = constriction.resistance(masks, radius, radius, pitch, rho, whole, 0.0).resistance
+    greenwood = constriction.resistance(masks, whole, rho).resistance
     finite = np.isfinite(exact.resistance)
     return {
         "rayleigh_bound_violations_whole_window": int(

@@ -4,7 +4,7 @@ For windows of about L = 57, 113, 227 and 453 cells a side (eta = 2e8 x 1, 4, 16
 ``auto`` windows), it measures
 
 * each interaction algorithm per map (folded DFT-GEMM ~ L^3, padded FFT ~ L^2 log L), one
-  thread, and which one ``auto`` takes (:func:`pipeline.physics.constriction.auto_method`);
+  thread, and which one ``auto`` takes (:func:`pipeline.physics.interaction.auto_method`);
 * the time per simulation (one oxide mask at one load step) of the cube's kernel
   (:func:`pipeline.physics.constriction.resistance` with the scenario's crops), on real
   oxide masks, and its growth from L = 113 against L^2 log L;
@@ -28,7 +28,9 @@ from pipeline.before_work import plan
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario, load_scenario
 from pipeline.before_work.domains import resolve
-from pipeline.physics import constriction
+from pipeline.physics import constriction, interaction
+from pipeline.physics.crops import choose_crops
+from pipeline.physics.spot_geometry import SpotGeometry
 from pipeline.physics import interaction_fft as fft
 from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube
@@ -57,18 +59,19 @@ def _scene(eta: float) -> Scenario:
 
 
 def _kernel_inputs(s: Scenario) -> tuple:
-    """The cube kernel's arguments on the scene's real masks (tiled to whole blocks) and crops."""
+    """The cube kernel's arguments (masks, spots, rho) on the scene's real masks (tiled to whole
+    blocks) and crops."""
     quiet = ComputeOptions(progress=False)
     contact, oxide = contact_stage.build(s), oxide_stage.build(s, quiet)
     radius, weights, pitch = cube.spot_maps(s, contact)
     psi = oxide["psi"].transpose("lambda", "realization", "y", "x").values
     thr = oxide["threshold"].transpose("xi", "lambda", "realization").values
     masks = (psi[None] < thr[..., None, None]).reshape(-1, s.n_cells, s.n_cells)
-    block = constriction.block_size(s.n_cells)
+    block = interaction.block_size(s.n_cells)
     count = block * math.ceil(masks.shape[0] / block)  # no padded (wasted) maps in the timing
     masks = masks[np.arange(count) % masks.shape[0]]
-    crops = constriction.choose_crops(radius, weights, pitch, s.cube.crop_tolerance)
-    return masks, radius, weights, pitch, s.material.rho, crops, s.cube.crop_tolerance
+    crops = choose_crops(radius, weights, pitch, s.cube.crop_tolerance)
+    return masks, SpotGeometry(radius, weights, pitch, crops, s.cube.crop_tolerance), s.material.rho
 
 
 def _interleaved(jobs: dict[str, tuple]) -> dict[str, float]:
@@ -108,27 +111,27 @@ def run(scenario: Scenario) -> dict[str, Any]:
     inputs = {}
     for s in scenes:
         n = s.n_cells
-        u = rng.random((constriction.block_size(n), n, n))
+        u = rng.random((interaction.block_size(n), n, n))
         for name in ("folded", "fft"):
-            jobs[f"{n}_{name}"] = (constriction.interaction_sum, u, 1.0, name)
+            jobs[f"{n}_{name}"] = (interaction.interaction_sum, u, 1.0, name)
         inputs[n] = _kernel_inputs(s)
         jobs[f"{n}_simulation"] = (constriction.resistance, *inputs[n])
     seconds = _interleaved(jobs)
     rows = []
     for s, eta in zip(scenes, ETAS):
         n = s.n_cells
-        masks, radius, *_, crops, _tol = inputs[n]
-        block = constriction.block_size(n)
+        masks, spots, _ = inputs[n]
+        block = interaction.block_size(n)
         estimates = {e.stage: e for e in plan.estimate(resolve(load_scenario("paper", {"roughness.eta": eta})))}
         rows.append({
             "eta": eta,
             "L": n,
-            "auto_method": constriction.auto_method(n),
+            "auto_method": interaction.auto_method(n),
             "block_size": block,
             "per_map_seconds": {name: seconds[f"{n}_{name}"] / block for name in ("folded", "fft")},
-            "seconds_per_simulation": seconds[f"{n}_simulation"] / (masks.shape[0] * radius.shape[0]),
-            "crop_cells_max": int(crops.max()),
-            "crop_cells_min": int(crops.min()),
+            "seconds_per_simulation": seconds[f"{n}_simulation"] / (masks.shape[0] * spots.radius.shape[0]),
+            "crop_cells_max": int(spots.crops.max()),
+            "crop_cells_min": int(spots.crops.min()),
             "paper_study_estimate": {
                 "cube_seconds": estimates["cube"].seconds,
                 "cube_peak_mib": estimates["cube"].peak_bytes / 2**20,
@@ -142,8 +145,8 @@ def run(scenario: Scenario) -> dict[str, Any]:
         r["L3_growth_vs_L113"] = (r["L"] / ref["L"]) ** 3
     return {
         "machine_note": "2 shared cores; one thread; sizes and paths timed in turn, medians",
-        "fft_from_cells": constriction.FFT_FROM,
-        "work_bytes_per_thread": constriction.WORK_BYTES,
+        "fft_from_cells": interaction.FFT_FROM,
+        "work_bytes_per_thread": interaction.WORK_BYTES,
         "padded_length_largest": fft.padded_length(rows[-1]["L"]),
         "table": rows,
         "default_scene": _default_ratio(),

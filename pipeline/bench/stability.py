@@ -95,6 +95,7 @@ def evaluate(case: Case) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         ``area_fraction``, ``separation`` over (delta, r), ``converged`` over delta.
     """
     from pipeline.physics import constriction
+    from pipeline.physics.spot_geometry import SpotGeometry
     from pipeline.stages import contact
 
     record: dict[str, Any] = {"status": "refused", "message": "", "iterations": 0, "residual": math.nan,
@@ -118,8 +119,8 @@ def evaluate(case: Case) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     radius = np.asarray(ds["spot_radius"].values, float)
     pitch = float(np.diff(ds["x"].values)[0])
     n = radius.shape[-1]
-    clean = constriction.resistance(np.ones((1, n, n), bool), radius, radius, pitch, scenario.material.rho,
-                                    np.full(radius.shape[0], n), 0.0, scenario.cube.method).resistance[:, 0]
+    clean = constriction.resistance(np.ones((1, n, n), bool), SpotGeometry.whole_window(radius, radius, pitch),
+                                    scenario.material.rho, scenario.cube.method).resistance[:, 0]
     record["seconds"] = round(time.perf_counter() - start, 4)
     arrays = {"force": ds["force"].values, "resistance_clean": np.asarray(clean, float),
               "converged": ds["converged"].values.astype(bool)}
@@ -155,36 +156,33 @@ def write_map(results: list[tuple[Case, dict[str, Any]]], target: str | Path) ->
     """Save the map as a labelled netCDF file (dimension ``case``) atomically."""
     import xarray as xr
 
+    from pipeline.bench.schema import STABILITY
+    from pipeline.stages.schema import labelled
     from pipeline.store import atomic_path
 
-    def var(key: str, long_name: str, units: str = "1", dtype: Any = None) -> tuple:
-        values = np.array([r[key] for _, r in results], dtype=dtype)
-        return ("case", values, {"long_name": long_name, "units": units})
+    def var(key: str, dtype: Any = None) -> tuple:
+        return labelled(STABILITY[key], np.array([r[key] for _, r in results], dtype=dtype))
 
     ds = xr.Dataset(
         {
-            "status": var("status", "converged, unconverged, refused (by validation) or failed", dtype=str),
-            "message": var("message", "why a case was refused, failed or did not converge", dtype=str),
-            "converged": ("case", np.array([r["status"] == "converged" for _, r in results], np.int8),
-                          {"long_name": "1 if every approach converged", "units": "1"}),
-            "iterations": var("iterations", "largest solver iteration count over the approaches", dtype=np.int32),
-            "residual": var("residual", "worst final relative residual over the approaches", dtype=float),
-            "seconds": var("seconds", "wall time of the contact build and clean resistance", "s", float),
-            "finite_nonnegative": var("finite_nonnegative", "1 if no NaN or negative value anywhere", dtype=np.int8),
-            "force_monotone": var("force_monotone", "1 if the force grows with every approach step", dtype=np.int8),
-            "resistance_falls": var("resistance_falls", "1 if the clean resistance falls with load", dtype=np.int8),
-            "open_circuits": var("open_circuits", "approaches with no touching spot (R = +inf)", dtype=np.int32),
-            "hertz_ratio": var("hertz_ratio", "central pressure / Hertz central pressure at the heaviest "
-                               "load (sphere; 1 in the smooth limit)", dtype=float),
-            "roughness_parameter": var("roughness_parameter", "sigma R* / a_Hertz^2 at the heaviest load (sphere)",
-                                       dtype=float),
+            "status": var("status", str),
+            "message": var("message", str),
+            "converged": labelled(STABILITY["converged"],
+                                  np.array([r["status"] == "converged" for _, r in results], np.int8)),
+            "iterations": var("iterations", np.int32),
+            "residual": var("residual", float),
+            "seconds": var("seconds", float),
+            "finite_nonnegative": var("finite_nonnegative", np.int8),
+            "force_monotone": var("force_monotone", np.int8),
+            "resistance_falls": var("resistance_falls", np.int8),
+            "open_circuits": var("open_circuits", np.int32),
+            "hertz_ratio": var("hertz_ratio", float),
+            "roughness_parameter": var("roughness_parameter", float),
         },
         coords={
-            "case": ("case", np.arange(len(results)), {"long_name": "case number", "units": "1"}),
-            "parameter": ("case", np.array([c.parameter for c, _ in results], dtype=str),
-                          {"long_name": "parameter pushed to an extreme", "units": "1"}),
-            "value": ("case", np.array([c.label.partition("=")[2] for c, _ in results], dtype=str),
-                      {"long_name": "its value", "units": "1"}),
+            "case": labelled(STABILITY["case"], np.arange(len(results))),
+            "parameter": labelled(STABILITY["parameter"], np.array([c.parameter for c, _ in results], dtype=str)),
+            "value": labelled(STABILITY["value"], np.array([c.label.partition("=")[2] for c, _ in results], dtype=str)),
         },
         attrs={"title": "g2tom stability map", "Conventions": "CF-1.10",
                "base": "paper scenario with " + ", ".join(f"{k}={v}" for k, v in FAST.items())},

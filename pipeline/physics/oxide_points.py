@@ -18,7 +18,7 @@ import threading
 import finufft
 import numpy as np
 
-from pipeline.physics.oxide_field import Band
+from pipeline.physics.oxide_band import Band
 
 __all__ = ["TOLERANCE", "values_at_points"]
 

@@ -25,7 +25,7 @@ the exact one (:func:`greenwood_resistance` takes no lattice term: see there).
 :func:`resistance` solves ``M f = 1`` matrix-free for a batch of oxide masks at every load step,
 with the calling convention of :func:`pipeline.physics.constriction.resistance`:
 ``M f = f / (2a) + film term + (K * f) / pi``, ``K * f`` from
-:func:`pipeline.physics.interaction_fft.interaction_apply`, by a Jacobi-preconditioned
+:func:`pipeline.physics.interaction_folded.interaction_apply`, by a Jacobi-preconditioned
 conjugate gradient batched over the maps, started from the previous load step's solution. The
 conductance is the variational estimate ``J(f) = 2 sum f - f^T M f``, exact to second order in
 the residual, and by default the solve stops when CG's own energy-norm record says ``J`` is
@@ -45,9 +45,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.physics.constriction import ChunkResult, _blocks, block_size
+from pipeline.physics.constriction import ChunkResult, _blocks
+from pipeline.physics.interaction import block_size
 from pipeline.physics.point_solve import RECORDS, solve_block
 from pipeline.physics.point_system import OPERATORS, checked_settings, spot_states, system_matrix
+from pipeline.physics.spot_geometry import SpotGeometry
 
 __all__ = ["CRITERIA", "PointResult", "resistance_dense", "resistance", "greenwood_resistance"]
 
@@ -141,12 +143,8 @@ def resistance_dense(
 
 def resistance(
     masks: np.ndarray,
-    radius: np.ndarray,
-    weights: np.ndarray,
-    pitch: float,
+    spots: SpotGeometry,
     rho: float,
-    crops: np.ndarray,
-    tolerance: float,
     method: str = "auto",
     *,
     film_resistance: float = np.inf,
@@ -162,20 +160,13 @@ def resistance(
     ----------
     masks
         Cells whose spot centre is free of oxide, bool (batch, n, n) as (y, x).
-    radius
-        Spot radii per load step (n_delta, n, n), in m, in order of the load (each step is
-        warm-started from the previous one); 0 means no spot.
-    weights
-        Must equal ``radius``: the point model has no weighting convention (the argument keeps
-        the calling convention of :func:`pipeline.physics.constriction.resistance`).
-    pitch
-        Cell pitch, in m.
+    spots
+        Spot radii per load step, in order of the load (each step is warm-started from the
+        previous one); its weights must equal the radii (the point model has no weighting
+        convention); entries whose crop bound exceeds its tolerance are solved again on the
+        whole window.
     rho
         Effective resistivity rho*, in ohm m.
-    crops
-        Crop size per load step (:func:`pipeline.physics.constriction.choose_crops`).
-    tolerance
-        Entries whose crop bound exceeds this are solved again on the whole window.
     method
         Interaction operator: ``auto``/``folded`` (DFT-GEMM) or ``gemm``/``direct`` (dense).
     film_resistance
@@ -194,7 +185,7 @@ def resistance(
         :data:`~pipeline.physics.lattice.SQUARE_LATTICE_CONSTANT` makes the spots of a smooth
         field (one per cell) reproduce the continuum.
     groups
-        Which set of spots each map has, int (batch,), ``radius`` then (n_groups, n_delta, n, n)
+        Which set of spots each map has, int (batch,), ``spots.radius`` then (n_groups, n_delta, n, n)
         (the ``asperities`` discretization); None: one set for all maps (see
         :func:`pipeline.physics.constriction.resistance`).
 
@@ -205,15 +196,15 @@ def resistance(
     """
     if method not in OPERATORS:
         raise ValueError(f"method = {method!r} is not allowed for the point model: must be one of {', '.join(OPERATORS)}")
-    if weights is not radius and not np.array_equal(weights, radius):
+    if spots.weights is not spots.radius and not np.array_equal(spots.weights, spots.radius):
         raise ValueError("the point model takes the spot radii as weights")
     if not solver_tolerance > 0 or max_iterations < 1:
         raise ValueError(f"solver_tolerance = {solver_tolerance!r} must be > 0 and max_iterations = {max_iterations!r} >= 1")
     if criterion not in CRITERIA:
         raise ValueError(f"criterion = {criterion!r} is not allowed: must be one of {', '.join(CRITERIA)}")
-    settings = {**checked_settings(rho, pitch, film_resistance, lattice_constant), "method": method,
+    settings = {**checked_settings(rho, spots.pitch, film_resistance, lattice_constant), "method": method,
                 "solver_tolerance": solver_tolerance, "max_iterations": max_iterations, "criterion": criterion}
-    return _run(masks, radius, crops, tolerance, settings, groups)
+    return _run(masks, spots.radius, spots.crops, spots.tolerance, settings, groups)
 
 
 def _run(masks: np.ndarray, radius: np.ndarray, crops: np.ndarray, tolerance: float, settings: dict,
@@ -246,12 +237,8 @@ def _run(masks: np.ndarray, radius: np.ndarray, crops: np.ndarray, tolerance: fl
 
 def greenwood_resistance(
     masks: np.ndarray,
-    radius: np.ndarray,
-    weights: np.ndarray,
-    pitch: float,
+    spots: SpotGeometry,
     rho: float,
-    crops: np.ndarray,
-    tolerance: float,
     method: str = "auto",
     *,
     film_resistance: float = np.inf,
@@ -262,21 +249,20 @@ def greenwood_resistance(
     ``R = rho* / sum t + rho* sum_{i != j} t_i t_j / d_ij / (pi (sum t)^2)``: Greenwood's Eqs. 11-13
     with every spot's own conductance ``t_i`` (``2 a_i`` when clean, ``a_i`` and film in series
     when oxidized) as its weight; equal to :func:`pipeline.physics.constriction.resistance` with
-    radius weights for an insulating film. Evaluated on the whole window (``crops`` and
-    ``tolerance`` are accepted for the calling convention and must not crop).
+    radius weights for an insulating film. Evaluated on the whole window (the crops of ``spots``
+    must not crop; its tolerance is unused).
 
     Parameters
     ----------
-    masks, radius, weights, pitch, rho, method, film_resistance, groups
+    masks, rho, method, film_resistance, groups
         As for :func:`resistance`. There is no lattice term: the form stays Greenwood's (and
         equal to the insulating-film path of :mod:`~pipeline.physics.constriction`). With the
         term it would be the Rayleigh quotient of the corrected ``M``, a lower bound of that
         model's conductance, which on the paper's scene with expected spots falls 0.01-5.1 %
         below Barber's K/(E* rho*) against -3.3 ... +1.8 % without it.
-    crops
-        Must be the whole window (``n`` for every load step).
-    tolerance
-        Unused by the whole-window evaluation; kept for the calling convention.
+    spots
+        As for :func:`resistance`, on the whole window (crops ``n`` for every load step,
+        :meth:`~pipeline.physics.spot_geometry.SpotGeometry.whole_window`).
 
     Returns
     -------
@@ -286,12 +272,12 @@ def greenwood_resistance(
     n = masks.shape[-1]
     if method not in OPERATORS:
         raise ValueError(f"method = {method!r} is not allowed: must be one of {', '.join(OPERATORS)}")
-    if not np.all(np.asarray(crops) == n):
+    if not np.all(np.asarray(spots.crops) == n):
         raise ValueError("greenwood_resistance evaluates the whole window: crops must all be n")
-    if weights is not radius and not np.array_equal(weights, radius):
+    if spots.weights is not spots.radius and not np.array_equal(spots.weights, spots.radius):
         raise ValueError("Greenwood's form with films takes the spot radii as weights")
-    settings = {**checked_settings(rho, pitch, film_resistance, 0.0), "method": method,
+    settings = {**checked_settings(rho, spots.pitch, film_resistance, 0.0), "method": method,
                 "solver_tolerance": 1.0, "max_iterations": 0, "criterion": "residual"}
-    res = _run(masks, radius, crops, tolerance, settings, groups)
+    res = _run(masks, spots.radius, spots.crops, spots.tolerance, settings, groups)
     return ChunkResult(res.resistance, res.resistance_self, res.resistance_interaction, res.n_conducting,
                        res.crop_bound, 0)

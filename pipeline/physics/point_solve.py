@@ -13,7 +13,7 @@ from typing import Callable
 
 import numpy as np
 
-from pipeline.physics.constriction import crop_slice
+from pipeline.physics.crops import crop_slice
 from pipeline.physics.point_system import OPERATORS, spot_states
 
 __all__ = ["RECORDS", "REDO_BLOCK", "solve_block"]
@@ -246,7 +246,7 @@ def solve_block(
     block: np.ndarray, radius: np.ndarray, crops: np.ndarray, tolerance: float, settings: dict,
     groups: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
-    """Every load step of one block of :func:`~pipeline.physics.constriction.block_size` masks, each warm-started from the previous one.
+    """Every load step of one block of :func:`~pipeline.physics.interaction.block_size` masks, each warm-started from the previous one.
 
     Entries whose cropping bound exceeds ``tolerance`` are solved again on the whole window,
     gathered into padded blocks of exactly :data:`REDO_BLOCK` maps (a fixed shape, so results

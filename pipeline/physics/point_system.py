@@ -8,7 +8,7 @@ from typing import Callable
 
 import numpy as np
 
-from pipeline.physics.interaction_fft import interaction_apply_columns, interaction_apply_dense_columns
+from pipeline.physics.interaction_folded import interaction_apply_columns, interaction_apply_dense_columns
 
 __all__ = ["OPERATORS", "CONDUCTANCE_FLOOR", "film_diagonal", "system_matrix", "checked_settings", "spot_states"]
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.physics import oxide_field
+from pipeline.physics import oxide_band, oxide_field
 from pipeline.physics.grid import cell_centres
 from pipeline.scene import FieldSource
 
@@ -22,7 +22,7 @@ def field_on_grid(source: FieldSource, lambda_index: int, realization: int, n: i
     """The field (float64, (n, n), indexed [y, x]) of one realization at the pixel centres of the grid."""
     lam = source.lambdas[lambda_index]
     modes = source.modes[lambda_index]
-    coeffs = oxide_field.coefficients(modes, oxide_field.field_stream(source.seed, lam, realization),
+    coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(source.seed, lam, realization),
                                       source.amplitudes)
     c = cell_centres(n, pixel)
     return oxide_field.grid_values(modes, coeffs, c, c)

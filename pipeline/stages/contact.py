@@ -17,11 +17,12 @@ from pipeline.config import AUTO, ConfigError, Scenario
 from pipeline.contact_solution import indenter_profile, radial_grid, solve, solve_with_stiffness
 from pipeline.before_work.domains import resolve
 from pipeline.physics import greenwood_tripp as gt
+from pipeline.physics import radial_grid as rg
 from pipeline.physics import hertz, spot_models, spots
 from pipeline.physics.asperity import area_fraction, asperity_pressure
 from pipeline.physics.grid import cell_centres
 from pipeline.stages import contact_discrete
-from pipeline.stages.schema import SCHEMA, SPOT_RADIUS_LONG_NAMES
+from pipeline.stages.schema import SCHEMA, SPOT_RADIUS_LONG_NAMES, labelled
 from pipeline.store import write_dataset
 
 __all__ = ["build", "run", "radial_grid", "indenter_profile", "solve_scenario", "fields"]
@@ -50,7 +51,7 @@ def fields(scenario: Scenario, r: np.ndarray, sols: list[gt.Solution]) -> dict[s
         "h": h,
         "p": p,
         "area": area_fraction(h, rough.sigma, rough.eta, rough.beta),
-        "force": p @ gt.force_weights(r),
+        "force": p @ rg.force_weights(r),
     }
 
 
@@ -98,8 +99,7 @@ def _hertz(scenario: Scenario, r: np.ndarray, force: np.ndarray) -> dict[str, np
 
 def _var(name: str, data: np.ndarray, **slots: str) -> tuple:
     """An xarray variable tuple of contact.nc: dims and CF long_name and units from the schema."""
-    var = SCHEMA["contact"][name]
-    return (var.dims, np.asarray(data), {"long_name": var.long_name.format(**slots), "units": var.units})
+    return labelled(SCHEMA["contact"][name], np.asarray(data), **slots)
 
 
 @single_threaded

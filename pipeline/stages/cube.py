@@ -33,7 +33,8 @@ import xarray as xr
 from pipeline import store
 from pipeline.compute import ComputeOptions, single_threaded
 from pipeline.config import Scenario
-from pipeline.physics import constriction
+from pipeline.physics.crops import choose_crops
+from pipeline.physics.interaction import AUTO_METHOD
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
 from pipeline.stages.cube_chunks import CubeSettings, asperity_spots, clean_terms, exact_terms, spots_of
 from pipeline.stages.cube_dataset import dataset
@@ -185,10 +186,10 @@ def work_settings(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, 
         solver_tolerance=cube.solver_tolerance,
         max_iterations=cube.max_iterations,
         solver_criterion=cube.solver_criterion,
-        crops=constriction.choose_crops(radius, weights, pitch, 0.0 if whole_window else cube.crop_tolerance),
+        crops=choose_crops(radius, weights, pitch, 0.0 if whole_window else cube.crop_tolerance),
         tolerance=cube.crop_tolerance,
         method=cube.method,
-        method_used=constriction.AUTO_METHOD if cube.method == "auto" else cube.method,
+        method_used=AUTO_METHOD if cube.method == "auto" else cube.method,
         spots=scenario.contact.spots,
         lattice_constant=cube.lattice_constant,
         asperities=asperities,

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from pipeline.physics import constriction, point_model, spot_models
+from pipeline.physics.spot_geometry import SpotGeometry
 from pipeline.scene import FieldSource
 from pipeline.stages.cube_discrete import discrete_chunk
 
@@ -105,10 +106,8 @@ def _resistance(masks: np.ndarray, radius: np.ndarray, weights: np.ndarray, sett
     """Resistance terms of a batch of conducting masks (batch, y, x) at every load step (map
     ``b`` with the spots ``radius[groups[b]]`` when ``groups`` is given)."""
     extra = {} if groups is None else {"groups": groups}
-    return model(settings)(
-        masks, radius, weights, settings.pitch, settings.rho,
-        settings.crops, settings.tolerance, settings.method, **extra,
-    )
+    spots = SpotGeometry(radius, weights, settings.pitch, settings.crops, settings.tolerance)
+    return model(settings)(masks, spots, settings.rho, settings.method, **extra)
 
 
 def asperity_spots(settings: CubeSettings, realizations: np.ndarray) -> np.ndarray:
@@ -176,11 +175,11 @@ def clean_terms(radius: np.ndarray, weights: np.ndarray, settings: CubeSettings)
     ``radius`` and ``weights`` as in :func:`chunk_terms`: (delta, y, x) gives one map,
     (realization, delta, y, x) one map per realization.
     """
-    n, n_delta = radius.shape[-1], radius.shape[-3]
+    n = radius.shape[-1]
     maps = radius.shape[0] if radius.ndim == 4 else 1
     extra = {"groups": np.arange(maps)} if radius.ndim == 4 else {}
-    return model(settings)(np.ones((maps, n, n), dtype=bool), radius, weights, settings.pitch, settings.rho,
-                           np.full(n_delta, n), 0.0, settings.method, **extra)
+    spots = SpotGeometry.whole_window(radius, weights, settings.pitch)
+    return model(settings)(np.ones((maps, n, n), dtype=bool), spots, settings.rho, settings.method, **extra)
 
 
 def exact_terms(source: FieldSource, realizations: np.ndarray, radius: np.ndarray, weights: np.ndarray,

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import xarray as xr
 
-from pipeline.physics import oxide_field
+from pipeline.physics import oxide_band
 from pipeline.physics.discrete_contact import interaction_kernel
 from pipeline.physics.discrete_resistance import resistances
 from pipeline.physics.oxide_points import values_at_points
@@ -106,7 +106,7 @@ def rings(radius: np.ndarray, correlation_length: float) -> np.ndarray:
     return np.clip(wanted, 1, DEFAULT_RINGS).astype(int)
 
 
-def clean_shares(modes: oxide_field.Band, coeffs: np.ndarray, x: np.ndarray, y: np.ndarray, radius: np.ndarray,
+def clean_shares(modes: oxide_band.Band, coeffs: np.ndarray, x: np.ndarray, y: np.ndarray, radius: np.ndarray,
                  threshold: np.ndarray, rule: str, correlation_length: float) -> np.ndarray:
     """Clean share of every spot at every step and oxide fraction, shape (xi, delta, spot).
 
@@ -157,7 +157,7 @@ def discrete_chunk(source: Any, index: int, realizations: np.ndarray, xi_index: 
     pieces = []
     for column, k in enumerate(realizations):
         x, y, radius = pool.spots(int(k))
-        coeffs = oxide_field.coefficients(modes, oxide_field.field_stream(base.seed, lam, int(k)), base.amplitudes)
+        coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(base.seed, lam, int(k)), base.amplitudes)
         share = clean_shares(modes, coeffs, x, y, radius, thresholds[:, column], settings.spot_rule,
                              lam * base.cell_size)
         pieces.append(_terms(pool.kernel(int(k)), radius[None] * np.sqrt(share), settings.rho, settings.model))

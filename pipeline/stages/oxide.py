@@ -12,7 +12,7 @@ Threshold rules (``oxide.threshold``):
   ``K = round(xi N)`` (half to even), so exactly K cells are covered (unless float32 values tie
   at the threshold, when every tied cell is covered).
 
-Every field has its own random stream (``oxide_field.field_stream``), so ``psi`` does not depend
+Every field has its own random stream (``oxide_band.field_stream``), so ``psi`` does not depend
 on the dask chunking, the scheduler, the worker count or the order of evaluation.
 """
 

@@ -19,7 +19,8 @@ from typing import Any
 
 import xarray as xr
 
-__all__ = ["Variable", "COORDINATES", "SURROGATE_COORDINATES", "RESISTANCE_LONG_NAMES", "SPOT_RADIUS_LONG_NAMES", "SCHEMA", "attrs", "variable", "array", "matches", "label_coords"]
+__all__ = ["Variable", "COORDINATES", "SURROGATE_COORDINATES", "RESISTANCE_LONG_NAMES", "SPOT_RADIUS_LONG_NAMES", "SCHEMA", "attrs",
+           "variable", "labelled", "array", "matches", "label_coords"]
 
 
 @dataclass(frozen=True)
@@ -317,6 +318,13 @@ def variable(stage: str, name: str, data: Any, slots: dict[str, Any] | None = No
     the long name's slots filled from ``slots``, ``extra`` attributes after ``units`` and ``long_name``."""
     var = SCHEMA[stage][name]
     return var.dims, data, {**var.attrs(**(slots or {})), **extra}
+
+
+def labelled(var: Variable, data: Any, **fields: Any) -> tuple[tuple[str, ...], Any, dict[str, str]]:
+    """``(dims, data, attrs)`` of ``var`` for :class:`xarray.Dataset`, ``long_name`` before ``units``: the
+    attribute order of contact.nc's Greenwood–Tripp variables and of the benchmark files, kept as written."""
+    found = var.attrs(**fields)
+    return var.dims, data, {"long_name": found["long_name"], "units": found["units"]}
 
 
 def array(stage: str, name: str, data: Any, slots: dict[str, Any] | None = None, **extra: Any) -> xr.DataArray:

@@ -11,7 +11,7 @@ Two methods (``surrogate.method``):
   lambda or sqrt(lambda) (``surrogate.lambda_map``; the spec string ``T`` or ``T;w=<map>``), all coefficients fitted
   at once by weighted least squares (weights 1 / max(relative 95 % half-width,
   ``weight_floor``)^2 from ``fits.nc``'s ``{p}_ci``), transform, rank and orders chosen by
-  leave-one-line-out cross-validation (:func:`pipeline.fitting.surrogate.select_model`).
+  leave-one-line-out cross-validation (:func:`pipeline.fitting.surrogate_joint.select_model`).
 
 ``surrogate.nc`` holds, for ``p`` in (alpha, gamma):
 
@@ -53,6 +53,8 @@ from scipy.stats import norm
 from pipeline.compute import ComputeOptions, single_threaded
 from pipeline.config import ConfigError, Scenario
 from pipeline.fitting import surrogate as sg
+from pipeline.fitting import surrogate_joint as sg_joint
+from pipeline.fitting import surrogate_paper as sg_paper
 from pipeline.stages.schema import SURROGATE_COORDINATES, array
 from pipeline.stages.schema import attrs as schema_attrs
 from pipeline.stages.surrogate_tables import band_tables, curve_tables
@@ -122,7 +124,7 @@ def _reduced(name: str, what: str, wanted: tuple[int, ...], limits: tuple[int, .
 
 
 def _loo(name: str, matrix: np.ndarray, lam: np.ndarray, xi: np.ndarray, rank: int, order: tuple[int, int]) -> xr.DataArray:
-    scan = sg.order_scan(matrix, lam, xi, rank, MAX_ORDER_W, MAX_ORDER_Z)
+    scan = sg_paper.order_scan(matrix, lam, xi, rank, MAX_ORDER_W, MAX_ORDER_Z)
     configured = scan[order] if order[0] <= MAX_ORDER_W and order[1] <= MAX_ORDER_Z else np.nan
     attrs = {**schema_attrs("surrogate", f"{name}_loo"), "configured": configured}
     if np.all(np.isnan(scan)):
@@ -152,8 +154,8 @@ def _paper(scenario: Scenario, name: str, matrix: np.ndarray, lam: np.ndarray, x
     wanted = (s.rank, getattr(s, f"{name}_order_w"), getattr(s, f"{name}_order_z"))
     limits = (min(lam.size, xi.size), lam.size - 1, xi.size - 1)
     rank, order_w, order_z = _reduced(name, "", wanted, limits, (lam.size, xi.size))
-    model = sg.fit_surrogate(matrix, lam, xi, rank, order_w, order_z)
-    predictions = sg.paper_loo_predictions(matrix, lam, xi, rank, order_w, order_z)
+    model = sg_paper.fit_surrogate(matrix, lam, xi, rank, order_w, order_z)
+    predictions = sg_paper.paper_loo_predictions(matrix, lam, xi, rank, order_w, order_z)
     loo = _loo(name, matrix, lam, xi, rank, (order_w, order_z))
     variables = {
         f"{name}_mode_lambda": array("surrogate", f"{name}_mode_lambda", model.modes_w),
@@ -188,8 +190,8 @@ def _joint(scenario: Scenario, fits: xr.Dataset, name: str, matrix: np.ndarray, 
     specs = tuple(sg.model_spec(t, m) for m in w_maps for t in transforms)
     relative = np.fmax(np.abs(_half_width(fits, name) / matrix), s.weight_floor)
     sigma_of = {"log": relative, "identity": relative * np.abs(matrix)}
-    best, tried = sg.select_model(matrix, lam, xi, specs, max_rank, max_w, max_z, sigma_of, s.cv_tolerance)
-    model = sg.fit_joint(matrix, lam, xi, best.rank, best.order_w, best.order_z, best.transform, sigma_of[sg.split_spec(best.transform)[0]])
+    best, tried = sg_joint.select_model(matrix, lam, xi, specs, max_rank, max_w, max_z, sigma_of, s.cv_tolerance)
+    model = sg_joint.fit_joint(matrix, lam, xi, best.rank, best.order_w, best.order_z, best.transform, sigma_of[sg.split_spec(best.transform)[0]])
     variables = {f"{name}_cv_rms": array("surrogate", f"{name}_cv_rms", [c.score for c in tried])}
     for key in ("transform", "rank", "order_w", "order_z", "free_parameters"):
         variables[f"{name}_cv_{key}"] = array("surrogate", f"{name}_cv_{key}", [getattr(c, key) for c in tried])
@@ -222,7 +224,7 @@ def _parameter(scenario: Scenario, fits: xr.Dataset, name: str) -> tuple[dict[st
         f"{name}_rank": int(info["rank"]),
         f"{name}_order_w": int(info["order_w"]),
         f"{name}_order_z": int(info["order_z"]),
-        f"{name}_free_parameters": sg.free_parameters(int(info["rank"]), int(info["order_w"]), int(info["order_z"])),
+        f"{name}_free_parameters": sg_joint.free_parameters(int(info["rank"]), int(info["order_w"]), int(info["order_z"])),
         f"{name}_cv_rms": float(info["cv_rms"]),
         f"{name}_formula": sg.closed_formula(info["coef_w"], info["coef_z"], transform, name),
     }

@@ -1,0 +1,127 @@
+"""The checks across a scenario's parameters: settings that rule each other out, run as it is loaded.
+
+:func:`check_scenario` is what :func:`pipeline.config.load_scenario` runs on every scenario it
+builds (``pipeline/__init__.py`` sets it, :func:`pipeline.config.use_cross_checks`): each value has
+then passed its own declared range, and a combination that cannot work stops the run before any
+work, with one :class:`~pipeline.config.ConfigError` naming the parameter, its value and what is
+allowed (exit status 2 from the CLI). This module imports no numpy: ``import pipeline`` stays free
+of it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from pipeline.before_work.window_checks import check_domains
+from pipeline.config import AUTO, SECTIONS, ConfigError, Scenario, parameter_key
+
+__all__ = ["check_scenario"]
+
+
+#: Largest integer a netCDF attribute (64-bit signed) can record.
+_INT_MAX = 2**63 - 1
+
+
+def _check_point_model(s: Scenario) -> None:
+    """The point model and resistive films need radius weights; the point model, an operator it can
+    apply; the lattice term belongs to the point model."""
+    if s.cube.lattice_constant > 0 and s.cube.model != "point":
+        raise ConfigError(
+            f"cube.lattice_constant = {s.cube.lattice_constant!r} is not allowed with cube.model = "
+            f"{s.cube.model!r}: the lattice self term belongs to cube.model = 'point' (must be 0 otherwise)"
+        )
+    if s.cube.model == "point" and s.cube.method not in ("auto", "folded", "gemm", "direct"):
+        raise ConfigError(
+            f"cube.method = {s.cube.method!r} is not allowed with cube.model = 'point': must be one of "
+            "'auto', 'folded', 'gemm', 'direct'"
+        )
+    needs_radius = "cube.model = 'point'" if s.cube.model == "point" else (
+        "oxide.film = 'resistive'" if s.oxide.film == "resistive" else None)
+    if needs_radius and s.cube.weights != "radius":
+        raise ConfigError(
+            f"cube.weights = {s.cube.weights!r} is not allowed with {needs_radius}: must be 'radius' "
+            "(only radius weights make Greenwood's form the Rayleigh quotient of the point model)"
+        )
+
+
+def _check_spots(s: Scenario) -> None:
+    """``expected`` and ``asperities`` spots need the separation at the cells and radius weights."""
+    if s.contact.spots == "mean_area":
+        return
+    if s.contact.area_interpolation != "separation":
+        raise ConfigError(
+            f"contact.area_interpolation = {s.contact.area_interpolation!r} is not allowed with "
+            f"contact.spots = {s.contact.spots!r}: must be 'separation' (these spots are computed from "
+            "the separation at each cell centre)"
+        )
+    if s.cube.weights != "radius":
+        raise ConfigError(
+            f"cube.weights = {s.cube.weights!r} is not allowed with contact.spots = {s.contact.spots!r}: "
+            "must be 'radius' (cell-area weights are the published code's convention for mean_area spots)"
+        )
+
+
+def _check_discrete(s: Scenario) -> None:
+    """The disc rule needs discrete spots; discrete spots take radius weights, no lattice term and
+    insulating films."""
+    if s.oxide.spot_rule == "disc" and s.contact.model != "discrete":
+        raise ConfigError(
+            f"oxide.spot_rule = 'disc' is not allowed with contact.model = {s.contact.model!r}: must be "
+            "'centre' (a grid spot stands for a cell's asperities, not one contact disc; the disc rule "
+            "needs contact.model = 'discrete')"
+        )
+    if s.contact.model != "discrete":
+        return
+    for name, value, allowed, why in (
+        ("cube.weights", s.cube.weights, "radius", "Greenwood's form on discrete spots weights by radii"),
+        ("oxide.film", s.oxide.film, "insulating", "resistive films are not implemented on discrete spots"),
+    ):
+        if value != allowed:
+            raise ConfigError(f"{name} = {value!r} is not allowed with contact.model = 'discrete': must be "
+                              f"{allowed!r} ({why})")
+    if s.cube.lattice_constant != 0:
+        raise ConfigError(f"cube.lattice_constant = {s.cube.lattice_constant!r} is not allowed with contact.model "
+                          "= 'discrete': must be 0 (discrete spots have no lattice to complete)")
+
+
+def check_scenario(s: Scenario) -> None:
+    """Every check across parameters of a scenario, run as it is loaded (before any work).
+
+    The settings that rule each other out (:func:`_check_point_model`, :func:`_check_spots`,
+    :func:`_check_discrete`), integers a netCDF attribute cannot hold, the approaches' order,
+    the atlas's box and, once ``contact.window`` and ``contact.r_max`` are both numbers, the
+    window against the radial domain and the oxide band
+    (:func:`pipeline.before_work.window_checks.check_domains`).
+
+    Raises
+    ------
+    ConfigError
+        Naming the parameter, its value and what is allowed.
+    """
+    _check_point_model(s)
+    _check_spots(s)
+    _check_discrete(s)
+    for section in SECTIONS:
+        obj = getattr(s, section)
+        for f in dataclasses.fields(obj):
+            value = getattr(obj, f.name)
+            if isinstance(value, int) and not isinstance(value, bool) and abs(value) > _INT_MAX:
+                raise ConfigError(
+                    f"{section}.{parameter_key(f)} = {value!r} is out of range: must be <= 2**63 - 1 = {_INT_MAX} "
+                    f"(stored as a 64-bit integer in every output file)")
+    if s.loading.delta_min > s.loading.delta_max:
+        raise ConfigError(
+            f"loading.delta_min = {s.loading.delta_min!r} is out of range: must be <= "
+            f"loading.delta_max = {s.loading.delta_max!r} (sigma)"
+        )
+    if s.loading.n_delta > 1 and s.loading.delta_min == s.loading.delta_max:
+        raise ConfigError(
+            f"loading.delta_min = {s.loading.delta_min!r} must differ from loading.delta_max = "
+            f"{s.loading.delta_max!r} when loading.n_delta = {s.loading.n_delta} > 1 (sigma)"
+        )
+    for low, high in (("mu_min", "mu_max"), ("pi_min", "pi_max")):
+        if not getattr(s.atlas, low) < getattr(s.atlas, high):
+            raise ConfigError(f"atlas.{high} = {getattr(s.atlas, high)!r} is out of range: must be > "
+                              f"atlas.{low} = {getattr(s.atlas, low)!r}")
+    if AUTO not in (s.contact.window, s.contact.r_max):
+        check_domains(s)

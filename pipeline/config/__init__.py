@@ -1,0 +1,53 @@
+"""Scenarios: the parameter set of a run, declared, loaded from TOML, overridden and validated.
+
+A scenario is a nested, frozen set of dataclasses, one per section (``material``,
+``roughness``, ...). Every field declares its unit, meaning and allowed range in its
+metadata, so validation, documentation and provenance all come from one place. All values
+are SI unless a field's unit says otherwise (``loading.delta_max`` is in units of sigma).
+
+Bundled scenarios (``paper``, ``published``) live in :mod:`pipeline.scenarios` and are
+chosen by name; any other value of ``--config`` is read as a TOML file path.
+
+The package, top down: ``declare`` (how a parameter is declared; :data:`AUTO`,
+:class:`ConfigError`), ``scene_sections`` and ``study_sections`` (the sections' parameters),
+``scenario`` (:class:`Scenario`, its derived values and config hashes), ``validation`` (each
+value against its declaration) and ``loading`` (:func:`load_scenario`). Config imports nothing
+else from the package; the checks across parameters live before work
+(:mod:`pipeline.before_work.scenario_checks`) and are set by ``pipeline/__init__.py``
+(:func:`~pipeline.config.loading.use_cross_checks`).
+"""
+
+from pipeline.config.declare import AUTO, ConfigError, format_range, parameter_key
+from pipeline.config.loading import (
+    USED_ONLY_WITH, bundled_scenarios, load_scenario, parameter_table, read_input_text, use_cross_checks)
+from pipeline.config.scenario import SECTIONS, STAGE_EXCLUDED, STAGE_INPUTS, STAGE_UPSTREAM, Scenario
+from pipeline.config.scene_sections import Contact, Indenter, Loading, Material, Roughness
+from pipeline.config.study_sections import Atlas, Cube, Fits, Oxide, Surrogate
+
+__all__ = [
+    "AUTO",
+    "ConfigError",
+    "read_input_text",
+    "Scenario",
+    "load_scenario",
+    "bundled_scenarios",
+    "parameter_table",
+    "parameter_key",
+    "format_range",
+    "use_cross_checks",
+    "USED_ONLY_WITH",
+    "SECTIONS",
+    "STAGE_INPUTS",
+    "STAGE_EXCLUDED",
+    "STAGE_UPSTREAM",
+    "Material",
+    "Roughness",
+    "Indenter",
+    "Loading",
+    "Contact",
+    "Oxide",
+    "Cube",
+    "Fits",
+    "Surrogate",
+    "Atlas",
+]

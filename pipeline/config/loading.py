@@ -1,0 +1,237 @@
+"""Loading a scenario: bundled or TOML file, a base, ``--set`` overrides, validation; input files' text.
+
+:func:`load_scenario` checks every value against its declaration (:mod:`pipeline.config.validation`)
+and every combination with the cross-checks set by :func:`use_cross_checks`; a bad value stops
+it with one :class:`~pipeline.config.declare.ConfigError` naming the parameter, its value and the
+allowed range.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+import warnings
+from importlib import resources
+from pathlib import Path
+from typing import Any, Callable, Iterable, Mapping
+
+from pipeline.config.declare import ConfigError, format_range, parameter_key
+from pipeline.config.scenario import SECTIONS, Scenario
+from pipeline.config.validation import check_field, unknown
+
+__all__ = ["read_input_text", "use_cross_checks", "bundled_scenarios", "load_scenario", "USED_ONLY_WITH",
+           "parameter_table"]
+
+
+def read_input_text(option: str, path: str | Path, encoding: str = "utf-8") -> str:
+    """The text of an input file given by ``option``, or one ConfigError line naming both.
+
+    Parameters
+    ----------
+    option
+        How the user named the file (``--csv``, ``--surrogate``), for the message.
+    path
+        The file.
+    encoding
+        Its text encoding (``utf-8-sig`` also accepts a leading byte-order mark).
+
+    Raises
+    ------
+    ConfigError
+        If ``path`` is a directory, does not exist, cannot be read (permissions) or is not
+        text in ``encoding``.
+    """
+    path = Path(path)
+    where = f"{option} {str(path)!r}"
+    if path.is_dir():
+        raise ConfigError(f"{where} is a directory: give a file")
+    if not path.exists():
+        raise ConfigError(f"{where} does not exist")
+    try:
+        return path.read_text(encoding=encoding)
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{where} is not UTF-8 text (byte {exc.start}: {exc.object[exc.start:exc.start + 1]!r})") from None
+    except OSError as exc:
+        raise ConfigError(f"{where} is unreadable ({exc.strerror or exc}): check its permissions") from None
+
+
+#: The checks across parameters that every scenario passes as it is built (:func:`use_cross_checks`).
+_CROSS_CHECKS: Callable[[Scenario], None] | None = None
+
+
+def use_cross_checks(check: Callable[[Scenario], None]) -> None:
+    """Set the checks across parameters that :func:`load_scenario` runs on every scenario it builds.
+
+    They live before work (:func:`pipeline.before_work.scenario_checks.check_scenario`), above
+    config, which imports nothing from the package: ``pipeline/__init__.py`` sets them as the
+    package is imported, so they run on every load whatever module loads the scenario.
+
+    Parameters
+    ----------
+    check
+        Raises :class:`ConfigError` (naming the parameter, its value and what is allowed) for a
+        scenario whose settings do not go together; may warn.
+    """
+    global _CROSS_CHECKS
+    _CROSS_CHECKS = check
+
+
+def _build(data: Mapping[str, Any], *, name: str, description: str) -> Scenario:
+    """The scenario of ``data`` (``{section: {key: value}}``), every value and combination checked."""
+    sections: dict[str, Any] = {}
+    for key in data:
+        if key not in SECTIONS:
+            raise unknown(key)
+    for section, cls in SECTIONS.items():
+        table = data.get(section, {})
+        if not isinstance(table, Mapping):
+            raise ConfigError(f"{section} = {table!r} is not allowed: must be a [{section}] table of parameters")
+        given = dict(table)
+        by_key = {parameter_key(f): f for f in dataclasses.fields(cls)}
+        for k in given:
+            if k not in by_key:
+                raise unknown(f"{section}.{k}")
+        kwargs = {
+            by_key[k].name: check_field(section, by_key[k], v) for k, v in given.items()
+        }
+        sections[section] = cls(**kwargs)
+    scenario = Scenario(name=name, description=description, **sections)
+    if _CROSS_CHECKS is None:
+        raise RuntimeError("no cross-checks set: import pipeline (its __init__ sets them) before loading a scenario")
+    _CROSS_CHECKS(scenario)
+    return scenario
+
+
+def bundled_scenarios() -> list[str]:
+    """Names of the scenarios shipped with the package."""
+    files = resources.files("pipeline.scenarios")
+    return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".toml"))
+
+
+def _parse_value(text: str) -> Any:
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text  # a bare word such as fixed_point
+
+
+def _read_toml(config: str | Path) -> tuple[dict[str, Any], str]:
+    text_name = str(config)
+    if text_name in bundled_scenarios():
+        text = resources.files("pipeline.scenarios").joinpath(f"{text_name}.toml").read_text()
+        return tomllib.loads(text), text_name
+    path = Path(config)
+    if not path.is_file():
+        raise ConfigError(
+            f"--config {text_name!r} is neither a bundled scenario "
+            f"({', '.join(bundled_scenarios())}) nor a TOML file"
+        )
+    try:
+        return tomllib.loads(path.read_text()), path.stem
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"--config {text_name!r}: not valid TOML ({exc})") from None
+
+
+def load_scenario(
+    config: str | Path = "paper", overrides: Iterable[str] | Mapping[str, Any] = ()
+) -> Scenario:
+    """Load a bundled scenario by name or a TOML file, apply overrides and validate.
+
+    Parameters
+    ----------
+    config
+        A bundled scenario name (see :func:`bundled_scenarios`) or a path to a TOML file.
+        A file may set ``base = "paper"`` to start from a bundled scenario.
+    overrides
+        ``"section.key=value"`` strings (values in TOML syntax) or a mapping
+        ``{"section.key": value}``.
+
+    Raises
+    ------
+    ConfigError
+        Naming the parameter, its value and the allowed range.
+    """
+    data, name = _read_toml(config)
+    # the settings the user chose (a file's own, not those of its base or of a bundled scenario)
+    explicit = set() if str(config) in bundled_scenarios() else {
+        f"{section}.{key}" for section, table in data.items() if isinstance(table, dict) for key in table}
+    name = str(data.pop("name", name))
+    description = str(data.pop("description", ""))
+    base = data.pop("base", None)
+    if base is not None:
+        if base not in bundled_scenarios():
+            raise ConfigError(f"base = {base!r} is not a bundled scenario ({', '.join(bundled_scenarios())})")
+        merged, _ = _read_toml(base)
+        merged.pop("name", None)
+        base_description = str(merged.pop("description", ""))
+        description = description or base_description
+        for section, values in data.items():
+            if isinstance(values, dict) and isinstance(merged.get(section), dict):
+                merged[section].update(values)
+            else:
+                merged[section] = values
+        data = merged
+    items = overrides.items() if isinstance(overrides, Mapping) else (
+        _split_override(o) for o in overrides
+    )
+    for dotted, value in items:
+        section, _, key = dotted.partition(".")
+        if section not in SECTIONS or not key:
+            raise unknown(dotted)
+        data.setdefault(section, {})[key] = value
+        explicit.add(dotted)
+    return _settle(_build(data, name=name, description=description), explicit)
+
+
+#: Settings used only under another setting's value: key -> (that setting, its value, what is used instead).
+USED_ONLY_WITH: dict[str, tuple[str, str, str]] = {
+    "fits.min_force": ("fits.fit_range", "force", "fits.min_force_normalized"),
+    "fits.min_force_normalized": ("fits.fit_range", "force_normalized", "fits.min_force"),
+}
+
+
+def _settle(s: Scenario, explicit: set[str]) -> Scenario:
+    """Defaults that follow the grid, and a warning for each chosen setting that has no effect.
+
+    ``surrogate.rank`` left at its default follows the oxide grid (at most
+    min(len(oxide.xi), len(oxide.lambda))); one the user set is kept, and
+    :func:`check_surrogate_grid` refuses it when out of range. A setting of
+    :data:`USED_ONLY_WITH` the user set while another setting overrides it is warned about,
+    naming that setting.
+
+    Parameters
+    ----------
+    s
+        The scenario as built.
+    explicit
+        ``section.key`` of every setting the user chose (``--set``, or the TOML file's own).
+    """
+    flat = s.flat()
+    for key, (control, needed, instead) in USED_ONLY_WITH.items():
+        if key in explicit and flat[control] != needed:
+            warnings.warn(f"{key} = {flat[key]:g} has no effect: {control} = {flat[control]!r} selects by {instead} "
+                          f"instead; set {control} = {needed!r} for {key} to count", stacklevel=3)
+    top = min(len(s.oxide.xi), len(s.oxide.lambda_))
+    if "surrogate.rank" not in explicit and s.surrogate.rank > top:
+        s = dataclasses.replace(s, surrogate=dataclasses.replace(s.surrogate, rank=top))
+    return s
+
+
+def _split_override(text: str) -> tuple[str, Any]:
+    if "=" not in text:
+        raise ConfigError(f"--set {text!r}: expected key=value, e.g. roughness.sigma=2e-5")
+    key, _, value = text.partition("=")
+    return key.strip(), _parse_value(value.strip())
+
+
+def parameter_table() -> list[tuple[str, Any, str, str, str]]:
+    """Every parameter as ``(key, default, unit, allowed range, description)``."""
+    rows = []
+    for section, cls in SECTIONS.items():
+        default = cls()
+        for f in dataclasses.fields(cls):
+            rows.append(
+                (f"{section}.{parameter_key(f)}", getattr(default, f.name), f.metadata["unit"],
+                 format_range(f.metadata), f.metadata["doc"])
+            )
+    return rows

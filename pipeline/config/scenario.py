@@ -1,0 +1,171 @@
+"""The scenario: every section in one frozen record, its derived values and its provenance.
+
+:class:`Scenario` holds one instance of every section (:data:`SECTIONS`); its config hashes cover
+each stage's parameters (:data:`STAGE_INPUTS`) and those of the stages it reads
+(:data:`STAGE_UPSTREAM`), so a stage file records exactly what it was built from.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from pipeline.config.declare import AUTO, ConfigError, parameter_key
+from pipeline.config.scene_sections import Contact, Indenter, Loading, Material, Roughness
+from pipeline.config.study_sections import Atlas, Cube, Fits, Oxide, Surrogate
+
+__all__ = ["SECTIONS", "STAGE_INPUTS", "STAGE_EXCLUDED", "STAGE_UPSTREAM", "Scenario"]
+
+
+SECTIONS: dict[str, type] = {
+    "material": Material,
+    "roughness": Roughness,
+    "indenter": Indenter,
+    "loading": Loading,
+    "contact": Contact,
+    "oxide": Oxide,
+    "cube": Cube,
+    "fits": Fits,
+    "surrogate": Surrogate,
+    "atlas": Atlas,
+}
+
+#: Parameters each stage depends on (whole sections or single ``section.key`` entries);
+#: a stage's config hash covers these and the hashes of the stages it reads.
+STAGE_INPUTS: dict[str, tuple[str, ...]] = {
+    "contact": ("material", "roughness", "indenter", "loading", "contact"),
+    "oxide": ("roughness.eta", "indenter.radius", "contact.window", "oxide"),
+    # the fitted steps and fits.confidence: the adaptive ensemble's stopping rule
+    "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance", "oxide.spot_rule", "fits.min_force",
+             "fits.fit_range",
+             "fits.min_force_normalized", "fits.confidence"),
+    "fits": ("fits",),
+    "surrogate": (
+        "surrogate.method",
+        "surrogate.rank",
+        "surrogate.alpha_order_w",
+        "surrogate.alpha_order_z",
+        "surrogate.gamma_order_w",
+        "surrogate.gamma_order_z",
+        "surrogate.alpha_transform",
+        "surrogate.gamma_transform",
+        "surrogate.lambda_map",
+        "surrogate.max_rank",
+        "surrogate.max_order_w",
+        "surrogate.max_order_z",
+        "surrogate.weight_floor",
+        "surrogate.cv_tolerance",
+    ),
+}
+#: Parameters left out of a stage's inputs although STAGE_INPUTS names their section.
+STAGE_EXCLUDED: dict[str, tuple[str, ...]] = {
+    "oxide": ("oxide.film", "oxide.film_resistance", "oxide.spot_rule"),
+}
+#: The stages whose outputs each stage reads (their hashes enter its own).
+STAGE_UPSTREAM: dict[str, tuple[str, ...]] = {
+    "contact": (),
+    "oxide": (),
+    "cube": ("contact", "oxide"),
+    "fits": ("cube",),
+    "surrogate": ("fits",),
+}
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A complete, validated parameter set."""
+
+    name: str = "custom"
+    description: str = ""
+    material: Material = field(default_factory=Material)
+    roughness: Roughness = field(default_factory=Roughness)
+    indenter: Indenter = field(default_factory=Indenter)
+    loading: Loading = field(default_factory=Loading)
+    contact: Contact = field(default_factory=Contact)
+    oxide: Oxide = field(default_factory=Oxide)
+    cube: Cube = field(default_factory=Cube)
+    fits: Fits = field(default_factory=Fits)
+    surrogate: Surrogate = field(default_factory=Surrogate)
+    atlas: Atlas = field(default_factory=Atlas)
+
+    # ----------------------------------------------------------------- derived values
+    @property
+    def deltas(self) -> "list[float]":
+        """Approaches delta in m, lightest first."""
+        n = self.loading.n_delta
+        lo, hi = self.loading.delta_min, self.loading.delta_max
+        if n == 1:
+            return [hi * self.roughness.sigma]
+        return [(hi + (lo - hi) * i / (n - 1)) * self.roughness.sigma for i in range(n)]
+
+    @property
+    def cell_size(self) -> float:
+        """Cell pitch 1/sqrt(eta), in m."""
+        return 1.0 / math.sqrt(self.roughness.eta)
+
+    @property
+    def resistance_scale(self) -> float:
+        """2 rho* / sqrt(R* sigma), in ohm: R' = R / resistance_scale (Eq. 25)."""
+        return 2.0 * self.material.rho / math.sqrt(self.indenter.radius * self.roughness.sigma)
+
+    @property
+    def force_scale(self) -> float:
+        """E* sqrt(R* sigma^3) / 2, in N: F' = F / force_scale (Eq. 25)."""
+        return self.material.E_star * math.sqrt(self.indenter.radius * self.roughness.sigma**3) / 2.0
+
+    @property
+    def n_cells(self) -> int:
+        """Cells along one side of the window: the odd number closest to window/cell size."""
+        if self.contact.window == AUTO:
+            raise ConfigError(
+                "contact.window = 'auto' is not resolved yet: call pipeline.before_work.domains.resolve(scenario)"
+            )
+        n = self.contact.window * self.indenter.radius / self.cell_size
+        k = int(round((n - 1.0) / 2.0))
+        return 2 * max(k, 0) + 1
+
+    # ----------------------------------------------------------------- provenance
+    def to_dict(self) -> dict[str, Any]:
+        """Nested plain dict ``{section: {key: value}}`` plus name and description."""
+        out: dict[str, Any] = {"name": self.name, "description": self.description}
+        for section in SECTIONS:
+            obj = getattr(self, section)
+            out[section] = {parameter_key(f): getattr(obj, f.name) for f in dataclasses.fields(obj)}
+        return out
+
+    def flat(self) -> dict[str, Any]:
+        """``{"section.key": value}`` for every parameter."""
+        d = self.to_dict()
+        return {f"{s}.{k}": v for s in SECTIONS for k, v in d[s].items()}
+
+    def stage_parameters(self, stage: str) -> dict[str, Any]:
+        """The parameters ``stage`` depends on directly, as ``{"section.key": value}``."""
+        flat = self.flat()
+        wanted = STAGE_INPUTS[stage]
+        excluded = STAGE_EXCLUDED.get(stage, ())
+        return {
+            k: v
+            for k, v in flat.items()
+            if any(k == w or k.startswith(w + ".") for w in wanted) and k not in excluded
+        }
+
+    def config_hash(self, stage: str | None = None) -> str:
+        """SHA-256 (16 hex digits) of a stage's parameters and its upstream stages' hashes.
+
+        With ``stage=None`` the hash covers the whole scenario (name and description aside).
+        """
+        if stage is None:
+            payload: Any = self.flat()
+        else:
+            payload = {
+                "stage": stage,
+                "parameters": self.stage_parameters(stage),
+                "upstream": {u: self.config_hash(u) for u in STAGE_UPSTREAM[stage]},
+            }
+        text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
