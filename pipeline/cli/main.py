@@ -231,7 +231,11 @@ def _cmd_params(args: argparse.Namespace, scenario: Scenario) -> None:
 
 
 def _cmd_plan(args: argparse.Namespace, scenario: Scenario) -> None:
-    from pipeline.before_work.plan import format_plan
+    from pipeline.before_work.plan import format_plan, format_validate_plan
+
+    if args.validate:
+        print("\n".join(format_validate_plan(args.config, args.workers)))
+        return
 
     if args.atlas:
         from pipeline.atlas.design import AtlasDesign, format_atlas_plan, plan_atlas
@@ -403,6 +407,8 @@ def _parser() -> argparse.ArgumentParser:
                compute=True)
     plan.add_argument("--atlas", action="store_true",
                       help="plan the atlas's default design over (mu, Pi) on this scenario (one scene per worker)")
+    plan.add_argument("--validate", action="store_true",
+                      help="plan `g2tom validate`'s default set on both surfaces, part 2 validating this scenario")
     add("atlas", _cmd_atlas, "run the chain on every scene of the atlas's design over (mu, Pi), one scene per "
         "task, resumable (<data-dir>/atlas/)", compute=True)
     add("params", _cmd_params, "list every parameter with its value, unit and range")
