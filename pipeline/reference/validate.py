@@ -103,8 +103,8 @@ def plan_lines(vset: scene.ValidationSet, config: str = "paper", workers: int = 
         f"resized from the measured scatter, {ensemble.MAX_ROUNDS} rounds at most): {est.ensemble} cases; {stand}",
         f"validate: estimated {format_duration(est.wall)} on {workers} worker(s) (cases: part 1 "
         f"{format_duration(est.seconds_part1)}, part 2 {format_duration(est.seconds_part2)} of one process; "
-        f"g2tom {format_duration(est.seconds_g2tom)}; model constants in pipeline/reference/cost.py, measured on the "
-        f"2-core machine under load)",
+        f"g2tom {format_duration(est.seconds_g2tom)}); at most {format_duration(est.wall_cap)} should every load need "
+        f"{vset.max_ensemble} realizations (constants: CPU seconds per solve in pipeline/reference/cost.py)",
     ]
 
 
