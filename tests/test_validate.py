@@ -22,7 +22,8 @@ TINY = dataclasses.replace(scene.QUICK, radius=1e-3, deltas=(1.0, 0.0), realizat
                            model_realizations=16,
                            discretizations=("expected", "asperities", "surface_asperities", "discrete"))
 #: The variables that differ between two runs of the same set: wall times.
-TIMES = ("seconds_contact", "seconds_case", "seconds_convergence")
+TIMES = ("seconds_contact", "seconds_case", "seconds_convergence", "seconds_cpu_case", "ensemble_seconds",
+         "ensemble_seconds_cpu")
 
 
 def test_without_the_extra_validate_names_the_install_command_and_exits_2(tmp_path, monkeypatch, capsys) -> None:

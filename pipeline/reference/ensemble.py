@@ -152,21 +152,23 @@ def stand_in(vset: scene.ValidationSet, realizations: range) -> tuple[np.ndarray
 @dataclass
 class Part2:
     """Part 2's full-field proxies as solved so far (NaN: not solved), (realization, load) and
-    (xi, lambda, realization, load), ohm: on the ensemble grid (``grid_count`` per load) and
-    by the stand-in (``stand_in_count``, every load)."""
+    (xi, lambda, realization, load), ohm: on the ensemble grid (``grid_count`` per load; their
+    summed wall and CPU ``seconds``) and by the stand-in (``stand_in_count``, every load)."""
 
     grid_clean: np.ndarray
     grid: np.ndarray
     grid_count: np.ndarray
     stand_clean: np.ndarray
     stand: np.ndarray
+    seconds: np.ndarray
+    seconds_cpu: np.ndarray
     stand_in_count: int = 0
 
     @classmethod
     def empty(cls, vset: scene.ValidationSet) -> "Part2":
         n, loads, ox = vset.max_ensemble, len(vset.deltas), (len(vset.xi), len(vset.lambdas))
         return cls(np.full((n, loads), np.nan), np.full(ox + (n, loads), np.nan), np.zeros(loads, int),
-                   np.full((n, loads), np.nan), np.full(ox + (n, loads), np.nan))
+                   np.full((n, loads), np.nan), np.full(ox + (n, loads), np.nan), np.zeros(loads), np.zeros(loads))
 
     def proxy(self, exact: np.ndarray, load: int, cell: tuple[int, int] | None, stand: bool) -> np.ndarray:
         """The proxy of one (load, cell) (cell None: clean; else (xi, lambda) index): the stand-in's,
@@ -267,6 +269,8 @@ def run_part2(vset: scene.ValidationSet, force_normalized: np.ndarray, exact_cle
             for case, record in solve(todo).items():
                 state.grid_clean[case.realization, case.load] = record["resistance_clean"]
                 state.grid[:, :, case.realization, case.load] = np.asarray(record["resistance"], float)
+                state.seconds[case.load] += record["seconds_total"]
+                state.seconds_cpu[case.load] += record.get("seconds_cpu", np.nan)
             for k in loads:
                 state.grid_count[k] = max(c.realization for c in todo if c.load == k) + 1
     return state
@@ -339,4 +343,6 @@ def variables(vset: scene.ValidationSet, state: Part2, exact_clean: np.ndarray, 
         "ensemble_target_clean": variable("ensemble_target_clean", target_clean),
         "ensemble_target": variable("ensemble_target", np.array(target_ox)),
         "ensemble_grid_check_clean": variable("ensemble_grid_check_clean", check),
+        "ensemble_seconds": variable("ensemble_seconds", state.seconds.copy()),
+        "ensemble_seconds_cpu": variable("ensemble_seconds_cpu", state.seconds_cpu.copy()),
     }

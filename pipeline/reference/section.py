@@ -258,6 +258,10 @@ def markdown(ds: xr.Dataset) -> str:
               "Barber's theorem on the full-field clean solution (convergence grid, first realization): punch "
               "conductance / (K / (E* rho*)) = " + ", ".join(f"{b:.4f}" for b in ds["barber_ratio"].values) + ".",
               f"Wall time: {float(np.nansum(ds['seconds_case'].values)):.0f} s for the main grid's cases "
-              f"(contact solves {float(np.nansum(ds['seconds_contact'].values)):.0f} s), "
-              f"{float(np.nansum(ds['seconds_convergence'].values)):.0f} s for the convergence grid.", ""]
+              f"(contact solves {float(np.nansum(ds['seconds_contact'].values)):.0f} s; CPU "
+              f"{float(np.nansum(ds['seconds_cpu_case'].values)):.0f} s), "
+              f"{float(np.nansum(ds['seconds_convergence'].values)):.0f} s for the convergence grid"
+              + (f", {float(np.nansum(ds['ensemble_seconds'].values)):.0f} s for part 2's cases (CPU "
+                 f"{float(np.nansum(ds['ensemble_seconds_cpu'].values)):.0f} s)" if "ensemble_seconds" in ds else "")
+              + " (summed over the workers).", ""]
     return "\n".join(lines)

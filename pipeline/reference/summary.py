@@ -49,7 +49,8 @@ def reference_arrays(vset: scene.ValidationSet, everything: list, done: dict) ->
 
 
 #: The main grid's per-case record fields kept as (realization, load) arrays.
-_MAIN = ("force", "delta", "contact_area", "resistance_clean", "side", "seconds_contact", "seconds_total")
+_MAIN = ("force", "delta", "contact_area", "resistance_clean", "side", "seconds_contact", "seconds_total",
+         "seconds_cpu")
 
 
 def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict[str, np.ndarray],
@@ -101,6 +102,7 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "barber_ratio": variable("barber_ratio", ref["coarse"]["barber_ratio"]),
         "seconds_contact": variable("seconds_contact", ref["seconds_contact"]),
         "seconds_case": variable("seconds_case", ref["seconds_total"]),
+        "seconds_cpu_case": variable("seconds_cpu_case", ref["seconds_cpu"]),
         "seconds_convergence": variable("seconds_convergence", ref["coarse"]["seconds_total"]),
     }
     if part2:

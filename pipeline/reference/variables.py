@@ -63,6 +63,9 @@ VARIABLES: dict[str, Variable] = {
     "seconds_contact": _v(_RL, "s", "wall time of the full-field contact solve"),
     "seconds_case": _v(_RL, "s", "wall time of the case (contact and every conductance)"),
     "seconds_convergence": _v("load", "s", "wall time of the convergence-grid case"),
+    "seconds_cpu_case": _v(_RL, "s", "CPU time of the case (its time on a core of its own)"),
+    "ensemble_seconds": _v("load", "s", "summed wall time of part 2's full-field cases at the load"),
+    "ensemble_seconds_cpu": _v("load", "s", "summed CPU time of part 2's full-field cases at the load"),
     # part 2: the default's ensemble against the full field's
     "ensemble_realization": _v("ensemble_realization", "1", "realization index of part 2's full-field ensemble"),
     "ensemble_count_clean": _v("load", "1", "realizations in the full field's clean ensemble (part 2)"),
