@@ -15,7 +15,7 @@ from pipeline.cli.main import main
 from pipeline.config import ConfigError
 from pipeline.reference import cases, cost, ensemble, scene, statistics
 from analysis.figures_validate import figure
-from pipeline.reference.validate import chosen_set, plan_lines, run_validation
+from pipeline.reference.validate import chosen_set, run_validation
 
 TINY = dataclasses.replace(scene.QUICK, radius=1e-3, deltas=(1.0, 0.0), realizations=(0, 1), n_grid=96,
                            pixels_per_cell=4.0, convergence_grid=48, ensemble_grid=48, max_ensemble=4,
@@ -126,7 +126,7 @@ def test_the_discrete_model_on_each_surfaces_own_caps_tracks_the_full_field(tiny
 
 
 def test_part_2_compares_the_ensembles_at_equal_force_with_combined_errors(tiny_run) -> None:
-    out, log = tiny_run
+    out, _ = tiny_run
     ds = xr.open_dataset(out / "validate.nc")
     P = ds.sizes["realization"]
     assert np.all(ds["ensemble_count_clean"].values >= P) and np.all(ds["ensemble_count"].values >= P)

@@ -292,16 +292,15 @@ def _cmd_validate(args: argparse.Namespace, scenario: Scenario) -> None:
         raise ConfigError("g2tom validate runs its own validation scene (the default set or --quick): --set is "
                           "not used by it; leave it out (--config names the scenario whose model part 2 validates)")
     from pipeline.before_work.preflight import check_data_dir, check_scheduler
+    from pipeline.reference.validate import chosen_set, output_folder, run_validation
 
+    vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads)
     check_data_dir(args.data_dir)
     if args.scheduler:
         check_scheduler(args.scheduler)
     problem = missing_extra()
     if problem:
         raise ConfigError(problem)
-    from pipeline.reference.validate import chosen_set, output_folder, run_validation
-
-    vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads)
     if args.workers is None and args.scheduler is None:
         args.workers = os.cpu_count() or 1  # a local cluster, one single-threaded case per core (as the atlas)
     from analysis.figures_validate import figure

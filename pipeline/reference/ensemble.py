@@ -14,6 +14,11 @@ would not exceed P, part 1's full field is the ensemble (no proxy). N is sized p
 ``oxide_error``: first from the prior scatter (:func:`statistics.prior_log_sd`), then, for at most
 :data:`MAX_ROUNDS` rounds in all, from the scatter of what was solved; at most ``max_ensemble``.
 Everything is deterministic given the stored cases, so a resumed run makes the same choices.
+
+The two ensembles are not quite independent: the model's oxide realization k is the very field
+the full field's realization k meets (its surfaces are its own). The ratio's standard error adds
+both ensembles' in squares as if they were: with the shared fields' positive correlation, the
+true one is smaller.
 """
 
 from __future__ import annotations
@@ -24,7 +29,6 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-import xarray as xr
 
 from pipeline.config import Scenario, load_scenario
 from pipeline.reference import discrete_spots, scene, statistics

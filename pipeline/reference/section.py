@@ -13,7 +13,7 @@ __all__ = ["markdown", "CLEAN_LIMIT", "OXIDE_LIMIT", "MEANINGS"]
 #: What each discretization is, for the section's legend.
 MEANINGS = {
     "mean_area": "one spot per cell of the cell's mean contact area (the paper's)",
-    "expected": "one spot per cell of the expected sum of asperity radii (Barber-consistent; the default)",
+    "expected": "one spot per cell of the expected sum of asperity radii (Barber-consistent)",
     "asperities": "one asperity per cell, its height drawn per realization",
     "surface_asperities": "the GW surface's own asperities in g2tom's cells at Greenwood-Tripp's separation: "
                           "against the full field, what remains is Greenwood-Tripp's averaging and the "

@@ -26,7 +26,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline.compute import ComputeOptions
-from pipeline.config import ConfigError, Scenario, load_scenario
+from pipeline.config import ConfigError, load_scenario
 from pipeline.progress import format_duration
 from pipeline.reference import cases as cases_mod
 from pipeline.reference import cost, discrete_spots, ensemble, scene, section, summary, surface_spots, window
