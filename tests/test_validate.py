@@ -398,8 +398,18 @@ def test_realizations_are_sized_by_the_scatter_and_the_targets_are_the_issues() 
         assert np.isnan(oxide) and np.isnan(statistics.target(f, True)) or statistics.target(f, True) == pytest.approx(oxide)
 
 
-@pytest.mark.parametrize("config", ["paper", "paper_discrete"])
-def test_part_2_validates_the_scenarios_own_model(config) -> None:
+def _bundled_with(model: str) -> str:
+    """A bundled scenario of ``contact.model`` (``paper`` first: whichever model the default has, the
+    side-by-side scenario has the other)."""
+    from pipeline.config import bundled_scenarios, load_scenario
+
+    names = ["paper"] + [n for n in ("paper_gt", "paper_discrete") if n in bundled_scenarios()]
+    return next(n for n in names if load_scenario(n).contact.model == model)
+
+
+@pytest.mark.parametrize("model", ["greenwood_tripp", "discrete"])
+def test_part_2_validates_the_scenarios_own_model(model) -> None:
+    config = _bundled_with(model)
     from pipeline.config import load_scenario
 
     own = load_scenario(config)
@@ -417,16 +427,17 @@ def test_part_2_validates_the_scenarios_own_model(config) -> None:
     assert own.contact.model in model.description and own.cube.model in model.description
 
 
-def test_a_run_on_the_discrete_scenario_reuses_part_1s_cases(tiny_run, tmp_path) -> None:
+def test_a_run_on_the_discrete_model_reuses_part_1s_cases(tiny_run, tmp_path) -> None:
     import shutil
 
     out, _ = tiny_run
     shutil.copytree(out / "cases", tmp_path / "cases")
     log = io.StringIO()
-    paths = run_validation(TINY, tmp_path, stream=log, config="paper_discrete")
+    config = _bundled_with("discrete")
+    paths = run_validation(TINY, tmp_path, stream=log, config=config)
     assert "part 1: 6 of 6 cases already stored, 0 to run" in log.getvalue()  # the full field is the model's own
     with xr.open_dataset(paths[0]) as ds:
-        assert ds.attrs["validated_scenario"] == "paper_discrete" and "contact.model discrete" in ds.attrs["validated_model"]
+        assert ds.attrs["validated_scenario"] == config and "contact.model discrete" in ds.attrs["validated_model"]
         assert ds.attrs["default_discretization"] == "discrete" and ds.attrs["default_model"] == "point"
         assert np.all(ds["ensemble_model_clean_standard_error"].values > 0)  # an ensemble of surfaces
         assert np.all(np.isfinite(ds["ensemble_ratio_clean"].values))
@@ -442,9 +453,10 @@ def test_validate_takes_the_global_options_and_refuses_bad_values_before_work(tm
         return []
 
     monkeypatch.setattr(validate, "run_validation", record)
-    assert main(["validate", "--quick", "--no-progress", "--workers", "2", "--config", "paper_discrete",
+    other = _bundled_with("discrete" if _bundled_with("greenwood_tripp") == "paper" else "greenwood_tripp")
+    assert main(["validate", "--quick", "--no-progress", "--workers", "2", "--config", other,
                  "--data-dir", str(tmp_path)]) == 0
-    assert seen["progress"] is False and seen["config"] == "paper_discrete" and seen["options"].workers == 2
+    assert seen["progress"] is False and seen["config"] == other and seen["options"].workers == 2
     assert main(["validate", "--quick", "--data-dir", str(tmp_path)]) == 0  # default: a local cluster on every core
     assert seen["options"].workers == (__import__("os").cpu_count() or 1) and seen["progress"] is True
     capsys.readouterr()
