@@ -484,3 +484,14 @@ def test_plan_validate_prints_both_surfaces_cases_grids_and_estimate(capsys) -> 
     assert out.count("validate: part 1 (exactness per surface, paired)") == 2 and "1024^2" in out
     assert out.count("validate: part 2 (the default's ensemble") == 2 and "256^2" in out
     assert out.count("validate: estimated") == 2 and "on 2 worker(s)" in out
+
+
+def test_cases_on_a_local_cluster_give_the_serial_run(tiny_run, tmp_path) -> None:
+    from pipeline.compute import ComputeOptions
+
+    out, _ = tiny_run
+    log = io.StringIO()
+    run_validation(TINY, tmp_path, stream=log, options=ComputeOptions(workers=2, progress=False))
+    assert "estimated" in log.getvalue() and "on 2 worker(s)" in log.getvalue()
+    with xr.open_dataset(out / "validate.nc") as serial, xr.open_dataset(tmp_path / "validate.nc") as cluster:
+        _same(serial.load(), cluster.load())
