@@ -117,6 +117,11 @@ class ValidationSet:
         return self.E / (2.0 * (1.0 - self.nu**2))
 
     @property
+    def force_scale(self) -> float:
+        """E* sqrt(R* sigma^3) / 2, N: F' = F / force_scale (Eq. 25)."""
+        return self.e_star * math.sqrt(self.radius * self.sigma**3) / 2.0
+
+    @property
     def mu(self) -> float:
         """(8/3) eta sigma sqrt(2 R* beta): the Greenwood-Tripp group (design.md section 9)."""
         return 8.0 / 3.0 * self.eta * self.sigma * math.sqrt(2.0 * self.radius * self.beta)

@@ -116,8 +116,9 @@ def _ensemble_table(ds: xr.Dataset) -> list[str]:
         return []
     cells = _ensemble_cells(ds)
     lines = [f"### Part 2: the default's ensemble ({ds.attrs.get('validated_model', '')})", "",
-             f"The validated scenario's ensemble ({int(ds['ensemble_model_count'])} realizations) against the full "
-             "field's, each as the geometric mean of R over its conducting realizations at equal force; ratio ± the "
+             f"The validated scenario's ensemble (clean: {int(ds['ensemble_model_count_clean'])} "
+             + ("value, one exact answer" if int(ds["ensemble_model_count_clean"]) == 1 else "surfaces")
+             + f"; oxidized: {int(ds['ensemble_model_count'])} realizations) against the full field's, each as the geometric mean of R over its conducting realizations at equal force; ratio ± the "
              "standard error of its log (both ensembles', in squares); ✓ within issue 29's target at that F', ✗ outside, "
              "no mark where the issue sets none (oxidized below F' 1). The full field's ensemble: N realizations, a "
              "proxy on all N corrected by part 1's paired main-grid solves (two-phase; N = part 1's realizations: "

@@ -21,7 +21,7 @@ from pipeline.reference import scene
 from pipeline.reference.variables import variable
 from pipeline.store import git_commit
 
-__all__ = ["dataset", "ratios", "reference_arrays"]
+__all__ = ["dataset", "ratios", "reference_arrays", "part1_ratios"]
 
 
 def reference_arrays(vset: scene.ValidationSet, everything: list, done: dict) -> dict[str, Any]:
@@ -48,6 +48,14 @@ def reference_arrays(vset: scene.ValidationSet, everything: list, done: dict) ->
     return out
 
 
+def part1_ratios(g2tom: dict[str, Any], ref: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """Part 1's ratios g2tom / full field at equal force: clean (discretization, model, realization,
+    load) and oxidized (discretization, model, xi, lambda, realization, load); NaN where both are
+    open circuits (inf / inf)."""
+    with np.errstate(invalid="ignore"):
+        return g2tom["clean"] / ref["resistance_clean"][None, None], g2tom["resistance"] / ref["resistance"][None, None]
+
+
 #: The main grid's per-case record fields kept as (realization, load) arrays.
 _MAIN = ("force", "delta", "contact_area", "resistance_clean", "side", "seconds_contact", "seconds_total",
          "seconds_cpu")
@@ -63,7 +71,7 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
     """
     ref = reference_arrays(vset, everything, done)
     scale_r = 2.0 * vset.rho / np.sqrt(vset.radius * vset.sigma)
-    scale_f = vset.e_star * np.sqrt(vset.radius * vset.sigma**3) / 2.0
+    scale_f = vset.force_scale
     coords = {
         "load": variable("load", np.arange(len(vset.deltas))),
         "realization": variable("realization", np.asarray(vset.realizations)),
@@ -76,9 +84,7 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "force_normalized": variable("force_normalized", g2tom["force"] / scale_f),
         "delta_g2tom": variable("delta_g2tom", np.asarray(vset.deltas) * vset.sigma),
     }
-    with np.errstate(invalid="ignore"):  # both open circuits (inf / inf): no ratio, NaN
-        clean_ratio = g2tom["clean"] / ref["resistance_clean"][None, None]
-        ox_ratio = g2tom["resistance"] / ref["resistance"][None, None]
+    clean_ratio, ox_ratio = part1_ratios(g2tom, ref)
     fine = ref["resistance_clean"][0]
     few = "NaN with fewer than two finite ratios"
     data = {

@@ -122,8 +122,7 @@ class CaseRunner:
         self._stack = ExitStack()
         self._client: Any = None
         self._made = False
-        f_scale = vset.e_star * np.sqrt(vset.radius * vset.sigma**3) / 2.0
-        self._f = np.asarray(forces) / f_scale
+        self._f = np.asarray(forces) / vset.force_scale
 
     def __enter__(self) -> "CaseRunner":
         return self
@@ -208,13 +207,6 @@ def _g2tom_side(vset: scene.ValidationSet) -> dict:
     return {"force": forces[0], "clean": clean, "resistance": oxidized, "skipped": skipped}
 
 
-def _ratios(vset: scene.ValidationSet, g2tom: dict, ref: dict) -> tuple[np.ndarray, np.ndarray]:
-    """Part 1's ratios g2tom / full field: clean (discretization, model, realization, load) and
-    oxidized (discretization, model, xi, lambda, realization, load)."""
-    with np.errstate(invalid="ignore"):
-        return g2tom["clean"] / ref["resistance_clean"][None, None], g2tom["resistance"] / ref["resistance"][None, None]
-
-
 def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.stderr, progress: bool = True,
                    draw: Callable[[xr.Dataset, Path], Path] | None = None, config: str = "paper",
                    options: ComputeOptions = SERIAL) -> list[Path]:
@@ -249,12 +241,12 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
     if not np.allclose(model.force, g2tom["force"], rtol=FORCE_AGREEMENT, atol=0):
         raise ConfigError(f"the validated scenario {config!r} loads at other forces ({model.force} N) than the "
                           f"validation's ({g2tom['force']} N): its load steps must be loading.delta_* of Greenwood-Tripp")
-    f = g2tom["force"] / (vset.e_star * np.sqrt(vset.radius * vset.sigma**3) / 2.0)
+    f = g2tom["force"] / vset.force_scale
     print(f"validate: g2tom done (part 1's discretizations; part 2: {model.description})", file=stream, flush=True)
     with CaseRunner(vset, g2tom["force"], source, out / "cases", options, stream, progress, start) as runner:
         done = runner.solve(everything, "part 1")
         ref = summary.reference_arrays(vset, everything, done)
-        ratio_clean, ratio = _ratios(vset, g2tom, ref)
+        ratio_clean, ratio = summary.part1_ratios(g2tom, ref)
         stand_clean, stand = ensemble.admitted(vset, ratio_clean, ratio)
         state = ensemble.run_part2(vset, f, ref["resistance_clean"], ref["resistance"], model, stand_clean, stand,
                                    lambda todo: runner.solve(todo, "part 2"),

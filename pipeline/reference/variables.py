@@ -99,7 +99,9 @@ VARIABLES: dict[str, Variable] = {
                                         "ensemble geometric mean"),
     "ensemble_model_open_fraction": _v(_EX, "1", "fraction of the validated scenario's ensemble that is an "
                                        "open circuit"),
-    "ensemble_model_count": _v("", "1", "realizations in the validated scenario's ensemble"),
+    "ensemble_model_count": _v("", "1", "realizations in the validated scenario's oxidized ensemble"),
+    "ensemble_model_count_clean": _v("", "1", "values in the validated scenario's clean ensemble (its pool's "
+                                     "surfaces; 1: one exact answer)"),
     "ensemble_ratio_clean": _v("load", "1", "the validated scenario's / the full field's clean ensemble "
                                "geometric mean of R at equal force"),
     "ensemble_ratio_clean_standard_error": _v("load", "1", "standard error of ln of the clean ensemble ratio "
