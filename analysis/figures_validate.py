@@ -2,8 +2,9 @@
 
 Draws ``validate.png`` from ``<data_dir>/validate/validate.nc`` (``g2tom validate``) in the
 shared style: one panel per case (clean, then each xi and lambda), one colour per spot
-discretization and one line style per resistance model, the legend below the panels. Writes
-nothing when the validation has not run.
+discretization and one line style per resistance model (part 1, per realization), and where the
+dataset has part 2, the full field's ensemble geometric mean with its standard error and the
+validated scenario's; the legend below the panels. Writes nothing when the validation has not run.
 """
 
 from __future__ import annotations
@@ -28,15 +29,30 @@ MODEL_STYLES = {"greenwood": "-", "point": "--"}
 ROW_HEIGHT = 2.2
 
 
-def _panels(ds: xr.Dataset) -> list[tuple[str, xr.DataArray, xr.DataArray]]:
-    """(title, reference R (realization, load), g2tom R (discretization, model, realization?, load)) per case."""
-    out = [("clean", ds["resistance_reference_clean"], ds["resistance_g2tom_clean"])]
+def _panels(ds: xr.Dataset) -> list[tuple[str, xr.DataArray, xr.DataArray, dict]]:
+    """(title, reference R (realization, load), g2tom R (discretization, model, realization?, load),
+    the selection of part 2's variables) per case."""
+    out = [("clean", ds["resistance_reference_clean"], ds["resistance_g2tom_clean"], {})]
     for xi in ds["xi"].values:
         for lam in ds["lambda"].values:
             sel = {"xi": xi, "lambda": lam}
             out.append((f"{equals('xi', xi)}, {equals('lambda', lam)}", ds["resistance_reference"].sel(sel),
-                        ds["resistance_g2tom"].sel(sel)))
+                        ds["resistance_g2tom"].sel(sel), sel))
     return out
+
+
+def _ensembles(ax: plt.Axes, ds: xr.Dataset, sel: dict, f: np.ndarray, scale: float) -> None:
+    """Part 2 on one panel: the full field's ensemble geometric mean (error bars: its standard error)
+    and the validated scenario's."""
+    suffix = "" if sel else "_clean"
+    if f"ensemble_reference{suffix}" not in ds:
+        return
+    ref = ds[f"ensemble_reference{suffix}"].sel(sel).values / scale
+    err = ds[f"ensemble_reference{suffix}_standard_error"].sel(sel).values
+    ax.errorbar(f, ref, yerr=(ref * (1 - np.exp(-err)), ref * (np.exp(err) - 1)), fmt="s", mfc="none", color="k",
+                ms=5, capsize=2, label="full field, ensemble (part 2)")
+    ax.loglog(f, ds[f"ensemble_model{suffix}"].sel(sel).values / scale, "-", color="0.35", lw=2.5, alpha=0.6,
+              label=f"{ds.attrs.get('validated_scenario', 'the default')}, ensemble (part 2)")
 
 
 def figure(ds: xr.Dataset, path: Path) -> Path:
@@ -65,7 +81,7 @@ def figure(ds: xr.Dataset, path: Path) -> Path:
     with context():
         fig, axes = plt.subplots(rows, cols, figsize=size(2, ROW_HEIGHT * rows + 0.6), squeeze=False,
                                  layout="constrained")
-        for ax, (title, ref, g2) in zip(axes.ravel(), panels):
+        for ax, (title, ref, g2, sel) in zip(axes.ravel(), panels):
             ax.loglog(np.broadcast_to(f, ref.shape).ravel(), ref.values.ravel() / scale, "ko", ms=3,
                       label="full field (each realization)")
             for colour, d in enumerate(ds["discretization"].values):
@@ -77,6 +93,7 @@ def figure(ds: xr.Dataset, path: Path) -> Path:
                         curve = ratios(curve.transpose("realization", "load").values)[0]
                     ax.loglog(f, np.asarray(curve) / scale, MODEL_STYLES.get(str(m), ":"), color=f"C{colour}",
                               marker=".", label=f"g2tom: {str(d).replace('_', ' ')}, {m}")
+            _ensembles(ax, ds, sel, f, scale)
             ax.set(title=title, xlabel=LABELS["force_normalized"])
             plain_log_ticks(ax.xaxis)
             plain_log_ticks(ax.yaxis)

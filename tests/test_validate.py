@@ -1,4 +1,4 @@
-"""`g2tom validate`: the plan, the outputs, resuming, and the refusal without the extra."""
+"""`g2tom validate`: the plan, both parts' outputs, part 2's statistics, resuming, the CLI's options and refusals."""
 
 from __future__ import annotations
 
@@ -13,13 +13,17 @@ import xarray as xr
 
 from pipeline.cli.main import main
 from pipeline.config import ConfigError
-from pipeline.reference import cases, scene
+from pipeline.reference import cases, cost, ensemble, scene, statistics
 from analysis.figures_validate import figure
 from pipeline.reference.validate import chosen_set, run_validation
 
 TINY = dataclasses.replace(scene.QUICK, radius=1e-3, deltas=(1.0, 0.0), realizations=(0, 1), n_grid=96,
-                           pixels_per_cell=4.0, convergence_grid=48,
+                           pixels_per_cell=4.0, convergence_grid=48, ensemble_grid=48, max_ensemble=4,
+                           model_realizations=16,
                            discretizations=("expected", "asperities", "surface_asperities", "discrete"))
+#: The variables that differ between two runs of the same set: wall times.
+TIMES = ("seconds_contact", "seconds_case", "seconds_convergence", "seconds_cpu_case", "ensemble_seconds",
+         "ensemble_seconds_cpu")
 
 
 def test_without_the_extra_validate_names_the_install_command_and_exits_2(tmp_path, monkeypatch, capsys) -> None:
@@ -33,20 +37,33 @@ def test_without_the_extra_validate_names_the_install_command_and_exits_2(tmp_pa
 
 def test_validate_refuses_scenario_options_it_would_ignore(tmp_path, capsys) -> None:
     assert main(["validate", "--quick", "--data-dir", str(tmp_path), "--set", "roughness.sigma=1e-5"]) == 2
-    assert "--config and --set are not used" in capsys.readouterr().err
+    assert "--set is not used" in capsys.readouterr().err
     assert not (tmp_path / "validate").exists()
 
 
-def test_default_and_quick_sets_meet_the_issue() -> None:
-    default, quick = chosen_set(False), chosen_set(True)
-    assert default.mu == pytest.approx(8.262, abs=0.01)  # the paper's mu
+def _force_normalized(vset: scene.ValidationSet) -> np.ndarray:
+    from pipeline.stages import contact as contact_stage
+
+    return contact_stage.build(scene.g2tom_scenario(vset, "greenwood", "expected"))["force_normalized"].values
+
+
+@pytest.mark.parametrize("surface", ["gw", "random_process"])
+def test_default_and_quick_sets_meet_the_issue(surface) -> None:
+    default, quick = chosen_set(False, surface), chosen_set(True, surface)
+    if surface == "gw":
+        assert default.mu == pytest.approx(8.262, abs=0.01)  # the paper's mu
     assert default.n_grid == 1024 and default.pixels_per_cell >= 16
-    assert len(default.deltas) >= 3 and max(default.deltas) >= 2.0 and min(default.deltas) <= -3.0  # F' 0.075..18.8
+    f = _force_normalized(default)  # >= 8 loads from F' <= 0.075 (the paper's delta = 2 sigma: 0.0752) to >= 18
+    assert len(default.deltas) >= 8 and round(f[0], 3) <= 0.075 and f[-1] >= 18.0 and np.all(np.diff(f) > 0)
     assert set(default.xi) == {0.5, 0.7} and set(default.lambdas) == {1.0, 5.0} and len(default.realizations) >= 4
-    assert cases.estimate_seconds(default, cases.plan_cases(default)) <= 45 * 60
-    assert quick.n_grid == 256 and len(quick.realizations) == 1 and len(quick.deltas) == 2
+    assert (default.clean_error, default.oxide_error) == (0.03, 0.05)
+    counts = ensemble.prior_counts(default, f).max(axis=0)  # more realizations at light loads, fewer at heavy ones
+    assert counts[0] > 100 and np.all(np.diff(counts) <= 0) and counts[-1] == len(default.realizations)
+    assert cost.estimate(default, f, 2, 60.0).wall <= 45 * 60
+    assert quick.n_grid == 256 and len(quick.realizations) == 2 and len(quick.deltas) == 2
     assert len(quick.xi) * len(quick.lambdas) == 1
-    assert cases.estimate_seconds(quick, cases.plan_cases(quick)) <= 180
+    est = cost.estimate(quick, _force_normalized(quick), 2, 5.0)
+    assert est.ensemble > 0 and est.wall <= 60  # --quick exercises part 2 too
 
 
 @pytest.fixture(scope="module")
@@ -59,8 +76,11 @@ def tiny_run(tmp_path_factory):
 
 def test_outputs_are_labelled_and_consistent(tiny_run) -> None:
     out, log = tiny_run
-    assert log.index("validate: 6 cases; estimated") < log.index("g2tom done; 0 of 6 cases already stored")
-    assert log.index("already stored") < log.index("case 1/6")  # the plan comes first, then g2tom, then the cases
+    # the plan comes first (cases, grids, estimate), then g2tom, then part 1's cases, then part 2's rounds
+    assert log.index("validate: part 1 (exactness per surface, paired)") < log.index("validate: estimated")
+    assert log.index("part 2 (the default's ensemble") < log.index("validate: estimated") < log.index("g2tom done")
+    assert log.index("g2tom done") < log.index("part 1: 0 of 6 cases already stored") < log.index("case 1/6")
+    assert log.index("case 6/6") < log.index("part 2 round 1")
     ds = xr.open_dataset(out / "validate.nc")
     for name, var in ds.variables.items():
         assert var.attrs.get("units") is not None and var.attrs.get("long_name"), name
@@ -85,7 +105,7 @@ def test_outputs_are_labelled_and_consistent(tiny_run) -> None:
     text = (out / "validate.md").read_text()
     assert text.startswith("## How right is the model?")
     first = text.splitlines()[2]
-    assert "g2tom's default discretization (expected" in first
+    assert f"g2tom's default discretization ({ds.attrs['default_discretization']}" in first
     assert ds.attrs["skipped_g2tom"] == "none" and "### asperities, point" in text
     assert "### surface_asperities, greenwood" in text
     assert not np.isnan(ds["resistance_g2tom"].values).any()  # +inf where g2tom's own asperities all miss
@@ -103,6 +123,37 @@ def test_the_discrete_model_on_each_surfaces_own_caps_tracks_the_full_field(tiny
     logs = np.log(clean)
     np.testing.assert_allclose(se, logs.std(axis=1, ddof=1) / np.sqrt(2), rtol=1e-12)
     assert "### discrete, point" in (out / "validate.md").read_text()
+
+
+def test_part_2_compares_the_ensembles_at_equal_force_with_combined_errors(tiny_run) -> None:
+    out, _ = tiny_run
+    ds = xr.open_dataset(out / "validate.nc")
+    P = ds.sizes["realization"]
+    assert np.all(ds["ensemble_count_clean"].values >= P) and np.all(ds["ensemble_count"].values >= P)
+    assert ds["ensemble_count_clean"].values.max() <= TINY.max_ensemble
+    for name in ("ensemble_ratio_clean", "ensemble_ratio_clean_standard_error", "ensemble_reference_clean",
+                 "ensemble_model_clean"):
+        assert np.all(np.isfinite(ds[name].values)), name
+    np.testing.assert_allclose(ds["ensemble_ratio_clean"].values,
+                               ds["ensemble_model_clean"].values / ds["ensemble_reference_clean"].values, rtol=1e-12)
+    np.testing.assert_allclose(ds["ensemble_ratio_clean_standard_error"].values,
+                               np.hypot(ds["ensemble_model_clean_standard_error"].values,
+                                        ds["ensemble_reference_clean_standard_error"].values), rtol=1e-12)
+    np.testing.assert_allclose(ds["ensemble_ratio_standard_error"].values,
+                               np.hypot(ds["ensemble_model_standard_error"].values,
+                                        ds["ensemble_reference_standard_error"].values), rtol=1e-12)
+    f = ds["force_normalized"].values
+    np.testing.assert_allclose(ds["ensemble_target_clean"].values, [statistics.target(x, False) for x in f])
+    # part 2's full-field cases are solved at g2tom's force, as part 1's: equal force, no interpolation
+    records = [json.loads(path.read_text()) for path in (out / "cases").glob("e_*.json")]
+    assert records, "part 2 solved no full-field case"
+    for rec in records:
+        assert rec["ensemble"] and rec["n"] == TINY.ensemble_grid
+        assert rec["force"] == pytest.approx(float(ds["force"].values[rec["load"]]), rel=1e-9)
+    text = (out / "validate.md").read_text()
+    assert "### Part 2: the default's ensemble" in text and "| F (N) | F' | N full field |" in text
+    first = text.split("\n\n")[1]  # the first lines, before the first blank one: both parts' flags
+    assert "Part 2: the ensemble of" in first
 
 
 def test_log_standard_error_against_a_bootstrap() -> None:
@@ -126,9 +177,10 @@ def test_a_rerun_resumes_from_the_stored_cases(tiny_run) -> None:
     log = io.StringIO()
     run_validation(TINY, out, stream=log, draw=figure)
     text = log.getvalue()
-    assert "5 of 6 cases already stored, 1 to run" in text and "case 1/1 r1_load0_n96" in text
+    assert "part 1: 5 of 6 cases already stored, 1 to run" in text and "case 1/1 r1_load0_n96" in text
     after = xr.open_dataset(out / "validate.nc").load()
     np.testing.assert_allclose(after["resistance_reference"].values, before["resistance_reference"].values, rtol=1e-12)
+    assert "part 2: 0 of" not in text and "to run (~0 s)" in text  # part 2's cases all read back
     assert json.loads(damaged.read_text())["key"]  # rewritten whole
     # another force (another set) does not reuse the stored case
     case = cases.Case(0, 0, TINY.n_grid, True)
@@ -174,7 +226,7 @@ def test_a_tiny_random_process_run(tmp_path) -> None:
     from pipeline.reference.scene import random_process_set
 
     vset = dataclasses.replace(random_process_set(TINY, rms=20e-6), convergence_grid=0,  # 48^2 cannot hold the band
-                               discretizations=("expected", "asperities"))  # its asperities are not known
+                               ensemble_grid=96, discretizations=("expected", "asperities"))  # its asperities are not known
     paths = run_validation(vset, tmp_path, stream=io.StringIO())
     text = paths[1].read_text()
     assert "self-affine" in text and "summit statistics" in text
@@ -255,3 +307,191 @@ def test_realizations_and_loads_override_the_set_and_bad_values_exit_2(tmp_path,
     monkeypatch.setattr(validate, "run_validation", record)
     assert main(["validate", "--quick", "--no-progress", "--realizations", "2", "--data-dir", str(tmp_path)]) == 0
     assert seen["progress"] is False and seen["vset"].realizations == (0, 1) and seen["vset"].n_grid == 256
+
+
+def _same(a: xr.Dataset, b: xr.Dataset) -> None:
+    """Every variable but the wall times equal, bit for bit (NaN equal to NaN)."""
+    assert set(a.data_vars) == set(b.data_vars)
+    for name in a.data_vars:
+        if name not in TIMES:
+            np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+
+
+def test_a_killed_run_resumes_to_the_uninterrupted_result_in_both_parts(tiny_run, tmp_path, monkeypatch) -> None:
+    out, _ = tiny_run
+    real = cases.run_case
+    calls = []
+
+    def killed_at(n):
+        def run(*args, **kwargs):
+            calls.append(args[1])
+            if len(calls) == n:
+                raise KeyboardInterrupt
+            return real(*args, **kwargs)
+        return run
+
+    monkeypatch.setattr(cases, "run_case", killed_at(3))  # killed in part 1
+    with pytest.raises(KeyboardInterrupt):
+        run_validation(TINY, tmp_path, stream=io.StringIO())
+    assert not calls[-1].ensemble and len(list((tmp_path / "cases").glob("*.json"))) == 2
+    calls.clear()
+    monkeypatch.setattr(cases, "run_case", killed_at(6))  # part 1's last four, then killed in part 2
+    with pytest.raises(KeyboardInterrupt):
+        run_validation(TINY, tmp_path, stream=io.StringIO())
+    assert calls[-1].ensemble and len(list((tmp_path / "cases").glob("e_*.json"))) == 1
+    monkeypatch.setattr(cases, "run_case", real)
+    log = io.StringIO()
+    run_validation(TINY, tmp_path, stream=log)
+    assert "part 1: 6 of 6 cases already stored, 0 to run" in log.getvalue()
+    assert "part 2: 1 of" in log.getvalue()
+    with xr.open_dataset(out / "validate.nc") as whole, xr.open_dataset(tmp_path / "validate.nc") as resumed:
+        _same(whole.load(), resumed.load())
+
+
+def test_the_standard_error_of_a_ratio_against_a_bootstrap() -> None:
+    """Part 2's ratio of two ensembles: the model's (plain) over the full field's (two-phase: a proxy on N
+    realizations corrected by the paired exact values on the first P), against resampling both."""
+    rng = np.random.default_rng(11)
+    M, N, P = 100, 200, 40
+    model = np.exp(rng.normal(0.1, 0.2, M))
+    surface = rng.normal(0.0, 0.3, N)  # each realization's own scatter, which its proxy and its full field share
+    proxy = np.exp(surface + 0.04)  # a proxy with an offset (the pairs remove it)
+    exact = np.exp(1.5 * surface[:P] + rng.normal(0.0, 0.1, P))  # differences correlated with the proxy
+    m, f = statistics.log_mean(model), statistics.two_phase_log_mean(proxy, exact)
+    error = statistics.ratio_error(m, f)
+    boot = []
+    for _ in range(4000):
+        im, ip, iq = rng.integers(0, M, M), rng.integers(0, P, P), rng.integers(P, N, N - P)
+        d = np.concatenate([proxy[ip], proxy[iq]])  # the pairs resampled as pairs, the rest on their own
+        boot.append(statistics.log_mean(model[im]).mean - statistics.two_phase_log_mean(d, exact[ip]).mean)
+    # within 5 %: leaving out the pairs' covariance term (11 %) or their own variance (27 %) would fail
+    assert error == pytest.approx(np.std(boot), rel=0.05)
+    # the pairs remove the proxy's offset: the estimate is the full field's, not the proxy's
+    d, e = np.log(proxy), np.log(exact) - np.log(proxy[:P])
+    assert f.mean == pytest.approx(np.mean(d) + np.mean(e), rel=1e-12)
+    # with N = P it is the plain mean and standard error of the exact values
+    plain = statistics.two_phase_log_mean(exact, exact)
+    assert plain.mean == pytest.approx(np.mean(np.log(exact)), rel=1e-12)
+    assert plain.error == pytest.approx(np.std(np.log(exact), ddof=1) / np.sqrt(P), rel=1e-12)
+    # open circuits are counted, not averaged; a deterministic answer has no error
+    opened = statistics.log_mean(np.array([1.0, 2.0, np.inf, 4.0]))
+    assert opened.count == 4 and opened.open_fraction == 0.25 and opened.mean == pytest.approx(np.log(8) / 3)
+    assert statistics.log_mean(np.array([3.0]), deterministic=True).error == 0.0
+
+
+def test_realizations_are_sized_by_the_scatter_and_the_targets_are_the_issues() -> None:
+    rng = np.random.default_rng(2)
+    wide, narrow = np.exp(rng.normal(0, 0.3, 40)), np.exp(rng.normal(0, 0.03, 40))
+    pairs = np.exp(rng.normal(0, 0.005, 4))  # the full field on the first four, close to its proxy
+    assert 50 < statistics.needed_count(wide, wide[:4] * pairs, 0.03, 10_000) < 200  # more where surfaces scatter
+    assert statistics.needed_count(narrow, narrow[:4] * pairs, 0.03, 10_000) == 4  # at least part 1's
+    # pairs that scatter more than the error allows: no count of proxies can help, the cap
+    assert statistics.needed_count(wide, np.exp(rng.normal(0, 0.3, 4)), 0.03, 77) == 77
+    exact = wide[:4]
+    assert statistics.needed_count(exact, exact, 0.03, 64) <= 64  # at most the cap
+    assert statistics.needed_count(np.array([]), np.array([]), 0.03, 1000, prior_sd=0.3) == 100  # no scatter yet: the prior's
+    assert statistics.prior_log_sd(0.075, False) == pytest.approx(0.32)
+    assert statistics.prior_log_sd(2.0, True) == pytest.approx(2 * 0.08)
+    for f, clean, oxide in ((0.075, 0.15, np.nan), (0.5, 0.08, np.nan), (1.0, 0.05, 0.10), (2.0, 0.05, 0.10),
+                            (5.0, 0.05, 0.07), (18.8, 0.05, 0.07)):
+        assert statistics.target(f, False) == pytest.approx(clean)
+        assert np.isnan(oxide) and np.isnan(statistics.target(f, True)) or statistics.target(f, True) == pytest.approx(oxide)
+
+
+def _bundled_with(model: str) -> str:
+    """A bundled scenario of ``contact.model`` (``paper`` first: whichever model the default has, the
+    side-by-side scenario has the other)."""
+    from pipeline.config import bundled_scenarios, load_scenario
+
+    names = ["paper"] + [n for n in ("paper_gt", "paper_discrete") if n in bundled_scenarios()]
+    return next(n for n in names if load_scenario(n).contact.model == model)
+
+
+@pytest.mark.parametrize("model", ["greenwood_tripp", "discrete"])
+def test_part_2_validates_the_scenarios_own_model(model) -> None:
+    config = _bundled_with(model)
+    from pipeline.config import load_scenario
+
+    own = load_scenario(config)
+    scenario = ensemble.validated_scenario(TINY, config)
+    assert (scenario.contact.model, scenario.oxide.spot_rule, scenario.cube.model, scenario.contact.spots) == (
+        own.contact.model, own.oxide.spot_rule, own.cube.model, own.contact.spots)
+    assert scenario.roughness.sigma == TINY.sigma and scenario.indenter.radius == TINY.radius
+    model = ensemble.model_ensemble(TINY, config)
+    assert model.resistance.shape[-1] == TINY.model_realizations
+    if own.contact.model == "discrete":  # each surface of the pool its own clean resistance
+        assert not model.deterministic and model.clean.shape[0] == max(own.contact.surfaces, TINY.model_realizations)
+        assert np.unique(model.clean[:, -1]).size > 10
+    else:  # Greenwood-Tripp's expected spots: one clean answer
+        assert model.deterministic and model.clean.shape[0] == 1
+    assert own.contact.model in model.description and own.cube.model in model.description
+
+
+def test_a_run_on_the_discrete_model_reuses_part_1s_cases(tiny_run, tmp_path) -> None:
+    import shutil
+
+    out, _ = tiny_run
+    shutil.copytree(out / "cases", tmp_path / "cases")
+    log = io.StringIO()
+    config = _bundled_with("discrete")
+    paths = run_validation(TINY, tmp_path, stream=log, config=config)
+    assert "part 1: 6 of 6 cases already stored, 0 to run" in log.getvalue()  # the full field is the model's own
+    with xr.open_dataset(paths[0]) as ds:
+        assert ds.attrs["validated_scenario"] == config and "contact.model discrete" in ds.attrs["validated_model"]
+        assert ds.attrs["default_discretization"] == "discrete" and ds.attrs["default_model"] == "point"
+        assert np.all(ds["ensemble_model_clean_standard_error"].values > 0)  # an ensemble of surfaces
+        assert np.all(np.isfinite(ds["ensemble_ratio_clean"].values))
+
+
+def test_validate_takes_the_global_options_and_refuses_bad_values_before_work(tmp_path, monkeypatch, capsys) -> None:
+    import pipeline.reference.validate as validate
+
+    seen = {}
+
+    def record(vset, out, progress=True, config="paper", options=None, **_):
+        seen.update(vset=vset, progress=progress, config=config, options=options)
+        return []
+
+    monkeypatch.setattr(validate, "run_validation", record)
+    other = _bundled_with("discrete" if _bundled_with("greenwood_tripp") == "paper" else "greenwood_tripp")
+    assert main(["validate", "--quick", "--no-progress", "--workers", "2", "--config", other,
+                 "--data-dir", str(tmp_path)]) == 0
+    assert seen["progress"] is False and seen["config"] == other and seen["options"].workers == 2
+    assert main(["validate", "--quick", "--data-dir", str(tmp_path)]) == 0  # default: a local cluster on every core
+    assert seen["options"].workers == (__import__("os").cpu_count() or 1) and seen["progress"] is True
+    capsys.readouterr()
+    for argv, expect in ((["--realizations", "0"], "--realizations = 0 is out of range"),
+                         (["--realizations", "1"], "--realizations = 1 is out of range"),
+                         (["--surface", "fractal"], "invalid choice: 'fractal'"),
+                         (["--workers", "0"], "--workers = 0 is out of range"),
+                         (["--scheduler", "nowhere"], "--scheduler 'nowhere'")):
+        seen.clear()
+        try:
+            status = main(["validate", "--data-dir", str(tmp_path / "x"), *argv])
+        except SystemExit as exc:  # argparse's refusals (an unknown choice)
+            status = exc.code
+        assert status == 2, argv
+        err = capsys.readouterr().err
+        assert err.startswith("g2tom: error:") and expect in err and err.count("\n") == 1, err
+        assert not seen  # before any work
+
+
+def test_plan_validate_prints_both_surfaces_cases_grids_and_estimate(capsys) -> None:
+    assert main(["plan", "--validate", "--workers", "2"]) == 0
+    out = capsys.readouterr().out
+    for surface in ("gw surface", "random_process surface"):
+        assert f"validate: {surface}" in out
+    assert out.count("validate: part 1 (exactness per surface, paired)") == 2 and "1024^2" in out
+    assert out.count("validate: part 2 (the default's ensemble") == 2 and "256^2" in out
+    assert out.count("validate: estimated") == 2 and "on 2 worker(s)" in out
+
+
+def test_cases_on_a_local_cluster_give_the_serial_run(tiny_run, tmp_path) -> None:
+    from pipeline.compute import ComputeOptions
+
+    out, _ = tiny_run
+    log = io.StringIO()
+    run_validation(TINY, tmp_path, stream=log, options=ComputeOptions(workers=2, progress=False))
+    assert "estimated" in log.getvalue() and "on 2 worker(s)" in log.getvalue()
+    with xr.open_dataset(out / "validate.nc") as serial, xr.open_dataset(tmp_path / "validate.nc") as cluster:
+        _same(serial.load(), cluster.load())

@@ -231,7 +231,11 @@ def _cmd_params(args: argparse.Namespace, scenario: Scenario) -> None:
 
 
 def _cmd_plan(args: argparse.Namespace, scenario: Scenario) -> None:
-    from pipeline.before_work.plan import format_plan
+    from pipeline.before_work.plan import format_plan, format_validate_plan
+
+    if args.validate:
+        print("\n".join(format_validate_plan(args.config, args.workers)))
+        return
 
     if args.atlas:
         from pipeline.atlas.design import AtlasDesign, format_atlas_plan, plan_atlas
@@ -284,21 +288,25 @@ def _cmd_validate(args: argparse.Namespace, scenario: Scenario) -> None:
     """The full-field reference against g2tom (pipeline.reference); the extra is checked first."""
     from pipeline.reference import missing_extra
 
-    if args.overrides or args.config != "paper":
-        raise ConfigError("g2tom validate runs its own validation scene (the default set or --quick): "
-                          "--config and --set are not used by it; leave them out")
-    from pipeline.before_work.preflight import check_data_dir
-
-    check_data_dir(args.data_dir)
-    problem = missing_extra()
-    if problem:
-        raise ConfigError(problem)
+    if args.overrides:
+        raise ConfigError("g2tom validate runs its own validation scene (the default set or --quick): --set is "
+                          "not used by it; leave it out (--config names the scenario whose model part 2 validates)")
+    from pipeline.before_work.preflight import check_data_dir, check_scheduler
     from pipeline.reference.validate import chosen_set, output_folder, run_validation
 
     vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads)
+    check_data_dir(args.data_dir)
+    if args.scheduler:
+        check_scheduler(args.scheduler)
+    problem = missing_extra()
+    if problem:
+        raise ConfigError(problem)
+    if args.workers is None and args.scheduler is None:
+        args.workers = os.cpu_count() or 1  # a local cluster, one single-threaded case per core (as the atlas)
     from analysis.figures_validate import figure
 
-    run_validation(vset, output_folder(args.data_dir, args.surface), progress=not args.no_progress, draw=figure)
+    run_validation(vset, output_folder(args.data_dir, args.surface), progress=not args.no_progress, draw=figure,
+                   config=args.config, options=_options(args))
 
 
 def _version() -> str:
@@ -398,6 +406,8 @@ def _parser() -> argparse.ArgumentParser:
                compute=True)
     plan.add_argument("--atlas", action="store_true",
                       help="plan the atlas's default design over (mu, Pi) on this scenario (one scene per worker)")
+    plan.add_argument("--validate", action="store_true",
+                      help="plan `g2tom validate`'s default set on both surfaces, part 2 validating this scenario")
     add("atlas", _cmd_atlas, "run the chain on every scene of the atlas's design over (mu, Pi), one scene per "
         "task, resumable (<data-dir>/atlas/)", compute=True)
     add("params", _cmd_params, "list every parameter with its value, unit and range")
@@ -420,14 +430,14 @@ def _parser() -> argparse.ArgumentParser:
     predict.add_argument("--surrogate", type=Path, default=None,
                          help="surrogate.json or surrogate.nc (default: <data-dir>/surrogate.json, else surrogate.nc)")
     validate = add("validate", _cmd_validate,
-                   "the full-field elastic contact (tamaas) against g2tom: <data-dir>/validate/")
+                   "the full-field elastic contact (tamaas) against g2tom, part 1 per surface and part 2 the "
+                   "--config scenario's ensemble: <data-dir>/validate/", compute=True)
     validate.add_argument("--quick", action="store_true",
-                          help="256^2 grid, one realization, two loads, clean and one oxidized case")
+                          help="256^2 grid, two realizations, two loads, clean and one oxidized case; part 2 on 128^2")
     validate.add_argument("--realizations", type=int, default=None,
-                          help="surfaces (and oxide fields) 0 .. N-1 instead of the set's (>= 1)")
+                          help="part 1's surfaces (and oxide fields) 0 .. N-1 instead of the set's (>= 2)")
     validate.add_argument("--loads", type=int, default=None,
                           help="load steps evenly spaced in delta/sigma over the set's range (>= 2)")
-    validate.add_argument("--no-progress", action="store_true", help="hide the line per finished case")
     validate.add_argument("--surface", choices=("gw", "random_process"), default="gw",
                           help="gw: asperities with g2tom's own parameters (<data-dir>/validate/); random_process: a "
                                "Gaussian self-affine surface, g2tom fed its summit statistics (<data-dir>/validate_random_process/)")

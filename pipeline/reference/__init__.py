@@ -8,9 +8,11 @@ Modules: ``elastic`` (the non-periodic Boussinesq operator and the library's con
 ``contact`` (load steps of a rough sphere), ``punch`` (conductance of a conducting set by
 Barber's analogy), ``surfaces`` (sphere, GW and random-process surfaces), ``oxide`` (g2tom's
 oxide field on the grid), ``scene`` (the validation scene and its g2tom counterpart),
-``surface_spots`` (g2tom on the GW surface's own asperities), ``window`` (each case's window,
-fitted to its contact), ``cases`` (one stored case), ``validate`` (the ``g2tom validate``
-driver), ``summary`` (validate.nc) and ``section`` (its figure and report section).
+``surface_spots`` and ``discrete_spots`` (g2tom on the GW surface's own asperities), ``window``
+(each case's window, fitted to its contact), ``cases`` (one stored case), ``statistics`` (part 2's
+ensemble means and standard errors), ``ensemble`` (part 2: the validated scenario's ensemble
+against the full field's), ``cost`` (the plan's estimate), ``validate`` (the ``g2tom validate``
+driver), ``variables`` and ``summary`` (validate.nc) and ``section`` (its report section).
 """
 
 from __future__ import annotations

@@ -2,8 +2,10 @@
 
 A case solves the full-field contact of the realization's rough sphere at g2tom's force, then the
 conductance (Barber's analogy) of the contact set, clean and minus every oxide case's oxide set.
-Each finished case is one small JSON file under ``<out>/cases/``, written atomically and keyed by
-everything that shaped it, so a killed run continues where it stopped and a changed set recomputes.
+Part 1's cases are on the main grid (and the first realization's clean on the convergence grid);
+part 2's ``ensemble`` cases on the ensemble grid. Each finished case is one small JSON file under
+``<out>/cases/``, written atomically and keyed by everything that shaped it, so a killed run
+continues where it stopped and a changed set recomputes.
 """
 
 from __future__ import annotations
@@ -25,32 +27,31 @@ from pipeline.reference.punch import punch_conductance
 from pipeline.scene import FieldSource
 from pipeline.store import atomic_path
 
-__all__ = ["Case", "plan_cases", "case_key", "load_case", "run_case", "estimate_seconds"]
+__all__ = ["Case", "plan_cases", "ensemble_cases", "case_key", "load_case", "run_case"]
 
-#: Seconds per N^2 log2(N) pixels of one contact solve and of one punch conductance, from runs on
-#: the shared 2-core machine (GW rough sphere, one thread; at 1024^2 a contact took 15-45 s and a
-#: punch 4-10 s, depending on the load and on the machine's other work): upper ends, rounded up.
-CONTACT_SECONDS = 5.5e-6
-PUNCH_SECONDS = 1.6e-6
-#: g2tom's side (contact, oxide and cube stages per model and discretization), seconds each.
-G2TOM_SECONDS = 4.0
+#: The set's fields that shape no case (part 1's realizations and loads are the case's own; part
+#: 2's sizes choose which cases run, not what one gives).
+UNSHAPING = ("realizations", "models", "discretizations", "convergence_grid", "deltas", "ensemble_grid",
+             "max_ensemble", "model_realizations", "clean_error", "oxide_error")
 #: Relative force step of the two nearby loads whose dF/d(delta) checks Barber's theorem.
 BARBER_STEP = 0.01
 
 
 @dataclass(frozen=True)
 class Case:
-    """Realization ``realization`` at load step ``load`` on an ``n x n`` grid; ``oxide``: with the oxide cases."""
+    """Realization ``realization`` at load step ``load`` on an ``n x n`` grid; ``oxide``: with the oxide
+    cases (else clean with Barber's check: the convergence grid); ``ensemble``: part 2's."""
 
     realization: int
     load: int
     n: int
     oxide: bool
+    ensemble: bool = False
 
     @property
     def name(self) -> str:
         """File stem of the case."""
-        return f"r{self.realization}_load{self.load}_n{self.n}"
+        return ("e_" if self.ensemble else "") + f"r{self.realization}_load{self.load}_n{self.n}"
 
 
 def plan_cases(vset: scene.ValidationSet) -> list[Case]:
@@ -62,27 +63,15 @@ def plan_cases(vset: scene.ValidationSet) -> list[Case]:
     return cases
 
 
-def _seconds(n: int) -> tuple[float, float]:
-    size = n * n * np.log2(n)
-    return CONTACT_SECONDS * size, PUNCH_SECONDS * size
-
-
-def estimate_seconds(vset: scene.ValidationSet, cases: list[Case], g2tom: bool = True) -> float:
-    """The plan's wall-time estimate of ``cases`` (and of g2tom's side if ``g2tom``), s."""
-    punches = 1 + len(vset.xi) * len(vset.lambdas)
-    total = G2TOM_SECONDS * len(vset.models) * len(vset.discretizations) if g2tom else 0.0
-    probe, _ = _seconds(window.probe_grid(vset))
-    for case in cases:
-        contact, punch = _seconds(case.n)
-        total += probe + ((contact + punch * punches) if case.oxide else (3 * contact + punch))
-    return total
+def ensemble_cases(vset: scene.ValidationSet, load: int, realizations: range) -> list[Case]:
+    """Part 2's cases of ``realizations`` at load step ``load`` on the ensemble grid (clean and oxidized)."""
+    return [Case(r, load, vset.ensemble_grid, True, ensemble=True) for r in realizations]
 
 
 def case_key(vset: scene.ValidationSet, case: Case, force: float, source: FieldSource) -> str:
     """Hash of everything that shapes a case's result (the scene, the oxide fields, the force)."""
-    shaping = {k: v for k, v in dataclasses.asdict(vset).items()
-               if k not in ("realizations", "models", "discretizations", "convergence_grid", "deltas")}
-    shaping["window"] = [window.probe_grid(vset), window.MARGIN, window.PAD_SPACINGS, window.GROWTH]
+    shaping = {k: v for k, v in dataclasses.asdict(vset).items() if k not in UNSHAPING}
+    shaping["window"] = [window.probe_grid(vset, case.ensemble), window.MARGIN, window.PAD_SPACINGS, window.GROWTH]
     fields = [source.n_cells, source.cell_size, source.seed, source.amplitudes, source.rule,
               [m.period for m in source.modes]]
     text = json.dumps({"set": shaping, "case": dataclasses.asdict(case), "force": float(force).hex(),
@@ -109,11 +98,12 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
     to the probe's contact ``reach``, m). The record holds the force and approach of the
     full-field solution, its contact area (m^2),
     the clean resistance and, for ``case.oxide``, the resistance (xi, lambda) with oxide, in ohm
-    (+inf where nothing conducts), and the wall times (s) of the contact and punch solves.
+    (+inf where nothing conducts), the wall times (s) of the contact solve and of the whole case,
+    and the case's CPU time (s: its time on a core of its own, what the plan's constants model).
     """
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     try:
-        side, reach = window.fitted_side(vset, case.realization, force)
+        side, reach = window.fitted_side(vset, case.realization, force, case.ensemble)
         operator, heights, state, side = window.solve_in_window(vset, case.realization, case.n, force, side)
     except (elastic.SolverFailure, ContactReachesEdge) as exc:  # recorded (NaN results, the reason), not fatal
         return _store(path, {"key": key, **dataclasses.asdict(case), "error": str(exc), "force": np.nan,
@@ -121,7 +111,8 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
                              "barber_ratio": np.nan, "resistance_clean": np.nan,
                              "resistance": np.full((len(vset.xi), len(vset.lambdas)), np.nan).tolist(),
                              "side": np.nan, "reach": np.nan,
-                             "seconds_contact": np.nan, "seconds_total": time.perf_counter() - start})
+                             "seconds_contact": np.nan, "seconds_total": time.perf_counter() - start,
+                             "seconds_cpu": time.process_time() - cpu})
     pixel = side / case.n
     contact_seconds = time.perf_counter() - start
     clean = punch_conductance(operator, state.contact, vset.rho)
@@ -149,6 +140,7 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
         "resistance": oxidized.tolist(),
         "seconds_contact": contact_seconds,
         "seconds_total": time.perf_counter() - start,
+        "seconds_cpu": time.process_time() - cpu,
     }
     return _store(path, record)
 

@@ -4,11 +4,12 @@ A :class:`ValidationSet` fixes the scene (the paper's materials, sigma and eta; 
 2 beta, which keep the paper's mu = (8/3) eta sigma sqrt(2 R* beta) = 8.26 with a contact that
 fits a 1024^2 grid at 16 pixels per asperity spacing), the loads (g2tom's approaches delta/sigma:
 the reference is solved at the force g2tom gives at each, so both are compared at equal F), the
-oxide cases (xi x lambda, g2tom's fields by seed and realization index) and the realizations.
+oxide cases (xi x lambda, g2tom's fields by seed and realization index), the realizations of
+part 1 and the sizes of part 2's ensembles.
 
-g2tom's side runs its stages in memory (contact, oxide, cube) for every spot discretization
-(``contact.spots`` when the scenario has that key; today's one-spot-per-cell ``mean_area``
-otherwise) and every ``cube.model``.
+g2tom's side runs its stages in memory (contact, oxide, cube): in part 1 for every spot
+discretization of Greenwood-Tripp's model and every ``cube.model`` (:func:`g2tom_scenario`), in part
+2 the validated scenario's own model (:func:`scene_overrides` on top of it).
 """
 
 from __future__ import annotations
@@ -28,11 +29,14 @@ from pipeline.stages import cube as cube_stage
 from pipeline.stages import oxide as oxide_stage
 
 __all__ = ["ValidationSet", "DEFAULT", "QUICK", "RANDOM", "random_process_set", "surface_stream", "rough_sphere", "g2tom_scenario",
-           "g2tom_resistances", "contact_extent", "FLOOR_SIGMAS"]
+           "g2tom_resistances", "contact_extent", "scene_overrides", "scenario_of", "FLOOR_SIGMAS", "DEFAULT_LOADS"]
 
 #: The GW surface's floor between asperities, in sigma below the reference plane: far below any
 #: contact of the loads used (the deepest touching tip lies near delta >= -3 sigma).
 FLOOR_SIGMAS = 8.0
+#: The default set's approaches delta/sigma: 8 evenly spaced from 2 to -3 (g2tom's load steps), i.e.
+#: F' = 0.075, 0.45, 1.55, 3.54, 6.35, 9.88, 14.1, 18.8 on the GW surface.
+DEFAULT_LOADS = tuple(float(d) for d in np.linspace(2.0, -3.0, 8))
 
 
 @dataclass(frozen=True)
@@ -50,7 +54,7 @@ class ValidationSet:
     xi, lambdas
         Oxide fractions and normalized correlation lengths: every pair is a case.
     realizations
-        Surface and oxide realization indices.
+        Surface and oxide realization indices of part 1 (0 .. P-1).
     n_grid, pixels_per_cell
         Reference grid side (pixels) and pixels per asperity spacing 1/sqrt(eta).
     convergence_grid
@@ -75,7 +79,7 @@ class ValidationSet:
     E: float = 2.1e11
     nu: float = 0.3
     rho: float = 7.2e-7
-    deltas: tuple[float, ...] = (2.0, -0.5, -3.0)
+    deltas: tuple[float, ...] = DEFAULT_LOADS
     xi: tuple[float, ...] = (0.5, 0.7)
     lambdas: tuple[float, ...] = (1.0, 5.0)
     realizations: tuple[int, ...] = (0, 1, 2, 3)
@@ -91,6 +95,11 @@ class ValidationSet:
     rms: float = 0.0
     short_wavelength: float = 0.0
     bandwidth_ratio: float = 8.0
+    ensemble_grid: int = 256
+    max_ensemble: int = 256
+    model_realizations: int = 1024
+    clean_error: float = 0.03
+    oxide_error: float = 0.05
 
     @property
     def pixel(self) -> float:
@@ -106,6 +115,11 @@ class ValidationSet:
     def e_star(self) -> float:
         """Contact modulus E* = E / (2 (1 - nu^2)) of two equal bodies, Pa."""
         return self.E / (2.0 * (1.0 - self.nu**2))
+
+    @property
+    def force_scale(self) -> float:
+        """E* sqrt(R* sigma^3) / 2, N: F' = F / force_scale (Eq. 25)."""
+        return self.e_star * math.sqrt(self.radius * self.sigma**3) / 2.0
 
     @property
     def mu(self) -> float:
@@ -133,13 +147,19 @@ def random_process_set(base: ValidationSet, rms: float, hurst: float = 0.8, band
 
 DEFAULT = ValidationSet()
 #: ``--quick``: 256^2 at 8 pixels per asperity spacing (a window of 2.3 mm, which holds the
-#: contact of both loads), one realization, two loads, clean plus one oxidized case.
-QUICK = dataclasses.replace(DEFAULT, deltas=(1.0, -0.5), xi=(0.5,), lambdas=(5.0,), realizations=(0,),
-                            n_grid=256, pixels_per_cell=8.0, convergence_grid=128)
-#: The random-process surface (``--surface random_process``): the default set's loads, oxide
-#: cases, realizations and grid on a Gaussian self-affine surface (H 0.8, rms 20 um, a band of 8),
-#: its summits as dense as the GW set's asperities (mu = 3.5: the summits are sharper).
-RANDOM = random_process_set(DEFAULT, rms=20e-6)
+#: contact of both loads), two realizations, two loads, clean plus one oxidized case; part 2 on
+#: 128^2 with at most 6 full-field realizations per load and 64 of g2tom's.
+QUICK = dataclasses.replace(DEFAULT, deltas=(1.0, -0.5), xi=(0.5,), lambdas=(5.0,), realizations=(0, 1),
+                            n_grid=256, pixels_per_cell=8.0, convergence_grid=128, ensemble_grid=128,
+                            max_ensemble=6, model_realizations=64)
+#: The random-process surface's approaches: 8 evenly spaced from 1.75 to -3.5 sigma (its summits'),
+#: the GW set's span of F' (0.067 .. 18.7; the GW set's approaches give F' 0.033 .. 15.4 there).
+RANDOM_LOADS = tuple(float(d) for d in np.linspace(1.75, -3.5, 8))
+#: The random-process surface (``--surface random_process``): the default set's oxide cases,
+#: realizations and grids on a Gaussian self-affine surface (H 0.8, rms 20 um, a band of 8), its
+#: summits as dense as the GW set's asperities (mu = 3.5: the summits are sharper), at
+#: :data:`RANDOM_LOADS`.
+RANDOM = dataclasses.replace(random_process_set(DEFAULT, rms=20e-6), deltas=RANDOM_LOADS)
 
 
 
@@ -176,23 +196,36 @@ def rough_sphere(vset: ValidationSet, realization: int, n: int, side: float | No
     return rough + surfaces.sphere(n, pixel, vset.radius)
 
 
-def g2tom_scenario(vset: ValidationSet, model: str, spots: str) -> Scenario:
-    """The g2tom scenario of the validation scene, one ``cube.model`` and one spot discretization."""
-    lo, hi = min(vset.deltas), max(vset.deltas)
-    overrides = {
+def scene_overrides(vset: ValidationSet, realizations: int) -> dict[str, object]:
+    """The settings that make a g2tom scenario the validation scene: materials, roughness, sphere,
+    loads, oxide cases and seed, and a fixed ensemble of ``realizations`` oxide fields."""
+    return {
         "material.E": vset.E, "material.nu": vset.nu, "material.rho": vset.rho,
         "roughness.sigma": vset.sigma, "roughness.eta": vset.eta, "roughness.beta": vset.beta,
         "indenter.radius": vset.radius,
-        "loading.delta_max": hi, "loading.delta_min": lo, "loading.n_delta": len(vset.deltas),
+        "loading.delta_max": max(vset.deltas), "loading.delta_min": min(vset.deltas),
+        "loading.n_delta": len(vset.deltas),
         "oxide.xi": list(vset.xi), "oxide.lambda": list(vset.lambdas), "oxide.seed": vset.oxide_seed,
-        "oxide.ensemble": "fixed", "oxide.n_realizations": max(2, max(vset.realizations) + 1),
-        "cube.model": model, "contact.spots": spots,
+        "oxide.ensemble": "fixed", "oxide.n_realizations": max(2, int(realizations)),
     }
-    scenario = resolve(load_scenario("paper", overrides))
+
+
+def scenario_of(vset: ValidationSet, config: str, overrides: dict[str, object]) -> Scenario:
+    """``config`` (a bundled scenario or a TOML file) with ``overrides``, its domains resolved; its
+    load steps checked to be the set's approaches."""
+    scenario = resolve(load_scenario(config, overrides))
     expected = np.asarray(vset.deltas) * vset.sigma
     if not np.allclose(scenario.deltas, expected, rtol=1e-12, atol=0):
         raise ValueError(f"deltas = {vset.deltas} must be evenly spaced, lightest load first (g2tom's load steps)")
     return scenario
+
+
+def g2tom_scenario(vset: ValidationSet, model: str, spots: str) -> Scenario:
+    """Part 1's g2tom scenario of the validation scene: Greenwood-Tripp's contact model (whatever
+    the default's), one spot discretization, the spots' centre rule and one ``cube.model``."""
+    overrides = {**scene_overrides(vset, max(vset.realizations) + 1), "contact.model": "greenwood_tripp",
+                 "oxide.spot_rule": "centre", "cube.model": model, "contact.spots": spots}
+    return scenario_of(vset, "paper", overrides)
 
 
 #: The contact's extent: the largest radius where GT's area fraction is at least this fraction of

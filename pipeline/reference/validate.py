@@ -1,9 +1,16 @@
-"""``g2tom validate [--quick]``: the full-field reference against g2tom on one validation set.
+"""``g2tom validate [--quick]``: the full-field reference against g2tom on one validation set, in two parts.
 
-Prints the plan first (scene, grid, cases, estimated time), runs g2tom's stages in memory for every
-spot discretization and ``cube.model``, then every reference case (resumable: finished cases are
-read back from ``<out>/cases/``), with one progress line per case, and writes ``validate.nc``,
-the figure ``validate.png`` and the report section ``validate.md`` under ``<out>``.
+Part 1, *exactness per surface* (paired): g2tom's discretizations and models on the very surfaces
+the full field solves, per realization. Part 2, *the default's ensemble* (unpaired,
+:mod:`pipeline.reference.ensemble`): the validated scenario's ensemble geometric mean of R against
+the full field's over as many realizations as each load needs.
+
+Prints the plan first (scene, cases, grids, estimated time), runs g2tom's sides in memory, then
+part 1's cases and part 2's rounds on dask (:class:`CaseRunner`: a ``dask.distributed`` cluster
+for ``workers`` > 1 or a ``scheduler``, as the atlas; otherwise one after the other in this
+process), each case resumable (finished cases are read back from ``<out>/cases/``), with one
+progress line per case, and writes ``validate.nc``, the figure ``validate.png`` and the report
+section ``validate.md`` under ``<out>``.
 """
 
 from __future__ import annotations
@@ -11,25 +18,30 @@ from __future__ import annotations
 import dataclasses
 import sys
 import time
+from contextlib import ExitStack
 from pathlib import Path
-from typing import Callable, TextIO
+from typing import Any, Callable, TextIO
 
 import numpy as np
 import xarray as xr
 
+from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, load_scenario
 from pipeline.progress import format_duration
 from pipeline.reference import cases as cases_mod
-from pipeline.reference import discrete_spots, scene, section, summary, surface_spots, window
+from pipeline.reference import cost, discrete_spots, ensemble, scene, section, summary, surface_spots, window
 from pipeline.scene import FieldSource
+from pipeline.stages import contact as contact_stage
 from pipeline.store import atomic_path
 
 #: Largest relative difference of g2tom's forces at one delta between discretizations and models
 #: (their auto domains differ); the reference is solved at the first one's.
 FORCE_AGREEMENT = 1e-4
+#: One process, no cluster: the library's default.
+SERIAL = ComputeOptions(workers=1, progress=False)
 
-__all__ = ["available_discretizations", "default_discretization", "plan_lines", "run_validation", "chosen_set",
-           "output_folder", "SURFACES"]
+__all__ = ["available_discretizations", "default_of", "plan_lines", "run_validation", "chosen_set",
+           "output_folder", "SURFACES", "CaseRunner", "SERIAL"]
 
 
 def available_discretizations(surface: str = "gw") -> tuple[str, ...]:
@@ -40,30 +52,121 @@ def available_discretizations(surface: str = "gw") -> tuple[str, ...]:
     return ("mean_area", "expected", "asperities") + own
 
 
-def default_discretization() -> str:
-    """The discretization of the default scenario ``paper``."""
-    return load_scenario("paper").contact.spots
+def default_of(config: str, model: ensemble.ModelEnsemble) -> dict[str, str]:
+    """The validated scenario ``config`` as validate.nc names it: ``name``, ``model`` (part 2's
+    words for it on the scene), ``discretization`` (part 1's name for its spots: ``discrete`` for the
+    discrete model) and ``resistance_model`` (its cube.model)."""
+    s = load_scenario(config)
+    return {"name": s.name, "model": model.description, "resistance_model": s.cube.model,
+            "discretization": discrete_spots.DISCRETE if s.contact.model == "discrete" else s.contact.spots}
 
 
-def plan_lines(vset: scene.ValidationSet, everything: list[cases_mod.Case]) -> list[str]:
-    """The plan printed before any work (the estimate assumes no case is stored yet)."""
-    seconds = cases_mod.estimate_seconds(vset, everything)
+def _force_normalized(vset: scene.ValidationSet) -> np.ndarray:
+    """g2tom's F' at the set's approaches (Greenwood-Tripp's forces, which every model shares)."""
+    contact = contact_stage.build(scene.g2tom_scenario(vset, vset.models[0], "expected"))
+    return contact["force_normalized"].values
+
+
+def _model_seconds(vset: scene.ValidationSet, config: str, workers: int) -> float:
+    """The project's plan of the validated scenario's contact, oxide and cube stages on the scene, s."""
+    from pipeline.before_work.plan import estimate
+
+    stages = estimate(ensemble.validated_scenario(vset, config), workers)
+    return sum(e.seconds for e in stages if e.stage in ("contact", "oxide", "cube"))
+
+
+def plan_lines(vset: scene.ValidationSet, config: str = "paper", workers: int = 1) -> list[str]:
+    """The plan printed before any work: scene, both parts' cases and grids, the estimate (no case stored)."""
+    f = _force_normalized(vset)
+    est = cost.estimate(vset, f, workers, _model_seconds(vset, config, workers))
     oxide = ", ".join(f"xi {x:g}/lambda {lam:g}" for x in vset.xi for lam in vset.lambdas)
+    stand = (f"on the GW surface the discrete solve of each surface's own caps stands in where part 1 shows it "
+             f"within {100 * ensemble.STAND_IN_TOLERANCE:g} % at every realization" if vset.surface == "gw"
+             else "no stand-in on this surface")
     return [
         f"validate: {vset.surface} surface" + (f" (self-affine, H {vset.hurst:g}, rms {vset.rms:g} m, wavelengths "
                                               f"{vset.short_wavelength:.3g} .. {vset.short_wavelength * vset.bandwidth_ratio:.3g} m; "
                                               "g2tom's parameters are its summits')" if vset.surface == "random_process" else "")
         + f": sigma {vset.sigma:g} m, eta {vset.eta:g} m^-2, beta {vset.beta:g} m, "
         f"R* {vset.radius:g} m, E* {vset.e_star:.4g} Pa, rho* {vset.rho:g} ohm m (mu = {vset.mu:.3f})",
-        f"validate: grid {vset.n_grid}^2 on each case's window, fitted to its contact by a {window.probe_grid(vset)}^2 "
-        f"probe (at most the set's {vset.side * 1e3:.3g} mm: pixels of at most {vset.pixel * 1e6:.3g} um, "
-        f"{vset.pixels_per_cell:g} per asperity spacing); convergence grid "
-        + (f"{vset.convergence_grid}^2" if vset.convergence_grid else "none"),
-        f"validate: loads delta/sigma {list(vset.deltas)}; realizations {list(vset.realizations)}; "
-        f"clean + {oxide}",
-        f"validate: g2tom {' x '.join([str(list(vset.discretizations)), str(list(vset.models))])}",
-        f"validate: {len(everything)} cases; estimated {format_duration(seconds)} (without stored cases)",
+        f"validate: {len(vset.deltas)} loads delta/sigma {[round(d, 3) for d in vset.deltas]}, F' "
+        + ", ".join(f"{x:.3g}" for x in f) + f"; clean + {oxide}",
+        f"validate: part 1 (exactness per surface, paired): realizations {list(vset.realizations)}, grid "
+        f"{vset.n_grid}^2 on each case's window, fitted to its contact by a {window.probe_grid(vset)}^2 probe (at most "
+        f"the set's {vset.side * 1e3:.3g} mm); convergence grid "
+        + (f"{vset.convergence_grid}^2" if vset.convergence_grid else "none")
+        + f"; g2tom {list(vset.discretizations)} x {list(vset.models)}: {est.part1} + {est.convergence} cases",
+        f"validate: part 2 (the default's ensemble, unpaired): {ensemble.describe(ensemble.validated_scenario(vset, config))} "
+        f"against the full field on {vset.ensemble_grid}^2 (probe {window.probe_grid(vset, True)}^2), "
+        f"standard error of ln R <= {vset.clean_error:g} clean, {vset.oxide_error:g} oxidized; full-field "
+        f"realizations per load from the prior scatter {est.ensemble_counts.tolist()} (at most {vset.max_ensemble}; "
+        f"resized from the measured scatter, {ensemble.MAX_ROUNDS} rounds at most): {est.ensemble} cases; {stand}",
+        f"validate: estimated {format_duration(est.wall)} on {workers} worker(s) (cases: part 1 "
+        f"{format_duration(est.seconds_part1)}, part 2 {format_duration(est.seconds_part2)} of one process; "
+        f"g2tom {format_duration(est.seconds_g2tom)}); at most {format_duration(est.wall_cap)} should every load need "
+        f"{vset.max_ensemble} realizations (constants: CPU seconds per solve in pipeline/reference/cost.py)",
     ]
+
+
+class CaseRunner:
+    """Runs cases where ``options`` says (one cluster for the whole validation, made at the first
+    case to run), each stored as it finishes; stored cases are read back.
+
+    Use as a context manager (the cluster is closed at its end).
+    """
+
+    def __init__(self, vset: scene.ValidationSet, forces: np.ndarray, source: FieldSource, case_dir: Path,
+                 options: ComputeOptions, stream: TextIO, progress: bool, start: float) -> None:
+        self.vset, self.forces, self.source, self.case_dir = vset, forces, source, case_dir
+        self.options, self.stream, self.progress, self.start = options, stream, progress, start
+        self._stack = ExitStack()
+        self._client: Any = None
+        self._made = False
+        self._f = np.asarray(forces) / vset.force_scale
+
+    def __enter__(self) -> "CaseRunner":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stack.close()
+
+    def _workers(self) -> int:
+        return 1 if self._client is None else max(len(self._client.scheduler_info().get("workers", {})), 1)
+
+    def _left(self, cases: list[cases_mod.Case]) -> float:
+        return sum(cost.case_seconds(self.vset, c, float(self._f[c.load])) for c in cases) / self._workers()
+
+    def solve(self, cases: list[cases_mod.Case], label: str) -> dict[cases_mod.Case, dict]:
+        """The records of ``cases``: stored ones read back, the others solved (and stored)."""
+        keys = {c: cases_mod.case_key(self.vset, c, self.forces[c.load], self.source) for c in cases}
+        done = {c: cases_mod.load_case(self.case_dir / f"{c.name}.json", keys[c]) for c in cases}
+        todo = [c for c in cases if done[c] is None]
+        if todo and not self._made:
+            from pipeline.compute import _client
+
+            self._client, self._made = _client(self._stack, self.options), True
+        print(f"validate: {label}: {len(cases) - len(todo)} of {len(cases)} cases already stored, {len(todo)} to run "
+              f"(~{format_duration(self._left(todo))})", file=self.stream, flush=True)
+        args = {c: (self.vset, c, self.forces[c.load], self.source, keys[c], self.case_dir / f"{c.name}.json")
+                for c in todo}
+        if self._client is None or not todo:
+            finished = ((c, cases_mod.run_case(*args[c])) for c in todo)
+        else:
+            from distributed import as_completed
+
+            futures = {self._client.submit(cases_mod.run_case, *args[c], key=f"validate-{c.name}-{keys[c]}",
+                                           pure=False): c for c in todo}
+            finished = ((futures[fut], fut.result()) for fut in as_completed(futures))
+        for number, (case, record) in enumerate(finished, start=1):
+            done[case] = record
+            if self.progress:
+                result = (f"FAILED ({record['error']})" if "error" in record else
+                          f"F = {record['force']:.4g} N, R = {record['resistance_clean']:.4g} ohm")
+                left = self._left([c for c in todo if c not in done or done[c] is None])
+                print(f"validate: case {number}/{len(todo)} {case.name}: {result} in {record['seconds_total']:.1f} s; "
+                      f"elapsed {format_duration(time.perf_counter() - self.start)}, ~{format_duration(left)} left",
+                      file=self.stream, flush=True)
+        return done
 
 
 def _g2tom_side(vset: scene.ValidationSet) -> dict:
@@ -105,37 +208,51 @@ def _g2tom_side(vset: scene.ValidationSet) -> dict:
 
 
 def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.stderr, progress: bool = True,
-                   draw: Callable[[xr.Dataset, Path], Path] | None = None) -> list[Path]:
-    """Run the set into ``out`` (plan, g2tom, every case, outputs); return the written files
-    (``progress``: one line per finished case; ``draw(ds, path)`` draws ``validate.png``, e.g.
-    :func:`analysis.figures_validate.figure`, which the CLI passes: the library draws nothing)."""
+                   draw: Callable[[xr.Dataset, Path], Path] | None = None, config: str = "paper",
+                   options: ComputeOptions = SERIAL) -> list[Path]:
+    """Run the set into ``out`` (plan, g2tom, part 1's cases, part 2's rounds, outputs); return the
+    written files.
+
+    Parameters
+    ----------
+    vset
+        The validation set (:func:`chosen_set`).
+    out
+        The output folder (``cases/`` under it keeps every finished case).
+    stream, progress
+        Where the plan and the lines go; ``progress``: one line per finished case.
+    draw
+        ``draw(ds, path)`` draws ``validate.png``, e.g. :func:`analysis.figures_validate.figure`,
+        which the CLI passes: the library draws nothing.
+    config
+        The validated scenario (bundled name or TOML file): part 2's model is its own.
+    options
+        Where the cases run (:class:`CaseRunner`).
+    """
     start = time.perf_counter()
     out = Path(out)
-    case_dir = out / "cases"
     everything = cases_mod.plan_cases(vset)
-    for line in plan_lines(vset, everything):
+    workers = 1 if options.scheduler is None and (options.workers or 1) <= 1 else (options.workers or 1)
+    for line in plan_lines(vset, config, workers):
         print(line, file=stream, flush=True)
     source = FieldSource.of(scene.g2tom_scenario(vset, vset.models[0], vset.discretizations[0]))
     g2tom = _g2tom_side(vset)
-    keys = {c: cases_mod.case_key(vset, c, g2tom["force"][c.load], source) for c in everything}
-    done = {c: cases_mod.load_case(case_dir / f"{c.name}.json", keys[c]) for c in everything}
-    todo = [c for c in everything if done[c] is None]
-    print(f"validate: g2tom done; {len(everything) - len(todo)} of {len(everything)} cases already stored, "
-          f"{len(todo)} to run (~{format_duration(cases_mod.estimate_seconds(vset, todo, g2tom=False))})",
-          file=stream, flush=True)
-    for number, case in enumerate(todo, start=1):
-        record = cases_mod.run_case(vset, case, g2tom["force"][case.load], source, keys[case],
-                                    case_dir / f"{case.name}.json")
-        done[case] = record
-        elapsed = time.perf_counter() - start
-        left = cases_mod.estimate_seconds(vset, todo[number:], g2tom=False)
-        result = (f"FAILED ({record['error']})" if "error" in record else
-                  f"F = {record['force']:.4g} N, R = {record['resistance_clean']:.4g} ohm")
-        if progress:
-            print(f"validate: case {number}/{len(todo)} {case.name}: {result} in {record['seconds_total']:.1f} s; "
-                  f"elapsed {format_duration(elapsed)}, ~{format_duration(max(left, 0.0))} left",
-                  file=stream, flush=True)
-    ds = summary.dataset(vset, everything, done, g2tom, default_discretization())
+    model = ensemble.model_ensemble(vset, config)
+    if not np.allclose(model.force, g2tom["force"], rtol=FORCE_AGREEMENT, atol=0):
+        raise ConfigError(f"the validated scenario {config!r} loads at other forces ({model.force} N) than the "
+                          f"validation's ({g2tom['force']} N): its load steps must be loading.delta_* of Greenwood-Tripp")
+    f = g2tom["force"] / vset.force_scale
+    print(f"validate: g2tom done (part 1's discretizations; part 2: {model.description})", file=stream, flush=True)
+    with CaseRunner(vset, g2tom["force"], source, out / "cases", options, stream, progress, start) as runner:
+        done = runner.solve(everything, "part 1")
+        ref = summary.reference_arrays(vset, everything, done)
+        ratio_clean, ratio = summary.part1_ratios(g2tom, ref)
+        stand_clean, stand = ensemble.admitted(vset, ratio_clean, ratio)
+        state = ensemble.run_part2(vset, f, ref["resistance_clean"], ref["resistance"], model, stand_clean, stand,
+                                   lambda todo: runner.solve(todo, "part 2"),
+                                   lambda text: print(f"validate: {text}", file=stream, flush=True))
+    part2 = ensemble.variables(vset, state, ref["resistance_clean"], ref["resistance"], model, stand_clean, stand, f)
+    ds = summary.dataset(vset, everything, done, g2tom, default_of(config, model), part2)
     paths = [out / "validate.nc", out / "validate.md"]
     with atomic_path(paths[0]) as tmp:
         ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4")
@@ -161,17 +278,21 @@ def chosen_set(quick: bool, surface: str = "gw", realizations: int | None = None
     Raises
     ------
     ConfigError
-        On an unknown surface, fewer than one realization or two loads.
+        On an unknown surface, fewer than two realizations (part 2 corrects its ensembles by part
+        1's pairs, whose scatter needs two) or two loads.
     """
     if surface not in SURFACES:
         raise ConfigError(f"--surface {surface!r} is not allowed: must be one of {', '.join(SURFACES)}")
-    if realizations is not None and realizations < 1:
-        raise ConfigError(f"--realizations = {realizations} is out of range: must be >= 1")
+    if realizations is not None and realizations < 2:
+        raise ConfigError(f"--realizations = {realizations} is out of range: must be >= 2 (part 2 corrects its "
+                          "ensembles by part 1's paired realizations)")
     if loads is not None and loads < 2:
         raise ConfigError(f"--loads = {loads} is out of range: must be >= 2 (the lightest and the heaviest)")
     base = scene.QUICK if quick else scene.DEFAULT
     if surface == "random_process":
         base = scene.random_process_set(base, rms=scene.RANDOM.rms)
+        if not quick:
+            base = dataclasses.replace(base, deltas=scene.RANDOM.deltas)
     changes: dict = {"discretizations": available_discretizations(surface)}
     if realizations is not None:
         changes["realizations"] = tuple(range(realizations))

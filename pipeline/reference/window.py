@@ -22,7 +22,7 @@ from pipeline.physics.grid import cell_centres
 from pipeline.reference import elastic, scene
 from pipeline.reference.contact import ContactReachesEdge, ContactState, contact_at_force
 
-__all__ = ["MARGIN", "PAD_SPACINGS", "GROWTH", "probe_grid", "fitted_side", "solve_in_window"]
+__all__ = ["MARGIN", "PAD_SPACINGS", "GROWTH", "PROBE_MIN", "probe_grid", "fitted_side", "solve_in_window"]
 
 #: The window's half side over the probe's contact reach (max |x|, |y| of a contact pixel).
 MARGIN = 1.25
@@ -30,26 +30,33 @@ MARGIN = 1.25
 PAD_SPACINGS = 2.0
 #: Factor by which a window that the contact reaches grows before the solve is repeated.
 GROWTH = 1.5
+#: Smallest probe grid (pixels along a side of the set's window): 35 um pixels on the GW default set.
+PROBE_MIN = 128
 
 
-def probe_grid(vset: scene.ValidationSet) -> int:
-    """Pixels along a side of the probe grid: the convergence grid's, or half the main grid's, and
-    on the random-process surface at least two per shortest wavelength (the band on the grid)."""
-    n = vset.convergence_grid or max(vset.n_grid // 2, 32)
+def probe_grid(vset: scene.ValidationSet, ensemble: bool = False) -> int:
+    """Pixels along a side of the probe grid of a case on the main grid (part 2's ``ensemble``
+    cases: the ensemble grid): an eighth of it, at least :data:`PROBE_MIN` (at most the grid
+    itself), and on the random-process surface at least two per shortest wavelength (the band
+    on the grid). The probe only finds the contact's reach; the window's margins absorb its error."""
+    grid = vset.ensemble_grid if ensemble else vset.n_grid
+    n = min(grid, max(PROBE_MIN, grid // 8))
     if vset.surface == "random_process":
         n = max(n, math.ceil(2.0 * vset.side / vset.short_wavelength))
     return n
 
 
-def fitted_side(vset: scene.ValidationSet, realization: int, force: float) -> tuple[float, float]:
-    """The window side (m) of a case and the probe's contact reach (m) on the set's window.
+def fitted_side(vset: scene.ValidationSet, realization: int, force: float,
+                ensemble: bool = False) -> tuple[float, float]:
+    """The window side (m) of a case and the probe's contact reach (m) on the set's window
+    (``ensemble``: part 2's probe, :func:`probe_grid`).
 
     Raises
     ------
     pipeline.reference.elastic.SolverFailure
         If the probe's contact solve fails.
     """
-    n = probe_grid(vset)
+    n = probe_grid(vset, ensemble)
     pixel = vset.side / n
     operator = elastic.free_surface(n, pixel, vset.e_star)
     state = contact_at_force(operator, scene.rough_sphere(vset, realization, n), force)

@@ -1,0 +1,136 @@
+"""The validation's cost before work: how many cases of which grid, and how long they take.
+
+A case costs its probe (a contact solve on the probe grid, :func:`pipeline.reference.window.probe_grid`),
+its contact solve(s) and its punch conductances (clean and one per oxide case; the convergence
+case solves the contact three times for Barber's check and one punch). One contact solve and one
+punch on an n x n grid at F' cost :data:`CONTACT_SECONDS` and :data:`PUNCH_SECONDS` (CPU seconds
+of one process: the wall time on a core of its own), interpolated in (ln F', ln s) between the
+lightest and heaviest default load, scaled by (n / n_table)^3 from the nearest measured grid (CG
+and Polonsky-Keer iterations grow about as n, each costs ~n^2 log n). Cases run on ``workers``
+processes: the wall time is their summed time over the workers (at least the longest case).
+Part 2's later rounds size the ensembles from the measured scatter: the estimate is the first
+round's (from the prior), and ``wall_cap`` the bound with every load at ``max_ensemble``. g2tom's side runs in the driver before the cases: part 1's
+discretizations (:data:`G2TOM_SECONDS` each), part 2's validated scenario (the project's own plan,
+:func:`pipeline.before_work.plan.estimate`, for its contact, oxide and cube stages) and, on the GW
+surface, the stand-in (:data:`STAND_IN_SECONDS` per realization and load).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from pipeline.reference import cases as cases_mod
+from pipeline.reference import ensemble, scene, window
+
+__all__ = ["CONTACT_SECONDS", "PUNCH_SECONDS", "G2TOM_SECONDS", "STAND_IN_SECONDS", "LIGHT_HEAVY", "Estimate",
+           "case_seconds", "estimate"]
+
+#: The F' of the tables' light and heavy columns (the default sets' lightest and heaviest loads).
+LIGHT_HEAVY = (0.07, 18.8)
+#: One full-field contact solve on a case's fitted window (its probe: on the set's window), CPU
+#: seconds of one single-threaded process, at the (lightest, heaviest) load of the default set,
+#: by surface and grid: realization 0's probe (:func:`window.fitted_side`), then
+#: :func:`window.solve_in_window` and one :func:`pipeline.reference.punch.punch_conductance` per grid, timed by
+#: ``time.process_time`` (2026-11-27, on the shared 2-core machine, whose wall time was twice the
+#: CPU time then: other work shared the cores). A 1024^2 case of the old default's three loads
+#: costs ~96 s by these tables; the quiet machine took 79 s a case on 2026-11-24 (README). The
+#: random-process surface's 249^2 entry is its probe (two pixels per shortest wavelength over the
+#: set's window).
+CONTACT_SECONDS = {
+    "gw": {128: (0.18, 0.20), 256: (0.86, 1.15), 512: (5.61, 7.79), 1024: (30.6, 45.1)},
+    "random_process": {249: (2.87, 3.49), 256: (0.68, 0.92), 512: (5.26, 7.42), 1024: (29.9, 52.0)},
+}
+#: One punch conductance (CG to 1e-7) on the same windows, CPU seconds, measured with the contact solves.
+PUNCH_SECONDS = {
+    "gw": {128: (0.03, 0.05), 256: (0.16, 0.30), 512: (1.35, 2.53), 1024: (7.29, 14.6)},
+    "random_process": {256: (0.11, 0.26), 512: (0.88, 2.03), 1024: (6.27, 12.0)},
+}
+#: g2tom's part 1, per (discretization, model), s (its contact, oxide and cube stages in memory at 8
+#: loads: 15 s for the GW set's 10 on the loaded machine).
+G2TOM_SECONDS = 2.0
+#: The stand-in (the discrete solve of one surface's own caps and its resistances, the contact stage
+#: included), s per realization and load: 5.0 s for 64 realizations at 8 loads on the loaded machine.
+STAND_IN_SECONDS = 1e-2
+
+
+def _table(table: dict[int, tuple[float, float]], n: int, force_normalized: float) -> float:
+    ref = min(table, key=lambda m: abs(math.log(m / n)))
+    light, heavy = table[ref]
+    t = (math.log(max(force_normalized, 1e-9)) - math.log(LIGHT_HEAVY[0])) / math.log(LIGHT_HEAVY[1] / LIGHT_HEAVY[0])
+    t = min(max(t, 0.0), 1.0)
+    return math.exp((1 - t) * math.log(light) + t * math.log(heavy)) * (n / ref) ** 3
+
+
+def case_seconds(vset: scene.ValidationSet, case: cases_mod.Case, force_normalized: float) -> float:
+    """The estimated time of one case, s (see the module docstring)."""
+    contacts, punches = CONTACT_SECONDS[vset.surface], PUNCH_SECONDS[vset.surface]
+    probe = _table(contacts, window.probe_grid(vset, case.ensemble), force_normalized)
+    contact = _table(contacts, case.n, force_normalized)
+    punch = _table(punches, case.n, force_normalized)
+    if not case.oxide:
+        return probe + 3 * contact + punch
+    return probe + contact + (1 + len(vset.xi) * len(vset.lambdas)) * punch
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """The plan of one validation, before work.
+
+    Attributes
+    ----------
+    part1, convergence
+        Part 1's cases on the main grid and on the convergence grid.
+    ensemble_counts
+        Part 2's first-round full-field realizations per load from the prior scatter (those beyond
+        part 1's solve ensemble cases; on the GW surface the stand-in can only lower them).
+    ensemble
+        Part 2's first-round ensemble cases.
+    seconds_part1, seconds_part2, seconds_g2tom
+        Summed case times of each part (s, one process) and g2tom's side (s).
+    wall
+        Estimated wall time on ``workers`` processes, s.
+    wall_cap
+        The same with every load's ensemble at ``max_ensemble`` (part 2's bound), s.
+    """
+
+    part1: int
+    convergence: int
+    ensemble_counts: np.ndarray
+    ensemble: int
+    seconds_part1: float
+    seconds_part2: float
+    seconds_g2tom: float
+    wall: float
+    wall_cap: float
+
+
+def estimate(vset: scene.ValidationSet, force_normalized: np.ndarray, workers: int,
+             model_seconds: float) -> Estimate:
+    """The plan's estimate (no case stored yet) at the loads' F' on ``workers`` processes;
+    ``model_seconds``: the validated scenario's stages on the validation scene (s)."""
+    part1 = cases_mod.plan_cases(vset)
+    counts = ensemble.prior_counts(vset, force_normalized).max(axis=0)
+    P = len(vset.realizations)
+
+    def seconds(cases: list[cases_mod.Case]) -> list[float]:
+        return [case_seconds(vset, c, float(force_normalized[c.load])) for c in cases]
+
+    def extra(per_load: np.ndarray) -> list[cases_mod.Case]:
+        return [c for k, n in enumerate(per_load) if n > P for c in cases_mod.ensemble_cases(vset, k, range(n))]
+
+    first = seconds(part1)
+    s1 = sum(first)
+    second = seconds(extra(counts))
+    capped = seconds(extra(np.full(len(force_normalized), vset.max_ensemble)))
+    stand = STAND_IN_SECONDS * len(force_normalized) * int(counts.max()) if vset.surface == "gw" else 0.0
+    g2tom = G2TOM_SECONDS * len(vset.discretizations) * len(vset.models) + model_seconds + stand
+
+    def wall(part2: list[float]) -> float:
+        return g2tom + max((s1 + sum(part2)) / max(workers, 1), max(first + part2, default=0.0))
+
+    return Estimate(part1=sum(c.oxide for c in part1), convergence=sum(not c.oxide for c in part1),
+                    ensemble_counts=counts, ensemble=len(second), seconds_part1=s1, seconds_part2=sum(second),
+                    seconds_g2tom=g2tom, wall=wall(second), wall_cap=wall(capped))
