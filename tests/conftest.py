@@ -25,15 +25,25 @@ SMALL_OVERRIDES = {
     "cube.chunk": 3,
     "fits.n_bootstrap": 50,
 }
+#: The command-line arguments that give the ``small`` scenario.
+SMALL_ARGS: tuple[str, ...] = ("--config", "paper_gt", *(a for k, v in SMALL_OVERRIDES.items() for a in ("--set", f"{k}={v}")))
 
 
 @pytest.fixture(scope="session")
 def paper() -> Scenario:
-    """The default scenario, unchanged."""
+    """The default scenario (discrete asperities), unchanged."""
     return resolve(load_scenario("paper"))
 
 
 @pytest.fixture(scope="session")
+def paper_gt() -> Scenario:
+    """The paper's study on Greenwood-Tripp's mean asperity layer (the grid spots' machinery), unchanged."""
+    return resolve(load_scenario("paper_gt"))
+
+
+@pytest.fixture(scope="session")
 def small() -> Scenario:
-    """The paper scenario shrunk to a few approaches, fractions, lengths and realizations."""
-    return resolve(load_scenario("paper", SMALL_OVERRIDES))
+    """``paper_gt`` shrunk to a few approaches, fractions, lengths and realizations: the grid
+    machinery most tests exercise (the default's discrete scenes are in test_discrete_stages.py
+    and test_pipeline_end_to_end.py)."""
+    return resolve(load_scenario("paper_gt", SMALL_OVERRIDES))

@@ -33,7 +33,7 @@ def _same(a: xr.Dataset, b: xr.Dataset) -> None:
 
 @pytest.fixture(scope="module")
 def base():
-    return load_scenario("paper", BASE)
+    return load_scenario("paper_gt", BASE)
 
 
 @pytest.fixture(scope="module")
@@ -83,7 +83,7 @@ def test_a_resumed_atlas_equals_an_uninterrupted_one(tmp_path, base, uninterrupt
 
 def test_another_configuration_reruns_its_scenes(tmp_path, base) -> None:
     atlas.run_atlas(base, DESIGN, tmp_path)
-    other = load_scenario("paper", {**BASE, "oxide.seed": 3})
+    other = load_scenario("paper_gt", {**BASE, "oxide.seed": 3})
     assert not atlas._done(other, design_scenes(DESIGN)[0], tmp_path)
     assert atlas._done(base, design_scenes(DESIGN)[0], tmp_path)
 
@@ -95,7 +95,7 @@ def test_two_worker_cluster_gives_the_same_bits(tmp_path, base, uninterrupted) -
 
 
 def test_a_refused_scene_stops_the_atlas_before_work(tmp_path) -> None:
-    bad = load_scenario("paper", {**BASE, "fits.fit_range": "force", "fits.min_force": 1e9})
+    bad = load_scenario("paper_gt", {**BASE, "fits.fit_range": "force", "fits.min_force": 1e9})
     with pytest.raises(ConfigError, match=r"atlas scene d00 \(mu 4, Pi 20\): fits.min_force"):
         atlas.run_atlas(bad, DESIGN, tmp_path)
     assert not (tmp_path / "atlas").exists()

@@ -10,7 +10,7 @@ import pytest
 from pipeline.atlas.design import AtlasDesign, design_scenes, format_atlas_plan, plan_atlas, scene_scenario
 from pipeline.config import AUTO, ConfigError, load_scenario
 from pipeline.physics.groups import groups
-from tests.conftest import SMALL_OVERRIDES
+from tests.conftest import SMALL_ARGS, SMALL_OVERRIDES
 
 
 def test_default_design_covers_engineering_surfaces() -> None:
@@ -49,7 +49,7 @@ def test_bad_designs_are_refused(kwargs, message) -> None:
 
 
 def test_scene_scenario_has_the_scene_groups() -> None:
-    base = load_scenario("paper")
+    base = load_scenario("paper_gt")
     for scene in design_scenes(AtlasDesign())[::5]:
         s = scene_scenario(base, scene)
         g = groups(s.roughness.sigma, s.roughness.eta, s.roughness.beta, s.indenter.radius)
@@ -59,14 +59,14 @@ def test_scene_scenario_has_the_scene_groups() -> None:
 
 
 def test_plan_grows_with_pi_and_reports_refusals() -> None:
-    base = load_scenario("paper", SMALL_OVERRIDES)
+    base = load_scenario("paper_gt", SMALL_OVERRIDES)
     design = AtlasDesign(mu=(2.0, 20.0), Pi=(10.0, 40.0), n_mu=2, n_pi=2, n_heldout=1)
     est = {e.scene.name: e for e in plan_atlas(base, design)}
     assert all(e.problem is None for e in est.values())
     assert est["d02"].n_cells > est["d00"].n_cells and est["d02"].seconds > est["d00"].seconds
     lines = format_atlas_plan(list(est.values()), parallel=2)
     assert lines[-1].startswith("5 of 5 scenes runnable")
-    refused = plan_atlas(load_scenario("paper", {**SMALL_OVERRIDES, "fits.fit_range": "force", "fits.min_force": 1e9}),
+    refused = plan_atlas(load_scenario("paper_gt", {**SMALL_OVERRIDES, "fits.fit_range": "force", "fits.min_force": 1e9}),
                          design)
     assert all(e.problem and "fits.min_force" in e.problem for e in refused)
     assert "refused: fits.min_force" in format_atlas_plan(refused)[1]
@@ -75,17 +75,16 @@ def test_plan_grows_with_pi_and_reports_refusals() -> None:
 def test_cli_plans_the_atlas(capsys) -> None:
     from pipeline.cli.main import main
 
-    assert main(["plan", "--atlas", "--workers", "2", *[a for k, v in SMALL_OVERRIDES.items()
-                                                        for a in ("--set", f"{k}={v}")]]) == 0
+    assert main(["plan", "--atlas", "--workers", "2", *SMALL_ARGS]) == 0
     out = capsys.readouterr().out.splitlines()
     assert len(out) == 1 + 31 + 1 and out[-1].startswith("31 of 31 scenes runnable") and "on 2 concurrent" in out[-1]
 
 
 def test_the_design_is_the_scenarios_atlas_section() -> None:
-    assert AtlasDesign.of(load_scenario("paper")) == AtlasDesign()
-    scenario = load_scenario("paper", {"atlas.mu_max": 80.0, "atlas.pi_max": 640.0, "atlas.n_pi": 6, "atlas.seed": 7})
+    assert AtlasDesign.of(load_scenario("paper_gt")) == AtlasDesign()
+    scenario = load_scenario("paper_gt", {"atlas.mu_max": 80.0, "atlas.pi_max": 640.0, "atlas.n_pi": 6, "atlas.seed": 7})
     design = AtlasDesign.of(scenario)
     assert design == AtlasDesign(mu=(1.0, 80.0), Pi=(5.0, 640.0), n_pi=6, seed=7)
     assert max(s.Pi for s in design_scenes(design)) == pytest.approx(640.0)
     with pytest.raises(ConfigError, match=r"atlas.mu_max = 0.5 is out of range: must be > atlas.mu_min = 1.0"):
-        load_scenario("paper", {"atlas.mu_max": 0.5})
+        load_scenario("paper_gt", {"atlas.mu_max": 0.5})

@@ -25,7 +25,7 @@ import pytest
 from pipeline.cli.main import main
 from pipeline.config import SECTIONS, load_scenario, parameter_key
 from pipeline.store import stage_path, write_dataset
-from tests.conftest import SMALL_OVERRIDES
+from tests.conftest import SMALL_ARGS, SMALL_OVERRIDES
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,7 +92,7 @@ def _npy(name: str, array: np.ndarray) -> Callable[[Path], None]:
     return setup
 
 
-_SMALL = tuple(a for k, v in SMALL_OVERRIDES.items() for a in ("--set", f"{k}={v}"))
+_SMALL = SMALL_ARGS
 _ROUGH = ("roughness", "--pixel-size", "1e-6")
 _SURFACE = np.random.default_rng(1).normal(scale=1e-6, size=(16, 16))
 
@@ -185,9 +185,9 @@ def _hand_cases() -> list[Case]:
              ("contact.spots = 'disc'", "mean_area", "expected", "asperities")),
         Case("negative lattice constant", ("contact", "--set", "cube.model=point", "--set", "cube.lattice_constant=-1"),
              ("cube.lattice_constant = -1", ">= 0")),
-        Case("lattice term with Greenwood's form", ("contact", "--set", "cube.lattice_constant=3.9"),
+        Case("lattice term with Greenwood's form", ("contact", "--config", "paper_gt", "--set", "cube.lattice_constant=3.9"),
              ("cube.lattice_constant = 3.9", "cube.model = 'point'")),
-        Case("area weights with expected spots", ("contact", "--set", "cube.weights=area"),
+        Case("area weights with expected spots", ("contact", "--config", "paper_gt", "--set", "cube.weights=area"),
              ("cube.weights = 'area'", "contact.spots = 'expected'", "'radius'")),
         Case("linear A* with expected spots", ("contact", "--set", "contact.area_interpolation=area_fraction"),
              ("contact.area_interpolation = 'area_fraction'", "contact.spots = 'expected'", "'separation'")),
@@ -332,5 +332,5 @@ def test_bad_input_catalog(results: Path, capsys) -> None:
 
 def test_catalog_scenarios_are_otherwise_valid() -> None:
     """The parameter table cases each break exactly one parameter of a valid scenario."""
-    load_scenario("paper", SMALL_OVERRIDES)
+    load_scenario("paper_gt", SMALL_OVERRIDES)
     assert sum(c.argv[0] == "params" for c in CASES) > 100

@@ -15,7 +15,7 @@ COARSE = {"loading.n_delta": 6, "contact.n_radial": 160, "oxide.ensemble": "fixe
 
 
 def _ratios(**overrides) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    scenario = resolve(load_scenario("paper", {**COARSE, **overrides}))
+    scenario = resolve(load_scenario("paper_gt", {**COARSE, **overrides}))
     ds = contact.build(scenario)
     barber = ds["barber_conductance"].values
     return {name: g / barber for name, g in cube.clean_conductances(scenario, ds).items()}, ds["force"].values

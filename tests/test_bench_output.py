@@ -10,7 +10,7 @@ from tests.conftest import SMALL_OVERRIDES
 def test_bench_prints_one_line_unless_verbose(tmp_path, capsys):
     from pipeline.bench import run_benchmarks
 
-    scene = resolve(load_scenario("paper", SMALL_OVERRIDES))
+    scene = resolve(load_scenario("paper_gt", SMALL_OVERRIDES))
     paths = run_benchmarks(scene, tmp_path, only=["predict"])
     out = capsys.readouterr().out.strip().splitlines()
     assert len(out) == 1 and str(paths["predict"]) in out[0] and paths["predict"].is_file()

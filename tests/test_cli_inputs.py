@@ -121,7 +121,7 @@ def test_one_cell_run_answers_with_its_cell(tmp_path, capsys, small) -> None:
     from tests.conftest import SMALL_OVERRIDES
     from tests.test_fits_stage import synthetic_cube
 
-    one = resolve(load_scenario("paper", {**SMALL_OVERRIDES, "oxide.xi": [0.5], "oxide.lambda": [5.0],
+    one = resolve(load_scenario("paper_gt", {**SMALL_OVERRIDES, "oxide.xi": [0.5], "oxide.lambda": [5.0],
                                           "surrogate.method": "paper", "surrogate.rank": 1}))
     write_dataset(fits.build(one, synthetic_cube(one, noise=0.2)), tmp_path, "fits", one)
     with warnings.catch_warnings():
@@ -215,7 +215,7 @@ def test_settings_of_the_bundled_scenario_are_not_warned() -> None:
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        load_scenario("paper", ["fits.min_force_normalized=0.5"])
+        load_scenario("paper_gt", ["fits.min_force_normalized=0.5"])
 
 
 # ------------------------------------------------------------------ 10: the default rank follows the grid
@@ -223,8 +223,8 @@ _ONE_CELL = ["--set", "oxide.xi=[0.5]", "--set", "oxide.lambda=[5]", "--set", "s
 
 
 def test_default_rank_follows_a_one_cell_grid(tmp_path, capsys) -> None:
-    assert load_scenario("paper", {"oxide.xi": [0.5], "oxide.lambda": [5.0]}).surrogate.rank == 1
-    assert load_scenario("paper", {"oxide.xi": [0.3, 0.5, 0.7]}).surrogate.rank == 2  # the default, within the grid
+    assert load_scenario("paper_gt", {"oxide.xi": [0.5], "oxide.lambda": [5.0]}).surrogate.rank == 1
+    assert load_scenario("paper_gt", {"oxide.xi": [0.3, 0.5, 0.7]}).surrogate.rank == 2  # the default, within the grid
     assert main(["run", "--check", "--data-dir", str(tmp_path), *_ONE_CELL]) == 0
     assert "every check before work passed" in capsys.readouterr().err
 

@@ -9,14 +9,14 @@ import xarray as xr
 from pipeline.cli.main import main
 from pipeline.compute import ComputeOptions
 from pipeline.stages import oxide
-from tests.conftest import SMALL_OVERRIDES
+from tests.conftest import SMALL_ARGS
 
 distributed = pytest.importorskip("distributed")
 
 
 def test_scheduler_address_runs_the_same_stage(tmp_path, small) -> None:
     expected = oxide.build(small, ComputeOptions(progress=False))
-    overrides = [arg for k, v in SMALL_OVERRIDES.items() for arg in ("--set", f"{k}={v}")]
+    overrides = list(SMALL_ARGS)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
                                   dashboard_address=None) as cluster:
         with distributed.Client(cluster) as client, distributed.get_task_stream(client) as stream:
@@ -67,7 +67,7 @@ def test_multi_process_cluster_gives_identical_cube(tmp_path, small) -> None:
 
     quiet = ComputeOptions(progress=False)
     expected = cube.build(small, contact.build(small), oxide.build(small, quiet), quiet)
-    overrides = [arg for k, v in SMALL_OVERRIDES.items() for arg in ("--set", f"{k}={v}")]
+    overrides = list(SMALL_ARGS)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster:
         for stage in ("contact", "oxide", "cube"):

@@ -30,9 +30,9 @@ def test_paper_scenario_embeds_tables_1_and_2(paper) -> None:
     assert load_scenario("published").n_cells == 57  # explicit 0.4 R* sqrt(eta) = 56.6 -> nearest odd
 
 
-def test_published_differs_only_in_its_conventions(paper) -> None:
+def test_published_differs_only_in_its_conventions(paper_gt) -> None:
     published = load_scenario("published")
-    diff = {k for k, v in published.flat().items() if paper.flat()[k] != v}
+    diff = {k for k, v in published.flat().items() if paper_gt.flat()[k] != v}
     assert diff == {
         "contact.solver",
         "contact.n_radial",
@@ -183,8 +183,8 @@ def test_list_split_at_spaces_by_make_is_glued_back(capsys) -> None:
     assert _rejoin(["oxide.xi=[0.3,", "0.5]", "cube.weights=area"]) == ["oxide.xi=[0.3, 0.5]", "cube.weights=area"]
     assert _rejoin(["oxide.lambda=[1.0,", "5.0,", "13.0]"]) == ["oxide.lambda=[1.0, 5.0, 13.0]"]
     assert _rejoin(["fits.reduction='median'"]) == ["fits.reduction='median'"]
-    assert main(["params", "--set", "oxide.xi=[0.3,", "--set", "0.5]", "--set", "contact.spots=mean_area",
-                 "--set", "cube.weights=area"]) == 0
+    assert main(["params", "--config", "paper_gt", "--set", "oxide.xi=[0.3,", "--set", "0.5]", "--set",
+                 "contact.spots=mean_area", "--set", "cube.weights=area"]) == 0
     out = capsys.readouterr().out
     assert "oxide.xi" in out and "[0.3, 0.5]" in out and "area" in out
 

@@ -89,7 +89,7 @@ def test_published_conventions():
 
 @pytest.mark.parametrize("shape", ["cone", "flat_punch"])
 def test_other_profiles(shape):
-    sc = load_scenario("paper", {**SMALL_OVERRIDES, "loading.n_delta": 3, "indenter.shape": shape,
+    sc = load_scenario("paper_gt", {**SMALL_OVERRIDES, "loading.n_delta": 3, "indenter.shape": shape,
                                  "indenter.cone_angle": 0.02, "indenter.punch_radius": 3e-4})
     out = contact.build(sc)
     assert np.all(np.diff(out.force) > 0) and np.all(out.converged == 1)
@@ -97,11 +97,11 @@ def test_other_profiles(shape):
 
 
 def test_run_writes_with_provenance(tmp_path, small):
-    sc = load_scenario("paper", {**SMALL_OVERRIDES, "loading.n_delta": 2})
+    sc = load_scenario("paper_gt", {**SMALL_OVERRIDES, "loading.n_delta": 2})
     path = contact.run(sc, tmp_path, ComputeOptions(progress=False))
     with xr.open_dataset(path) as out:
         assert out.attrs["config_hash"] == sc.config_hash("contact")
-        assert out.attrs["scenario"] == "paper" and "g2tom_version" in out.attrs
+        assert out.attrs["scenario"] == "paper_gt" and "g2tom_version" in out.attrs
         assert out.force.attrs["units"] == "N"
     assert not list(tmp_path.glob(".*.tmp"))
 
@@ -156,7 +156,7 @@ def test_validation_errors_leave_data_untouched(tmp_path, capsys, override, mess
 
 def test_bench_reports_times_and_force_errors(small, monkeypatch):
     monkeypatch.setattr(bench_contact, "_REPEATS", 1)
-    sc = load_scenario("paper", {**SMALL_OVERRIDES, "loading.n_delta": 3, "contact.n_radial": 60})
+    sc = load_scenario("paper_gt", {**SMALL_OVERRIDES, "loading.n_delta": 3, "contact.n_radial": 60})
     result = bench_contact.run(sc)
     assert result["reference"]["n_radial"] == 240 and len(result["reference"]["force_N"]) == 3
     cases = {(c["solver"], c["n_radial"], c["radial_grid"]): c for c in result["cases"]}

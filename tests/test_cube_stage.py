@@ -68,7 +68,7 @@ def _scenario(**cube_overrides):
     fixed = {"oxide.ensemble": "fixed", "oxide.n_realizations": N_REAL}
     if cube_overrides.get("weights") == "area":  # the published convention of mean-area spots
         fixed["contact.spots"] = "mean_area"
-    return load_scenario("paper", {**fixed, **{f"cube.{k}": v for k, v in cube_overrides.items()}})
+    return load_scenario("paper_gt", {**fixed, **{f"cube.{k}": v for k, v in cube_overrides.items()}})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -190,7 +190,7 @@ def test_threshold_ties_are_oxide_as_in_the_oxide_stage(inputs):
 
 
 def test_resistance_scales_with_rho(inputs, built):
-    scaled = _build(load_scenario("paper", {"material.rho": 2 * 7.2e-7, "cube.chunk": 3, "oxide.ensemble": "fixed", "oxide.n_realizations": N_REAL}), *inputs)
+    scaled = _build(load_scenario("paper_gt", {"material.rho": 2 * 7.2e-7, "cube.chunk": 3, "oxide.ensemble": "fixed", "oxide.n_realizations": N_REAL}), *inputs)
     np.testing.assert_allclose(scaled["resistance"], 2 * built["resistance"], rtol=1e-14)
 
 
@@ -217,7 +217,7 @@ def test_area_weights_change_only_the_interaction_term(inputs, built):
 
 
 def test_published_scenario_differs_only_in_the_interaction_weights():
-    paper, published = load_scenario("paper"), load_scenario("published")
+    paper, published = load_scenario("paper_gt"), load_scenario("published")
     assert published.cube == dataclasses.replace(paper.cube, weights="area")
     assert published.material == paper.material
 

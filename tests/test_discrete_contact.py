@@ -152,3 +152,51 @@ def test_bad_forces_are_refused():
     for forces in ([1.0, 0.5], [0.0, 1.0], [-1.0]):
         with pytest.raises(ValueError, match="forces"):
             dc.solve_forces(asp, sphere, np.array(forces), E_STAR, BETA, FLOOR)
+
+
+def test_rigid_approach_when_only_the_highest_cap_touches():
+    """The bracket's lower end is where the highest cap alone carries the force: with no other cap
+    touching there the excess is zero up to rounding, of either sign, and that end is the root."""
+    from pipeline.physics.discrete_contact import _rigid_delta, hertz_load
+
+    rng = np.random.default_rng(4)
+    e_star, beta = 1.154e11, 3e-5
+    for _ in range(300):
+        top = rng.uniform(-5e-5, 5e-5)
+        g = np.concatenate([[top], top - rng.uniform(2e-5, 1e-4, 20)])  # the rest far below
+        force = 10.0 ** rng.uniform(-3, 1)
+        d = _rigid_delta(g, force, e_star, beta)
+        assert hertz_load(g - d, e_star, beta).sum() == pytest.approx(force, rel=1e-12)
+
+
+def test_continuation_halves_a_failing_step_however_short(monkeypatch):
+    """Where Newton fails on a step shorter than sqrt(2), the walk must still refine it (before,
+    a step of 1.4x was retried unchanged until the depth limit)."""
+    advance = dc._Walker._advance
+
+    def fussy(self, force):  # fails on any step above 1.1x, like a Newton that stagnates
+        if self.force and force / self.force > 1.1:
+            raise dc.NotConverged("step too long")
+        return advance(self, force)
+
+    monkeypatch.setattr(dc._Walker, "_advance", fussy)
+    rng = np.random.default_rng(2)
+    asperities = dc.Asperities(rng.uniform(-4e-4, 4e-4, 60), rng.uniform(-4e-4, 4e-4, 60),
+                               rng.normal(0.0, 2e-5, 60))
+    profile = lambda r: r ** 2 / (2 * 1e-2)  # noqa: E731
+    got = dc.solve_forces(asperities, profile, np.array([10.0, 14.0]), 1.154e11, 3e-5, 1e-5)
+    assert got.load[1].sum() == pytest.approx(14.0, rel=1e-9)
+
+
+def test_the_default_scene_solves_every_surface_at_coarse_steps():
+    """Surface 12 of the default scene with six load steps (38.8 N, then 406.9 N) stalled Newton
+    from 290.9 N on a step of 1.4x; the walk refines it now."""
+    from pipeline.before_work.domains import resolve
+    from pipeline.config import load_scenario
+    from pipeline.compute import ComputeOptions
+    from pipeline.stages import contact
+    from tests.conftest import SMALL_OVERRIDES
+
+    scene = resolve(load_scenario("paper", {**SMALL_OVERRIDES, "contact.surfaces": 13}))
+    pool = contact.build(scene, ComputeOptions(progress=False, workers=1))
+    assert np.all(pool["discrete_residual"].values <= dc.TOLERANCE)

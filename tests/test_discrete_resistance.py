@@ -129,3 +129,15 @@ def test_bad_shapes_and_models_are_refused():
         dr.resistances(np.zeros((2, 2)), np.ones(2), RHO, "exact")
     with pytest.raises(ValueError, match="must be"):
         dr.currents(np.zeros((2, 2)), np.ones((1, 1, 3)))
+
+
+@pytest.mark.parametrize("nested", [True, False])
+def test_large_sets_factorized_by_lapack_equal_the_direct_solve(nested):
+    assert dr.LAPACK_FROM < 150
+    rng = np.random.default_rng(13)
+    kernel, radii = layout(rng, 150, 4, 3e-5, nested)
+    if nested:  # whole spots: one union factorization of 150 + 1
+        radii = radii.max(axis=0) * (np.sort(rng.uniform(size=radii.shape), axis=0) > 0.3)
+    got, path = solved(kernel, radii)
+    np.testing.assert_allclose(got, direct(kernel, radii), rtol=1e-10)
+    assert path == (dr.NESTED if nested else dr.WHOLE)

@@ -34,8 +34,8 @@ def _clean_resistance(scenario) -> np.ndarray:
 
 @pytest.mark.parametrize("overrides", SHAPES.values(), ids=SHAPES.keys())
 def test_auto_window_gives_the_resistance_of_a_much_larger_window(overrides):
-    auto = resolve(load_scenario("paper", {**FAST, **overrides}))
-    big = resolve(load_scenario("paper", {**FAST, **overrides, "contact.window": 1.6 * auto.contact.window}))
+    auto = resolve(load_scenario("paper_gt", {**FAST, **overrides}))
+    big = resolve(load_scenario("paper_gt", {**FAST, **overrides, "contact.window": 1.6 * auto.contact.window}))
     assert big.n_cells >= 1.5 * auto.n_cells
     # the same radial domain (the larger one) for both, so only the window differs
     same_domain = dataclasses.replace(auto, contact=dataclasses.replace(auto.contact, r_max=big.contact.r_max))
@@ -51,7 +51,7 @@ def test_auto_window_gives_the_resistance_of_a_much_larger_window(overrides):
 
 
 def test_auto_radial_domain_holds_the_window_and_the_pressure():
-    s = resolve(load_scenario("paper", FAST))
+    s = resolve(load_scenario("paper_gt", FAST))
     corner = np.sqrt(2.0) * (s.n_cells - 1) / 2.0 * s.cell_size
     assert corner + domains.MARGIN_CELLS * s.cell_size <= s.contact.r_max * s.indenter.radius
     ds = contact.build(s)
@@ -61,9 +61,9 @@ def test_auto_radial_domain_holds_the_window_and_the_pressure():
 
 @pytest.mark.parametrize("overrides", SHAPES.values(), ids=SHAPES.keys())
 def test_too_small_explicit_window_is_refused_with_the_value_needed(overrides):
-    auto = resolve(load_scenario("paper", {**FAST, **overrides}))
+    auto = resolve(load_scenario("paper_gt", {**FAST, **overrides}))
     needed = domains.domains(auto).window_needed
-    small = load_scenario("paper", {**FAST, **overrides, "contact.window": 0.5 * auto.contact.window})
+    small = load_scenario("paper_gt", {**FAST, **overrides, "contact.window": 0.5 * auto.contact.window})
     with pytest.raises(ConfigError) as err:
         resolve(small)
     assert f"it must be >= {domains._round_up(needed):.4g} (R*" in str(err.value)
@@ -72,10 +72,10 @@ def test_too_small_explicit_window_is_refused_with_the_value_needed(overrides):
 def test_explicit_values_are_kept_exactly_and_hashes_use_resolved_values():
     published = load_scenario("published")
     assert resolve(published) == published  # both explicit: bit-for-bit the same scenario
-    paper = load_scenario("paper")
+    paper = load_scenario("paper_gt")
     assert paper.contact.window == AUTO and paper.contact.r_max == AUTO
     resolved = resolve(paper)
-    same = load_scenario("paper", {"contact.window": resolved.contact.window,
+    same = load_scenario("paper_gt", {"contact.window": resolved.contact.window,
                                    "contact.r_max": resolved.contact.r_max})
     assert resolved.config_hash("oxide") == same.config_hash("oxide")
     assert resolved.config_hash("cube") == same.config_hash("cube")
@@ -83,11 +83,11 @@ def test_explicit_values_are_kept_exactly_and_hashes_use_resolved_values():
 
 def test_unresolved_window_has_no_cell_count():
     with pytest.raises(ConfigError, match="pipeline.before_work.domains.resolve"):
-        load_scenario("paper").n_cells
+        load_scenario("paper_gt").n_cells
 
 
 def test_cheap_cell_estimate_bounds_the_resolved_count():
     for eta in (2e8, 3.2e9):
-        s = load_scenario("paper", {**FAST, "roughness.eta": eta})
+        s = load_scenario("paper_gt", {**FAST, "roughness.eta": eta})
         n = resolve(s).n_cells
         assert n <= domains.estimate_cells(s) <= 1.3 * n

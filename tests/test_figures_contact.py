@@ -18,7 +18,7 @@ FAST = {"loading.n_delta": 6, "contact.n_radial": 160}
 @pytest.mark.parametrize("shape", ["sphere", "cone"])
 def test_spot_maps_are_rasters_and_hertz_is_drawn_for_the_sphere_only(tmp_path, monkeypatch, shape):
     overrides = {**FAST, "indenter.shape": shape, "indenter.cone_angle": 0.1}
-    scenario = resolve(load_scenario("paper", overrides))
+    scenario = resolve(load_scenario("paper_gt", overrides))
     store.write_dataset(contact.build(scenario), tmp_path, "contact", scenario)
     figures: list[matplotlib.figure.Figure] = []
     real = matplotlib.figure.Figure.savefig

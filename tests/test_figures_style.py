@@ -111,10 +111,10 @@ def outside_math(text: str) -> str:
     return "".join(text.split("$")[::2])
 
 
-def test_no_symbol_is_spelled_in_ascii_outside_mathtext(drawn) -> None:
+def test_no_symbol_is_spelled_in_ascii_outside_mathtext(drawn, small: Scenario) -> None:
     for name, fig in drawn.items():
         for text in _texts(fig):
-            raw = RAW_SYMBOLS.search(outside_math(text))
+            raw = RAW_SYMBOLS.search(outside_math(text).replace(small.name, ""))  # a name, not a symbol
             assert raw is None, f"{name}: {text!r} spells {raw.group(0)!r} outside mathtext"
 
 

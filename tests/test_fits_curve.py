@@ -11,7 +11,7 @@ from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import assert_labelled, synthetic_cube, true_alpha, true_gamma
 
 #: 16 load steps from 20 N to 5 kN, 10 of them at F >= 200 N.
-SCENARIO = load_scenario("paper", {**SMALL_OVERRIDES, "loading.n_delta": 16})
+SCENARIO = load_scenario("paper_gt", {**SMALL_OVERRIDES, "loading.n_delta": 16})
 CURVATURE = 0.06  # ln R' gains CURVATURE (ln F')^2: the power law misses it by > 3 %
 
 
@@ -77,9 +77,9 @@ def test_noisy_curves_keep_their_promise():
 def test_fit_range_in_normalized_force_selects_the_same_steps():
     cube = synthetic_cube(SCENARIO, noise=0.1)
     k = 9
-    by_newtons = load_scenario("paper", {**SMALL_OVERRIDES, "loading.n_delta": 16,
+    by_newtons = load_scenario("paper_gt", {**SMALL_OVERRIDES, "loading.n_delta": 16,
                                          "fits.fit_range": "force", "fits.min_force": float(cube["force"][k])})
-    by_normalized = load_scenario("paper", {**SMALL_OVERRIDES, "loading.n_delta": 16,
+    by_normalized = load_scenario("paper_gt", {**SMALL_OVERRIDES, "loading.n_delta": 16,
                                             "fits.fit_range": "force_normalized",
                                             "fits.min_force_normalized": float(cube["force_normalized"][k])})
     a, b = fits.build(by_newtons, cube), fits.build(by_normalized, cube)
@@ -91,7 +91,7 @@ def test_fit_range_in_normalized_force_selects_the_same_steps():
 
 
 def test_unreachable_normalized_range_is_a_config_error():
-    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "fits.fit_range": "force_normalized",
+    scenario = load_scenario("paper_gt", {**SMALL_OVERRIDES, "fits.fit_range": "force_normalized",
                                        "fits.min_force_normalized": 1e6})
     with pytest.raises(ConfigError, match="fits.min_force_normalized = 1e.06 is out of range"):
         fits.build(scenario, synthetic_cube(scenario))

@@ -23,7 +23,7 @@ from tests.conftest import SMALL_OVERRIDES
 
 
 def cli_overrides(scenario: Scenario) -> list[str]:
-    """``--set`` arguments that turn the paper scenario into ``scenario``."""
+    """``--set`` arguments that turn the CLI's default scenario (``paper``) into ``scenario``."""
     base = load_scenario("paper").flat()
     args: list[str] = []
     for key, value in scenario.flat().items():
@@ -144,7 +144,7 @@ def test_open_share_reported_and_mean_unbiased(small: Scenario) -> None:
 
 @pytest.mark.parametrize("reduction", ["arithmetic_mean", "median"])
 def test_other_reductions(small: Scenario, reduction: str) -> None:
-    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "fits.reduction": reduction})
+    scenario = load_scenario("paper_gt", {**SMALL_OVERRIDES, "fits.reduction": reduction})
     ds = fits.build(scenario, synthetic_cube(scenario, noise=0.05))
     lam, xi = np.asarray(scenario.oxide.lambda_), np.asarray(scenario.oxide.xi)
     np.testing.assert_allclose(ds["gamma"], true_gamma(lam, xi).T, atol=0.03)
@@ -152,7 +152,7 @@ def test_other_reductions(small: Scenario, reduction: str) -> None:
 
 
 def test_too_few_fitted_steps_is_a_config_error(small: Scenario) -> None:
-    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "fits.fit_range": "force", "fits.min_force": 1e6})
+    scenario = load_scenario("paper_gt", {**SMALL_OVERRIDES, "fits.fit_range": "force", "fits.min_force": 1e6})
     with pytest.raises(ConfigError, match="fits.min_force"):
         fits.build(scenario, synthetic_cube(scenario))
 
@@ -197,7 +197,7 @@ def test_bootstrap_redraws_realizations_jointly_across_steps(small: Scenario) ->
 
 @pytest.mark.parametrize("open_step", [False, True])
 def test_clean_interval_is_the_least_squares_one(open_step: bool) -> None:
-    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "loading.n_delta": 10})
+    scenario = load_scenario("paper_gt", {**SMALL_OVERRIDES, "loading.n_delta": 10})
     cube = synthetic_cube(scenario, noise=0.0)
     wiggle = np.exp(0.05 * np.random.default_rng(2).standard_normal(cube.sizes["delta"]))
     if open_step:  # a non-finite clean value on a fitted step must not count as a point
@@ -218,7 +218,7 @@ def test_clean_interval_is_the_least_squares_one(open_step: bool) -> None:
 
 
 def test_clean_interval_undefined_on_two_steps() -> None:
-    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "fits.fit_range": "force", "fits.min_force": 1000.0})
+    scenario = load_scenario("paper_gt", {**SMALL_OVERRIDES, "fits.fit_range": "force", "fits.min_force": 1000.0})
     ds = fits.build(scenario, synthetic_cube(scenario, noise=0.0))
     assert int(ds["fitted"].sum()) == 2
     assert np.all(np.isnan(ds["gamma_clean_ci"])) and np.all(np.isnan(ds["alpha_clean_ci"]))

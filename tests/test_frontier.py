@@ -75,7 +75,7 @@ def test_contact_sweep_errors_fall_with_nodes_and_tolerance(monkeypatch) -> None
     monkeypatch.setattr(frontier_sweeps, "NODES", (20, 160))
     monkeypatch.setattr(frontier_sweeps, "TOLERANCES", (1e-3, 1e-10))
     monkeypatch.setattr(frontier_sweeps, "REPEATS", 1)
-    scenario = load_scenario("paper", {"contact.n_radial": 160, "loading.n_delta": 6})
+    scenario = load_scenario("paper_gt", {"contact.n_radial": 160, "loading.n_delta": 6})
     rows = {(r["solver"], r["n_radial"], r["tolerance"]): r for r in frontier_sweeps.contact_frontier(scenario)}
     fine, coarse = rows["newton", 160, 1e-10], rows["newton", 20, 1e-10]
     assert fine["force_error"] < coarse["force_error"] and fine["area_error"] < coarse["area_error"]
@@ -129,7 +129,7 @@ def test_cube_and_ensemble_sweeps_measure_real_errors(monkeypatch) -> None:
     monkeypatch.setattr(frontier_sweeps, "REPEATS", 1)
     monkeypatch.setattr(frontier_sweeps, "ENSEMBLE_REALIZATIONS", 24)
     monkeypatch.setattr(frontier_sweeps, "ENSEMBLE_COUNTS", (6, 24, 400))
-    scenario = resolve(load_scenario("paper", {"contact.n_radial": 160, "loading.n_delta": 6}))
+    scenario = resolve(load_scenario("paper_gt", {"contact.n_radial": 160, "loading.n_delta": 6}))
     rows = {(r["crop_tolerance"], r["precision"]): r for r in frontier_sweeps.cube_frontier(scenario)}
     assert rows[0.0, "float64"]["resistance_error"] < 1e-12  # exact algorithm against the dense sum
     assert 1e-8 < rows[1e-2, "float64"]["resistance_error"] <= 1e-2  # cropping error within its tolerance

@@ -29,7 +29,7 @@ def adaptive_dir(tmp_path_factory):
 def _scenario():
     from pipeline.before_work.domains import resolve
 
-    return resolve(load_scenario("paper", {k: json.loads(v) if isinstance(v, str) else v for k, v in SETS.items()}))
+    return resolve(load_scenario("paper_gt", {k: json.loads(v) if isinstance(v, str) else v for k, v in SETS.items()}))
 
 
 def test_prefix_counts_are_log_spaced_and_end_at_the_count() -> None:

@@ -114,7 +114,7 @@ def test_newton_residual_and_fixed_point_agreement(small):
 
 
 def test_fixed_point_not_converged_is_reported():
-    sc = load_scenario("paper", {"loading.n_delta": 2, "contact.n_radial": 40, "contact.max_iterations": 2})
+    sc = load_scenario("paper_gt", {"loading.n_delta": 2, "contact.n_radial": 40, "contact.max_iterations": 2})
     _, fixed = solve_scenario(sc, solver="fixed_point")
     assert not any(s.converged for s in fixed) and all(s.iterations == 2 for s in fixed)
 
@@ -188,7 +188,7 @@ def test_profiles():
 
 def test_roughness_parameter_at_minus_two_sigma():
     """Table 1 at delta = -2 sigma: sigma R*/a^2 ~= 0.361 (Sect. 2.5.1)."""
-    sc = load_scenario("paper", {"loading.n_delta": 1, "loading.delta_max": -2.0})
+    sc = load_scenario("paper_gt", {"loading.n_delta": 1, "loading.delta_max": -2.0})
     r, (sol,) = solve_scenario(sc)
     rough, e_star, radius = sc.roughness, sc.material.E_star, sc.indenter.radius
     p = asperity_pressure(-2 * rough.sigma + profile(r, radius=radius) + sol.displacement,

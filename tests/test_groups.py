@@ -46,7 +46,7 @@ def test_bad_values_refused(bad: float) -> None:
 
 def _chain(overrides: dict) -> tuple:
     """contact -> oxide -> cube -> fits in memory; R' (xi, lambda, delta, realization), F', fits."""
-    s = resolve(load_scenario("paper", overrides))
+    s = resolve(load_scenario("paper_gt", overrides))
     c = contact.build(s)
     o = oxide.build(s)
     k = cube.build(s, c, o)
@@ -63,7 +63,7 @@ def pair() -> tuple:
     can differ.
     """
     base = dict(SMALL_OVERRIDES, **{"oxide.xi": [0.5, 0.8], "oxide.lambda": [1.0, 9.0]})
-    auto = resolve(load_scenario("paper", base))  # the auto domains of the first scene, pinned for both
+    auto = resolve(load_scenario("paper_gt", base))  # the auto domains of the first scene, pinned for both
     window, r_max = auto.contact.window, auto.contact.r_max
     base.update({"contact.window": window, "contact.r_max": r_max})
     a = _chain(base)
@@ -76,7 +76,7 @@ def pair() -> tuple:
         "indenter.radius": other.radius, "material.E": 7.0e10, "material.nu": 0.25, "material.rho": 2.0e-8,
         "contact.window": window * stretch, "contact.r_max": r_max * stretch,
     })
-    b_scene = load_scenario("paper", b_over)
+    b_scene = load_scenario("paper_gt", b_over)
     b_over["fits.min_force"] = sa.fits.min_force * b_scene.force_scale / sa.force_scale
     return a, _chain(b_over)
 
@@ -96,7 +96,7 @@ def test_equal_groups_give_equal_normalized_resistance(pair) -> None:
 def test_other_groups_give_other_loads(pair) -> None:
     """The check above can fail: mu x2 (beta x4, Pi unchanged) moves F'(delta/sigma) by far more."""
     (sa, _, fa, _), _ = pair
-    s = resolve(load_scenario("paper", dict(SMALL_OVERRIDES, **{
+    s = resolve(load_scenario("paper_gt", dict(SMALL_OVERRIDES, **{
         "roughness.beta": 4 * sa.roughness.beta})))
     fb = contact.build(s)["force_normalized"].values
     assert np.min(np.abs(fb / fa - 1.0)) > 0.01

@@ -15,5 +15,5 @@ def test_memory_probe_without_sysconf(monkeypatch) -> None:
     total = psutil.virtual_memory().total
     have = available_memory()
     assert 0 < have <= total
-    scenario = load_scenario("paper")  # validation checks the ensemble against physical memory
+    scenario = load_scenario("paper_gt")  # validation checks the ensemble against physical memory
     assert check_resources(scenario)  # the plan's estimates against the available memory

@@ -161,18 +161,18 @@ def test_cli_rejects_bad_oxide_parameters(
 def test_window_smaller_than_correlation_length_warns_with_mode_count() -> None:
     lam = 60.0  # l_O = 60 cells > the 57-cell window
     with pytest.warns(UserWarning, match=r"oxide.lambda = 60.*only (\d+) independent Fourier modes") as record:
-        scenario = resolve(load_scenario("paper", {"oxide.lambda": [5.0, lam], "oxide.period": "window"}))
+        scenario = resolve(load_scenario("paper_gt", {"oxide.lambda": [5.0, lam], "oxide.period": "window"}))
     modes = oxide_band.band(scenario.n_cells, scenario.cell_size, lam, 3.0, 0.5)
     assert f"only {modes.size} independent" in str(record[0].message)
 
 
 def test_window_without_modes_is_an_error() -> None:
     with pytest.raises(ConfigError, match="oxide.lambda"):
-        resolve(load_scenario("paper", {"oxide.lambda": [500.0], "oxide.period": "window"}))
+        resolve(load_scenario("paper_gt", {"oxide.lambda": [500.0], "oxide.period": "window"}))
 
 
 def test_spectral_period_has_modes_at_any_lambda() -> None:
-    scenario = resolve(load_scenario("paper", {"oxide.lambda": [500.0], "oxide.spectral_resolution": 4.0}))
+    scenario = resolve(load_scenario("paper_gt", {"oxide.lambda": [500.0], "oxide.spectral_resolution": 4.0}))
     assert bands(scenario)[0].size > 100
 
 

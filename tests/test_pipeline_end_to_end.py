@@ -134,6 +134,6 @@ def test_physics_benchmarks_run_once_per_configuration(tmp_path, monkeypatch, sm
     (tmp_path / "bench" / "biases.json").write_text("{truncated")
     bench.physics_benchmarks(small, tmp_path)
     assert calls == [*bench.PHYSICS_BENCH, "biases"]  # an unreadable one runs again
-    other = load_scenario("paper", {**SMALL_OVERRIDES, "fits.n_bootstrap": 60})
+    other = load_scenario("paper_gt", {**SMALL_OVERRIDES, "fits.n_bootstrap": 60})
     bench.physics_benchmarks(other, tmp_path)
     assert calls[-2:] == list(bench.PHYSICS_BENCH)  # another configuration: both

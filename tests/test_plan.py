@@ -30,7 +30,7 @@ MEMORY = 16.0 * 2**30  # a fixed machine, so the refusals do not depend on the o
 )
 def test_exhausting_parameters_are_refused_naming_them(overrides, parameter):
     with pytest.raises(ConfigError) as err:
-        plan.check_resources(load_scenario("paper", overrides), memory=MEMORY)
+        plan.check_resources(load_scenario("paper_gt", overrides), memory=MEMORY)
     assert str(err.value).startswith(parameter), str(err.value)
 
 
@@ -42,9 +42,9 @@ def test_refused_before_work_by_the_cli(tmp_path, capsys):
 
 
 def test_paper_scene_fits_and_plan_prints_every_stage(capsys):
-    estimates = plan.check_resources(resolve(load_scenario("paper")), memory=MEMORY)
+    estimates = plan.check_resources(resolve(load_scenario("paper_gt")), memory=MEMORY)
     assert [e.stage for e in estimates] == ["contact", "oxide", "cube", "fits", "surrogate"]
-    assert main(["plan"]) == 0
+    assert main(["plan", "--config", "paper_gt"]) == 0
     out = capsys.readouterr().out
     assert "49 x 49 cells" in out
     for stage in ("contact", "oxide", "cube", "fits", "surrogate"):
@@ -53,8 +53,8 @@ def test_paper_scene_fits_and_plan_prints_every_stage(capsys):
 
 def test_estimates_grow_with_the_cell_count():
     fixed = {"oxide.ensemble": "fixed"}  # an adaptive cube's memory is dominated by its cap, not the cells
-    small = plan.estimate(resolve(load_scenario("paper", fixed)))
-    large = plan.estimate(resolve(load_scenario("paper", {**fixed, "roughness.eta": 3.2e9})))
+    small = plan.estimate(resolve(load_scenario("paper_gt", fixed)))
+    large = plan.estimate(resolve(load_scenario("paper_gt", {**fixed, "roughness.eta": 3.2e9})))
     for a, b in zip(small, large):
         if a.stage in ("oxide", "cube"):
             assert b.peak_bytes > 5 * (a.peak_bytes - plan.BASE_BYTES)
@@ -77,8 +77,9 @@ def test_memory_estimate_within_a_factor_2_of_measured_peak(tmp_path, eta):
     sets = {"roughness.eta": eta, "oxide.xi": [0.3, 0.7], "oxide.lambda": [3.0, 9.0],
             "oxide.n_realizations": 20, "oxide.chunk": 10, "cube.chunk": 10, "loading.n_delta": 8,
             "contact.n_radial": 240}
-    args = [a for k, v in sets.items() for a in ("--set", f"{k}={v}")] + ["--data-dir", str(tmp_path), "--no-progress"]
-    estimates = {e.stage: e.peak_bytes for e in plan.estimate(resolve(load_scenario("paper", sets)))}
+    args = ["--config", "paper_gt", *[a for k, v in sets.items() for a in ("--set", f"{k}={v}")], "--data-dir", str(tmp_path),
+            "--no-progress"]
+    estimates = {e.stage: e.peak_bytes for e in plan.estimate(resolve(load_scenario("paper_gt", sets)))}
     for stage in ("contact", "oxide", "cube"):
         run = subprocess.run([sys.executable, "-c", _RSS, stage, *args], capture_output=True, text=True, check=True)
         measured = float(run.stdout.split()[-1])
@@ -99,7 +100,7 @@ MEASURED_FIXED_400 = {1: 18.7, None: 12.1}
 
 
 def test_adaptive_plan_prints_a_range_containing_the_measured_run(capsys):
-    scenario = resolve(load_scenario("paper"))
+    scenario = resolve(load_scenario("paper_gt"))
     counts = plan.realizations(scenario)
     assert counts.adaptive and (counts.low, counts.high) == (400, 30_000)
     assert counts.low * 108 <= MEASURED_REALIZATIONS <= counts.high * 108
@@ -109,7 +110,7 @@ def test_adaptive_plan_prints_a_range_containing_the_measured_run(capsys):
     low, high = cube.seconds_range
     assert low < cube.seconds < high and high / low == pytest.approx(30_000 / 400)
     assert low <= MEASURED_CUBE_SECONDS <= high
-    assert main(["plan"]) == 0
+    assert main(["plan", "--config", "paper_gt"]) == 0
     out = capsys.readouterr().out
     assert "400 .. 30000 realizations per (xi, lambda) (adaptive)" in out
     assert "43200 .. 3240000 realizations in all, typical 361115" in out
@@ -120,17 +121,17 @@ def test_adaptive_plan_prints_a_range_containing_the_measured_run(capsys):
 @pytest.mark.parametrize("workers", [1, None])
 def test_cube_plan_within_1_5x_of_measured(workers):
     """The typical estimate against the measured runs (adaptive default, fixed 400 on 1 and 2 threads)."""
-    fixed = resolve(load_scenario("paper", {"oxide.ensemble": "fixed", "oxide.n_realizations": 400}))
+    fixed = resolve(load_scenario("paper_gt", {"oxide.ensemble": "fixed", "oxide.n_realizations": 400}))
     cube = next(e for e in plan.estimate(fixed, workers) if e.stage == "cube")
     assert 1 / 1.5 <= cube.seconds / MEASURED_FIXED_400[workers] <= 1.5, cube.seconds
     if workers is None:
-        adaptive = next(e for e in plan.estimate(resolve(load_scenario("paper"))) if e.stage == "cube")
+        adaptive = next(e for e in plan.estimate(resolve(load_scenario("paper_gt"))) if e.stage == "cube")
         assert 1 / 1.5 <= adaptive.seconds / MEASURED_CUBE_SECONDS <= 1.5, adaptive.seconds
 
 
 def test_adaptive_memory_is_typical_with_the_cap_beside():
-    scenario = resolve(load_scenario("paper"))
-    fixed = resolve(load_scenario("paper", {"oxide.ensemble": "fixed"}))  # same fields in oxide.nc (500)
+    scenario = resolve(load_scenario("paper_gt"))
+    fixed = resolve(load_scenario("paper_gt", {"oxide.ensemble": "fixed"}))  # same fields in oxide.nc (500)
     adaptive = {e.stage: e for e in plan.estimate(scenario)}
     base = {e.stage: e.peak_bytes for e in plan.estimate(fixed)}
     # the cube's and fits' results are held on the padded realization axis: typically the largest
@@ -146,10 +147,10 @@ def test_adaptive_memory_is_typical_with_the_cap_beside():
     plan.check_resources(scenario, memory=MEMORY)  # the default scenario is not refused
     # a cap that would not fit only warns: typical runs stop far below it
     with pytest.warns(ResourceWarning, match="oxide.max_realizations = 3000000"):
-        plan.check_resources(resolve(load_scenario("paper", {"oxide.max_realizations": 3_000_000})), memory=MEMORY)
+        plan.check_resources(resolve(load_scenario("paper_gt", {"oxide.max_realizations": 3_000_000})), memory=MEMORY)
     # typical counts that would not fit are refused, naming the parameter
     with pytest.raises(ConfigError) as err:
-        plan.check_resources(resolve(load_scenario("paper", {"oxide.min_realizations": 300_000,
+        plan.check_resources(resolve(load_scenario("paper_gt", {"oxide.min_realizations": 300_000,
                                                              "oxide.max_realizations": 300_000})), memory=MEMORY)
     assert "is out of range for this machine" in str(err.value) and "_realizations = 300000" in str(err.value)
 
@@ -158,7 +159,7 @@ def test_an_8_gb_laptop_runs_the_default():
     """6 GiB available: the default run fits (refused before the fits' memory was calibrated)."""
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        plan.check_resources(resolve(load_scenario("paper")), memory=6.0 * 2**30)
+        plan.check_resources(resolve(load_scenario("paper_gt")), memory=6.0 * 2**30)
 
 
 def test_a_typical_run_that_cannot_fit_is_refused_before_work_by_the_cli(tmp_path, capsys):
@@ -173,8 +174,8 @@ def test_plan_of_the_discrete_model_counts_its_pool_and_maps() -> None:
     from pipeline.before_work import plan
     from pipeline.config import load_scenario
 
-    grid = {e.stage: e for e in plan.estimate(load_scenario("paper"), workers=2)}
-    discrete = {e.stage: e for e in plan.estimate(load_scenario("paper_discrete"), workers=2)}
+    grid = {e.stage: e for e in plan.estimate(load_scenario("paper_gt"), workers=2)}
+    discrete = {e.stage: e for e in plan.estimate(load_scenario("paper"), workers=2)}
     # 256 surfaces x 20 steps x 3.85 ms on two workers beside the Greenwood-Tripp solve
     assert discrete["contact"].seconds - grid["contact"].seconds == pytest.approx(256 * 20 * 3.85e-3 / 2, rel=1e-9)
     # 188,200 computed (xi, field) pairs at 5.5 ms on two workers: 518 s
@@ -191,12 +192,12 @@ MEASURED_DEFAULT_PEAK_MIB = {"contact": 273, "oxide": 297, "cube": 3470, "fits":
 
 
 def test_every_stage_memory_within_1_5x_of_the_measured_default_run():
-    for estimate in plan.estimate(resolve(load_scenario("paper"))):
+    for estimate in plan.estimate(resolve(load_scenario("paper_gt"))):
         ratio = estimate.peak_bytes / 2**20 / MEASURED_DEFAULT_PEAK_MIB[estimate.stage]
         assert 1 / 1.5 <= ratio <= 1.5, (estimate.stage, estimate.peak_bytes / 2**20)
 
 
 def test_every_stage_time_within_1_5x_of_the_measured_default_run():
-    for estimate in plan.estimate(resolve(load_scenario("paper"))):
+    for estimate in plan.estimate(resolve(load_scenario("paper_gt"))):
         measured = MEASURED_DEFAULT_RUN[estimate.stage]
         assert 1 / 1.5 <= estimate.seconds / measured <= 1.5, (estimate.stage, estimate.seconds, measured)

@@ -82,15 +82,15 @@ def test_greenwood_closed_form_with_vanishing_radii_is_finite():
     np.testing.assert_allclose(insulating.resistance, plain.resistance, rtol=1e-12)
 
 
-def test_expected_spots_with_the_lattice_term_obey_barber(paper):
+def test_expected_spots_with_the_lattice_term_obey_barber(paper_gt):
     """Clean paper scene: the contact stage's expected spots (radius sqrt(beta) F_1/2(h) per cell)
     conduct K / (E* rho*) (Barber, K from the linearised Greenwood-Tripp system) to 1e-4 at every step
     with the lattice term (measured 2e-5), and 0.5-3.4 % too much without it."""
-    ds = contact.build(paper)  # the stage's expected spots and its Barber conductance
-    assert paper.contact.spots == "expected"
+    ds = contact.build(paper_gt)  # the stage's expected spots and its Barber conductance
+    assert paper_gt.contact.spots == "expected"
     barber = ds["barber_conductance"].values * RHO  # conductance x rho*, m
-    radius, dx = ds["spot_radius"].values, paper.cell_size
-    masks = np.ones((1, paper.n_cells, paper.n_cells), bool)
+    radius, dx = ds["spot_radius"].values, paper_gt.cell_size
+    masks = np.ones((1, paper_gt.n_cells, paper_gt.n_cells), bool)
     crops = choose_crops(radius, radius, dx, 1e-9)
 
     def conductance(c):

@@ -253,7 +253,7 @@ def inputs():
 
 
 def _scenario(**overrides):
-    return load_scenario("paper", {"oxide.ensemble": "fixed", "oxide.n_realizations": N_REAL, **overrides})
+    return load_scenario("paper_gt", {"oxide.ensemble": "fixed", "oxide.n_realizations": N_REAL, **overrides})
 
 
 def test_stage_point_model_matches_dense_and_records_the_solver(inputs):
@@ -311,14 +311,14 @@ def test_stage_resistive_film_both_models(inputs):
 )
 def test_bad_settings_are_config_errors(override, message):
     with pytest.raises(ConfigError, match=message.replace(".", r"\.").replace("(", r"\(")):
-        load_scenario("paper", [override])
+        load_scenario("paper_gt", [override])
 
 
 def test_point_model_needs_radius_weights_and_an_applicable_operator():
     with pytest.raises(ConfigError, match="cube.weights = 'area'"):
         load_scenario("published", ["cube.model=point"])
     with pytest.raises(ConfigError, match="cube.method = 'fft'"):
-        load_scenario("paper", ["cube.model=point", "cube.method=fft"])
+        load_scenario("paper_gt", ["cube.model=point", "cube.method=fft"])
 
 
 def test_cli_exits_2_on_bad_solver_settings(tmp_path, capsys):
@@ -327,7 +327,7 @@ def test_cli_exits_2_on_bad_solver_settings(tmp_path, capsys):
 
 
 def test_film_does_not_touch_the_oxide_stage_hash():
-    insulating = load_scenario("paper")
-    resistive = load_scenario("paper", {"oxide.film": "resistive"})
+    insulating = load_scenario("paper_gt")
+    resistive = load_scenario("paper_gt", {"oxide.film": "resistive"})
     assert resistive.config_hash("oxide") == insulating.config_hash("oxide")
     assert resistive.config_hash("cube") != insulating.config_hash("cube")

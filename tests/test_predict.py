@@ -255,7 +255,7 @@ def test_json_round_trips_every_table_value(data_dir) -> None:
 
 
 def test_json_carries_the_lambda_map(tmp_path, small: Scenario) -> None:
-    scenario = resolve(load_scenario("paper", {**SMALL_OVERRIDES, "surrogate.lambda_map": "lambda"}))
+    scenario = resolve(load_scenario("paper_gt", {**SMALL_OVERRIDES, "surrogate.lambda_map": "lambda"}))
     write_dataset(fits.build(scenario, synthetic_cube(scenario, noise=0.2)), tmp_path, "fits", scenario)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)

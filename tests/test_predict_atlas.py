@@ -29,13 +29,13 @@ from tests.test_predict import _rows
 @pytest.fixture(scope="module")
 def atlas_json(tmp_path_factory):
     data = tmp_path_factory.mktemp("atlas")
-    target, _ = write_atlas_surrogate(atlas.run_atlas(load_scenario("paper", BASE), DESIGN, data))
+    target, _ = write_atlas_surrogate(atlas.run_atlas(load_scenario("paper_gt", BASE), DESIGN, data))
     return target
 
 
 def _surface(eta: float):
     """The paper surface with another eta: mu and Pi both scale with eta."""
-    paper = load_scenario("paper", BASE)
+    paper = load_scenario("paper_gt", BASE)
     return dataclasses.replace(paper, roughness=dataclasses.replace(paper.roughness, eta=eta))
 
 
@@ -77,7 +77,7 @@ def test_cli_the_run_own_for_its_surface_the_atlas_for_others(tmp_path, capsys, 
     from pipeline.before_work.domains import resolve
     from pipeline.predict.predictor import load_surrogate
 
-    small = resolve(load_scenario("paper", SMALL_OVERRIDES))  # the run's own: a 3 x 3 grid
+    small = resolve(load_scenario("paper_gt", SMALL_OVERRIDES))  # the run's own: a 3 x 3 grid
     write_dataset(fits.build(small, synthetic_cube(small, noise=0.2)), tmp_path, "fits", small)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)

@@ -48,7 +48,7 @@ def test_extrapolate_accepts_it_with_a_warning(data_dir, small: Scenario, capsys
     status, out, err = _predict(data_dir, small, capsys, "--set", "roughness.eta=1e9", "--extrapolate")
     assert status == 0
     assert "warning: mu = " in err and "another surface's coefficients" in err
-    assert "answered by the run's own single-scene surrogate (scenario 'paper', mu = 8.262" in err
+    assert f"answered by the run's own single-scene surrogate (scenario '{small.name}', mu = 8.262" in err
     row = _rows(out)[0]
     expected = groups(small.roughness.sigma, 1e9, small.roughness.beta, small.indenter.radius)
     assert row["mu"] == pytest.approx(expected.mu, rel=1e-9) and row["Pi"] == pytest.approx(expected.Pi, rel=1e-9)
@@ -62,7 +62,7 @@ def test_same_groups_other_dimensions_scale_exactly(data_dir, small: Scenario, c
                                         small.indenter.radius).__dict__.values(), sigma=40e-6, radius=5e-3)
     sets = {"roughness.sigma": other.sigma, "roughness.eta": other.eta, "roughness.beta": other.beta,
             "indenter.radius": other.radius, "material.E": 7e10, "material.rho": 2e-8}
-    b = load_scenario("paper", {**{k: v for k, v in small.flat().items() if k.startswith(("oxide", "loading"))}, **sets})
+    b = load_scenario("paper_gt", {**{k: v for k, v in small.flat().items() if k.startswith(("oxide", "loading"))}, **sets})
     tables = load_surrogate(data_dir / "surrogate.json")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SurrogateErrorWarning)

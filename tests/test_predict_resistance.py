@@ -25,7 +25,7 @@ def run_dir(tmp_path_factory):
     from pipeline.before_work.domains import resolve
 
     data = tmp_path_factory.mktemp("run")
-    small = resolve(load_scenario("paper", SMALL_OVERRIDES))
+    small = resolve(load_scenario("paper_gt", SMALL_OVERRIDES))
     write_dataset(fits.build(small, synthetic_cube(small, noise=0.2)), data, "fits", small)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
@@ -44,7 +44,7 @@ def _shared_force(data, scenario) -> float:
 
 def test_readme_case_other_sigma_is_answered_by_the_atlas(run_dir) -> None:
     data, small = run_dir
-    scenario = load_scenario("paper", {"roughness.sigma": 15e-6})
+    scenario = load_scenario("paper_gt", {"roughness.sigma": 15e-6})
     force = _shared_force(data, scenario)
     # the run's own surrogate alone refuses this surface (the README's snippets before issue 32)
     with pytest.raises(ConfigError, match="mu"):
@@ -86,7 +86,7 @@ def test_a_height_map_is_measured_like_predict_roughness(run_dir, tmp_path) -> N
     path = tmp_path / "map.npy"
     np.save(path, heights)
     measured = surface_scenario(path, pixel_size=1e-6)
-    assert measured == with_measured_roughness(load_scenario("paper"), path, 1e-6)
+    assert measured == with_measured_roughness(load_scenario("paper"), path, 1e-6)  # the default scene
     with pytest.raises(ConfigError, match="pixel_size"):
         surface_scenario("paper", pixel_size=1e-6)
     with pytest.raises(ConfigError, match="no_such_scenario"):

@@ -35,7 +35,7 @@ def test_blocks_are_found() -> None:
 def test_readme_python_examples_run_in_order(tmp_path, monkeypatch, capsys) -> None:
     from pipeline.before_work.domains import resolve
 
-    small = resolve(load_scenario("paper", SMALL_OVERRIDES))
+    small = resolve(load_scenario("paper_gt", SMALL_OVERRIDES))
     data = tmp_path / "data"
     write_dataset(fits.build(small, synthetic_cube(small, noise=0.2)), data, "fits", small)
     with warnings.catch_warnings():

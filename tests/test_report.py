@@ -97,7 +97,7 @@ def test_renderers_escape() -> None:
 
 
 def test_load_figure_markers_are_the_fitted_reduction() -> None:
-    scenario = load_scenario("paper", {**SMALL_OVERRIDES, "fits.reduction": "median"})
+    scenario = load_scenario("paper_gt", {**SMALL_OVERRIDES, "fits.reduction": "median"})
     cube = synthetic_cube(scenario, noise=0.5)
     ds = fits_stage.build(scenario, cube)
     xi, lam = float(ds.xi[1]), float(ds["lambda"][1])

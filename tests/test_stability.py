@@ -30,7 +30,7 @@ EXTREMES = {
 
 @pytest.mark.parametrize("overrides", EXTREMES.values(), ids=EXTREMES.keys())
 def test_contact_converges_and_stays_physical(overrides) -> None:
-    scenario = load_scenario("paper", {**FAST, **overrides})
+    scenario = load_scenario("paper_gt", {**FAST, **overrides})
     ds = contact.build(scenario)
     force = ds["force"].values
     assert np.all(np.isfinite(force)) and np.all(force > 0)
@@ -47,7 +47,7 @@ def test_contact_converges_and_stays_physical(overrides) -> None:
 
 
 def test_nearly_full_oxide_gives_counted_open_circuits_and_finite_fits() -> None:
-    scenario = resolve(load_scenario("paper", {
+    scenario = resolve(load_scenario("paper_gt", {
         **FAST, "oxide.xi": [0.5, 0.99], "oxide.lambda": [23.0], "oxide.ensemble": "fixed", "oxide.n_realizations": 40,
         "fits.n_bootstrap": 20,
     }))
@@ -73,7 +73,7 @@ def _check_case(case: stability.Case) -> None:
         assert "\n" not in message and " = " in message and ("out of range" in message or "must" in message)
         return
     assert record["status"] == "converged", record["message"]
-    assert record["residual"] <= load_scenario("paper").contact.tolerance
+    assert record["residual"] <= load_scenario("paper_gt").contact.tolerance
     for name in ("force", "pressure", "area_fraction"):
         assert np.isfinite(arrays[name]).all() and (arrays[name] >= 0).all(), name
     assert np.isfinite(arrays["separation"]).all()
@@ -128,7 +128,7 @@ def test_unconverged_solve_is_reported_naming_the_case() -> None:
 
 @pytest.mark.stress
 def test_oxide_fraction_at_its_edges() -> None:
-    scenario = load_scenario("paper", {
+    scenario = load_scenario("paper_gt", {
         **FAST, "oxide.xi": [1e-6, 0.5, 1 - 1e-6], "oxide.lambda": [1.0, 19.0], "oxide.n_realizations": 12,
     })
     quiet = ComputeOptions(progress=False)
@@ -158,7 +158,7 @@ def test_random_scenes_converge_and_stay_physical() -> None:
            shape=st.sampled_from(["sphere", "cone", "flat_punch"]))
     def check(sigma, eta, beta, radius, top, depth, shape) -> None:
         try:
-            scenario = load_scenario("paper", {
+            scenario = load_scenario("paper_gt", {
                 **stability.FAST, "roughness.sigma": 10**sigma, "roughness.eta": 10**eta,
                 "roughness.beta": 10**beta, "indenter.radius": 10**radius, "indenter.shape": shape,
                 "indenter.punch_radius": 0.05 * 10**radius, "indenter.edge_radius": 0.5 * 10**radius,

@@ -13,7 +13,7 @@ from pipeline import __version__
 from pipeline.cli.main import main
 from pipeline.config import load_scenario
 from pipeline.store import StaleInputError, atomic_path, read_stage, stage_path, stage_problem, write_dataset
-from tests.conftest import SMALL_OVERRIDES
+from tests.conftest import SMALL_ARGS, SMALL_OVERRIDES
 
 
 def _dataset(value: float) -> xr.Dataset:
@@ -31,7 +31,7 @@ def test_write_records_provenance_and_reads_back(tmp_path, small) -> None:
     assert ds.attrs["config_hash"] == small.config_hash("contact")
     assert ds.attrs["roughness.sigma"] == small.roughness.sigma
     assert json.loads(ds.attrs["parameters"])["contact.n_radial"] == 160
-    assert ds.attrs["history"].endswith("stage contact, scenario paper")
+    assert ds.attrs["history"].endswith("stage contact, scenario paper_gt")
     assert f"g2tom {__version__}" in ds.attrs["history"]
     assert [p.name for p in tmp_path.iterdir()] == ["contact.nc"]
     umask = os.umask(0)
@@ -43,7 +43,7 @@ def test_stale_or_missing_input_is_refused(tmp_path, small) -> None:
     with pytest.raises(StaleInputError, match="missing"):
         read_stage(tmp_path, "contact", small)
     write_dataset(_dataset(1.0), tmp_path, "contact", small)
-    other = load_scenario("paper", {"roughness.sigma": 1e-5})
+    other = load_scenario("paper_gt", {"roughness.sigma": 1e-5})
     with pytest.raises(StaleInputError, match="different configuration"):
         read_stage(tmp_path, "contact", other)
 
@@ -133,14 +133,14 @@ def test_truncated_stage_file_names_file_and_fix(tmp_path, small) -> None:
 
 
 def test_stamp_touches_a_damaged_or_foreign_stage_file(tmp_path, small) -> None:
-    args = ["--data-dir", str(tmp_path), *[a for k, v in SMALL_OVERRIDES.items() for a in ("--set", f"{k}={v}")]]
+    args = ["--data-dir", str(tmp_path), *SMALL_ARGS]
     assert main(["stamp", *args]) == 0
     stamps = tmp_path / ".stamps"
     write_dataset(_dataset(1.0), tmp_path, "fits", small)
     os.utime(stamps / "fits.json", ns=(1, 1))
     assert main(["stamp", *args]) == 0  # a current fits.nc: the stamp is left alone
     assert (stamps / "fits.json").stat().st_mtime_ns == 1
-    other = load_scenario("paper", {**SMALL_OVERRIDES, "fits.seed": 8})
+    other = load_scenario("paper_gt", {**SMALL_OVERRIDES, "fits.seed": 8})
     write_dataset(_dataset(1.0), tmp_path, "fits", other)
     assert main(["stamp", *args]) == 0  # built with fits.seed = 8: make must rebuild it
     assert (stamps / "fits.json").stat().st_mtime_ns > stage_path(tmp_path, "fits").stat().st_mtime_ns - 1

@@ -81,7 +81,7 @@ def test_bad_input() -> None:
 
 
 def test_paper_stage_builds_table3_and_cv(tmp_path, small) -> None:
-    paper_method = load_scenario("paper", {**SMALL_OVERRIDES, "surrogate.method": "paper"})
+    paper_method = load_scenario("paper_gt", {**SMALL_OVERRIDES, "surrogate.method": "paper"})
     with pytest.warns(UserWarning, match="reduced to"):
         ds = surrogate.build(paper_method, fits.build(paper_method, synthetic_cube(paper_method, noise=0.0)))
     lam, xi = np.asarray(small.oxide.lambda_), np.asarray(small.oxide.xi)
@@ -134,7 +134,7 @@ def test_joint_stage_on_small_grid(small) -> None:
 
 
 def test_joint_stage_needs_three_lines() -> None:
-    tiny = load_scenario("paper", {**SMALL_OVERRIDES, "oxide.xi": [0.2, 0.5]})
+    tiny = load_scenario("paper_gt", {**SMALL_OVERRIDES, "oxide.xi": [0.2, 0.5]})
     with pytest.raises(ConfigError, match="must each hold >= 3 values"):
         surrogate.build(tiny, fits.build(tiny, synthetic_cube(tiny, noise=0.0)))
 
@@ -316,7 +316,7 @@ def test_polynomial_in_lambda_recovered_exactly_and_chosen_by_cross_validation()
 
 @pytest.mark.parametrize(("choice", "spec"), [("log", "log"), ("sqrt", "log;w=sqrt")])
 def test_joint_stage_uses_the_configured_lambda_map(choice: str, spec: str) -> None:
-    scenario = resolve(load_scenario("paper", {**SMALL_OVERRIDES, "surrogate.lambda_map": choice}))
+    scenario = resolve(load_scenario("paper_gt", {**SMALL_OVERRIDES, "surrogate.lambda_map": choice}))
     with pytest.warns(UserWarning, match="reduced to"):
         ds = surrogate.build(scenario, fits.build(scenario, synthetic_cube(scenario, noise=0.0)))
     assert ds.attrs["alpha_transform"] == spec

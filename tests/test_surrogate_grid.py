@@ -7,9 +7,9 @@ import pytest
 from pipeline.cli.main import main
 from pipeline.before_work.surrogate_grid import check_surrogate_grid
 from pipeline.config import ConfigError, load_scenario
-from tests.conftest import SMALL_OVERRIDES
+from tests.conftest import SMALL_ARGS
 
-_SMALL = [a for k, v in SMALL_OVERRIDES.items() for a in ("--set", f"{k}={v}")]
+_SMALL = list(SMALL_ARGS)
 _GRID_2x2 = ["--set", "oxide.xi=[0.3, 0.7]", "--set", "oxide.lambda=[3.0, 9.0]"]
 
 
@@ -24,16 +24,16 @@ def test_run_refuses_before_writing(tmp_path, capsys, extra) -> None:
 
 
 def test_rank_range_follows_the_grid() -> None:
-    check_surrogate_grid(load_scenario("paper", {"surrogate.rank": 9}))  # 9 x 12 grid: 9 modes
+    check_surrogate_grid(load_scenario("paper_gt", {"surrogate.rank": 9}))  # 9 x 12 grid: 9 modes
     with pytest.raises(ConfigError, match=r"surrogate.rank = 10 is out of range: must be >= 1 and <= 9"):
-        check_surrogate_grid(load_scenario("paper", {"surrogate.rank": 10}))
+        check_surrogate_grid(load_scenario("paper_gt", {"surrogate.rank": 10}))
 
 
 def test_paper_method_allows_a_2x2_grid_and_other_stages_any_grid() -> None:
     two = {"oxide.xi": [0.3, 0.7], "oxide.lambda": [3.0, 9.0]}
-    check_surrogate_grid(load_scenario("paper", {**two, "surrogate.method": "paper"}))
+    check_surrogate_grid(load_scenario("paper_gt", {**two, "surrogate.method": "paper"}))
     with pytest.raises(ConfigError, match="oxide.xi holds 2 value"):
-        check_surrogate_grid(load_scenario("paper", two))
+        check_surrogate_grid(load_scenario("paper_gt", two))
     assert main(["params", "--set", "oxide.xi=[0.3, 0.7]", "--set", "surrogate.rank=1000"]) == 0
 
 

@@ -54,7 +54,7 @@ def _timed(func: Any, *args: Any) -> float:
 
 
 def _scene(eta: float) -> Scenario:
-    return resolve(load_scenario("paper", {"roughness.eta": eta, "oxide.xi": [0.5], "oxide.lambda": [5.0, 13.0],
+    return resolve(load_scenario("paper_gt", {"roughness.eta": eta, "oxide.xi": [0.5], "oxide.lambda": [5.0, 13.0],
                                            "oxide.n_realizations": N_MASKS // 2, "oxide.chunk": N_MASKS}))
 
 
@@ -90,8 +90,8 @@ def _default_ratio() -> dict[str, Any]:
     """Cube time of the paper's scene (auto window) against today's 0.4 R* window, interleaved."""
     quiet = ComputeOptions(progress=False)
     sets = {"oxide.ensemble": "fixed", "oxide.n_realizations": RATIO_REALIZATIONS}
-    scenes = {"auto": resolve(load_scenario("paper", sets)),
-              "window_0.4": resolve(load_scenario("paper", {**sets, "contact.window": 0.4, "contact.r_max": 0.3}))}
+    scenes = {"auto": resolve(load_scenario("paper_gt", sets)),
+              "window_0.4": resolve(load_scenario("paper_gt", {**sets, "contact.window": 0.4, "contact.r_max": 0.3}))}
     jobs = {name: (cube.build, s, contact_stage.build(s), oxide_stage.build(s, quiet), quiet)
             for name, s in scenes.items()}
     seconds = _interleaved(jobs)
@@ -122,7 +122,7 @@ def run(scenario: Scenario) -> dict[str, Any]:
         n = s.n_cells
         masks, spots, _ = inputs[n]
         block = interaction.block_size(n)
-        estimates = {e.stage: e for e in plan.estimate(resolve(load_scenario("paper", {"roughness.eta": eta})))}
+        estimates = {e.stage: e for e in plan.estimate(resolve(load_scenario("paper_gt", {"roughness.eta": eta})))}
         rows.append({
             "eta": eta,
             "L": n,

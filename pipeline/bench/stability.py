@@ -1,6 +1,6 @@
 """Stability map: the contact solve and the clean resistance far beyond the paper's scene.
 
-Each case is the paper scenario at a reduced resolution (:data:`FAST`) with one parameter
+Each case is the Greenwood-Tripp study (``paper_gt``) at a reduced resolution (:data:`FAST`) with one parameter
 pushed to an extreme (sigma 1e-9..1e-3 m, eta 1e6..1e14 m^-2, beta 1e-7..1e-3 m, R*
 1e-4..1 m, delta/sigma +10..-10, rho* over 12 decades, each indenter shape, and the oxide
 fraction and correlation length at their edges). For each case :func:`evaluate` records
@@ -105,7 +105,7 @@ def evaluate(case: Case) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     from pipeline.before_work.domains import resolve
 
     try:
-        scenario = resolve(load_scenario("paper", {**FAST, **case.overrides}))
+        scenario = resolve(load_scenario("paper_gt", {**FAST, **case.overrides}))
     except ConfigError as exc:
         record["message"] = str(exc)
         return record, {}
@@ -185,7 +185,7 @@ def write_map(results: list[tuple[Case, dict[str, Any]]], target: str | Path) ->
             "value": labelled(STABILITY["value"], np.array([c.label.partition("=")[2] for c, _ in results], dtype=str)),
         },
         attrs={"title": "g2tom stability map", "Conventions": "CF-1.10",
-               "base": "paper scenario with " + ", ".join(f"{k}={v}" for k, v in FAST.items())},
+               "base": "paper_gt scenario with " + ", ".join(f"{k}={v}" for k, v in FAST.items())},
     )
     target = Path(target)
     with atomic_path(target) as tmp:

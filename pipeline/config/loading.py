@@ -132,6 +132,28 @@ def _read_toml(config: str | Path) -> tuple[dict[str, Any], str]:
         raise ConfigError(f"--config {text_name!r}: not valid TOML ({exc})") from None
 
 
+def _with_base(data: dict[str, Any], seen: tuple[str, ...] = ()) -> tuple[dict[str, Any], str]:
+    """A scenario's table merged over its ``base`` (a bundled scenario, which may have a base of its
+    own), and the description of the nearest base that has one."""
+    base = data.pop("base", None)
+    if base is None:
+        return data, ""
+    if base not in bundled_scenarios():
+        raise ConfigError(f"base = {base!r} is not a bundled scenario ({', '.join(bundled_scenarios())})")
+    if base in seen:
+        raise ConfigError(f"base = {base!r} is its own base ({' -> '.join(seen + (base,))})")
+    merged, _ = _read_toml(base)
+    merged.pop("name", None)
+    own = str(merged.pop("description", ""))
+    merged, further = _with_base(merged, seen + (base,))
+    for section, values in data.items():
+        if isinstance(values, dict) and isinstance(merged.get(section), dict):
+            merged[section].update(values)
+        else:
+            merged[section] = values
+    return merged, own or further
+
+
 def load_scenario(
     config: str | Path = "paper", overrides: Iterable[str] | Mapping[str, Any] = ()
 ) -> Scenario:
@@ -141,7 +163,8 @@ def load_scenario(
     ----------
     config
         A bundled scenario name (see :func:`bundled_scenarios`) or a path to a TOML file.
-        A file may set ``base = "paper"`` to start from a bundled scenario.
+        A file may set ``base = "paper"`` to start from a bundled scenario (which may itself
+        start from another: ``paper_gt`` from ``paper``, ``published`` from ``paper_gt``).
     overrides
         ``"section.key=value"`` strings (values in TOML syntax) or a mapping
         ``{"section.key": value}``.
@@ -157,20 +180,8 @@ def load_scenario(
         f"{section}.{key}" for section, table in data.items() if isinstance(table, dict) for key in table}
     name = str(data.pop("name", name))
     description = str(data.pop("description", ""))
-    base = data.pop("base", None)
-    if base is not None:
-        if base not in bundled_scenarios():
-            raise ConfigError(f"base = {base!r} is not a bundled scenario ({', '.join(bundled_scenarios())})")
-        merged, _ = _read_toml(base)
-        merged.pop("name", None)
-        base_description = str(merged.pop("description", ""))
-        description = description or base_description
-        for section, values in data.items():
-            if isinstance(values, dict) and isinstance(merged.get(section), dict):
-                merged[section].update(values)
-            else:
-                merged[section] = values
-        data = merged
+    data, base_description = _with_base(data)
+    description = description or base_description
     items = overrides.items() if isinstance(overrides, Mapping) else (
         _split_override(o) for o in overrides
     )

@@ -205,7 +205,13 @@ def _rigid_delta(g: np.ndarray, force: float, e_star: float, beta: float) -> flo
 
     top = float(g.max())
     low = top - (force / (4.0 / 3.0 * e_star * np.sqrt(beta))) ** (2.0 / 3.0)  # one cap alone: too low
-    return float(brentq(lambda d: hertz_load(g - d, e_star, beta).sum() - force, low, top, xtol=1e-15, rtol=1e-15))
+
+    def excess(d: float) -> float:
+        return float(hertz_load(g - d, e_star, beta).sum() - force)
+
+    if excess(low) <= 0.0:  # only the highest cap touches there: low is the root (to rounding)
+        return low
+    return float(brentq(excess, low, top, xtol=1e-15, rtol=1e-15))
 
 
 @dataclass
@@ -337,7 +343,8 @@ class _Walker:
 
     def reach(self, force: float, depth: int = 0) -> int:
         """Solve at ``force``; where Newton fails from the current start, walk up from a lighter
-        load in steps of at most sqrt(2) (from a quarter of the force when cold).
+        load in steps of at most sqrt(2) (from a quarter of the force when cold), and at least two
+        of them, each refined the same way where it fails.
 
         Raises
         ------
@@ -352,7 +359,9 @@ class _Walker:
         iterations = 0
         if self.force == 0.0:
             iterations += self.reach(force / 4.0, depth + 1)
-        for step in np.geomspace(self.force, force, int(np.ceil(2.0 * np.log2(force / self.force))) + 1)[1:]:
+        # at least two steps, so that every level of refinement halves the step (in ln F) that failed
+        steps = max(2, int(np.ceil(2.0 * np.log2(force / self.force))))
+        for step in np.geomspace(self.force, force, steps + 1)[1:]:
             iterations += self.reach(float(step), depth + 1)
         return iterations
 

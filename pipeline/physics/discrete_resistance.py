@@ -243,11 +243,35 @@ def _set_total(kernel: np.ndarray, a: np.ndarray, union: np.ndarray) -> tuple[fl
     return _lu_sum(matrix[:c, :c].copy()), False
 
 
-@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+#: Size from which a factorization calls LAPACK (``potrf`` through NumPy's Cholesky, on a copy)
+#: instead of the compiled loop, which is faster on small matrices and 2-4x slower on large ones.
+LAPACK_FROM = 64
+
+
+@numba.njit(cache=True, nogil=True)
 def _cholesky(matrix: np.ndarray, size: int) -> bool:
     """Lower Cholesky factor of ``matrix[:size, :size]`` in place from its lower triangle (the
-    upper is not read); ``False`` where it is not positive definite. The inner products may be
-    reassociated (vectorized): the same inputs always give the same factor."""
+    upper is not read); ``False`` where it is not positive definite."""
+    if size < LAPACK_FROM:
+        return _cholesky_loop(matrix, size)
+    full = np.empty((size, size))
+    for i in range(size):
+        for j in range(i + 1):
+            full[i, j] = full[j, i] = matrix[i, j]
+    try:
+        lower = np.linalg.cholesky(full)
+    except Exception:  # not positive definite
+        return False
+    for i in range(size):
+        for j in range(i + 1):
+            matrix[i, j] = lower[i, j]
+    return True
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _cholesky_loop(matrix: np.ndarray, size: int) -> bool:
+    """:func:`_cholesky` by the compiled loop; its inner products may be reassociated (vectorized):
+    the same inputs always give the same factor."""
     for j in range(size):
         pivot = matrix[j, j]
         for k in range(j):
