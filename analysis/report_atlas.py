@@ -1,7 +1,7 @@
 """Report section "The atlas over (mu, Pi)": the surrogate chosen by leave-one-scene-out
 cross-validation with its error table, the band by region, and the held-out verdict, computed by
 :func:`pipeline.atlas.fit.verdict` from ``<data>/atlas/heldout.csv`` (the code that wrote
-``surrogate.json``'s verdict)."""
+``surrogate.json``'s verdict); then the measured-surface chain (:mod:`analysis.report_chain`)."""
 
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.report_blocks import Block, table
+from analysis.report_chain import chain_blocks
 from pipeline.atlas.fit import verdict
 from pipeline.fitting.atlas_band import FORCE_EDGES, XI_EDGES, RegionalBand, region_labels
 
@@ -78,11 +79,12 @@ def atlas_blocks(data_dir: Path) -> list[Block]:
     folder = Path(data_dir) / "atlas"
     blocks = [Block("h2", "The atlas over (mu, Pi): held-out scenes")]
     if not (folder / "surrogate.json").is_file() or not (folder / "heldout.csv").is_file():
-        return blocks + [Block("p", "Not available: run `make atlas` (its plan first: `make atlas-plan`).")]
+        return blocks + [Block("p", "Not available: run `make atlas` (its plan first: `make atlas-plan`).")] + \
+            chain_blocks(data_dir)
     doc = json.loads((folder / "surrogate.json").read_text())
     if int(doc.get("format_version", 1)) < 2:
         return blocks + [Block("p", "The atlas surrogate is of format 1 (one polynomial in five logs, before issue 31): "
-                                    "rerun `make atlas` for this section.")]
+                                    "rerun `make atlas` for this section.")] + chain_blocks(data_dir)
     rows = read_heldout(folder / "heldout.csv")
     held = verdict(rows)
     worst = held["worst"]
@@ -126,4 +128,4 @@ def atlas_blocks(data_dir: Path) -> list[Block]:
         table_rows.append([scene, f"{items[0]['mu']:.4g}", f"{items[0]['Pi']:.4g}", f"{np.sqrt(np.mean(errors**2)):.3g}",
                            f"{errors.max():.3g}", f"{sum(i['within'] for i in items)} of {len(items)}"])
     blocks.append(table(["held-out scene", "mu", "Pi", "RMS error in ln R'", "max", "points within"], table_rows))
-    return blocks
+    return blocks + chain_blocks(data_dir)
