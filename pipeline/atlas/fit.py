@@ -10,7 +10,8 @@ are chosen by leave-one-scene-out cross-validation over :data:`DEGREES` x :data:
 lowest term count within 5 % of the best RMS over the scenes off the box's corners); one
 polynomial of total degree 2..6 in the five
 logs (the first atlas's model) is cross-validated beside it, for the record. The band is the
-cross-validated error where the query is (:mod:`pipeline.fitting.atlas_band`). ln alpha and
+cross-validated error where the query is, raised to the held-out scenes' error in its region where
+that is larger (:mod:`pipeline.fitting.atlas_band`). ln alpha and
 gamma of Eq. 27 over (xi, lambda, mu, Pi) (:mod:`pipeline.fitting.atlas_surrogate`) stay beside
 it.
 
@@ -32,7 +33,7 @@ import numpy as np
 import xarray as xr
 from scipy.stats import norm
 
-from pipeline.fitting.atlas_band import fit_band
+from pipeline.fitting.atlas_band import fit_band, with_heldout
 from pipeline.fitting.atlas_grid import (GridTensorModel, cross_validate, fit_grid_tensor, group_powers,
                                          node_coordinates)
 from pipeline.fitting.atlas_surrogate import AtlasModel, exponents, fit_atlas_model, select_degree
@@ -270,6 +271,9 @@ def fit_atlas(atlas: xr.Dataset) -> tuple[dict[str, Any], list[dict[str, Any]]]:
         models[name] = fit_atlas_model(*args, d, TRANSFORM[name])
         doc[name] = _model_doc(models[name], d, scores)
     rows = heldout_rows(atlas, np.flatnonzero(held), models)
+    cv_band = band
+    band, held_rms, held_counts = with_heldout(band, *(np.array([r[k] for r in rows]) for k in (
+        "xi", "mu", "Pi", "force_normalized", "error")))
     doc.update({
         "format": FORMAT, "format_version": FORMAT_VERSION,
         CURVE: grid_doc(curve),
@@ -279,7 +283,8 @@ def fit_atlas(atlas: xr.Dataset) -> tuple[dict[str, Any], list[dict[str, Any]]]:
                  "polynomials; linear between nodes. ln alpha and gamma (Eq. 27): one polynomial of total degree "
                  "D in the mapped (-ln(1 - xi), ln lambda, ln mu, ln Pi); term k is prod_i u_i^powers[k][i]",
         "cross_validation": cv_rows,
-        "band": band.to_dict(),
+        "band": {**band.to_dict(), "cross_validated": cv_band.regional.tolist(), "heldout": held_rms.tolist(),
+                 "heldout_counts": held_counts.tolist()},
         "domain": {"mu": [float(atlas["mu"].values[design_idx].min()), float(atlas["mu"].values[design_idx].max())],
                    "Pi": [float(atlas["Pi"].values[design_idx].min()), float(atlas["Pi"].values[design_idx].max())],
                    "xi": [0.0, float(atlas["xi"].max())],

@@ -15,7 +15,9 @@ of the (mu, Pi) box). The band here is one standard deviation of ln R' made of
   interval (a quadratic's interpolation error: zero on a node, a quarter of the leave-one-out
   error mid-interval);
 
-combined in quadrature. Pure numpy; no I/O.
+combined in quadrature. Where the held-out scenes (never fitted) have at least :data:`MIN_POINTS`
+points in a region and err more there than the cross-validation says, the regional error is
+theirs (:func:`with_heldout`): the band is the larger of the two honest estimates. Pure numpy; no I/O.
 """
 
 from __future__ import annotations
@@ -27,7 +29,8 @@ import numpy as np
 
 from pipeline.fitting.atlas_grid import interpolation_weights, node_coordinates
 
-__all__ = ["FORCE_EDGES", "XI_EDGES", "EDGE_STEPS", "MIN_POINTS", "RegionalBand", "fit_band", "region_labels"]
+__all__ = ["FORCE_EDGES", "XI_EDGES", "EDGE_STEPS", "MIN_POINTS", "RegionalBand", "fit_band", "with_heldout",
+           "region_labels"]
 
 #: F' between the regions of the band: light, middle, heavy loads.
 FORCE_EDGES = (0.3, 3.0)
@@ -84,8 +87,14 @@ class RegionalBand:
 
     @classmethod
     def from_dict(cls, doc: dict[str, Any]) -> "RegionalBand":
-        """The inverse of :meth:`to_dict`."""
+        """The inverse of :meth:`to_dict` (other keys of ``doc`` are ignored)."""
         return cls(**{k: np.asarray(doc[k], float) for k in cls.__dataclass_fields__})
+
+    def regions(self, xi: np.ndarray, mu: np.ndarray, pi: np.ndarray, force_n: np.ndarray) -> np.ndarray:
+        """Flat index (F', xi, groups) of each point's region, as in :func:`region_labels`."""
+        f = np.searchsorted(FORCE_EDGES, force_n, side="right")
+        x = np.searchsorted(XI_EDGES, xi, side="right")
+        return f * 6 + x * 2 + self.at_edge(mu, pi).astype(int)
 
     def at_edge(self, mu: np.ndarray, pi: np.ndarray) -> np.ndarray:
         """Whether each surface lies within :data:`EDGE_STEPS` grid steps of the box's boundary."""
@@ -168,3 +177,19 @@ def fit_band(residual: np.ndarray, log_r: np.ndarray, xi_nodes: np.ndarray, w_no
             grid_z[f, x] = _rms(loo_z[f_region == f][:, x_region == x])
             grid_w[f, x] = _rms(loo_w[f_region == f][:, x_region == x])
     return RegionalBand(regional, counts, grid_z, grid_w, low, step, steps, z_nodes, np.asarray(w_nodes, float))
+
+
+def with_heldout(band: RegionalBand, xi: np.ndarray, mu: np.ndarray, pi: np.ndarray, force_n: np.ndarray,
+                 error: np.ndarray) -> tuple[RegionalBand, np.ndarray, np.ndarray]:
+    """``band`` with each region's error raised to the held-out scenes' RMS ``error`` (ln R') there,
+    where they have at least :data:`MIN_POINTS` finite points; and the held-out RMS and counts (3, 3, 2)."""
+    index = band.regions(xi, mu, pi, force_n)
+    finite = np.isfinite(error)
+    rms, counts = np.zeros(18), np.zeros(18)
+    for k in range(18):
+        values = error[(index == k) & finite]
+        counts[k], rms[k] = values.size, _rms(values)
+    regional = np.where(counts >= MIN_POINTS, np.maximum(band.regional.ravel(), rms), band.regional.ravel())
+    raised = RegionalBand(regional.reshape(3, 3, 2), band.counts, band.grid_z, band.grid_w, band.box_low,
+                          band.box_step, band.box_steps, band.z_nodes, band.w_nodes)
+    return raised, rms.reshape(3, 3, 2), counts.reshape(3, 3, 2)
