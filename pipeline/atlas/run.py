@@ -25,7 +25,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from pipeline.atlas.design import AtlasDesign, Scene, design_scenes, plan_atlas, scene_scenario
+from pipeline.atlas.design import AtlasDesign, Scene, design_scenes, format_atlas_plan, plan_atlas, scene_scenario
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Loading, Scenario
 from pipeline.store import atomic_path, provenance
@@ -208,10 +208,17 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
     original, twin = _twin(scenes)
     twin_loading = scene_scenario(base, original).loading  # the same approaches in sigma, exactly
     twin_pending = not _done(twin_base(base), twin, data_dir, twin_loading)
-    refused = [e for e in plan_atlas(base, design) if e.problem and e.scene in pending]
+    estimates = plan_atlas(base, design)
+    refused = [e for e in estimates if e.problem and e.scene in pending]
     if refused:
         e = refused[0]
         raise ConfigError(f"atlas scene {e.scene.name} (mu {e.scene.mu:.4g}, Pi {e.scene.Pi:.4g}): {e.problem}")
+    if pending:  # the plan's total for what is left (the whole table: `g2tom plan --atlas`)
+        workers = 1 if options.scheduler is None and not (options.workers and options.workers > 1) else (
+            options.workers or 1)
+        left = [e for e in estimates if e.scene in pending]
+        for line in format_atlas_plan(left, workers)[1 + len(left):]:  # the total, and the budget if over
+            print(f"atlas: plan: {line}", file=sys.stderr)
     by_name = {s.name: s for s in scenes}
     with ExitStack() as stack:
         client = _client(stack, options) if pending else None
