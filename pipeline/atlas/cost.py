@@ -11,7 +11,8 @@ steps):
 
 * contact: ``surfaces x sum_s (CONTACT_STEP_S + CONTACT_SQUARE_S C_s^2 + CONTACT_CUBE_S N_s^3)``,
   C_s the expected candidates (asperities above the undeformed indenter);
-* cube: ``fields x sum_s (FIELD_STEP_S + FIELD_SQUARE_S N_s^2 + FIELD_MIXED_S C_s N_s)``, a field
+* cube: ``fields x sum_s (FIELD_STEP_S + FIELD_SQUARE_S N_s^2 + FIELD_MIXED_S C_s N_s + FIELD_CUBE_S N_s^3)``,
+  a field
   being one oxide realization at one lambda, all its xi at once (the point solves of a step share
   one factorization);
 * fields: per lambda the realizations of its slowest xi: the measured counts of the adaptive
@@ -42,14 +43,16 @@ __all__ = ["SceneCost", "scene_cost", "discrete_fields"]
 CONTACT_STEP_S = 2.0e-4
 CONTACT_SQUARE_S = 2.15e-8
 CONTACT_CUBE_S = 2.35e-10
-#: Cube, one field (all xi): seconds per step, per N^2 and per candidate x N of a step, fitted
-#: (non-negative least squares, within 3 %) to d02: 5.2 ms per field, N <= 31; d12: 27 ms, N <= 249;
-#: d22: 1.35 s, N <= 1,993 (64 fields); d24: 0.112 s, N <= 469. Up to N ~ 2,000 the
-#: factorizations' N^3 does not show beside the kernels' N^2; beyond (mu ~ 1 at Pi 320: N ~ 6,000)
-#: the model is extrapolated.
-FIELD_STEP_S = 2.4e-4
-FIELD_SQUARE_S = 5.2e-8
-FIELD_MIXED_S = 5.5e-9
+#: Cube, one field (all xi): seconds per step, per N^2, per candidate x N and per N^3 of a step,
+#: fitted exactly to the compiled (numba) cube of 01f6c8d after a warm-up call: d02: 2.31 ms per field
+#: (N <= 31), d12: 11.1 ms (N <= 249), d24: 54.9 ms (N <= 469), d22: 1.99 s (N <= 1,993); fixed
+#: ensembles of 16-64 realizations at lambda 1 and 23. The factorizations' N^3 shows from N ~ 1,000
+#: (the batched-NumPy cube before it took 1.35 s per field at d22, 5.2 ms at d02); beyond N ~ 2,000
+#: (mu ~ 1 at Pi 320: N ~ 6,000) the model is extrapolated.
+FIELD_STEP_S = 1.1e-4
+FIELD_SQUARE_S = 1.18e-8
+FIELD_MIXED_S = 2.07e-9
+FIELD_CUBE_S = 5.4e-11
 #: Fields per lambda of the reference scene (the adaptive discrete d12, mu 7.07, Pi 40, target
 #: 5 %, min 400 realizations): the realizations of the slowest xi at lambda 1, 3, 7, 11, 17, 23.
 REFERENCE_FIELDS = (400, 506, 431, 630, 1225, 2016)
@@ -123,7 +126,8 @@ def scene_cost(scenario: Scenario) -> SceneCost:
     steps = float(n.size)
     contact = scenario.contact.surfaces * (CONTACT_STEP_S * steps + CONTACT_SQUARE_S * float(np.sum(c**2))
                                            + CONTACT_CUBE_S * float(np.sum(n**3)))
-    per_field = FIELD_STEP_S * steps + FIELD_SQUARE_S * float(np.sum(n**2)) + FIELD_MIXED_S * float(np.sum(c * n))
+    per_field = (FIELD_STEP_S * steps + FIELD_SQUARE_S * float(np.sum(n**2)) + FIELD_MIXED_S * float(np.sum(c * n))
+                 + FIELD_CUBE_S * float(np.sum(n**3)))
     fields = discrete_fields(scenario, n)
     cells = len(scenario.oxide.xi) * len(scenario.oxide.lambda_)
     other = SCENE_S + FITS_S * fields / len(scenario.oxide.lambda_) * cells * scenario.fits.n_bootstrap / 100
