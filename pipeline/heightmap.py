@@ -245,6 +245,7 @@ def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | N
     if pixel is None:
         raise ConfigError(f"HEIGHTMAP {str(path)!r} carries no pixel size: give --pixel-size (m)")
     periodic = measured.periodic if periodic is None else periodic
+    crop = None
     try:
         heights, crop = _measured_part(measured.heights)
         periodic = periodic and crop is None  # a cropped map is no longer periodic
@@ -258,10 +259,13 @@ def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | N
         moments = psd_moments(z, pixel, cutoff, periodic)
         summits = summit_parameters(moments.m0, moments.m2, moments.m4, beta_rule)
         gaps = _gaps(z, holed, pixel, periodic)
-    except ConfigError:
-        raise
+    except ConfigError as exc:
+        if crop is None:
+            raise
+        raise ConfigError(f"{exc} {_cropped(crop, measured.heights)}") from None
     except ValueError as exc:
-        raise ConfigError(f"HEIGHTMAP {str(path)!r}: {exc}") from None
+        raise ConfigError(f"HEIGHTMAP {str(path)!r}: {exc}" + (f" {_cropped(crop, measured.heights)}" if crop else "")
+                          ) from None
     return {
         "file": str(path), "reader": measured.reader, "file_height_unit": measured.unit,
         "shape": list(z.shape), "pixel_size": list(pixel),
@@ -273,6 +277,15 @@ def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | N
         "read_shape": list(np.shape(measured.heights)), "cropped_to": crop,
         **gaps,
     }
+
+
+def _cropped(crop: list[list[int]], heights: np.ndarray) -> str:
+    """What a refusal of a cropped map says about the crop."""
+    (r0, r1), (c0, c1) = crop
+    shape = np.shape(heights)
+    return (f"(after cropping to the measured area, rows {r0}..{r1} and columns {c0}..{c1} of the {shape[0]} x "
+            f"{shape[1]} map read: a region of undefined pixels on its border, "
+            f"{np.isnan(np.asarray(heights, float)).mean():.1%} of the map undefined in all, lies outside it)")
 
 
 def _measured_part(heights: np.ndarray) -> tuple[np.ndarray, list[list[int]] | None]:
