@@ -10,50 +10,12 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from analysis.report_atlas import atlas_blocks  # the atlas section lives in its own module
 from analysis.report_blocks import Block, markdown_blocks, table
 from pipeline.config import Scenario
 from pipeline.store import StaleInputError, read_stage
 
 __all__ = ["atlas_blocks", "barber_blocks", "bias_blocks", "curve_blocks", "point_blocks", "validation_blocks"]
-
-
-def atlas_blocks(data_dir: Path) -> list[Block]:
-    """Section "The atlas": the held-out verdict of ``<data>/atlas/surrogate.json`` and its error per scene."""
-    folder = Path(data_dir) / "atlas"
-    blocks = [Block("h2", "The atlas over (mu, Pi): held-out scenes")]
-    if not (folder / "surrogate.json").is_file() or not (folder / "heldout.csv").is_file():
-        return blocks + [Block("p", "Not available: run `make atlas` (its plan first: `make atlas-plan`).")]
-    doc = json.loads((folder / "surrogate.json").read_text())
-    held = doc["heldout"]
-    worst = held["worst"]
-    blocks.append(Block("p", (
-        f"Rule: {held['rule']}. Curve model (degree {doc['log_resistance']['degree']}): {held['cells_within']} of "
-        f"{held['cells']} held-out (scene, xi, lambda) cells within at every step ({held['steps_within']} of "
-        f"{held['steps']} points); RMS {held['rms_ln_error']:.3g} in ln R'; worst cell {worst['scene']} (mu "
-        f"{worst['mu']:.3g}, Pi {worst['Pi']:.3g}, xi {worst['xi']:g}, lambda {worst['lambda']:g}, F' "
-        f"{worst['force_normalized']:.3g}): {worst['error']:.3g} against {worst['allowed']:.3g} allowed. Eq. 25's power "
-        f"law: {held['power_law_cells_within']} of {held['cells']} cells (RMS {held['power_law_rms_ln_error']:.3g}).")))
-    atlas_file = folder / "atlas.nc"
-    if atlas_file.is_file():
-        with xr.open_dataset(atlas_file) as atlas:
-            if "invariance_pair" in atlas.attrs:
-                blocks.append(Block("p", (
-                    f"Invariance of the groups: scenes {atlas.attrs['invariance_pair']} give R' equal within "
-                    f"{float(atlas.attrs['invariance_max_ln_error']):.2g} in ln R' at every cell and fitted step.")))
-    lines = (folder / "heldout.csv").read_text().splitlines()
-    header = lines[0].split(",")
-    rows: dict[str, list[list[str]]] = {}
-    for line in lines[1:]:
-        values = dict(zip(header, line.split(",")))
-        rows.setdefault(values["scene"], []).append([values["mu"], values["Pi"], values["error"], values["within"]])
-    table_rows = []
-    for scene, items in rows.items():
-        errors = np.array([float(i[2]) for i in items])
-        table_rows.append([scene, f"{float(items[0][0]):.4g}", f"{float(items[0][1]):.4g}",
-                           f"{np.sqrt(np.mean(errors**2)):.3g}", f"{errors.max():.3g}",
-                           f"{sum(i[3] == 'True' for i in items)} of {len(items)}"])
-    blocks.append(table(["held-out scene", "mu", "Pi", "RMS error in ln R'", "max", "points within"], table_rows))
-    return blocks
 
 
 def curve_blocks(fits: xr.Dataset) -> list[Block]:

@@ -12,7 +12,11 @@ The moments m0, m2, m4 come from the power spectrum below a stated short-wavelen
 (:func:`pipeline.physics.surface_spectrum.psd_moments`), the summit parameters from them
 (:func:`pipeline.physics.surface_spectrum.summit_parameters`).
 
-Undefined (NaN) pixels, up to :data:`MAX_MISSING_SHARE` of the map, are filled by the fill of
+A region of undefined pixels that touches the map's border and holds more than
+:data:`OUTSIDE_FILL_SHARE` of it (an instrument's frame, a round or irregular field of view) lies
+outside the measured area: the map is cropped to the largest rectangle without it first (``cropped_to``); undefined (NaN)
+pixels inside, up to
+:data:`MAX_MISSING_SHARE` of the cropped map, are filled by the fill of
 least curvature (:func:`pipeline.physics.height_fill.fill_gaps`) before the moments are taken;
 the report says how many, and how the rms height, m2 and m4 change if those pixels are masked
 instead (:func:`pipeline.physics.height_fill.masked_moments`, finite differences on both maps).
@@ -39,7 +43,7 @@ from pipeline.physics.roughness import validated_heights
 from pipeline.physics.surface_spectrum import BETA_RULES, psd_moments, summit_parameters
 
 __all__ = ["read_heightmap", "read_measured", "Measured", "measure", "PLAUSIBLE_SIGMA", "CUTOFF_PIXELS", "INSTALL",
-           "MAX_MISSING_SHARE", "MAP_EXTENT"]
+           "MAX_MISSING_SHARE", "MAP_EXTENT", "OUTSIDE_FILL_SHARE"]
 
 #: Height standard deviations (m) outside this range are almost surely in the wrong unit.
 PLAUSIBLE_SIGMA = (1e-10, 1e-3)
@@ -50,6 +54,9 @@ CUTOFF_PIXELS = 4.0
 #: Largest share of undefined pixels that is filled: beyond it the fill, not the measurement,
 #: would set the moments (a filled hole holds no roughness shorter than its own size; see height_fill).
 MAX_MISSING_SHARE = 0.25
+#: Largest share of a map's pixels that one region of undefined pixels touching its border may hold
+#: and still be filled (an edge dropout); a larger one lies outside the measured area, cropped instead.
+OUTSIDE_FILL_SHARE = 0.01
 #: How to install the instrument-format reader.
 INSTALL = install_hint("topography", "SurfaceTopography")
 #: Height units of instrument files, in m.
@@ -206,7 +213,9 @@ def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | N
             periodic: bool | None = None, beta_rule: str = "paper") -> dict[str, Any]:
     """Everything ``g2tom roughness --json`` prints: moments, summit parameters, what was done (SI).
 
-    Undefined (NaN) pixels are filled first (``filled_pixels``, ``filled_share``); with any,
+    A measured area that is not the whole map is cropped to (``cropped_to``: the kept [first,
+    last] row and column of the map as read, ``read_shape``; None: none), then undefined
+    (NaN) pixels are filled (``filled_pixels``, ``filled_share`` of the cropped map); with any,
     ``masked_rms_height`` (m) and ``masked_rms_change``, ``masked_m2_change``,
     ``masked_m4_change`` (relative, masked over filled map, by finite differences) say how much
     masking them instead would change; all four are None for a complete map.
@@ -236,8 +245,11 @@ def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | N
     if pixel is None:
         raise ConfigError(f"HEIGHTMAP {str(path)!r} carries no pixel size: give --pixel-size (m)")
     periodic = measured.periodic if periodic is None else periodic
+    crop = None
     try:
-        filled, holed = _filled(measured.heights)
+        heights, crop = _measured_part(measured.heights)
+        periodic = periodic and crop is None  # a cropped map is no longer periodic
+        filled, holed = _filled(heights)
         z = validated_heights(filled)
         _check_extent(z.shape, pixel, "--pixel-size" if pixel_size is not None else
                       f"the pixel size of HEIGHTMAP {str(path)!r}")
@@ -247,10 +259,13 @@ def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | N
         moments = psd_moments(z, pixel, cutoff, periodic)
         summits = summit_parameters(moments.m0, moments.m2, moments.m4, beta_rule)
         gaps = _gaps(z, holed, pixel, periodic)
-    except ConfigError:
-        raise
+    except ConfigError as exc:
+        if crop is None:
+            raise
+        raise ConfigError(f"{exc} {_cropped(crop, measured.heights)}") from None
     except ValueError as exc:
-        raise ConfigError(f"HEIGHTMAP {str(path)!r}: {exc}") from None
+        raise ConfigError(f"HEIGHTMAP {str(path)!r}: {exc}" + (f" {_cropped(crop, measured.heights)}" if crop else "")
+                          ) from None
     return {
         "file": str(path), "reader": measured.reader, "file_height_unit": measured.unit,
         "shape": list(z.shape), "pixel_size": list(pixel),
@@ -259,8 +274,67 @@ def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | N
         "bandwidth_alpha": summits.bandwidth, "sigma": summits.sigma,
         "summit_mean_height": summits.summit_mean_height, "eta": summits.eta, "beta": summits.beta,
         "beta_rule": f"{summits.beta_rule}: {BETA_RULES[summits.beta_rule]}",
+        "read_shape": list(np.shape(measured.heights)), "cropped_to": crop,
         **gaps,
     }
+
+
+def _cropped(crop: list[list[int]], heights: np.ndarray) -> str:
+    """What a refusal of a cropped map says about the crop."""
+    (r0, r1), (c0, c1) = crop
+    shape = np.shape(heights)
+    return (f"(after cropping to the measured area, rows {r0}..{r1} and columns {c0}..{c1} of the {shape[0]} x "
+            f"{shape[1]} map read: a region of undefined pixels on its border, "
+            f"{np.isnan(np.asarray(heights, float)).mean():.1%} of the map undefined in all, lies outside it)")
+
+
+def _measured_part(heights: np.ndarray) -> tuple[np.ndarray, list[list[int]] | None]:
+    """The map's measured part and the kept [first, last] row and column (None: the whole map).
+
+    A region of undefined pixels (4-neighbours) that touches the map's border and holds more than
+    :data:`OUTSIDE_FILL_SHARE` of the map lies outside the measured area (an instrument's frame, a
+    round or irregular field of view): the map is then cropped to the largest rectangle that holds
+    none of it (:func:`_largest_rectangle`), and only holes inside are filled. Smaller regions on
+    the border are dropouts, filled like holes.
+    """
+    from scipy import ndimage
+
+    raw = np.asarray(heights)
+    if raw.dtype.kind != "f" or raw.ndim != 2 or not np.isnan(raw).any() or np.isnan(raw).all():
+        return raw, None
+    labels, count = ndimage.label(np.isnan(raw))
+    edge = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    edge = edge[edge > 0]
+    sizes = ndimage.sum_labels(np.ones(raw.shape), labels, edge) if edge.size else np.zeros(0)
+    large = edge[sizes > OUTSIDE_FILL_SHARE * raw.size]
+    if large.size == 0:
+        return raw, None
+    outside = np.isin(labels, large)
+    (r0, r1), (c0, c1) = _largest_rectangle(~outside)
+    return raw[r0:r1 + 1, c0:c1 + 1], [[r0, r1], [c0, c1]]
+
+
+def _largest_rectangle(inside: np.ndarray) -> tuple[tuple[int, int], tuple[int, int]]:
+    """The [first, last] row and column of the largest axis-aligned rectangle of True pixels
+    (the histogram method: per row, the run lengths of True above each column, and the largest
+    rectangle under that histogram by a stack; the first of equal areas)."""
+    best, where = 0, ((0, 0), (0, 0))
+    height = np.zeros(inside.shape[1] + 1, dtype=int)  # a zero sentinel closes every bar
+    for row in range(inside.shape[0]):
+        height[:-1] = np.where(inside[row], height[:-1] + 1, 0)
+        stack: list[int] = []
+        for col, h in enumerate(height.tolist()):
+            start = col
+            while stack and height[stack[-1]] >= h:
+                top = stack.pop()
+                left = stack[-1] + 1 if stack else 0
+                area = int(height[top]) * (col - left)
+                if area > best:
+                    best, where = area, ((row - int(height[top]) + 1, row), (left, col - 1))
+                start = left
+            del start
+            stack.append(col)
+    return where
 
 
 def _filled(heights: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:

@@ -10,7 +10,12 @@ import pytest
 from pipeline.atlas.design import AtlasDesign, design_scenes, format_atlas_plan, plan_atlas, scene_scenario
 from pipeline.config import AUTO, ConfigError, load_scenario
 from pipeline.physics.groups import groups
-from tests.conftest import SMALL_ARGS, SMALL_OVERRIDES
+from tests.conftest import SMALL_OVERRIDES
+
+
+def test_the_atlas_scenario_has_25_design_and_8_heldout_scenes() -> None:
+    scenes = design_scenes(AtlasDesign.of(load_scenario("atlas")))
+    assert sum(not s.heldout for s in scenes) == 25 and sum(s.heldout for s in scenes) == 8
 
 
 def test_default_design_covers_engineering_surfaces() -> None:
@@ -66,18 +71,19 @@ def test_plan_grows_with_pi_and_reports_refusals() -> None:
     assert est["d02"].n_cells > est["d00"].n_cells and est["d02"].seconds > est["d00"].seconds
     lines = format_atlas_plan(list(est.values()), parallel=2)
     assert lines[-1].startswith("5 of 5 scenes runnable")
-    refused = plan_atlas(load_scenario("paper_gt", {**SMALL_OVERRIDES, "fits.fit_range": "force", "fits.min_force": 1e9}),
-                         design)
-    assert all(e.problem and "fits.min_force" in e.problem for e in refused)
-    assert "refused: fits.min_force" in format_atlas_plan(refused)[1]
+    refused = plan_atlas(load_scenario("paper_gt", {**SMALL_OVERRIDES, "oxide.n_realizations": 10**9}), design)
+    assert all(e.problem and "oxide.n_realizations" in e.problem for e in refused)
+    assert "refused: oxide.n_realizations" in format_atlas_plan(refused)[1]
 
 
 def test_cli_plans_the_atlas(capsys) -> None:
     from pipeline.cli.main import main
 
-    assert main(["plan", "--atlas", "--workers", "2", *SMALL_ARGS]) == 0
+    small = {**SMALL_OVERRIDES, "atlas.n_mu": 2, "atlas.n_pi": 3, "atlas.n_heldout": 2}
+    assert main(["plan", "--atlas", "--workers", "2", "--config", "paper_gt",
+                 *[a for k, v in small.items() for a in ("--set", f"{k}={v}")]]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert len(out) == 1 + 31 + 1 and out[-1].startswith("31 of 31 scenes runnable") and "on 2 concurrent" in out[-1]
+    assert len(out) == 1 + 8 + 1 and out[-1].startswith("8 of 8 scenes runnable") and "on 2 concurrent" in out[-1]
 
 
 def test_the_design_is_the_scenarios_atlas_section() -> None:

@@ -54,10 +54,13 @@ def test_answers_inside_the_domain_by_the_formula(atlas_json) -> None:
     alpha, gamma = sur.models["alpha"](*args)[0], sur.models["gamma"](*args)[0]
     by_hand = alpha * scenario.resistance_scale * (force / scenario.force_scale) ** -gamma
     assert float(result["resistance_power_law"]) == pytest.approx(by_hand, rel=1e-12)
-    curve = float(np.exp(sur.models[CURVE].transformed(*args, np.array([force / scenario.force_scale]))[0]))
+    f_n = np.array([force / scenario.force_scale])
+    curve = float(np.exp(sur.models[CURVE].log_resistance(*args, f_n)[0]))
     assert result.attrs["model"] == "curve"
     assert float(result["resistance"]) == pytest.approx(curve * scenario.resistance_scale, rel=1e-12)
-    assert float(result["upper"]) == pytest.approx(float(result["resistance"]) * math.exp(sur.error), rel=1e-12)
+    band = float(sur.band(*args, f_n)[0])  # the regional band where the query is
+    assert float(result["surrogate_error"]) == pytest.approx(band, rel=1e-12) and band > 0
+    assert float(result["upper"]) == pytest.approx(float(result["resistance"]) * math.exp(band), rel=1e-12)
     assert float(result["mu"]) == pytest.approx(g.mu) and "atlas surrogate" in result.attrs["answered_by"]
     # another surface inside the domain gets other coefficients
     other = predict_atlas(sur, _surface(1.9e8), _force(sur, _surface(1.9e8)), 0.5, 3.0)
@@ -124,3 +127,54 @@ def test_fresh_install_answers_from_the_shipped_atlas(tmp_path, capsys, atlas_js
     assert f"answered by the atlas surrogate {atlas_json}" in capsys.readouterr().err
     doc = json.loads(atlas_json.read_text())
     assert doc["provenance"]["config_hash"] and "g2tom_commit" in doc["provenance"]
+
+
+def test_the_band_is_regional(atlas_json) -> None:
+    """Light loads and much oxide get their own error; on an oxide node the grid adds nothing,
+    between nodes it does."""
+    sur = load_atlas_surrogate(atlas_json)
+    scenario = _surface(1.5e8)
+    lo, hi = sur.domain["force_normalized"]
+    light = predict_atlas(sur, scenario, 1.1 * lo * scenario.force_scale, 0.5, 1.0)
+    heavy = predict_atlas(sur, scenario, 0.9 * hi * scenario.force_scale, 0.5, 1.0)
+    assert float(light["surrogate_error"]) != pytest.approx(float(heavy["surrogate_error"]), rel=1e-6)
+    between = predict_atlas(sur, scenario, 0.9 * hi * scenario.force_scale, 0.5, 2.2)
+    assert float(between["surrogate_error"]) >= float(heavy["surrogate_error"])
+    assert "region" in between.attrs["band"]
+
+
+def test_a_format_one_surrogate_is_still_read(tmp_path) -> None:
+    """The first atlas's surrogate (one polynomial in five logs, one global error; the file shipped
+    before issue 31's full run) still answers, with its global band."""
+    from pipeline.predict.atlas import shipped_path
+
+    path = shipped_path()
+    if path is None or json.loads(path.read_text()).get("format_version", 1) != 1:
+        pytest.skip("the shipped atlas surrogate is not of format 1: nothing old to read")
+    sur = load_atlas_surrogate(path)
+    assert sur.band is None
+    paper = load_scenario("paper")
+    lo, hi = sur.domain["force_normalized"]
+    out = predict_atlas(sur, paper, math.sqrt(lo * hi) * paper.force_scale, 0.5, 5.0)
+    assert float(out["surrogate_error"]) == pytest.approx(sur.error) and np.isfinite(float(out["resistance"]))
+    newer = json.loads(path.read_text())
+    newer["format_version"] = 99
+    (tmp_path / "new.json").write_text(json.dumps(newer))
+    with pytest.raises(ConfigError, match="format_version 99 is newer than this g2tom's 2: upgrade g2tom"):
+        load_atlas_surrogate(tmp_path / "new.json")
+
+
+def test_1e5_queries_over_10_surfaces_within_a_second(atlas_json) -> None:
+    import time
+
+    sur = load_atlas_surrogate(atlas_json)
+    rng = np.random.default_rng(0)
+    lo, hi = sur.domain["force_normalized"]
+    surfaces = [_surface(eta) for eta in np.linspace(1.1e8, 1.9e8, 10)]
+    start = time.perf_counter()
+    for scenario in surfaces:
+        n = 10_000
+        force = np.exp(rng.uniform(np.log(lo), np.log(hi), n)) * scenario.force_scale
+        out = predict_atlas(sur, scenario, force, rng.uniform(0.05, 0.5, n), rng.uniform(1.0, 5.0, n))
+    elapsed = time.perf_counter() - start
+    assert np.all(np.isfinite(out["resistance"].values)) and elapsed < 1.0, elapsed

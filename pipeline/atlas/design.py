@@ -10,9 +10,13 @@ R*, only scales F and R. This module holds what is known before any scene runs:
   from one seed (numpy SeedSequence), each at least a quarter grid step from every design node
   in both coordinates, so none duplicates a design scene;
 * :func:`scene_scenario`: the scenario of one scene: the base scenario with eta and beta from
-  (mu, Pi) at the base's sigma and R*, and the domains back to ``auto``;
-* :func:`plan_atlas`: each scene's window, memory and time (:func:`pipeline.before_work.plan.estimate`), or
-  why it cannot run (a refusal of the plan or the preflight), before any work.
+  (mu, Pi) at the base's sigma and R*, load steps spanning F' 0.05-20 (:mod:`pipeline.atlas.loads`),
+  every step fitted, on discrete asperities a pool sized by its touching count, and the domains
+  back to ``auto``;
+* :func:`plan_atlas`: each scene's window, memory and time (:mod:`pipeline.atlas.cost`: on
+  discrete asperities the time grows with the touching asperities), or why it cannot run (a
+  refusal of the plan or the preflight), before any work; :func:`format_atlas_plan` adds the wall
+  time on the workers against the 3 h budget.
 """
 
 from __future__ import annotations
@@ -23,14 +27,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.config import AUTO, ConfigError, Scenario
+from pipeline.atlas.cost import SceneCost
+from pipeline.config import AUTO, ConfigError, Loading, Scenario
 from pipeline.physics.groups import surface_from_groups
 
 __all__ = ["AtlasDesign", "Scene", "SceneEstimate", "design_scenes", "scene_scenario", "plan_atlas",
-           "format_atlas_plan"]
+           "format_atlas_plan", "wall_seconds", "BUDGET_SECONDS", "POOL_TOUCHING", "MIN_POOL"]
 
 #: Smallest distance of a held-out scene from a design node, in grid steps of each log coordinate.
 MIN_HELDOUT_GAP = 0.25
+#: Touching asperities the discrete pool holds at its heaviest step over all its surfaces: the
+#: paper's, 256 surfaces of ~200. A scene with more per surface gets fewer surfaces (the surface-to-
+#: surface scatter of ln R falls as the touching count grows), at least MIN_POOL and at most the
+#: base's ``contact.surfaces``.
+POOL_TOUCHING = 256 * 200
+MIN_POOL = 32
 #: Draws tried per held-out scene before the design is refused as too dense.
 _MAX_DRAWS = 10_000
 
@@ -120,40 +131,68 @@ def design_scenes(design: AtlasDesign) -> list[Scene]:
     return scenes
 
 
-def scene_scenario(base: Scenario, scene: Scene) -> Scenario:
-    """``base`` with the scene's eta and beta (at the base's sigma and R*) and ``auto`` domains."""
+def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None) -> Scenario:
+    """``base`` with the scene's eta and beta (at the base's sigma and R*), approaches whose forces
+    span :data:`pipeline.atlas.loads.FORCE_RANGE` in F' (:func:`pipeline.atlas.loads.loading_for_range`,
+    ``loading.n_delta`` kept), every step fitted, and ``auto`` domains.
+
+    Raises
+    ------
+    ConfigError
+        If the scene's approaches cannot be found (naming the scene).
+    """
+    from pipeline.atlas.loads import END_MARGIN, FORCE_RANGE, expected_touching, loading_for_range
+
     surface = surface_from_groups(scene.mu, scene.Pi, base.roughness.sigma, base.indenter.radius)
     roughness = dataclasses.replace(base.roughness, eta=surface.eta, beta=surface.beta)
     contact = dataclasses.replace(base.contact, window=AUTO, r_max=AUTO)
-    return dataclasses.replace(base, name=f"{base.name}/{scene.name}", roughness=roughness, contact=contact)
+    # every step is fitted: the lightest lies at FORCE_RANGE[0] / (1 + END_MARGIN)
+    fits = dataclasses.replace(base.fits, fit_range="force_normalized",
+                               min_force_normalized=round(FORCE_RANGE[0] / (1.0 + 2.0 * END_MARGIN), 6))
+    scenario = dataclasses.replace(base, name=f"{base.name}/{scene.name}", roughness=roughness, contact=contact,
+                                   fits=fits)
+    try:
+        scenario = loading_for_range(scenario) if loading is None else dataclasses.replace(scenario, loading=loading)
+        if scenario.contact.model == "discrete":  # as many touching caps in the pool as the paper's
+            heaviest = float(expected_touching(scenario)[-1])
+            surfaces = min(base.contact.surfaces, max(MIN_POOL, math.ceil(POOL_TOUCHING / max(heaviest, 1.0))))
+            scenario = dataclasses.replace(scenario, contact=dataclasses.replace(scenario.contact, surfaces=surfaces))
+        return scenario
+    except ValueError as exc:
+        raise ConfigError(f"atlas scene {scene.name} (mu {scene.mu:.4g}, Pi {scene.Pi:.4g}): {exc}") from None
 
 
 @dataclass(frozen=True)
 class SceneEstimate:
-    """A scene's plan: cells per window side, peak memory (bytes) and time (s), or why it cannot run."""
+    """A scene's plan: cells per window side, peak memory (bytes), time (s, one thread) and what
+    drives it (:class:`pipeline.atlas.cost.SceneCost`), or why it cannot run."""
 
     scene: Scene
     n_cells: int | None
     peak_bytes: float
     seconds: float
     problem: str | None
+    cost: SceneCost | None = None
 
 
 def plan_atlas(base: Scenario, design: AtlasDesign, workers: int | None = 1) -> list[SceneEstimate]:
-    """Every scene's resolved window and its stages' estimates, before any work.
+    """Every scene's resolved window, peak memory and modelled time, before any work.
 
-    ``workers`` is the per-scene worker count (1: one scene per single-threaded task). A scene
-    the plan or the preflight refuses carries the refusal as ``problem`` instead of raising, so
-    the whole design is seen at once.
+    Memory comes from :func:`pipeline.before_work.plan.check_resources` (a scene that does not fit
+    is refused there), time from :func:`pipeline.atlas.cost.scene_cost` (on discrete asperities it
+    grows with the touching asperities, not with a grid). ``workers`` is the per-scene worker
+    count (1: one scene per single-threaded task). A scene the plan or the preflight refuses
+    carries the refusal as ``problem`` instead of raising, so the whole design is seen at once.
     """
+    from pipeline.atlas.cost import scene_cost
     from pipeline.before_work import plan
     from pipeline.before_work.domains import resolve
     from pipeline.before_work.preflight import check_scene
 
     out = []
     for scene in design_scenes(design):
-        scenario = scene_scenario(base, scene)
         try:
+            scenario = scene_scenario(base, scene)
             plan.check_resources(scenario, workers)
             resolved = resolve(scenario)
             check_scene(resolved)
@@ -161,22 +200,50 @@ def plan_atlas(base: Scenario, design: AtlasDesign, workers: int | None = 1) -> 
         except ConfigError as exc:
             out.append(SceneEstimate(scene, None, math.nan, math.nan, str(exc)))
             continue
-        out.append(SceneEstimate(scene, resolved.n_cells, max(e.peak_bytes for e in estimates),
-                                 sum(e.seconds for e in estimates), None))
+        cost = scene_cost(resolved)
+        out.append(SceneEstimate(scene, resolved.n_cells, max(e.peak_bytes for e in estimates), cost.seconds, None,
+                                 cost))
     return out
 
 
+#: The wall time an atlas may take on this 2-core machine (issue 31: `make atlas` <= 3 h).
+BUDGET_SECONDS = 3 * 3600.0
+
+
+def wall_seconds(seconds: list[float], parallel: int) -> float:
+    """Wall time of scenes of these CPU times, one per task on ``parallel`` workers, longest first
+    (each worker takes the next scene when free)."""
+    loads = [0.0] * max(1, parallel)
+    for s in sorted(seconds, reverse=True):
+        loads[loads.index(min(loads))] += s
+    return max(loads)
+
+
 def format_atlas_plan(estimates: list[SceneEstimate], parallel: int = 1) -> list[str]:
-    """One line per scene and the total, time divided over ``parallel`` concurrent scenes."""
-    lines = [f"{'scene':6s} {'mu':>8s} {'Pi':>8s} {'cells':>6s} {'memory':>10s} {'time':>10s}"]
+    """One line per scene, the total and the wall time on ``parallel`` concurrent scenes against
+    :data:`BUDGET_SECONDS`."""
+    lines = [f"{'scene':6s} {'mu':>8s} {'Pi':>8s} {'cells':>6s} {'touching':>9s} {'pool':>5s} {'fields':>7s} "
+             f"{'memory':>10s} {'time':>10s}"]
     for e in estimates:
         head = f"{e.scene.name:6s} {e.scene.mu:8.4g} {e.scene.Pi:8.4g}"
         if e.problem:
             lines.append(f"{head}  refused: {e.problem}")
-        else:
-            lines.append(f"{head} {e.n_cells:6d} {e.peak_bytes / 2**20:7.0f} MiB {e.seconds:8.3g} s")
+            continue
+        c = e.cost
+        touching = f"{c.touching[-1]:9.0f}" if c is not None and c.touching is not None else f"{'-':>9s}"
+        pool = f"{c.surfaces:5d}" if c is not None and c.surfaces else f"{'-':>5s}"
+        fields = f"{c.fields:7.0f}" if c is not None else f"{'-':>7s}"
+        lines.append(f"{head} {e.n_cells:6d} {touching} {pool} {fields} {e.peak_bytes / 2**20:7.0f} MiB "
+                     f"{e.seconds:8.3g} s")
     runnable = [e for e in estimates if not e.problem]
     total = sum(e.seconds for e in runnable)
-    lines.append(f"{len(runnable)} of {len(estimates)} scenes runnable, {total:.3g} s in all, about "
-                 f"{total / parallel / 3600:.3g} h on {parallel} concurrent scene(s)")
+    wall = wall_seconds([e.seconds for e in runnable], parallel)
+    lines.append(f"{len(runnable)} of {len(estimates)} scenes runnable, {total:.3g} s of one thread in all, about "
+                 f"{wall / 3600:.3g} h on {parallel} concurrent scene(s) (touching: expected asperities in contact at "
+                 f"the heaviest step; fields: oxide realizations x lambda)")
+    if wall > BUDGET_SECONDS:
+        worst = sorted(runnable, key=lambda e: -e.seconds)[:3]
+        lines.append(f"over the {BUDGET_SECONDS / 3600:g} h budget by {wall / BUDGET_SECONDS:.3g} x; the costliest scenes: "
+                     + ", ".join(f"{e.scene.name} (mu {e.scene.mu:.3g}, Pi {e.scene.Pi:.3g}) {e.seconds / 3600:.3g} h"
+                                 for e in worst))
     return lines

@@ -25,9 +25,9 @@ from pathlib import Path
 
 import xarray as xr
 
-from pipeline.atlas.design import AtlasDesign, Scene, design_scenes, plan_atlas, scene_scenario
+from pipeline.atlas.design import AtlasDesign, Scene, design_scenes, format_atlas_plan, plan_atlas, scene_scenario
 from pipeline.compute import ComputeOptions
-from pipeline.config import ConfigError, Scenario
+from pipeline.config import ConfigError, Loading, Scenario
 from pipeline.store import atomic_path, provenance
 
 __all__ = ["scene_dataset", "scene_path", "run_atlas", "ATLAS_FILE"]
@@ -41,14 +41,15 @@ def scene_path(data_dir: str | Path, scene: Scene) -> Path:
     return Path(data_dir) / "atlas" / "scenes" / f"{scene.name}.nc"
 
 
-def scene_dataset(base: Scenario, scene: Scene) -> xr.Dataset:
-    """Run the chain on one scene in memory, single-threaded; its slice of ``atlas.nc``."""
+def scene_dataset(base: Scenario, scene: Scene, loading: Loading | None = None) -> xr.Dataset:
+    """Run the chain on one scene in memory, single-threaded; its slice of ``atlas.nc`` (``loading``:
+    see :func:`pipeline.atlas.design.scene_scenario`)."""
     from pipeline.before_work.domains import resolve
     from pipeline.stages import contact, cube, fits, oxide
     from pipeline.stages.schema import SURROGATE_COORDINATES
 
     start = time.perf_counter()
-    scenario = resolve(scene_scenario(base, scene))
+    scenario = resolve(scene_scenario(base, scene, loading))
     c = contact.build(scenario)
     k = cube.build(scenario, c, oxide.build(scenario, _ONE), _ONE)
     f = fits.build(scenario, k)
@@ -58,6 +59,7 @@ def scene_dataset(base: Scenario, scene: Scene) -> xr.Dataset:
         return dims, f[name].transpose(*dims).values, dict(f[name].attrs)
 
     reduced = f[f"{scenario.fits.reduction}_normalized"].transpose("xi", "lambda", "delta").values
+    reduced_ci = f[f"{scenario.fits.reduction}_normalized_ci"].transpose("xi", "lambda", "delta", "bound").values
     ds = xr.Dataset(
         {
             **{name: take(name, grid) for name in ("alpha", "gamma", "n_realizations")},
@@ -68,6 +70,12 @@ def scene_dataset(base: Scenario, scene: Scene) -> xr.Dataset:
             "curve_coefficients": take("curve_coefficients", grid + ("power",)),
             "resistance_normalized": (grid + ("step",), reduced, {
                 "units": "1", "long_name": f"R' of the fitted reduction ({scenario.fits.reduction}) over realizations"}),
+            "resistance_normalized_ci": (grid + ("step", "bound"), reduced_ci, {
+                "units": "1", "long_name": f"bootstrap interval of the {scenario.fits.reduction} of R' at each step"}),
+            "open_probability": (grid + ("step",), f["open_probability"].transpose("xi", "lambda", "delta").values,
+                                 dict(f["open_probability"].attrs)),
+            "resistance_clean_normalized": (("step",), f["resistance_clean_normalized"].values, {
+                "units": "1", "long_name": "R' of the oxide-free surface"}),
             "force_normalized": (("step",), k["force_normalized"].values, {
                 "units": "1", "long_name": "F' = 2F/(E* sqrt(R* sigma^3))"}),
             "fitted": (("step",), f["fitted"].values, {"units": "1", "long_name": "1 where the step was fitted"}),
@@ -83,26 +91,26 @@ def scene_dataset(base: Scenario, scene: Scene) -> xr.Dataset:
                "wall_seconds": (time.perf_counter() - start, "wall time of the scene's chain (s)")}
     for name, (value, long_name) in scalars.items():
         ds[name] = xr.DataArray(value, attrs={"units": "s" if name == "wall_seconds" else "1", "long_name": long_name})
-    ds.attrs.update(provenance(scene_scenario(base, scene), "fits"))
+    ds.attrs.update(provenance(scene_scenario(base, scene, loading), "fits"))
     ds.attrs.update(scene=scene.name, title=f"g2tom atlas scene {scene.name}", stage="atlas scene")
     return ds
 
 
-def _done(base: Scenario, scene: Scene, data_dir: Path) -> bool:
+def _done(base: Scenario, scene: Scene, data_dir: Path, loading: Loading | None = None) -> bool:
     """Whether the scene's file is there, readable and of this configuration."""
     path = scene_path(data_dir, scene)
     if not path.is_file():
         return False
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
-            return ds.attrs.get("config_hash") == scene_scenario(base, scene).config_hash("fits")
+            return ds.attrs.get("config_hash") == scene_scenario(base, scene, loading).config_hash("fits")
     except (OSError, ValueError, RuntimeError):
         return False
 
 
-def _run_scene(base: Scenario, scene: Scene, data_dir: Path) -> tuple[str, float]:
+def _run_scene(base: Scenario, scene: Scene, data_dir: Path, loading: Loading | None = None) -> tuple[str, float]:
     """The task: one scene, written atomically; its name and wall time."""
-    ds = scene_dataset(base, scene)
+    ds = scene_dataset(base, scene, loading)
     with atomic_path(scene_path(data_dir, scene)) as tmp:
         ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4")
     return scene.name, float(ds["wall_seconds"])
@@ -197,12 +205,20 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
     data_dir = Path(data_dir)
     scenes = design_scenes(design)
     pending = [s for s in scenes if not _done(base, s, data_dir)]
-    _, twin = _twin(scenes)
-    twin_pending = not _done(twin_base(base), twin, data_dir)
-    refused = [e for e in plan_atlas(base, design) if e.problem and e.scene in pending]
+    original, twin = _twin(scenes)
+    twin_loading = scene_scenario(base, original).loading  # the same approaches in sigma, exactly
+    twin_pending = not _done(twin_base(base), twin, data_dir, twin_loading)
+    estimates = plan_atlas(base, design)
+    refused = [e for e in estimates if e.problem and e.scene in pending]
     if refused:
         e = refused[0]
         raise ConfigError(f"atlas scene {e.scene.name} (mu {e.scene.mu:.4g}, Pi {e.scene.Pi:.4g}): {e.problem}")
+    if pending:  # the plan's total for what is left (the whole table: `g2tom plan --atlas`)
+        workers = 1 if options.scheduler is None and not (options.workers and options.workers > 1) else (
+            options.workers or 1)
+        left = [e for e in estimates if e.scene in pending]
+        for line in format_atlas_plan(left, workers)[1 + len(left):]:  # the total, and the budget if over
+            print(f"atlas: plan: {line}", file=sys.stderr)
     by_name = {s.name: s for s in scenes}
     with ExitStack() as stack:
         client = _client(stack, options) if pending else None
@@ -217,6 +233,6 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
                 name, seconds = future.result()
                 _line(k, len(pending), name, seconds, by_name[name])
     if twin_pending:  # the invariance check: equal (mu, Pi), other dimensions
-        _line(1, 1, *_run_scene(twin_base(base), twin, data_dir), twin)
+        _line(1, 1, *_run_scene(twin_base(base), twin, data_dir, twin_loading), twin)
     return _gather(base, scenes, data_dir)
 

@@ -275,10 +275,12 @@ def _cmd_atlas(args: argparse.Namespace, scenario: Scenario) -> None:
 
     target, doc = write_atlas_surrogate(path)
     held, worst = doc["heldout"], doc["heldout"]["worst"]
-    print(f"atlas: wrote {target}: alpha degree {doc['alpha']['degree']}, gamma degree {doc['gamma']['degree']}; "
-          f"held out: {held['cells_within']} of {held['cells']} cells within max(5 %, interval) at every step; worst "
-          f"{worst['scene']} (xi {worst['xi']:g}, lambda {worst['lambda']:g}, F' {worst['force_normalized']:.3g}): "
-          f"{worst['error']:.3g} vs {worst['allowed']:.3g}", file=sys.stderr)
+    curve = doc["log_resistance"]
+    print(f"atlas: wrote {target}: curve model the grid surrogate (degree {curve['degree']} in the groups, order "
+          f"{curve['order']} in ln F', by leave-one-scene-out cross-validation); held out: {held['cells_within']} of "
+          f"{held['cells']} cells within max(5 %, interval) at every step; worst {worst['scene']} (xi {worst['xi']:g}, "
+          f"lambda {worst['lambda']:g}, F' {worst['force_normalized']:.3g}): {worst['error']:.3g} in ln R' vs "
+          f"{worst['allowed']:.3g} allowed; targets {'met' if held['met'] else 'not met'}", file=sys.stderr)
 
 
 def _cmd_roughness(args: argparse.Namespace, scenario: Scenario) -> None:

@@ -156,7 +156,9 @@ def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
         result = predict_with(chosen, scenario, force, xi, lam, model=args.model, extrapolate=args.extrapolate)
     if not isinstance(chosen, SurrogateTables):
         print(f"g2tom: note: the atlas surrogate holds no realization spread, fit interval or open-circuit share: "
-              f"columns {', '.join(NOT_IN_ATLAS)} left out; its band is its held-out error", file=sys.stderr)
+              f"columns {', '.join(NOT_IN_ATLAS)} left out; its band is its "
+              f"{'cross-validated and held-out error where the query is' if chosen.band is not None else 'held-out error'}",
+              file=sys.stderr)
     for w in caught:
         print(f"g2tom: warning: {w.message}", file=sys.stderr)
     print(f"g2tom: answered by {result.attrs['answered_by']}", file=sys.stderr)

@@ -33,8 +33,17 @@ def _report(r: dict[str, Any]) -> str:
 
 
 def _filled_line(r: dict[str, Any]) -> str:
+    crop = ""
+    if r.get("cropped_to"):
+        (r0, r1), (c0, c1) = r["cropped_to"]
+        crop = (f"cropped     to rows {r0}..{r1}, columns {c0}..{c1} of the {r['read_shape'][0]} x "
+                f"{r['read_shape'][1]} map read (the largest rectangle of the measured area: undefined pixels connected to the border lie outside it)\n")
     if not r["filled_pixels"]:
-        return "filled      none (no undefined pixels)"
+        return crop + "filled      none (no undefined pixels)"
+    return crop + _gap_line(r)
+
+
+def _gap_line(r: dict[str, Any]) -> str:
     return (f"filled      {r['filled_pixels']} undefined pixels ({r['filled_share']:.2%}) by the fill of least curvature; "
             f"masked instead, rms_height {r['masked_rms_change']:+.2%}, m2 {r['masked_m2_change']:+.2%}, "
             f"m4 {r['masked_m4_change']:+.2%} (finite differences)")

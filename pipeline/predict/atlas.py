@@ -3,12 +3,13 @@
 The atlas surrogate (``<data>/atlas/surrogate.json``, :mod:`pipeline.atlas.fit`) gives ln R' at
 the query's (xi, lambda, F') and the surface's groups (mu, Pi) (:mod:`pipeline.physics.groups`)
 by its curve model (the default, ``resistance``), and alpha and gamma of Eq. 27
-(``resistance_power_law`` = alpha 2 rho*/sqrt(R* sigma) F'^-gamma). Its band is the held-out error
-of the curve model:
-one standard deviation of ln R' taken as the RMS of |ln R'_surrogate - ln R'_scene| over every
-held-out (scene, xi, lambda, step), so ``lower`` / ``upper`` = R exp(-/+ that); the single-scene
-band's components (realization spread, fit interval, open-circuit share) are not in the atlas
-and are NaN. A query outside the atlas's domain (mu, Pi, xi, lambda, or F' beyond the steps fitted
+(``resistance_power_law`` = alpha 2 rho*/sqrt(R* sigma) F'^-gamma). Its band is where the query is:
+one standard deviation of ln R', the surrogate's leave-one-scene-out error in the query's region
+of (F', xi, the (mu, Pi) box's inside or edge) and its interpolation error between oxide nodes
+(:mod:`pipeline.fitting.atlas_band`), so ``lower`` / ``upper`` = R exp(-/+ that). A surrogate of
+format 1 (the first atlas's one polynomial, e.g. an older shipped file) is still read and answers
+with its one global held-out error. The single-scene band's components (realization spread, fit
+interval, open-circuit share) are not in the atlas and are NaN. A query outside the atlas's domain (mu, Pi, xi, lambda, or F' beyond the steps fitted
 in every scene) is refused unless ``extrapolate`` (then an ExtrapolationWarning).
 """
 
@@ -22,8 +23,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.atlas.fit import CURVE, FORMAT
+from pipeline.atlas.fit import CURVE, FORMAT, FORMAT_VERSION, grid_model
 from pipeline.config import ConfigError, Scenario
+from pipeline.fitting.atlas_band import RegionalBand
 from pipeline.fitting.atlas_surrogate import AtlasModel
 from pipeline.predict.queries import OUTPUT_COLUMNS, check_ranges, check_values, queries
 from pipeline.scene import scene_groups
@@ -49,33 +51,74 @@ def is_atlas_document(text: str) -> bool:
 
 @dataclass(frozen=True)
 class AtlasSurrogate:
-    """The atlas surrogate's models, domain and held-out error (one sigma of ln R')."""
+    """The atlas surrogate's models, domain and band.
 
-    models: dict[str, AtlasModel]
+    Attributes
+    ----------
+    models
+        ``alpha``, ``gamma`` (Eq. 27) and :data:`CURVE` (ln R'): the grid surrogate
+        (:class:`~pipeline.fitting.atlas_grid.GridTensorModel`, format 2) or one polynomial in five
+        logs (format 1, the first atlas's).
+    domain
+        (low, high) of mu, Pi, xi, lambda and F'.
+    error
+        The held-out RMS error of ln R' (the band of format 1; reported beside the regional band).
+    source
+        Where it was read from.
+    band
+        The regional band (:class:`~pipeline.fitting.atlas_band.RegionalBand`), None for format 1.
+    """
+
+    models: dict[str, Any]
     domain: dict[str, tuple[float, float]]
     error: float
     source: str
+    band: RegionalBand | None = None
 
     @classmethod
     def from_json(cls, text: str, source: str) -> "AtlasSurrogate":
-        """Parse ``surrogate.json`` of the atlas; ConfigError if it is not one."""
+        """Parse ``surrogate.json`` of the atlas; ConfigError if it is not one (or of a later format)."""
         try:
             doc = json.loads(text)
             if doc.get("format") != FORMAT:
                 raise ValueError(f"format is {doc.get('format')!r}, not {FORMAT!r}")
-            models = {p: AtlasModel(doc[p]["transform"], np.array(doc[p]["low"], float), np.array(doc[p]["high"], float),
-                                    np.array(doc[p]["powers"], int), np.array(doc[p]["coef"], float))
-                      for p in ("alpha", "gamma", CURVE)}
+            version = int(doc.get("format_version", 1))
+            if version > FORMAT_VERSION:
+                raise ValueError(f"format_version {version} is newer than this g2tom's {FORMAT_VERSION}: upgrade g2tom")
+            models: dict[str, Any] = {p: _polynomial(doc[p]) for p in ("alpha", "gamma")}
+            models[CURVE] = grid_model(doc[CURVE]) if version >= 2 else _polynomial(doc[CURVE])
+            band = RegionalBand.from_dict(doc["band"]) if version >= 2 else None
             domain = {k: (float(doc["domain"][k][0]), float(doc["domain"][k][1])) for k in _DOMAIN}
-            return cls(models, domain, float(doc["heldout"]["rms_ln_error"]), source)
+            return cls(models, domain, float(doc["heldout"]["rms_ln_error"]), source, band)
         except (ValueError, KeyError, TypeError, AttributeError) as exc:
             raise ConfigError(f"--surrogate {source!r} is not a g2tom atlas surrogate.json ({exc})") from None
 
     def describe(self) -> str:
         """Which surrogate answers, for the user."""
         mu, pi = self.domain["mu"], self.domain["Pi"]
+        band = "regional held-out band" if self.band is not None else f"held-out error {self.error:.3g} in ln R"
         return (f"the atlas surrogate {self.source} (mu {mu[0]:.4g}..{mu[1]:.4g}, Pi {pi[0]:.4g}..{pi[1]:.4g}, "
-                f"held-out error {self.error:.3g} in ln R)")
+                f"{band})")
+
+    def log_resistance(self, xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray,
+                       force_n: np.ndarray) -> np.ndarray:
+        """ln R' of the curve model at the queries."""
+        model = self.models[CURVE]
+        if isinstance(model, AtlasModel):
+            return model.transformed(xi, lam, mu, pi, force_n)
+        return model.log_resistance(xi, lam, mu, pi, force_n)
+
+    def error_at(self, xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray,
+                 force_n: np.ndarray) -> np.ndarray:
+        """One standard deviation of ln R' at each query: the regional band, or format 1's global error."""
+        if self.band is None:
+            return np.full(np.shape(xi), self.error)
+        return self.band(xi, lam, mu, pi, force_n)
+
+
+def _polynomial(doc: dict[str, Any]) -> AtlasModel:
+    return AtlasModel(doc["transform"], np.array(doc["low"], float), np.array(doc["high"], float),
+                      np.array(doc["powers"], int), np.array(doc["coef"], float))
 
 
 def shipped_path() -> Path | None:
@@ -120,8 +163,8 @@ def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi:
     alpha = surrogate.models["alpha"](x, lm, mu, pi)
     gamma = surrogate.models["gamma"](x, lm, mu, pi)
     power_law = alpha * scenario.resistance_scale * np.exp(-gamma * np.log(force_n))
-    resistance = surrogate.models[CURVE](x, lm, mu, pi, force_n) * scenario.resistance_scale
-    error = np.full(f.size, surrogate.error)
+    resistance = np.exp(surrogate.log_resistance(x, lm, mu, pi, force_n)) * scenario.resistance_scale
+    error = surrogate.error_at(x, lm, mu, pi, force_n)
     columns = {
         "force": f, "xi": x, "lambda": lm, "force_normalized": force_n, "alpha": alpha, "gamma": gamma,
         "resistance": resistance, "lower": resistance * np.exp(-error), "upper": resistance * np.exp(error),
@@ -132,7 +175,10 @@ def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi:
     ds = xr.Dataset({name: label(values) for name, values in columns.items()})
     for name, (units, long_name) in OUTPUT_COLUMNS.items():
         ds[name].attrs = {"units": units, "long_name": long_name}
-    ds.attrs["band"] = "held-out error of the atlas surrogate: lower, upper = R exp(-/+ rms |ln R'_surrogate - ln R'_scene|)"
+    ds.attrs["band"] = ("lower, upper = R exp(-/+ e): e the atlas surrogate's cross-validated error of ln R' in the "
+                        "query's region of (F', xi, mu-Pi box) and between oxide nodes (pipeline.fitting.atlas_band)"
+                        if surrogate.band is not None else
+                        "held-out error of the atlas surrogate: lower, upper = R exp(-/+ rms |ln R'_surrogate - ln R'_scene|)")
     ds.attrs["surrogate_method"] = "atlas"
     ds.attrs["model"] = "curve"  # ln R' over (xi, lambda, mu, Pi, F'); the power law beside it
     ds.attrs["answered_by"] = surrogate.describe()

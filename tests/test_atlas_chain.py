@@ -1,0 +1,65 @@
+"""The measured-surface chain: the random-process surface's height map -> roughness -> predict,
+against its full field (pipeline/atlas/chain.py), on the quick validation set."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from pipeline.atlas import chain
+from pipeline.atlas import run as atlas
+from pipeline.atlas.fit import write_atlas_surrogate
+from pipeline.config import load_scenario
+from tests.test_atlas import BASE, DESIGN
+
+
+@pytest.fixture(scope="module")
+def validated(tmp_path_factory):
+    pytest.importorskip("tamaas")
+    from pipeline.reference.validate import chosen_set, output_folder, run_validation
+
+    data = tmp_path_factory.mktemp("chain")
+    out = output_folder(data, "random_process")
+    run_validation(chosen_set(True, "random_process"), out, progress=False)
+    return data
+
+
+@pytest.fixture(scope="module")
+def surrogate(tmp_path_factory):
+    design = DESIGN.__class__(mu=(2.0, 8.0), Pi=(10.0, 40.0), n_mu=2, n_pi=2, n_heldout=1)
+    target, _ = write_atlas_surrogate(atlas.run_atlas(load_scenario("paper", BASE), design,
+                                                      tmp_path_factory.mktemp("atlas")))
+    return target
+
+
+def test_chain_measures_predicts_and_compares(validated, surrogate, capsys) -> None:
+    assert chain.main(["--data-dir", str(validated), "--surrogate", str(surrogate)]) == 0
+    from pipeline.reference.validate import output_folder
+
+    with xr.open_dataset(output_folder(validated, "random_process") / chain.CHAIN_FILE) as c:
+        c = c.load()
+    # the height map measured: the summits' parameters within 10 % of the spectrum's closed form
+    for name in ("sigma", "eta", "beta"):
+        assert c[f"measured_{name}"].values == pytest.approx(c.attrs[f"set_{name}"], rel=0.10), name
+    # the ratio is the prediction over the full field's resistance, per load
+    with xr.open_dataset(output_folder(validated, "random_process") / "validate.nc") as v:
+        ref = v["resistance_reference_clean"].values
+    np.testing.assert_allclose(c["ratio_clean"].values, c["resistance_chain_clean"].values / ref, rtol=1e-12)
+    assert np.all(np.isfinite(c["ratio_clean"].values)) and np.all(np.isfinite(c["ratio"].values))
+    assert np.all(c["inside_domain"].values == 1)  # mu 3.46, Pi 18: inside (2..8, 10..40)
+    # measured and known parameters give nearly the same answer: the measurement costs little here
+    np.testing.assert_allclose(c["ratio_clean"].values, c["ratio_clean_known"].values, rtol=0.15)
+    for name, var in c.variables.items():
+        assert var.attrs.get("units") is not None and var.attrs.get("long_name"), name
+    from analysis.report_chain import chain_blocks
+
+    blocks = chain_blocks(validated)
+    assert blocks[-1].kind == "table" and len(blocks[-1].rows) == 1 + c.sizes["load"]
+
+
+def test_chain_without_a_validation_is_refused_in_one_line(tmp_path, capsys) -> None:
+    assert chain.main(["--data-dir", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("g2tom: error: validate.nc") and "random_process" in err[0]
+    assert not any(tmp_path.iterdir())
