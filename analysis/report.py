@@ -87,9 +87,11 @@ def _summary_blocks(scenario: Scenario, fits: xr.Dataset | None, sur: xr.Dataset
     list of Block
         The heading and a list of statements, read from the stages' outputs (nothing recomputed).
     """
+    spots = (f"a pool of {scenario.contact.surfaces} surfaces' own asperities, oxide spot rule "
+             f"{scenario.oxide.spot_rule}" if scenario.contact.model == "discrete" else f"{scenario.contact.spots} spots")
     items = [f"**Computed:** scenario '{scenario.name}': {scenario.description} (g2tom {__version__}, "
              f"configuration hash {scenario.config_hash()}); contact model {scenario.contact.model} with "
-             f"{scenario.contact.spots} spots, resistance model {scenario.cube.model}."]
+             f"{spots}, resistance model {scenario.cube.model}."]
     if fits is None:
         items.append("**Not available:** the fits stage's output (run `g2tom fits`).")
     else:

@@ -20,7 +20,8 @@ SETS = {"oxide.xi": "[0.3, 0.7]", "oxide.lambda": "[3.0, 9.0]", "oxide.min_reali
 @pytest.fixture(scope="module")
 def adaptive_dir(tmp_path_factory):
     data = tmp_path_factory.mktemp("adaptive")
-    args = [a for k, v in SETS.items() for a in ("--set", f"{k}={v}")] + ["--data-dir", str(data), "--no-progress"]
+    args = ["--config", "paper_gt", *[a for k, v in SETS.items() for a in ("--set", f"{k}={v}")], "--data-dir", str(data),
+            "--no-progress"]
     for stage in ("contact", "oxide", "cube"):
         assert main([stage, *args]) == 0
     return data

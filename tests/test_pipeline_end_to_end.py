@@ -5,21 +5,20 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import xarray as xr
 import pytest
 
 from pipeline import __version__
 from pipeline.cli.main import STAGES, main
 from pipeline.config import load_scenario
 from pipeline.store import read_stage
-from tests.conftest import SMALL_OVERRIDES
+from tests.conftest import SMALL_ARGS, SMALL_OVERRIDES
 from tests.test_schema import written_against_schema
 
 
 def _set_args() -> list[str]:
-    args: list[str] = []
-    for key, value in SMALL_OVERRIDES.items():
-        args += ["--set", f"{key}={value}"]
-    return args
+    """The ``small`` scenario (Greenwood-Tripp, paper_gt) on the command line."""
+    return list(SMALL_ARGS)
 
 
 @pytest.fixture(scope="module")
@@ -137,3 +136,21 @@ def test_physics_benchmarks_run_once_per_configuration(tmp_path, monkeypatch, sm
     other = load_scenario("paper_gt", {**SMALL_OVERRIDES, "fits.n_bootstrap": 60})
     bench.physics_benchmarks(other, tmp_path)
     assert calls[-2:] == list(bench.PHYSICS_BENCH)  # another configuration: both
+
+
+def test_the_default_discrete_study_runs_end_to_end(tmp_path) -> None:
+    """``g2tom run`` on the default scenario (discrete asperities, disc rule, point model), shrunk:
+    every stage, the figures and the report, with the discrete model's pool in contact.nc."""
+    data = tmp_path / "default"
+    sets = {**SMALL_OVERRIDES, "contact.surfaces": 8}
+    args = [a for k, v in sets.items() for a in ("--set", f"{k}={v}")]
+    assert main(["run", "--data-dir", str(data), "--no-progress", "--no-bench", *args]) == 0
+    with xr.open_dataset(data / "contact.nc") as contact_ds:
+        assert contact_ds.sizes["surface"] == 8 and contact_ds.attrs["scenario"] == "paper"
+        conductance = contact_ds["discrete_barber_conductance"].values
+    with xr.open_dataset(data / "cube.nc") as cube_ds:
+        assert np.isfinite(cube_ds["resistance"].values[..., :8]).mean() > 0.5
+        # Barber per surface, averaged over the pool: the clean point model's conductance is K / (E* rho*)
+        np.testing.assert_allclose(cube_ds["conductance_clean_point"].values, conductance.mean(axis=0), rtol=1e-8)
+    report = (data / "report.md").read_text()
+    assert "contact model discrete" in report and (data / "figures" / "fig5_spots.png").exists()
