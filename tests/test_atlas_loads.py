@@ -15,6 +15,8 @@ from pipeline.before_work.domains import resolve
 from pipeline.config import load_scenario
 
 DISCRETE = {"contact.model": "discrete", "oxide.spot_rule": "disc", "cube.model": "point"}
+#: The atlas on Greenwood-Tripp's grid spots (paper_gt's models).
+GRID = {"contact.model": "greenwood_tripp", "oxide.spot_rule": "centre", "cube.model": "greenwood"}
 
 
 @pytest.mark.parametrize("mu, Pi", [(1.0, 5.0), (7.07, 40.0), (50.0, 320.0)])
@@ -76,7 +78,7 @@ def test_the_discrete_pool_shrinks_with_the_touching_count() -> None:
     heaviest = loads.expected_touching(large)[-1]
     assert large.contact.surfaces == max(MIN_POOL, int(np.ceil(POOL_TOUCHING / heaviest))) < 256
     # grid spots keep the base's pool (it is not used)
-    assert scene_scenario(load_scenario("atlas"), Scene("x", 2.0, 300.0, False)).contact.surfaces == 256
+    assert scene_scenario(load_scenario("atlas", GRID), Scene("x", 2.0, 300.0, False)).contact.surfaces == 256
 
 
 #: Measured one-thread CPU seconds on this machine (2026-11-27; the constants' sources in
@@ -101,7 +103,7 @@ def test_discrete_cost_grows_with_the_touching_count_not_a_grid() -> None:
     assert costs[0].touching[-1] < costs[1].touching[-1] < costs[2].touching[-1]
     assert costs[0].seconds < costs[1].seconds < costs[2].seconds
     assert costs[2].cube / costs[2].fields > 20 * costs[1].cube / costs[1].fields  # ~N^2 per field
-    grid = cost.scene_cost(resolve(scene_scenario(load_scenario("atlas"), Scene("x", 7.07, 40.0, False))))
+    grid = cost.scene_cost(resolve(scene_scenario(load_scenario("atlas", GRID), Scene("x", 7.07, 40.0, False))))
     assert grid.touching is None and grid.surfaces == 0 and grid.seconds > 0
 
 
