@@ -57,22 +57,24 @@ TYPICAL_FIELDS = 171_200 / 12
 #: reached the cap (make run from a fresh clone, 2026-11-25, cube.nc: 30,000; 361,115 in all).
 TYPICAL_LARGEST = 30_000
 #: The same for the discrete model with the disc rule and the point model (contact.model =
-#: "discrete"), estimated from a fixed 64-realization cube of paper_discrete: per cell
+#: "discrete", the default), estimated from a fixed 64-realization cube of the discrete study: per cell
 #: 64 (w / (0.9 x 0.025))^2 from its fast-rule half-widths w, clipped to [400, 30,000]: 146,587
 #: realizations over the 108 cells, 188,200 computed in whole batches, 39,800 fields.
 DISCRETE_TYPICAL_REALIZATIONS = 146_587 / 108
 DISCRETE_TYPICAL_COMPUTED = 188_200 / 108
 DISCRETE_TYPICAL_FIELDS = 39_800 / 12
-#: The largest count over the cells of the adaptive paper_discrete cube (2026-11-25, cube.nc's
-#: realization axis at lambda 23, xi 0.9; 175,096 realizations kept in all).
+#: The largest count over the cells of the adaptive discrete cube (2026-11-25 and 2026-11-27,
+#: cube.nc's realization axis at lambda 23, xi 0.9; 175,096 realizations kept in all).
 DISCRETE_TYPICAL_LARGEST = 9_569
 #: One thread's time per discrete surface and load step of the contact solve (s): the median of
 #: `g2tom bench --only discrete` on the paper's scene, 3.85 ms.
 DISCRETE_SOLVE_S = 3.85e-3
 #: One thread's time per (xi, field) of the cube on discrete spots (s) by (oxide.spot_rule,
-#: cube.model): the fixed 64-realization cube of paper_discrete (disc, point) took 25 ms per
-#: field of 9 xi on two threads; the other pairs scaled by `g2tom bench --only discrete`'s ratios.
-DISCRETE_XI_MAP_S = {("disc", "point"): 5.5e-3, ("centre", "point"): 3.0e-3,
+#: cube.model): (disc, point) from the default `make run` from a fresh clone (2026-11-27, 2 cores,
+#: compiled point solves and disc shares: the cube took 92.05 s, 2 x 92.05 / 188,200); the
+#: (centre, point) pair scaled by the same ratio to the previous code's 5.5 ms (not measured); the
+#: Greenwood pairs are the previous code's, whose Greenwood form did not change (not remeasured).
+DISCRETE_XI_MAP_S = {("disc", "point"): 2 * 92.05 / 188_200, ("centre", "point"): 3.0e-3 * 2 * 92.05 / 188_200 / 5.5e-3,
                      ("disc", "greenwood"): 2.8e-3, ("centre", "greenwood"): 0.75e-3}
 #: Measured stage times of the default `make run` from a fresh clone (2026-11-25, 2 cores,
 #: data/timings.json) over what the models below give for it (the fits' and the surrogate's
