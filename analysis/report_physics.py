@@ -99,13 +99,18 @@ def barber_blocks(data_dir: Path, scenario: Scenario) -> list[Block]:
         cube = read_stage(data_dir, "cube", scenario)
     except (FileNotFoundError, StaleInputError, OSError) as exc:
         return blocks + [Block("p", f"Not available: {exc}")]
-    barber = contact["barber_conductance"].values
+    discrete = "discrete_barber_conductance" in contact
+    # discrete asperities: each surface's own K, averaged over the pool as the cube averages its conductance
+    barber = (contact["discrete_barber_conductance"].mean("surface") if discrete
+              else contact["barber_conductance"]).values
     names = [n for n in cube.data_vars if n.startswith("conductance_clean_")]
     ratios = {n.removeprefix("conductance_clean_"): cube[n].values / barber for n in names}
-    spots = contact.attrs.get("spots", "mean_area")
+    spots = "discrete" if discrete else contact.attrs.get("spots", "mean_area")
+    system = ("coupled caps of each surface of the pool (the mean over its surfaces of conductance and of "
+              "K / (E* rho*))" if discrete else "discretised Greenwood-Tripp system")
     blocks.append(Block("p", (
         f"Barber's theorem is exact for a clean elastic contact: conductance = K / (E* rho*), with K = -dF/d delta "
-        f"the exact linearisation of the discretised Greenwood-Tripp system. With this run's spots ({spots}), the "
+        f"the exact linearisation of the {system}. With this run's spots ({spots}), the "
         "clean conductance over Barber's, worst step: " + "; ".join(
             f"{name.replace('_', ' + ')} {_worst(r)}" for name, r in ratios.items()) + ".")))
     if spots == "asperities":

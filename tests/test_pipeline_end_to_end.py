@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import xarray as xr
@@ -154,3 +155,5 @@ def test_the_default_discrete_study_runs_end_to_end(tmp_path) -> None:
         np.testing.assert_allclose(cube_ds["conductance_clean_point"].values, conductance.mean(axis=0), rtol=1e-8)
     report = (data / "report.md").read_text()
     assert "contact model discrete" in report and (data / "figures" / "fig5_spots.png").exists()
+    # Barber's section checks each surface's own K (not Greenwood-Tripp's): the point model is exact
+    assert "With this run's spots (discrete)" in report and re.search(r"point 1\.0000 \([+-]0\.00 %\)", report)

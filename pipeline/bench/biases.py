@@ -42,10 +42,10 @@ STEPS: tuple[tuple[str, dict[str, Any]], ...] = (
                                    "contact.area_interpolation": "separation", "contact.r_max": "auto",
                                    "contact.window": "auto"}),
     ("spectral period (field lattice)", {"oxide.period": "spectral"}),
-    ("expected spots (Barber, default)", {"contact.spots": "expected"}),
+    ("expected spots (Barber; paper_gt)", {"contact.spots": "expected"}),
     ("point model (Greenwood's bound)", {"cube.model": "point"}),
     ("discrete asperities (coupled caps)", {"contact.model": "discrete"}),
-    ("disc spot rule (a sqrt(f))", {"oxide.spot_rule": "disc"}),
+    ("disc spot rule (a sqrt(f); the default)", {"oxide.spot_rule": "disc"}),
 )
 #: Beside the chain: asperity spots in place of expected spots (step 5).
 SIDE = ("asperity spots (instead of expected)", 4, {"contact.spots": "asperities"})
