@@ -1,4 +1,5 @@
-"""Figures of stage 1: the Greenwood–Tripp solution (paper Fig. 4) and its spots (Fig. 5).
+"""Figures of stage 1: the Greenwood–Tripp solution (paper Fig. 4) and its spots (Fig. 5: the
+cell grid's spots, or on discrete asperities one surface of the pool's touching asperities).
 
 The Hertz references exist for the sphere only: other indenters draw the Greenwood–Tripp
 curves alone and say so. The spot maps are rasters (one pixel per cell), so they cost the
@@ -97,7 +98,38 @@ def _contact_radius(one: xr.Dataset) -> float:
     return float(one.r.values[inside[-1]])
 
 
+def _fig5_discrete(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
+    """Fig. 5 on discrete asperities: the first surface of the pool, each touching asperity a dot
+    at its position, its area and grey level growing with its contact radius."""
+    count = int(ds.spot_count.values[0])
+    x_mm, y_mm = ds.asperity_x.values[0, :count] * 1e3, ds.asperity_y.values[0, :count] * 1e3
+    radius = ds.asperity_radius.isel(surface=0).transpose("delta", "spot").values[:, :count] / scenario.cell_size
+    top = float(radius.max()) if radius.size and radius.max() > 0 else 1.0
+    reach = 1.1 * float(np.max(np.abs(np.concatenate([x_mm, y_mm])))) if count else 1.0
+    fig, axes = plt.subplots(1, 4, figsize=size(2, 2.3), layout="constrained")
+    for ax, target in zip(axes, FIG5_DELTAS):
+        k = _nearest(ds, target)
+        one = ds.isel(delta=k)
+        on = radius[k] > 0
+        image = ax.scatter(x_mm[on], y_mm[on], s=40.0 * (radius[k, on] / top) ** 2 + 1.0, c=radius[k, on],
+                           cmap="Greys", vmin=0.0, vmax=top, edgecolors="0.3", linewidths=0.3)
+        for value, colour, dashes, label in ((one.hertz_radius, "C3", "--", "Hertz"),
+                                             (one.holm_radius, "C1", "-", "Holm–Greenwood (Greenwood–Tripp)")):
+            if np.isfinite(value):
+                ax.add_patch(plt.Circle((0, 0), 1e3 * float(value), fill=False, color=colour, ls=dashes, lw=1.2,
+                                        label=label))
+        ax.set(xlim=(-reach, reach), ylim=(-reach, reach), aspect="equal", xlabel=LABELS["x"],
+               title=f"$F$ = {float(one.force):.0f} N, {int(on.sum())} spots")
+    axes[0].set_ylabel(LABELS["y"])
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncols=2)
+    fig.colorbar(image, ax=axes, shrink=0.8, label=LABELS["spot_radius"])
+    fig.suptitle(f"Contact spots of one rough surface of the pool, dot size and grey level by radius ({scenario.name})")
+    return save(fig, path)
+
+
 def _fig5(ds: xr.Dataset, scenario: Scenario, path: Path) -> Path:
+    if "asperity_radius" in ds:
+        return _fig5_discrete(ds, scenario, path)
     x_mm = ds.x.values * 1e3
     half = 0.5 * (x_mm[1] - x_mm[0]) if x_mm.size > 1 else 0.5
     extent = (x_mm[0] - half, x_mm[-1] + half, x_mm[0] - half, x_mm[-1] + half)
