@@ -185,6 +185,8 @@ def _hand_cases() -> list[Case]:
              ("contact.spots = 'disc'", "mean_area", "expected", "asperities")),
         Case("negative lattice constant", ("contact", "--set", "cube.model=point", "--set", "cube.lattice_constant=-1"),
              ("cube.lattice_constant = -1", ">= 0")),
+        Case("discrete asperities out of reach", ("contact", "--set", "roughness.sigma=1e-9"),
+             ("contact.model = 'discrete'", "0.0377 asperities", "roughness.sigma = 1e-09", "paper_gt")),
         Case("lattice term with Greenwood's form", ("contact", "--config", "paper_gt", "--set", "cube.lattice_constant=3.9"),
              ("cube.lattice_constant = 3.9", "cube.model = 'point'")),
         Case("area weights with expected spots", ("contact", "--config", "paper_gt", "--set", "cube.weights=area"),

@@ -19,7 +19,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-import sys
 import warnings
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -422,24 +421,27 @@ def check_resources(scenario: Scenario, workers: int | None = None, memory: floa
     return estimates
 
 
-def prepare(command: str, scenario: Scenario, workers: int | None = None) -> Scenario:
+def prepare(command: str, scenario: Scenario, workers: int | None = None) -> tuple[Scenario, list[str]]:
     """What the CLI runs before any work: resource checks and the resolution of ``auto`` domains.
 
-    Returns ``scenario`` unchanged for commands that need neither (params, predict, roughness).
+    Returns the resolved scenario (``scenario`` unchanged for commands that need neither: params,
+    predict, roughness) and the plan's lines to announce once the other checks have passed (the
+    stages' estimates that exceed :data:`ANNOUNCE_AFTER`).
     """
     if command in _NO_DOMAINS:
-        return scenario
+        return scenario, []
     from pipeline.before_work.domains import resolve
 
     check_resources(scenario, workers)
     resolved = resolve(scenario)
+    notes = []
     for e in check_resources(resolved, workers):
         if e.seconds > ANNOUNCE_AFTER and command in (e.stage, "run"):
             span = (f" (adaptive ensemble: {e.seconds_range[0]:.3g} .. {e.seconds_range[1]:.3g} s)"
                     if e.seconds_range else "")
-            print(f"plan: {e.stage} estimated at ~{e.seconds:.3g} s{span} and ~{e.peak_bytes / 2**20:.0f} MiB peak "
-                  f"(`g2tom plan` for all stages)", file=sys.stderr)
-    return resolved
+            notes.append(f"plan: {e.stage} estimated at ~{e.seconds:.3g} s{span} and ~{e.peak_bytes / 2**20:.0f} MiB "
+                         f"peak (`g2tom plan` for all stages)")
+    return resolved, notes
 
 
 def format_plan(scenario: Scenario, workers: int | None = None) -> list[str]:

@@ -28,7 +28,8 @@ import numpy as np
 
 from pipeline.config import ConfigError, Scenario
 
-__all__ = ["check_data_dir", "check_output_file", "check_scheduler", "check_scene", "scene_forces", "preflight"]
+__all__ = ["check_data_dir", "check_output_file", "check_scheduler", "check_scene", "check_discrete_reach",
+           "scene_forces", "preflight"]
 
 #: Seconds a scheduler has to accept a TCP connection.
 CONNECT_TIMEOUT = 2.0
@@ -128,14 +129,23 @@ def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
                           f"({reason}); start one with `dask scheduler` or drop --scheduler") from None
 
 
-def scene_forces(scenario: Scenario, data_dir: str | Path | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Force (N) of every approach and how many cells touch at each.
+def scene_forces(scenario: Scenario, data_dir: str | Path | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Force (N) of every approach, how many cells touch at each, and how many asperities
+    Greenwood-Tripp expects to touch at each (``2 pi eta int P(z > h(r)) r dr``).
 
     From the contact stage's output when it is current; otherwise from a coarse solve of
     the same scene (``COARSE_NODES`` radial nodes, about 0.05 s), where a cell touches when
     its centre lies inside the outermost node with a nonzero area fraction.
     """
+    from scipy.special import erfc
+
+    from pipeline.physics.radial_grid import force_weights
     from pipeline.store import stage_path, stage_problem  # xarray only when needed
+
+    rough = scenario.roughness
+
+    def asperities(r: np.ndarray, h: np.ndarray) -> np.ndarray:
+        return 0.5 * erfc(h / (rough.sigma * np.sqrt(2.0))) @ (rough.eta * force_weights(r))
 
     if data_dir is not None and stage_problem(data_dir, "contact", scenario) is None:
         import xarray as xr
@@ -143,7 +153,8 @@ def scene_forces(scenario: Scenario, data_dir: str | Path | None = None) -> tupl
         with xr.open_dataset(stage_path(data_dir, "contact"), engine="netcdf4") as ds:
             force = ds["force"].values
             touching = np.count_nonzero(ds["spot_radius"].values > 0, axis=(-2, -1))
-        return force, touching
+            expected = asperities(ds["r"].values, ds["separation"].transpose("delta", "r").values)
+        return force, touching, expected
     from pipeline.physics.grid import cell_centres
     from pipeline.physics.spots import cell_radii
     from pipeline.stages import contact
@@ -156,7 +167,26 @@ def scene_forces(scenario: Scenario, data_dir: str | Path | None = None) -> tupl
     x = cell_centres(scenario.n_cells, scenario.cell_size)
     r_cells = np.sort(cell_radii(x, x).ravel())
     edge = np.array([r[np.nonzero(a > 0)[0][-1]] if (a > 0).any() else -1.0 for a in f["area"]])
-    return f["force"], np.searchsorted(r_cells, edge, side="right")
+    return f["force"], np.searchsorted(r_cells, edge, side="right"), asperities(r, f["h"])
+
+
+#: Fewest asperities Greenwood-Tripp expects to touch at the heaviest approach for the discrete
+#: model: below, a surface of the pool often has none within reach of the sphere (P = e^-5 for
+#: none at all), and its solve would need approaches beyond the asperity disc it was drawn on.
+DISCRETE_MIN_TOUCHING = 5.0
+
+
+def check_discrete_reach(scenario: Scenario, expected: float) -> None:
+    """Refuse ``contact.model = "discrete"`` on a scene where fewer than :data:`DISCRETE_MIN_TOUCHING`
+    asperities are expected to touch at the heaviest approach (``expected``, from :func:`scene_forces`)."""
+    if not expected >= DISCRETE_MIN_TOUCHING:
+        rough = scenario.roughness
+        raise ConfigError(
+            f"contact.model = 'discrete' is out of range for this scene: about {expected:.3g} asperities are expected "
+            f"to touch at the heaviest approach (roughness.sigma = {rough.sigma!r} m, roughness.eta = {rough.eta!r} "
+            f"m^-2, loading.delta_min = {scenario.loading.delta_min!r} sigma); it needs at least "
+            f"{DISCRETE_MIN_TOUCHING:g} (fewer leave surfaces with no asperity in reach): use contact.model = "
+            f"'greenwood_tripp' (the scenario paper_gt)")
 
 
 def check_scene(scenario: Scenario, data_dir: str | Path | None = None) -> None:
@@ -167,8 +197,10 @@ def check_scene(scenario: Scenario, data_dir: str | Path | None = None) -> None:
     ConfigError
         Naming the parameter at fault, its value and the range the scene allows.
     """
-    force, touching = scene_forces(scenario, data_dir)
+    force, touching, expected = scene_forces(scenario, data_dir)
     heaviest = int(np.argmin(scenario.deltas))
+    if scenario.contact.model == "discrete":
+        check_discrete_reach(scenario, float(expected[heaviest]))
     rough, loading = scenario.roughness, scenario.loading
     if not np.isfinite(force).all():
         raise ConfigError(

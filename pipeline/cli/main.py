@@ -23,7 +23,6 @@ from pipeline.config import (  # noqa: E402
     STAGE_INPUTS, ConfigError, Scenario, load_scenario, parameter_table)
 from pipeline.errors import StaleInputError  # noqa: E402
 from pipeline.before_work.plan import prepare  # noqa: E402
-from pipeline.before_work.preflight import check_data_dir  # noqa: E402
 from pipeline.before_work.surrogate_grid import check_surrogate_grid  # noqa: E402
 
 if TYPE_CHECKING:
@@ -43,8 +42,7 @@ STAGES: dict[str, str] = {
 
 #: Commands that run the surrogate stage: its limits on the oxide grid are checked before any stage.
 _REACH_SURROGATE = ("run", "surrogate")
-#: Commands whose plan :func:`prepare` may announce (a stage's or the run's estimate).
-_ANNOUNCED = ("contact", "oxide", "cube", "fits", "surrogate", "run")
+
 
 
 def _scenario_args(p: argparse.ArgumentParser) -> None:
@@ -85,6 +83,8 @@ def _preflight(args: argparse.Namespace, scenario: Scenario, scene: bool = True)
     from pipeline.before_work.preflight import preflight
 
     preflight(scenario, args.data_dir, getattr(args, "scheduler", None), scene=scene)
+    for note in getattr(args, "plan_notes", ()):  # the plan, once every check has passed
+        print(note, file=sys.stderr)
 
 
 def _run_stage(name: str, scenario: Scenario, args: argparse.Namespace) -> None:
@@ -296,7 +296,7 @@ def _cmd_validate(args: argparse.Namespace, scenario: Scenario) -> None:
     if args.overrides:
         raise ConfigError("g2tom validate runs its own validation scene (the default set or --quick): --set is "
                           "not used by it; leave it out (--config names the scenario whose model part 2 validates)")
-    from pipeline.before_work.preflight import check_scheduler
+    from pipeline.before_work.preflight import check_data_dir, check_scheduler
     from pipeline.reference.validate import chosen_set, output_folder, run_validation
 
     vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads)
@@ -495,11 +495,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             check_surrogate_grid(scenario)
         if getattr(args, "workers", None) is not None:
             _options(args)  # --workers is checked before the plan is announced
-        if args.command in _ANNOUNCED:
-            check_data_dir(args.data_dir)  # and the data directory: an error line comes alone
         with warnings.catch_warnings():
             warnings.simplefilter("default")
-            scenario = prepare(args.command, scenario, getattr(args, "workers", None))
+            scenario, args.plan_notes = prepare(args.command, scenario, getattr(args, "workers", None))
         args.handler(args, scenario)
     except ConfigError as exc:
         print(f"g2tom: error: {exc}", file=sys.stderr)
