@@ -75,15 +75,18 @@ DISCRETE_SOLVE_S = 3.85e-3
 #: Greenwood pairs are the previous code's, whose Greenwood form did not change (not remeasured).
 DISCRETE_XI_MAP_S = {("disc", "point"): 2 * 92.05 / 188_200, ("centre", "point"): 3.0e-3 * 2 * 92.05 / 188_200 / 5.5e-3,
                      ("disc", "greenwood"): 2.8e-3, ("centre", "greenwood"): 0.75e-3}
-#: Measured stage times of the default `make run` from a fresh clone (2026-11-25, 2 cores,
-#: data/timings.json) over what the models below give for it (the fits' and the surrogate's
-#: models had not been fitted to a run): contact 2.12 s / 0.604 s, oxide 2.27 s / 1.14 s, fits
-#: 17.4 s / 0.578 s; the surrogate's 11.6 s over its 108 cells (the joint fit's cross-validated
-#: order search grows with the grid).
-CONTACT_CALIBRATION = 2.12 / 0.604
-OXIDE_CALIBRATION = 2.27 / 1.14
-FITS_CALIBRATION = 17.4 / 0.578
-SURROGATE_SECONDS_PER_CELL = 11.6 / 108
+#: Stage times of the two default studies measured on 2026-11-27 (2 cores; each stage run by
+#: `g2tom STAGE --no-progress` in a fresh data directory, the seconds it reports) over what the
+#: models below give for them: contact 0.95 s (paper_gt) over 0.604 s, the discrete pool's part
+#: being DISCRETE_SOLVE_S's (11.07 s for `paper`); oxide 1.30 s and 0.84 s (the same oxide stage,
+#: two windows) over 1.14 s; fits 9.89 s (paper_gt, 361,115 realizations) over 0.578 s and 4.92 s
+#: (paper, 146,587) over 0.2345 s, their geometric mean; the surrogate 3.31 s and 3.60 s over its
+#: 108 cells (the joint fit's cross-validated order search grows with the grid). The previous
+#: calibration (2026-11-25: 2.12, 2.27, 17.4 and 11.6 s for paper_gt) was 1.7-3.5x over today's.
+CONTACT_CALIBRATION = 0.95 / 0.604
+OXIDE_CALIBRATION = (1.30 + 0.84) / 2 / 1.14
+FITS_CALIBRATION = (9.89 / 0.578 * 4.92 / 0.2345) ** 0.5
+SURROGATE_SECONDS_PER_CELL = (3.31 + 3.60) / 2 / 108
 #: The fits stage's peak resident memory in the default run (2,812 MiB, process tree sampled every
 #: 0.1 s, 2026-11-25) less BASE_BYTES, over what the model gives for it (7,527 MiB: the model
 #: counts three full copies of the results where the bootstrap holds about one).
