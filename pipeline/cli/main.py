@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Callable, NoReturn, Sequence  # noqa: E402
 
 from pipeline import __version__  # noqa: E402
 from pipeline.config import (  # noqa: E402
-    STAGE_INPUTS, ConfigError, Scenario, load_scenario, parameter_table)
+    STAGE_INPUTS, ConfigError, Scenario, bundled_scenarios, load_scenario, parameter_table)
 from pipeline.errors import StaleInputError  # noqa: E402
 from pipeline.before_work.plan import prepare  # noqa: E402
 from pipeline.before_work.surrogate_grid import check_surrogate_grid  # noqa: E402
@@ -49,7 +49,7 @@ def _scenario_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--config",
         default="paper",
-        help="bundled scenario name (paper, published) or a TOML file (default: paper)",
+        help=f"bundled scenario name ({', '.join(bundled_scenarios())}) or a TOML file (default: paper)",
     )
     p.add_argument(
         "--set",
