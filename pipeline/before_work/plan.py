@@ -23,7 +23,7 @@ import warnings
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from pipeline.config import AUTO, ConfigError, Scenario, load_scenario
+from pipeline.config import AUTO, CHUNK_BYTES, ConfigError, Scenario, load_scenario
 
 __all__ = ["StageEstimate", "Realizations", "realizations", "estimate", "check_resources", "prepare", "format_plan",
            "format_validate_plan", "available_memory", "MAX_SECONDS", "BASE_BYTES"]
@@ -244,7 +244,6 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     """
     from pipeline.physics.interaction import FFT_FROM, block_size, work_bytes_per_map
     from pipeline.physics.interaction_fft import padded_length
-    from pipeline.stages.oxide import CHUNK_BYTES
 
     n = _cells(scenario)
     cells = float(n) * n
