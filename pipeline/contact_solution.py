@@ -1,9 +1,11 @@
-"""The Greenwood–Tripp solve of a scenario: its indenter profile, radial grid and solution.
+"""The Greenwood–Tripp solve of a scenario: its indenter profile, radial grid, solution and fields.
 
 The glue between a :class:`pipeline.config.Scenario` and :mod:`pipeline.physics.greenwood_tripp`,
 shared by the contact stage and by :mod:`pipeline.before_work.domains` (which sizes the domains from a fast
 solve before any stage runs); no I/O. :func:`solve` needs numeric domains
-(:func:`pipeline.before_work.domains.resolve` resolves ``auto``).
+(:func:`pipeline.before_work.domains.resolve` resolves ``auto``;
+:func:`pipeline.before_work.domains.solve_scenario` resolves, then solves). :func:`fields` are the
+solution's separation, pressure, area fraction and force, as the contact stage stores them.
 """
 
 from __future__ import annotations
@@ -13,9 +15,10 @@ import numpy as np
 from pipeline.config import AUTO, Scenario
 from pipeline.physics import greenwood_tripp as gt
 from pipeline.physics import radial_grid as rg
+from pipeline.physics.asperity import area_fraction, asperity_pressure
 from pipeline.physics.indenter import profile
 
-__all__ = ["indenter_profile", "radial_grid", "layer", "solve", "solve_with_stiffness"]
+__all__ = ["indenter_profile", "radial_grid", "layer", "solve", "solve_with_stiffness", "fields"]
 
 #: Rigid gap (units of sigma) beyond which the graded grid coarsens: F_{3/2}(4) / F_{3/2}(0) ~ 1e-5.
 _FINE_GAP = 4.0
@@ -100,3 +103,18 @@ def solve_with_stiffness(scenario: Scenario) -> tuple[np.ndarray, list[gt.Soluti
     r, matrix, sols = _solve(scenario, None, None, None)
     stiffness = gt.stiffness(matrix, indenter_profile(scenario, r), scenario.deltas, layer(scenario), sols, r)
     return r, sols, stiffness
+
+
+def fields(scenario: Scenario, r: np.ndarray, sols: list[gt.Solution]) -> dict[str, np.ndarray]:
+    """Displacement, separation (m), pressure (Pa), area fraction over (delta, r), force (N)."""
+    rough = scenario.roughness
+    u = np.stack([s.displacement for s in sols])
+    h = np.asarray(scenario.deltas)[:, None] + indenter_profile(scenario, r)[None, :] + u
+    p = asperity_pressure(h, rough.sigma, rough.eta, rough.beta, scenario.material.E_star)
+    return {
+        "u": u,
+        "h": h,
+        "p": p,
+        "area": area_fraction(h, rough.sigma, rough.eta, rough.beta),
+        "force": p @ rg.force_weights(r),
+    }

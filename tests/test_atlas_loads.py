@@ -23,8 +23,7 @@ GRID = {"contact.model": "greenwood_tripp", "oxide.spot_rule": "centre", "cube.m
 def test_every_scene_spans_the_force_range_by_the_stage_solve(mu, Pi) -> None:
     """The steps found by the fast solve, solved by the contact stage's own solve (720 nodes, the
     resolved domains), reach past F' 0.05 and 20 by less than twice the margin."""
-    from pipeline.contact_solution import solve
-    from pipeline.stages.contact import fields
+    from pipeline.contact_solution import fields, solve
 
     scenario = resolve(scene_scenario(load_scenario("atlas"), Scene("x", mu, Pi, False)))
     force = fields(scenario, *solve(scenario))["force"] / scenario.force_scale

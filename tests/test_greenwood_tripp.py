@@ -23,7 +23,7 @@ from pipeline.physics.hertz import (
 )
 from pipeline.physics.indenter import profile
 from pipeline.contact_solution import indenter_profile, layer as _layer, radial_grid
-from pipeline.stages.contact import solve_scenario
+from pipeline.before_work.domains import solve_scenario
 
 
 def _quad_displacement(r_nodes, p_nodes, r, e_star):

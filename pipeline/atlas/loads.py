@@ -54,7 +54,7 @@ _POLISH = 6
 def probe(scenario: Scenario, delta_sigma: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """A fast Greenwood–Tripp solve at the approaches ``delta_sigma`` (units of sigma, lightest
     first, evenly spaced), warm-started along them: radial nodes (m) and the contact stage's fields
-    (:func:`pipeline.stages.contact.fields`: separation ``h``, pressure ``p``, ``force``, ...).
+    (:func:`pipeline.contact_solution.fields`: separation ``h``, pressure ``p``, ``force``, ...).
 
     Parameters
     ----------
@@ -68,8 +68,7 @@ def probe(scenario: Scenario, delta_sigma: np.ndarray) -> tuple[np.ndarray, dict
     ValueError
         If the approaches are not evenly spaced and decreasing.
     """
-    from pipeline.contact_solution import indenter_profile, solve
-    from pipeline.stages.contact import fields
+    from pipeline.contact_solution import fields, indenter_profile, solve
 
     deltas = np.atleast_1d(np.asarray(delta_sigma, float))
     sigma = scenario.roughness.sigma

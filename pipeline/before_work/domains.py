@@ -15,7 +15,8 @@ The elastic displacement only widens the gap (``u >= 0``), so the rigid gap boun
 spots from above: the solve's grid is sized from the rigid gap, and the window from the
 solution. An explicit value that truncates the contact by more than the tolerance is refused
 with the value needed. The resolved scenario carries plain numbers, so its config hashes and
-every output's provenance record them.
+every output's provenance record them. :func:`solve_scenario` is the Greenwood–Tripp solve of a
+scenario whose domains may still be ``auto`` (resolved first).
 """
 
 from __future__ import annotations
@@ -30,10 +31,11 @@ from pipeline.before_work.window_checks import check_domains
 from pipeline.config import AUTO, ConfigError, Scenario
 from pipeline.contact_solution import indenter_profile, solve
 from pipeline.physics import crops, spot_models, spots
+from pipeline.physics import greenwood_tripp as gt
 from pipeline.physics.asperity import log_asperity_integral
 from pipeline.physics.grid import cell_centres
 
-__all__ = ["Domains", "resolve", "domains", "estimate_cells", "check_cell_count", "MARGIN_CELLS",
+__all__ = ["Domains", "resolve", "solve_scenario", "domains", "estimate_cells", "check_cell_count", "MARGIN_CELLS",
            "TOLERANCE_FLOOR"]
 
 #: Cells between the window's corner centres and r_max (room for the spline at the corners).
@@ -279,3 +281,14 @@ def resolve(scenario: Scenario) -> Scenario:
     out = dataclasses.replace(scenario, contact=contact)
     check_domains(out)
     return out
+
+
+def solve_scenario(
+    scenario: Scenario, *, solver: str | None = None, n_radial: int | None = None,
+    tolerance: float | None = None,
+) -> tuple[np.ndarray, list[gt.Solution]]:
+    """Radial nodes (m) and the Greenwood–Tripp solution of every approach, ``auto`` domains
+    resolved first (see :func:`pipeline.contact_solution.solve`)."""
+    if scenario.contact.r_max == AUTO:
+        scenario = resolve(scenario)
+    return solve(scenario, solver=solver, n_radial=n_radial, tolerance=tolerance)

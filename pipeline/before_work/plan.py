@@ -23,10 +23,10 @@ import warnings
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from pipeline.config import AUTO, ConfigError, Scenario, load_scenario
+from pipeline.config import AUTO, CHUNK_BYTES, ConfigError, Scenario, load_scenario
 
 __all__ = ["StageEstimate", "Realizations", "realizations", "estimate", "check_resources", "prepare", "format_plan",
-           "format_validate_plan", "available_memory", "MAX_SECONDS", "BASE_BYTES"]
+           "available_memory", "MAX_SECONDS", "BASE_BYTES"]
 
 #: Resident memory of a g2tom stage's process with its small arrays: the surrogate stage of the
 #: default run peaked at 217 MiB (process tree, sampled every 0.1 s; 2026-11-25).
@@ -247,7 +247,6 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     """
     from pipeline.physics.interaction import FFT_FROM, block_size, work_bytes_per_map
     from pipeline.physics.interaction_fft import padded_length
-    from pipeline.stages.oxide import CHUNK_BYTES
 
     n = _cells(scenario)
     cells = float(n) * n
@@ -485,12 +484,3 @@ def format_plan(scenario: Scenario, workers: int | None = None) -> list[str]:
     span = f"   ({low:.3g} .. {high:.3g} s)" if counts.adaptive else ""
     lines.append(f"{'total':10s} {'':>14s} {total:10.3g} s{span} (model constants measured on a 2-core machine)")
     return lines
-
-
-def format_validate_plan(config: str = "paper", workers: int | None = None) -> list[str]:
-    """Lines of ``g2tom plan --validate``: ``g2tom validate``'s default set on both surfaces, part 2
-    validating ``config`` (cases, grids, the estimate: :mod:`pipeline.reference.cost`)."""
-    from pipeline.reference.validate import SURFACES, chosen_set, plan_lines
-
-    parallel = max(1, workers or os.cpu_count() or 1)
-    return [line for surface in SURFACES for line in plan_lines(chosen_set(False, surface), config, parallel)]

@@ -155,15 +155,16 @@ def scene_forces(scenario: Scenario, data_dir: str | Path | None = None) -> tupl
             touching = np.count_nonzero(ds["spot_radius"].values > 0, axis=(-2, -1))
             expected = asperities(ds["r"].values, ds["separation"].transpose("delta", "r").values)
         return force, touching, expected
+    from pipeline.before_work.domains import solve_scenario
+    from pipeline.contact_solution import fields
     from pipeline.physics.grid import cell_centres
     from pipeline.physics.spots import cell_radii
-    from pipeline.stages import contact
 
     coarse = dataclasses.replace(
         scenario, contact=dataclasses.replace(
             scenario.contact, n_radial=min(scenario.contact.n_radial, COARSE_NODES)))
-    r, sols = contact.solve_scenario(coarse)
-    f = contact.fields(coarse, r, sols)
+    r, sols = solve_scenario(coarse)
+    f = fields(coarse, r, sols)
     x = cell_centres(scenario.n_cells, scenario.cell_size)
     r_cells = np.sort(cell_radii(x, x).ravel())
     edge = np.array([r[np.nonzero(a > 0)[0][-1]] if (a > 0).any() else -1.0 for a in f["area"]])

@@ -15,8 +15,10 @@ from typing import Any
 
 import numpy as np
 
+from pipeline.before_work.domains import solve_scenario
 from pipeline.bench.timing import median_time
 from pipeline.config import Scenario
+from pipeline.contact_solution import fields
 from pipeline.stages import contact
 
 __all__ = ["run"]
@@ -29,8 +31,8 @@ _REFINEMENT = 4
 
 def _case(scenario: Scenario, solver: str, reference: np.ndarray) -> dict[str, Any]:
     """Time one solver on the scenario's grid; its force error against ``reference`` (N)."""
-    seconds, (r, sols) = median_time(lambda: contact.solve_scenario(scenario, solver=solver), _REPEATS)
-    force = contact.fields(scenario, r, sols)["force"]
+    seconds, (r, sols) = median_time(lambda: solve_scenario(scenario, solver=solver), _REPEATS)
+    force = fields(scenario, r, sols)["force"]
     return {
         "solver": solver,
         "n_radial": len(r),
@@ -52,8 +54,8 @@ def run(scenario: Scenario) -> dict[str, Any]:
     """Time the stage and its solvers and measure force errors; JSON-ready figures."""
     n_ref = _REFINEMENT * scenario.contact.n_radial
     start = time.perf_counter()
-    r_ref, sols_ref = contact.solve_scenario(scenario, solver="newton", n_radial=n_ref, tolerance=1e-12)
-    reference = contact.fields(scenario, r_ref, sols_ref)["force"]
+    r_ref, sols_ref = solve_scenario(scenario, solver="newton", n_radial=n_ref, tolerance=1e-12)
+    reference = fields(scenario, r_ref, sols_ref)["force"]
     ref_seconds = time.perf_counter() - start
     stage_seconds, _ = median_time(lambda: contact.build(scenario), _REPEATS)
     cases = [_case(scenario, solver, reference) for solver in ("newton", "fixed_point")]

@@ -22,7 +22,8 @@ import numpy as np
 
 from pipeline.compute import ComputeOptions
 from pipeline.config import Scenario
-from pipeline.before_work.domains import resolve
+from pipeline.before_work.domains import resolve, solve_scenario
+from pipeline.contact_solution import fields
 from pipeline.physics import discrete_contact as dc
 from pipeline.physics.discrete_resistance import resistances
 from pipeline.scene import FieldSource
@@ -49,8 +50,8 @@ def _solve(settings: dict[str, Any], k: int, all_candidates: bool = False) -> tu
 
 
 def _contact(scenario: Scenario) -> tuple[dict[str, Any], np.ndarray]:
-    r, sols = contact.solve_scenario(scenario)
-    forces = contact.fields(scenario, r, sols)["force"]
+    r, sols = solve_scenario(scenario)
+    forces = fields(scenario, r, sols)["force"]
     radius, served = contact_discrete.domain(scenario, min(scenario.deltas))
     rough = scenario.roughness
     settings = {"seed": scenario.oxide.seed, "radius": radius, "eta": rough.eta, "sigma": rough.sigma,

@@ -47,18 +47,18 @@ def _replace(scenario: Scenario, section: str, **changes: Any) -> Scenario:
 
 def _force_and_area(scenario: Scenario, r: np.ndarray, sols: list) -> tuple[np.ndarray, np.ndarray]:
     """Force (N) and real contact area (m^2) of every approach."""
-    from pipeline.stages import contact
+    from pipeline.contact_solution import fields
 
-    f = contact.fields(scenario, r, sols)
+    f = fields(scenario, r, sols)
     return f["force"], f["area"] @ force_weights(r)
 
 
 def contact_frontier(scenario: Scenario) -> list[dict[str, Any]]:
     """Every contact setting with its time (s) and largest relative force and area errors."""
-    from pipeline.stages import contact
+    from pipeline.before_work.domains import solve_scenario
 
     n_ref = 4 * scenario.contact.n_radial
-    r, sols = contact.solve_scenario(scenario, solver="newton", n_radial=n_ref, tolerance=1e-12)
+    r, sols = solve_scenario(scenario, solver="newton", n_radial=n_ref, tolerance=1e-12)
     ref_force, ref_area = _force_and_area(scenario, r, sols)
     settings = [("newton", n, "graded", tol) for n in NODES for tol in TOLERANCES]
     settings += [("fixed_point", 20, "uniform", scenario.contact.fixed_point_tolerance),
@@ -67,7 +67,7 @@ def contact_frontier(scenario: Scenario) -> list[dict[str, Any]]:
     for solver, n, grid, tol in settings:
         s = _replace(scenario, "contact", radial_grid=grid)
         seconds, (r, sols) = _median_time(
-            lambda s=s, n=n, tol=tol, solver=solver: contact.solve_scenario(
+            lambda s=s, n=n, tol=tol, solver=solver: solve_scenario(
                 s, solver=solver, n_radial=n, tolerance=tol if solver == "newton" else None))
         force, area = _force_and_area(s, r, sols)
         rows.append({

@@ -19,7 +19,7 @@ import numpy as np
 from pipeline.bench.timing import median_time
 from pipeline.config import Scenario
 from pipeline.predict.predictor import predict
-from pipeline.predict.surrogate_file import CURVE_TABLE, GRID_TABLES, STEP_TABLES, SurrogateTables
+from pipeline.stages.surrogate_file import CURVE_TABLE, GRID_TABLES, STEP_TABLES, SurrogateTables
 from pipeline.scene import scene_groups
 
 __all__ = ["run"]

@@ -234,9 +234,11 @@ def _cmd_params(args: argparse.Namespace, scenario: Scenario) -> None:
 
 
 def _cmd_plan(args: argparse.Namespace, scenario: Scenario) -> None:
-    from pipeline.before_work.plan import format_plan, format_validate_plan
+    from pipeline.before_work.plan import format_plan
 
     if args.validate:
+        from pipeline.reference.validate import format_validate_plan
+
         print("\n".join(format_validate_plan(args.config, args.workers)))
         return
 

@@ -21,7 +21,7 @@ from pipeline.predict.answer import choose_surrogate, predict_with
 from pipeline.predict.atlas import NOT_IN_ATLAS
 from pipeline.predict.domain import with_measured_roughness
 from pipeline.predict.queries import OUTPUT_COLUMNS, check_values
-from pipeline.predict.surrogate_file import SurrogateTables
+from pipeline.stages.surrogate_file import SurrogateTables
 
 __all__ = ["predict_cli", "to_csv", "to_json", "to_table", "INPUT_ALIASES", "TABLE_COLUMNS"]
 
@@ -119,7 +119,7 @@ def to_csv(ds: xr.Dataset) -> str:
 def to_json(ds: xr.Dataset) -> str:
     """Prediction dataset as one JSON object: who answered, each column's unit and meaning, and one
     object per query (NaN as null, infinities as "inf")."""
-    from pipeline.predict.surrogate_file import _encode
+    from pipeline.stages.surrogate_file import _encode
 
     columns = _columns(ds)
     rows = [dict(zip(map(_label, columns), values)) for values in zip(*(_encode(c) for c in columns.values()))]

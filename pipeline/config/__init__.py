@@ -22,7 +22,7 @@ from pipeline.config.loading import (
     USED_ONLY_WITH, bundled_scenarios, load_scenario, parameter_table, read_input_text, use_cross_checks)
 from pipeline.config.scenario import SECTIONS, STAGE_EXCLUDED, STAGE_INPUTS, STAGE_UPSTREAM, Scenario
 from pipeline.config.scene_sections import Contact, Indenter, Loading, Material, Roughness
-from pipeline.config.study_sections import Atlas, Cube, Fits, Oxide, Surrogate
+from pipeline.config.study_sections import CHUNK_BYTES, Atlas, Cube, Fits, Oxide, Surrogate
 
 __all__ = [
     "AUTO",
@@ -50,4 +50,5 @@ __all__ = [
     "Fits",
     "Surrogate",
     "Atlas",
+    "CHUNK_BYTES",
 ]

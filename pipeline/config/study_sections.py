@@ -10,7 +10,12 @@ from dataclasses import dataclass
 
 from pipeline.config.declare import param
 
-__all__ = ["Oxide", "Cube", "Fits", "Surrogate", "Atlas"]
+__all__ = ["Oxide", "Cube", "Fits", "Surrogate", "Atlas", "CHUNK_BYTES"]
+
+#: Largest float32 fields of one oxide chunk (all lambdas), bytes: ``oxide.chunk`` realizations a
+#: chunk, fewer where their fields would pass it; bounds the oxide stage's peak on large grids (and
+#: its estimate before work).
+CHUNK_BYTES = 64 * 2**20
 
 
 @dataclass(frozen=True)

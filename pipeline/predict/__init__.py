@@ -1,7 +1,9 @@
 """The predictor (Eq. 27) from a written surrogate: ``predictor`` (R_el and its band), ``queries``
-(the grid of queries and their ranges), ``domain`` (which surface a query is on),
-``surrogate_file`` (surrogate.json), ``atlas`` (the shipped atlas surrogate over mu and Pi) and
-``answer`` (the surrogate ``g2tom predict`` chooses for a surface, and its answer).
+(the grid of queries and their ranges), ``domain`` (which surface a query is on), ``atlas`` (the
+shipped atlas surrogate over mu and Pi) and ``answer`` (the surrogate ``g2tom predict`` chooses
+for a surface, and its answer); ``chain`` runs a measured surface's height map through the
+roughness and the answer against its full field. ``surrogate.json`` is read as the surrogate stage
+writes it (:mod:`pipeline.stages.surrogate_file`).
 
 :func:`predict_resistance` is the one call for Python users (also ``pipeline.predict_resistance``).
 It is imported on first use, so that importing a submodule stays as light as it was.

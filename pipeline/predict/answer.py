@@ -21,7 +21,7 @@ from pipeline.predict import atlas as atlas_file  # atlas_file.shipped_path, loo
 from pipeline.predict.atlas import NOT_IN_ATLAS, AtlasSurrogate, is_atlas_document, load_atlas_surrogate, predict_atlas
 from pipeline.predict.domain import check_surface, with_measured_roughness
 from pipeline.predict.predictor import predict
-from pipeline.predict.surrogate_file import SurrogateTables, load_surrogate
+from pipeline.stages.surrogate_file import SurrogateTables, load_surrogate
 
 __all__ = ["choose_surrogate", "own_surrogate_path", "predict_resistance", "predict_with", "surface_scenario"]
 

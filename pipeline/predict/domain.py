@@ -15,7 +15,7 @@ from pathlib import Path
 from pipeline.config import ConfigError, Scenario
 from pipeline.predict.queries import ExtrapolationWarning
 from pipeline.scene import scene_groups
-from pipeline.predict.surrogate_file import SurrogateTables
+from pipeline.stages.surrogate_file import SurrogateTables
 
 __all__ = ["GROUP_TOLERANCE", "answered_by", "check_surface", "with_measured_roughness"]
 

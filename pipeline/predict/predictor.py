@@ -29,7 +29,7 @@ total, and a warning says so. Queries outside the fitted ranges of xi, lambda or
 unless ``extrapolate=True`` (then an :class:`ExtrapolationWarning`); where the local surrogate
 error exceeds ``warn_error`` a :class:`SurrogateErrorWarning` is issued.
 
-The predictor works from ``surrogate.json`` alone (:mod:`pipeline.predict.surrogate_file`: the
+The predictor works from ``surrogate.json`` alone (:mod:`pipeline.stages.surrogate_file`: the
 coefficients, coordinate maps, scale conventions, fitted ranges and band tables) and gives the
 same numbers from ``surrogate.nc``. The command ``g2tom predict`` is :mod:`pipeline.cli.predict`.
 """
@@ -53,7 +53,7 @@ from pipeline.predict.queries import (
     queries,
 )
 from pipeline.scene import scene_groups
-from pipeline.predict.surrogate_file import GRID_TABLES, STEP_TABLES, SurrogateTables, load_surrogate
+from pipeline.stages.surrogate_file import GRID_TABLES, STEP_TABLES, SurrogateTables, load_surrogate
 
 __all__ = ["ExtrapolationWarning", "SurrogateErrorWarning", "SurrogateTables", "load_surrogate", "predict", "MODELS",
            "OUTPUT_COLUMNS"]

@@ -16,6 +16,7 @@ section ``validate.md`` under ``<out>``.
 from __future__ import annotations
 
 import dataclasses
+import os
 import sys
 import time
 from contextlib import ExitStack
@@ -40,8 +41,8 @@ FORCE_AGREEMENT = 1e-4
 #: One process, no cluster: the library's default.
 SERIAL = ComputeOptions(workers=1, progress=False)
 
-__all__ = ["available_discretizations", "default_of", "plan_lines", "run_validation", "chosen_set",
-           "output_folder", "SURFACES", "CaseRunner", "SERIAL"]
+__all__ = ["available_discretizations", "default_of", "plan_lines", "format_validate_plan", "run_validation",
+           "chosen_set", "output_folder", "SURFACES", "CaseRunner", "SERIAL"]
 
 
 def available_discretizations(surface: str = "gw") -> tuple[str, ...]:
@@ -299,6 +300,13 @@ def chosen_set(quick: bool, surface: str = "gw", realizations: int | None = None
     if loads is not None:
         changes["deltas"] = tuple(float(d) for d in np.linspace(max(base.deltas), min(base.deltas), loads))
     return dataclasses.replace(base, **changes)
+
+
+def format_validate_plan(config: str = "paper", workers: int | None = None) -> list[str]:
+    """Lines of ``g2tom plan --validate``: ``g2tom validate``'s default set on both surfaces, part 2
+    validating ``config`` (cases, grids, the estimate: :mod:`pipeline.reference.cost`)."""
+    parallel = max(1, workers or os.cpu_count() or 1)
+    return [line for surface in SURFACES for line in plan_lines(chosen_set(False, surface), config, parallel)]
 
 
 def output_folder(data_dir: Path, surface: str) -> Path:

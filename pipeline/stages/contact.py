@@ -13,46 +13,18 @@ import numpy as np
 import xarray as xr
 
 from pipeline.compute import ComputeOptions, single_threaded
-from pipeline.config import AUTO, ConfigError, Scenario
-from pipeline.contact_solution import indenter_profile, radial_grid, solve, solve_with_stiffness
+from pipeline.config import ConfigError, Scenario
+from pipeline.contact_solution import fields, indenter_profile, solve_with_stiffness
 from pipeline.before_work.domains import resolve
 from pipeline.physics import greenwood_tripp as gt
-from pipeline.physics import radial_grid as rg
 from pipeline.physics import hertz, spot_models, spots
-from pipeline.physics.asperity import area_fraction, asperity_pressure
+from pipeline.physics.asperity import area_fraction
 from pipeline.physics.grid import cell_centres
 from pipeline.stages import contact_discrete
 from pipeline.stages.schema import SCHEMA, SPOT_RADIUS_LONG_NAMES, labelled
 from pipeline.store import write_dataset
 
-__all__ = ["build", "run", "radial_grid", "indenter_profile", "solve_scenario", "fields"]
-
-
-
-def solve_scenario(
-    scenario: Scenario, *, solver: str | None = None, n_radial: int | None = None,
-    tolerance: float | None = None,
-) -> tuple[np.ndarray, list[gt.Solution]]:
-    """Radial nodes (m) and the Greenwood–Tripp solution of every approach, ``auto`` domains
-    resolved first (see :func:`pipeline.contact_solution.solve`)."""
-    if scenario.contact.r_max == AUTO:
-        scenario = resolve(scenario)
-    return solve(scenario, solver=solver, n_radial=n_radial, tolerance=tolerance)
-
-
-def fields(scenario: Scenario, r: np.ndarray, sols: list[gt.Solution]) -> dict[str, np.ndarray]:
-    """Displacement, separation (m), pressure (Pa), area fraction over (delta, r), force (N)."""
-    rough = scenario.roughness
-    u = np.stack([s.displacement for s in sols])
-    h = np.asarray(scenario.deltas)[:, None] + indenter_profile(scenario, r)[None, :] + u
-    p = asperity_pressure(h, rough.sigma, rough.eta, rough.beta, scenario.material.E_star)
-    return {
-        "u": u,
-        "h": h,
-        "p": p,
-        "area": area_fraction(h, rough.sigma, rough.eta, rough.beta),
-        "force": p @ rg.force_weights(r),
-    }
+__all__ = ["build", "run"]
 
 
 def _cell_spots(scenario: Scenario, r: np.ndarray, u: np.ndarray, nodal_area: np.ndarray,

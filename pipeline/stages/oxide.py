@@ -28,7 +28,7 @@ import xarray as xr
 
 from pipeline import store
 from pipeline.compute import ComputeOptions, compute, single_threaded
-from pipeline.config import Scenario
+from pipeline.config import CHUNK_BYTES, Scenario
 from pipeline.physics.grid import cell_centres
 from pipeline.scene import FieldSource, bands, threshold_block
 from pipeline.stages.schema import variable
@@ -88,8 +88,6 @@ class RecordedFields:
         return self.source.thresholds(index, realizations)
 
 
-#: Largest float32 fields of one chunk (all lambdas), bytes: bounds the stage's peak on large grids.
-CHUNK_BYTES = 64 * 2**20
 #: Working memory of the field synthesis, bytes per cell and realization (measured: 336 MiB
 #: beyond the result for 50 fields of 229^2 cells), and the most a chunk's synthesis may use.
 FIELD_WORK_PER_CELL = 128

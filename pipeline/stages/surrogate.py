@@ -1,7 +1,7 @@
 """Stage 5: the surrogate of alpha and gamma (Eq. 26) and the predictor's tables.
 
 Reads ``fits.nc``; writes ``surrogate.nc``, ``surrogate.json`` (everything the predictor
-needs, see :mod:`pipeline.predict.surrogate_file`), ``table3.csv`` and ``table3.md``.
+needs, see :mod:`pipeline.stages.surrogate_file`), ``table3.csv`` and ``table3.md``.
 
 Two methods (``surrogate.method``):
 
@@ -57,10 +57,10 @@ from pipeline.fitting import surrogate_joint as sg_joint
 from pipeline.fitting import surrogate_paper as sg_paper
 from pipeline.stages.schema import SURROGATE_COORDINATES, array
 from pipeline.stages.schema import attrs as schema_attrs
+from pipeline.stages.surrogate_file import SurrogateTables
 from pipeline.stages.surrogate_tables import band_tables, curve_tables
 from pipeline.stages.table3 import PARAMETERS, table3_csv, table3_markdown
 from pipeline.store import atomic_path, read_stage, write_dataset
-from pipeline.predict.surrogate_file import SurrogateTables
 from pipeline.scene import scene_groups
 
 __all__ = ["build", "run", "PARAMETERS"]

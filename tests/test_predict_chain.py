@@ -1,5 +1,5 @@
 """The measured-surface chain: the random-process surface's height map -> roughness -> predict,
-against its full field (pipeline/atlas/chain.py), on the quick validation set."""
+against its full field (pipeline/predict/chain.py), on the quick validation set."""
 
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.atlas import chain
 from pipeline.atlas import run as atlas
 from pipeline.atlas.fit import write_atlas_surrogate
 from pipeline.config import load_scenario
+from pipeline.predict import chain
 from tests.test_atlas import BASE, DESIGN
 
 

@@ -3,7 +3,9 @@
 Everything :func:`pipeline.predict.predict` needs, as plain numpy arrays: the coefficients of
 alpha(xi, lambda) and gamma(xi, lambda), each cell's curve model, the fitted ranges and the band's
 tables, read from ``surrogate.nc`` or written to and read from ``surrogate.json`` (NaN as null,
-infinities as "inf"; floats round-trip exactly), so that a prediction needs no netCDF.
+infinities as "inf"; floats round-trip exactly), so that a prediction needs no netCDF. The
+surrogate stage (:mod:`pipeline.stages.surrogate`) writes the file, the predictor
+(:mod:`pipeline.predict`) reads it.
 """
 
 from __future__ import annotations

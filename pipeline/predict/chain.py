@@ -20,7 +20,7 @@ what a profilometer would measure. For every realization of the validation set:
 
 ``chain.nc`` (beside ``validate.nc``) holds the ratios per (case, realization, load) and their
 geometric means and standard errors of ln over the realizations per load; the report prints them
-(``analysis/report_chain.py``). Run ``python -m pipeline.atlas.chain --data-dir DATA`` after
+(``analysis/report_chain.py``). Run ``python -m pipeline.predict.chain --data-dir DATA`` after
 ``g2tom validate --surface random_process`` (``--quick`` too).
 """
 
@@ -242,9 +242,9 @@ def run_chain(data_dir: str | Path, surrogate: str | Path | None = None) -> Path
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m pipeline.atlas.chain [--data-dir DATA] [--surrogate FILE]``: exit 0, or 2 with one
+    """``python -m pipeline.predict.chain [--data-dir DATA] [--surrogate FILE]``: exit 0, or 2 with one
     ``g2tom: error:`` line."""
-    parser = argparse.ArgumentParser(prog="python -m pipeline.atlas.chain", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m pipeline.predict.chain", description=__doc__.splitlines()[0])
     parser.add_argument("--data-dir", default="data", help="data directory (its validate_random_process/validate.nc)")
     parser.add_argument("--surrogate", default=None, help="a surrogate file to answer with (default: the atlas's)")
     args = parser.parse_args(argv)
