@@ -11,6 +11,7 @@ import pytest
 from pipeline.atlas import cost, loads
 from pipeline.atlas.design import (BUDGET_SECONDS, MIN_POOL, POOL_TOUCHING, AtlasDesign, Scene, design_scenes,
                                    format_atlas_plan, scene_scenario, wall_seconds)
+from pipeline.before_work import discrete_cost
 from pipeline.before_work.domains import resolve
 from pipeline.config import load_scenario
 
@@ -61,7 +62,7 @@ def test_expected_counts_against_the_discrete_pool() -> None:
 
     base = load_scenario("atlas", {**DISCRETE, "contact.surfaces": 16, "loading.n_delta": 6})
     scenario = resolve(scene_scenario(base, Scene("x", 7.07, 20.0, False)))
-    touching, candidates = loads.expected_counts(scenario)
+    touching, candidates = discrete_cost.expected_counts(scenario)
     pool = contact.build(scenario)
     measured = (pool["asperity_radius"].values > 0).sum(axis=-1).mean(axis=0)
     assert np.all(np.diff(touching) > 0) and np.all(candidates > touching)
@@ -74,7 +75,7 @@ def test_the_discrete_pool_shrinks_with_the_touching_count() -> None:
     small = scene_scenario(base, Scene("x", 20.0, 5.0, False))
     large = scene_scenario(base, Scene("x", 2.0, 300.0, False))
     assert small.contact.surfaces == base.contact.surfaces == 256
-    heaviest = loads.expected_touching(large)[-1]
+    heaviest = discrete_cost.expected_touching(large)[-1]
     assert large.contact.surfaces == max(MIN_POOL, int(np.ceil(POOL_TOUCHING / heaviest))) < 256
     # grid spots keep the base's pool (it is not used)
     assert scene_scenario(load_scenario("atlas", GRID), Scene("x", 2.0, 300.0, False)).contact.surfaces == 256

@@ -207,3 +207,35 @@ def test_every_stage_time_within_1_5x_of_the_measured_default_run(name):
     for estimate in plan.estimate(resolve(load_scenario(name))):
         measured = MEASURED_DEFAULT_RUN[name][estimate.stage]
         assert 1 / 1.5 <= estimate.seconds / measured <= 1.5, (estimate.stage, estimate.seconds, measured)
+
+
+def test_the_default_scene_s_discrete_models_are_the_recorded_ones() -> None:
+    """plan scales the default's measured discrete costs by the cost models' ratio; the ratio is 1 on
+    the default scene only if the recorded model values are the models' own there."""
+    from pipeline.before_work.discrete_cost import expected_counts, field_seconds, surface_seconds
+
+    touching, candidates = expected_counts(load_scenario("paper"))
+    assert surface_seconds(touching, candidates) == pytest.approx(plan.DEFAULT_SURFACE_MODEL_S, rel=1e-12)
+    assert field_seconds(touching, candidates) == pytest.approx(plan.DEFAULT_FIELD_MODEL_S, rel=1e-12)
+    assert touching.size == plan.DEFAULT_STEPS
+
+
+def test_a_scene_with_more_touching_asperities_is_planned_dearer_by_the_models_ratio() -> None:
+    """sigma 100 um instead of 20 um: ~2x the touching asperities and 5x the candidates at the
+    heaviest step; the pool's and the cube's estimates grow by the discrete cost models' ratios (the
+    previous plan kept the default's 10.8 s and 92 s whatever the scene)."""
+    from pipeline.before_work.discrete_cost import expected_counts, field_seconds, surface_seconds
+
+    default, rough = load_scenario("paper"), load_scenario("paper", {"roughness.sigma": 1e-4})
+    grid = {e.stage: e.seconds for e in plan.estimate(load_scenario("paper_gt", {"roughness.sigma": 1e-4}), workers=2)}
+    base = {e.stage: e.seconds for e in plan.estimate(default, workers=2)}
+    est = {e.stage: e.seconds for e in plan.estimate(rough, workers=2)}
+    touching, candidates = expected_counts(rough)
+    assert touching[-1] > 1.5 * expected_counts(default)[0][-1]
+    pool = 256 * 20 * plan.DISCRETE_SOLVE_S / 2 * surface_seconds(touching, candidates) / plan.DEFAULT_SURFACE_MODEL_S
+    assert est["contact"] - grid["contact"] == pytest.approx(pool, rel=1e-9)
+    ratio = field_seconds(touching, candidates) / plan.DEFAULT_FIELD_MODEL_S
+    assert ratio > 3
+    assert est["cube"] == pytest.approx(base["cube"] * ratio, rel=1e-9)
+    lines = plan.format_plan(resolve(rough), workers=2)
+    assert any(f"expects {touching[-1]:.0f} touching and {candidates[-1]:.0f} candidates" in line for line in lines)

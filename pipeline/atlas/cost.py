@@ -1,28 +1,18 @@
 """What an atlas scene costs, before any work: the model behind ``g2tom plan --atlas``.
 
 On Greenwood–Tripp's grid spots a scene costs what :func:`pipeline.before_work.plan.estimate` says
-for its cell grid. On discrete asperities (``contact.model = "discrete"``) the cost grows with the
-count of touching asperities, not with a grid: every surface of the pool is a dense Newton solve
-over its touching caps at every load step, and every oxide field a dense point-interaction solve
-over the conducting spots at every step. Both are modelled per load step from Greenwood–Tripp's
-expected count of touching asperities N_s and of candidates C_s
-(:func:`pipeline.atlas.loads.expected_counts`, within a few % of the discrete pool's at the heavy
-steps):
+for its cell grid. On discrete asperities (``contact.model = "discrete"``) the pool and every oxide
+field cost what :mod:`pipeline.before_work.discrete_cost` models from Greenwood–Tripp's expected
+counts of touching asperities N_s and candidates C_s per load step, and the fields are counted here:
 
-* contact: ``surfaces x sum_s (CONTACT_STEP_S + CONTACT_SQUARE_S C_s^2 + CONTACT_CUBE_S N_s^3)``,
-  C_s the expected candidates (asperities above the undeformed indenter);
-* cube: ``fields x sum_s (FIELD_STEP_S + FIELD_SQUARE_S N_s^2 + FIELD_MIXED_S C_s N_s + FIELD_CUBE_S N_s^3)``,
-  a field
-  being one oxide realization at one lambda, all its xi at once (the point solves of a step share
-  one factorization);
 * fields: per lambda the realizations of its slowest xi: the measured counts of the adaptive
   paper_discrete-like scene (:data:`REFERENCE_FIELDS`, 5 % target) scaled by
   min(1, (:data:`REFERENCE_TOUCHING` / N_mid)^:data:`FIELDS_EXPONENT`) (more spots average more:
   fewer realizations reach the target; fewer spots were not measured to need more) and by
   (0.05 / target)^2, between ``oxide.min_realizations`` and ``oxide.max_realizations``.
 
-The constants are one thread's CPU seconds measured on this 2-core machine (2026-11-27, small
-fixed ensembles of design scenes d02, d12, d22, d24: mu 7.07 at Pi 5, 40, 320, and mu 50 at
+The constants are one thread's CPU seconds or counts measured on this 2-core machine (2026-11-27,
+small fixed ensembles of design scenes d02, d12, d22, d24: mu 7.07 at Pi 5, 40, 320, and mu 50 at
 Pi 320; see each constant).
 """
 
@@ -36,23 +26,6 @@ from pipeline.config import Scenario
 
 __all__ = ["SceneCost", "scene_cost", "discrete_fields"]
 
-#: Contact pool, one surface: seconds per load step, per candidate squared (the coupling kernel
-#: over the candidates) and per touching asperity cubed (the Newton factorizations), each summed
-#: over the steps; fitted exactly to d12: 0.085 s per surface of 20 steps (candidates <= 832,
-#: N <= 249), d22: 11.4 s (6,657, 1,993), d24 (mu 50, Pi 320): 1.94 s (4,792, 469).
-CONTACT_STEP_S = 2.0e-4
-CONTACT_SQUARE_S = 2.15e-8
-CONTACT_CUBE_S = 2.35e-10
-#: Cube, one field (all xi): seconds per step, per N^2, per candidate x N and per N^3 of a step,
-#: fitted exactly to the compiled (numba) cube of 01f6c8d after a warm-up call: d02: 2.31 ms per field
-#: (N <= 31), d12: 11.1 ms (N <= 249), d24: 54.9 ms (N <= 469), d22: 1.99 s (N <= 1,993); fixed
-#: ensembles of 16-64 realizations at lambda 1 and 23. The factorizations' N^3 shows from N ~ 1,000
-#: (the batched-NumPy cube before it took 1.35 s per field at d22, 5.2 ms at d02); beyond N ~ 2,000
-#: (mu ~ 1 at Pi 320: N ~ 6,000) the model is extrapolated.
-FIELD_STEP_S = 1.1e-4
-FIELD_SQUARE_S = 1.18e-8
-FIELD_MIXED_S = 2.07e-9
-FIELD_CUBE_S = 5.4e-11
 #: Fields per lambda of the reference scene (the adaptive discrete d12, mu 7.07, Pi 40, target
 #: 5 %, min 400 realizations): the realizations of the slowest xi at lambda 1, 3, 7, 11, 17, 23.
 REFERENCE_FIELDS = (400, 506, 431, 630, 1225, 2016)
@@ -114,8 +87,8 @@ def discrete_fields(scenario: Scenario, touching: np.ndarray) -> float:
 def scene_cost(scenario: Scenario) -> SceneCost:
     """The modelled CPU seconds of one atlas scene (its scenario as :func:`pipeline.atlas.design.scene_scenario`
     makes it), single-threaded."""
-    from pipeline.atlas.loads import expected_counts
     from pipeline.before_work import plan
+    from pipeline.before_work.discrete_cost import expected_counts, field_seconds, surface_seconds
 
     if scenario.contact.model != "discrete":
         estimates = {e.stage: e.seconds for e in plan.estimate(scenario, 1)}
@@ -123,11 +96,8 @@ def scene_cost(scenario: Scenario) -> SceneCost:
         return SceneCost(None, 0, counts.fields * len(scenario.oxide.lambda_), estimates["contact"],
                          estimates["cube"], estimates["oxide"] + estimates["fits"] + SCENE_S)
     n, c = expected_counts(scenario)
-    steps = float(n.size)
-    contact = scenario.contact.surfaces * (CONTACT_STEP_S * steps + CONTACT_SQUARE_S * float(np.sum(c**2))
-                                           + CONTACT_CUBE_S * float(np.sum(n**3)))
-    per_field = (FIELD_STEP_S * steps + FIELD_SQUARE_S * float(np.sum(n**2)) + FIELD_MIXED_S * float(np.sum(c * n))
-                 + FIELD_CUBE_S * float(np.sum(n**3)))
+    contact = scenario.contact.surfaces * surface_seconds(n, c)
+    per_field = field_seconds(n, c)
     fields = discrete_fields(scenario, n)
     cells = len(scenario.oxide.xi) * len(scenario.oxide.lambda_)
     other = SCENE_S + FITS_S * fields / len(scenario.oxide.lambda_) * cells * scenario.fits.n_bootstrap / 100

@@ -141,7 +141,8 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
     ConfigError
         If the scene's approaches cannot be found (naming the scene).
     """
-    from pipeline.atlas.loads import END_MARGIN, FORCE_RANGE, expected_touching, loading_for_range
+    from pipeline.atlas.loads import END_MARGIN, FORCE_RANGE, loading_for_range
+    from pipeline.before_work.discrete_cost import expected_touching
 
     surface = surface_from_groups(scene.mu, scene.Pi, base.roughness.sigma, base.indenter.radius)
     roughness = dataclasses.replace(base.roughness, eta=surface.eta, beta=surface.beta)

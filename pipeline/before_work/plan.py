@@ -68,6 +68,8 @@ DISCRETE_TYPICAL_LARGEST = 9_569
 #: One thread's time per discrete surface and load step of the contact solve (s): the median of
 #: `g2tom bench --only discrete` on the paper's scene, 3.85 ms.
 DISCRETE_SOLVE_S = 3.85e-3
+#: Load steps of the default scene, on which DISCRETE_SOLVE_S and DISCRETE_XI_MAP_S were measured.
+DEFAULT_STEPS = 20
 #: One thread's time per (xi, field) of the cube on discrete spots (s) by (oxide.spot_rule,
 #: cube.model): (disc, point) from the default `make run` from a fresh clone (2026-11-27, 2 cores,
 #: compiled point solves and disc shares: the cube took 92.05 s, 2 x 92.05 / 188,200); the
@@ -75,6 +77,14 @@ DISCRETE_SOLVE_S = 3.85e-3
 #: Greenwood pairs are the previous code's, whose Greenwood form did not change (not remeasured).
 DISCRETE_XI_MAP_S = {("disc", "point"): 2 * 92.05 / 188_200, ("centre", "point"): 3.0e-3 * 2 * 92.05 / 188_200 / 5.5e-3,
                      ("disc", "greenwood"): 2.8e-3, ("centre", "greenwood"): 0.75e-3}
+#: The discrete cost models (:mod:`pipeline.before_work.discrete_cost`) on the default scene (its
+#: 20 steps' expected counts: at most 210 touching asperities and 754 candidates), CPU seconds of
+#: one thread: one surface of the pool, one oxide field's point solves (every xi). Another scene's
+#: discrete pool and cube are estimated as the default's measured constants above times the
+#: models' ratio, so the cost follows the touching count (dense solves: N^3 at large N).
+DEFAULT_SURFACE_MODEL_S = 0.06703674989319493
+DEFAULT_HEAVIEST_TOUCHING = 210
+DEFAULT_FIELD_MODEL_S = 0.008316928707799072
 #: Stage times of the two default studies measured on 2026-11-27 (2 cores; each stage run by
 #: `g2tom STAGE --no-progress` in a fresh data directory, the seconds it reports) over what the
 #: models below give for them: contact 0.95 s (paper_gt) over 0.604 s, the discrete pool's part
@@ -292,8 +302,13 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     per_realization = per_map + per_field
     cube_s = per_map * counts.computed + per_field * counts.fields
     if scenario.contact.model == "discrete":  # the pool's solves; one dense solve set per (xi, field)
-        contact_s += DISCRETE_SOLVE_S * scenario.contact.surfaces * n_delta / t
-        per_realization = n_xi * n_lam * DISCRETE_XI_MAP_S[(ox.spot_rule, scenario.cube.model)] / t
+        from pipeline.before_work.discrete_cost import expected_counts, field_seconds, surface_seconds
+
+        touching, candidates = expected_counts(scenario)
+        surface_scale = surface_seconds(touching, candidates) / DEFAULT_SURFACE_MODEL_S
+        field_scale = field_seconds(touching, candidates) / DEFAULT_FIELD_MODEL_S
+        contact_s += DISCRETE_SOLVE_S * DEFAULT_STEPS * surface_scale * scenario.contact.surfaces / t
+        per_realization = n_xi * n_lam * DISCRETE_XI_MAP_S[(ox.spot_rule, scenario.cube.model)] * field_scale / t
         cube_s = per_realization * counts.computed
     # fits: the cube's terms, the bootstrap's resample counts and means.
     boot = scenario.fits.n_bootstrap
@@ -472,6 +487,15 @@ def format_plan(scenario: Scenario, workers: int | None = None) -> list[str]:
             f"typical {counts.computed * n_cells:.0f}; times below are typical "
             f"(range: every cell at oxide.min_realizations .. at oxide.max_realizations); so is memory "
             f"(in brackets: a cell at oxide.max_realizations)")
+    if scenario.contact.model == "discrete":
+        from pipeline.before_work.discrete_cost import expected_counts
+
+        touching, candidates = expected_counts(scenario)
+        lines.append(
+            f"discrete asperities: {scenario.contact.surfaces} surfaces; Greenwood-Tripp expects "
+            f"{touching[-1]:.0f} touching and {candidates[-1]:.0f} candidates at the heaviest step (the default "
+            f"scene: {DEFAULT_HEAVIEST_TOUCHING}); the pool's and the cube's times scale from the default's by the "
+            f"discrete cost models (dense solves, ~N^3 at large N)")
     lines.append(f"{'stage':10s} {'peak memory':>14s} {'time':>12s}")
     total, low, high = 0.0, 0.0, 0.0
     for e in estimate(scenario, workers):

@@ -1,0 +1,147 @@
+"""What a scene of discrete asperities costs, before any work: Greenwood–Tripp's expected counts
+and the cost model of the discrete contact pool and cube.
+
+On discrete asperities (``contact.model = "discrete"``) the cost grows with the count of
+touching asperities, not with a cell grid: every surface of the pool is a dense Newton solve over
+its touching caps at every load step, and every oxide field a dense point-interaction solve over
+the conducting spots at every step. Both are modelled per load step from Greenwood–Tripp's
+expected count of touching asperities N_s and of candidates C_s (:func:`expected_counts`, one
+fast solve, :func:`probe`; within a few % of the discrete pool's at the heavy steps):
+
+* one surface of the pool: ``sum_s (CONTACT_STEP_S + CONTACT_SQUARE_S C_s^2 + CONTACT_CUBE_S N_s^3)``
+  (:func:`surface_seconds`), C_s the expected candidates (asperities above the undeformed indenter);
+* one oxide field (one realization at one lambda, all its xi at once: the point solves of a step
+  share one factorization): ``sum_s (FIELD_STEP_S + FIELD_SQUARE_S N_s^2 + FIELD_MIXED_S C_s N_s
+  + FIELD_CUBE_S N_s^3)`` (:func:`field_seconds`).
+
+The constants are one thread's CPU seconds measured on a 2-core machine (2026-11-27, small fixed
+ensembles of atlas design scenes d02, d12, d22, d24: mu 7.07 at Pi 5, 40, 320, and mu 50 at Pi 320;
+see each constant). ``g2tom plan`` scales its estimates of the default scene by these models'
+ratio (:mod:`pipeline.before_work.plan`); ``g2tom plan --atlas`` adds them up per scene
+(:mod:`pipeline.atlas.cost`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+
+from pipeline.config import Scenario
+
+__all__ = ["probe", "expected_counts", "expected_touching", "surface_seconds", "field_seconds"]
+
+#: Radial nodes of the fast solve.
+_N_RADIAL = 400
+#: Rigid gap (units of sigma) at the fast solve's outer radius: f_{3/2}(12) ~ 1e-33 of the peak.
+_FAR_GAP = 12.0
+#: Contact pool, one surface: seconds per load step, per candidate squared (the coupling kernel
+#: over the candidates) and per touching asperity cubed (the Newton factorizations), each summed
+#: over the steps; fitted exactly to d12: 0.085 s per surface of 20 steps (candidates <= 832,
+#: N <= 249), d22: 11.4 s (6,657, 1,993), d24 (mu 50, Pi 320): 1.94 s (4,792, 469).
+CONTACT_STEP_S = 2.0e-4
+CONTACT_SQUARE_S = 2.15e-8
+CONTACT_CUBE_S = 2.35e-10
+#: Cube, one field (all xi): seconds per step, per N^2, per candidate x N and per N^3 of a step,
+#: fitted exactly to the compiled (numba) cube of 01f6c8d after a warm-up call: d02: 2.31 ms per field
+#: (N <= 31), d12: 11.1 ms (N <= 249), d24: 54.9 ms (N <= 469), d22: 1.99 s (N <= 1,993); fixed
+#: ensembles of 16-64 realizations at lambda 1 and 23. The factorizations' N^3 shows from N ~ 1,000
+#: (the batched-NumPy cube before it took 1.35 s per field at d22, 5.2 ms at d02); beyond N ~ 2,000
+#: (mu ~ 1 at Pi 320: N ~ 6,000) the model is extrapolated.
+FIELD_STEP_S = 1.1e-4
+FIELD_SQUARE_S = 1.18e-8
+FIELD_MIXED_S = 2.07e-9
+FIELD_CUBE_S = 5.4e-11
+#: The expected touching and candidate counts found so far, by the parameters that set them.
+_COUNTS: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def probe(scenario: Scenario, delta_sigma: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """A fast Greenwood–Tripp solve at the approaches ``delta_sigma`` (units of sigma, lightest
+    first, evenly spaced), warm-started along them: radial nodes (m) and the contact stage's fields
+    (:func:`pipeline.contact_solution.fields`: separation ``h``, pressure ``p``, ``force``, ...).
+
+    Parameters
+    ----------
+    scenario
+        The surface, sphere and material (its loading and domains are replaced).
+    delta_sigma
+        Approaches delta / sigma, decreasing (negative: interpenetration).
+
+    Raises
+    ------
+    ValueError
+        If the approaches are not evenly spaced and decreasing.
+    """
+    from pipeline.contact_solution import fields, indenter_profile, solve
+
+    deltas = np.atleast_1d(np.asarray(delta_sigma, float))
+    sigma = scenario.roughness.sigma
+    r = scenario.indenter.radius * 1e-6
+    while (deltas.min() * sigma + float(indenter_profile(scenario, np.array([r]))[0])) < _FAR_GAP * sigma:
+        r *= 1.5
+    probe_scenario = dataclasses.replace(
+        scenario,
+        loading=dataclasses.replace(scenario.loading, delta_max=float(deltas[0]), delta_min=float(deltas[-1]),
+                                    n_delta=deltas.size),
+        contact=dataclasses.replace(scenario.contact, r_max=r / scenario.indenter.radius, window=1.0,
+                                    radial_grid="graded", n_radial=_N_RADIAL, solver="newton"))
+    if not np.allclose(np.array(probe_scenario.deltas) / sigma, deltas, rtol=0, atol=1e-9):
+        raise ValueError("the approaches must be evenly spaced and decreasing")
+    nodes, sols = solve(probe_scenario, tolerance=1e-10)
+    return nodes, fields(probe_scenario, nodes, sols)
+
+
+def expected_counts(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
+    """Greenwood–Tripp's expected count of touching asperities at each of the scenario's
+    approaches, 2 pi eta integral P(z > h(r)) r dr with h the solved separation (z ~ N(0, sigma^2)),
+    and of candidates, the asperities above the undeformed indenter (h the rigid gap: the discrete
+    solve's candidate set, displacements only lowering asperities), by one fast solve."""
+    from scipy.special import erfc
+
+    from pipeline.contact_solution import indenter_profile
+    from pipeline.physics.greenwood_tripp import force_weights
+
+    flat = scenario.flat()
+    key = json.dumps({k: v for k, v in flat.items() if k.startswith(("material.", "roughness.", "indenter.",
+                                                                      "loading."))}, sort_keys=True)
+    if key not in _COUNTS:
+        sigma = scenario.roughness.sigma
+        deltas = np.asarray(scenario.deltas)
+        nodes, solved = probe(scenario, deltas / sigma)
+        weights = scenario.roughness.eta * force_weights(nodes)
+        rigid = deltas[:, None] + indenter_profile(scenario, nodes)[None, :]
+        counts = tuple(0.5 * erfc(gap / (sigma * math.sqrt(2.0))) @ weights for gap in (solved["h"], rigid))
+        _COUNTS[key] = counts
+    return _COUNTS[key][0].copy(), _COUNTS[key][1].copy()
+
+
+def expected_touching(scenario: Scenario) -> np.ndarray:
+    """Greenwood–Tripp's expected count of touching asperities at each approach (:func:`expected_counts`)."""
+    return expected_counts(scenario)[0]
+
+
+def surface_seconds(touching: np.ndarray, candidates: np.ndarray) -> float:
+    """Modelled CPU seconds (one thread) of one surface of the discrete pool over its load steps.
+
+    Parameters
+    ----------
+    touching, candidates
+        (steps,) expected touching asperities and candidates per load step (:func:`expected_counts`).
+    """
+    return (CONTACT_STEP_S * touching.size + CONTACT_SQUARE_S * float(np.sum(candidates**2))
+            + CONTACT_CUBE_S * float(np.sum(touching**3)))
+
+
+def field_seconds(touching: np.ndarray, candidates: np.ndarray) -> float:
+    """Modelled CPU seconds (one thread) of one oxide field's point solves over the load steps, every xi.
+
+    Parameters
+    ----------
+    touching, candidates
+        (steps,) expected touching asperities and candidates per load step (:func:`expected_counts`).
+    """
+    return (FIELD_STEP_S * touching.size + FIELD_SQUARE_S * float(np.sum(touching**2))
+            + FIELD_MIXED_S * float(np.sum(candidates * touching)) + FIELD_CUBE_S * float(np.sum(touching**3)))
