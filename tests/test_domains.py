@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pipeline.before_work import domains
-from pipeline.config import AUTO, ConfigError, load_scenario
+from pipeline.config import AUTO, ConfigError, ResolvedScenario, Scenario, load_scenario
 from pipeline.before_work.domains import resolve
 from pipeline.physics import constriction
 from pipeline.physics.spot_geometry import SpotGeometry
@@ -38,7 +38,7 @@ def test_auto_window_gives_the_resistance_of_a_much_larger_window(overrides):
     big = resolve(load_scenario("paper_gt", {**FAST, **overrides, "contact.window": 1.6 * auto.contact.window}))
     assert big.n_cells >= 1.5 * auto.n_cells
     # the same radial domain (the larger one) for both, so only the window differs
-    same_domain = dataclasses.replace(auto, contact=dataclasses.replace(auto.contact, r_max=big.contact.r_max))
+    same_domain = Scenario.of(auto, contact=dataclasses.replace(auto.contact, r_max=big.contact.r_max))
     r_auto, r_big = _clean_resistance(same_domain), _clean_resistance(big)
     tol = auto.cube.crop_tolerance
     np.testing.assert_allclose(r_auto, r_big, rtol=tol, atol=0)
@@ -47,7 +47,7 @@ def test_auto_window_gives_the_resistance_of_a_much_larger_window(overrides):
     assert d.n_cells_needed == auto.n_cells
     smaller = dataclasses.replace(auto.contact, window=(auto.n_cells - 4) * auto.cell_size / auto.indenter.radius)
     with pytest.raises(ConfigError, match="contact.window = .* truncates the contact"):
-        resolve(dataclasses.replace(auto, contact=smaller))
+        resolve(Scenario.of(auto, contact=smaller))
 
 
 def test_auto_radial_domain_holds_the_window_and_the_pressure():
@@ -71,7 +71,7 @@ def test_too_small_explicit_window_is_refused_with_the_value_needed(overrides):
 
 def test_explicit_values_are_kept_exactly_and_hashes_use_resolved_values():
     published = load_scenario("published")
-    assert resolve(published) == published  # both explicit: bit-for-bit the same scenario
+    assert Scenario.of(resolve(published)) == published  # both explicit: bit-for-bit the same values
     paper = load_scenario("paper_gt")
     assert paper.contact.window == AUTO and paper.contact.r_max == AUTO
     resolved = resolve(paper)
@@ -79,6 +79,24 @@ def test_explicit_values_are_kept_exactly_and_hashes_use_resolved_values():
                                    "contact.r_max": resolved.contact.r_max})
     assert resolved.config_hash("oxide") == same.config_hash("oxide")
     assert resolved.config_hash("cube") == same.config_hash("cube")
+
+
+def test_resolve_gives_a_resolved_scenario_and_is_idempotent():
+    for name in ("paper_gt", "published"):  # auto domains, and both explicit
+        scenario = load_scenario(name, FAST)
+        resolved = resolve(scenario)
+        assert type(scenario) is Scenario and type(resolved) is ResolvedScenario
+        again = resolve(resolved)
+        assert type(again) is ResolvedScenario and again == resolved
+    assert resolved.n_cells == 57  # published: 0.4 R* sqrt(eta) = 56.6 cells -> the nearest odd count
+
+
+def test_replace_keeps_the_resolved_type_and_of_drops_it(small):
+    fewer = dataclasses.replace(small, oxide=dataclasses.replace(small.oxide, xi=[0.5]))
+    assert type(fewer) is ResolvedScenario and fewer.n_cells == small.n_cells
+    plain = Scenario.of(small, contact=dataclasses.replace(small.contact, window=AUTO))
+    assert type(plain) is Scenario and plain.flat() == {**small.flat(), "contact.window": AUTO}
+    assert type(resolve(plain)) is ResolvedScenario
 
 
 def test_unresolved_window_has_no_cell_count():

@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from pipeline.before_work.window_checks import check_domains
-from pipeline.config import AUTO, ConfigError, Scenario
+from pipeline.config import AUTO, ConfigError, ResolvedScenario, Scenario, odd_cells
 from pipeline.contact_solution import indenter_profile, solve
 from pipeline.physics import crops, spot_models, spots
 from pipeline.physics import greenwood_tripp as gt
@@ -120,7 +120,7 @@ def _solve_heaviest(scenario: Scenario, r_max: float) -> tuple[np.ndarray, np.nd
     loading = dataclasses.replace(scenario.loading, delta_max=scenario.loading.delta_min, n_delta=1)
     contact = dataclasses.replace(scenario.contact, r_max=r_max / scenario.indenter.radius,
                                   radial_grid="graded", window=1.0)
-    fast = dataclasses.replace(scenario, loading=loading, contact=contact)
+    fast = Scenario.of(scenario, loading=loading, contact=contact)  # plain: this window is not the resolved one
     r, sols = solve(fast, solver="newton", n_radial=_N_RADIAL, tolerance=1e-8)
     return r, sols[0].displacement
 
@@ -230,7 +230,7 @@ def domains(scenario: Scenario) -> Domains:
     window_needed = n_needed * h / radius_star
     c = scenario.contact
     window = _round_up(window_needed) if c.window == AUTO else float(c.window)
-    n_used = _odd_cells(window * radius_star / h)
+    n_used = odd_cells(window * radius_star, h)
     if n_used < n_needed:
         k = (n_used - 1) // 2
         bound = float(bounds[k]) if k < bounds.size else 0.0
@@ -255,17 +255,14 @@ def domains(scenario: Scenario) -> Domains:
     return result
 
 
-def _odd_cells(n: float) -> int:
-    """The odd cell count closest to ``n`` (as :attr:`pipeline.config.Scenario.n_cells`)."""
-    return 2 * max(int(round((n - 1.0) / 2.0)), 0) + 1
-
-
-def resolve(scenario: Scenario) -> Scenario:
+def resolve(scenario: Scenario) -> ResolvedScenario:
     """``scenario`` with numeric ``contact.r_max`` and ``contact.window`` (``auto`` resolved).
 
     Explicit values are checked (an explicit window or r_max that truncates the contact by
     more than ``cube.crop_tolerance`` is refused) and kept exactly as given, so a scenario
-    with both explicit keeps its results bit for bit.
+    with both explicit keeps its results bit for bit, and resolving a resolved scenario gives
+    it back. The result is a :class:`~pipeline.config.ResolvedScenario`, also when both were
+    explicit.
 
     Raises
     ------
@@ -278,7 +275,7 @@ def resolve(scenario: Scenario) -> Scenario:
         contact = dataclasses.replace(contact, r_max=scenario.contact.r_max)
     if scenario.contact.window != AUTO:
         contact = dataclasses.replace(contact, window=scenario.contact.window)
-    out = dataclasses.replace(scenario, contact=contact)
+    out = ResolvedScenario.of(scenario, contact=contact)
     check_domains(out)
     return out
 

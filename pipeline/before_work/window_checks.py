@@ -3,7 +3,9 @@
 :func:`check_domains` runs as a scenario with an explicit ``contact.window`` and
 ``contact.r_max`` is loaded (:func:`pipeline.before_work.scenario_checks.check_scenario`), and
 again on the resolved scenario (:func:`pipeline.before_work.domains.resolve`): both before any
-work. Like the other checks it imports no numpy at the top (``import pipeline`` stays free of it).
+work. It takes a scenario whose two domains are numbers, resolved or not, so it counts the window's
+cells itself (:func:`pipeline.config.odd_cells`). Like the other checks it imports no numpy at the
+top (``import pipeline`` stays free of it).
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ from __future__ import annotations
 import math
 import warnings
 
-from pipeline.config import ConfigError, Scenario
+from pipeline.config import ConfigError, Scenario, odd_cells
 
 __all__ = ["check_domains", "FIELD_BYTES_PER_ENTRY"]
 
@@ -27,22 +29,23 @@ def check_domains(s: Scenario) -> None:
     """
     window = s.contact.window * s.indenter.radius
     r_max = s.contact.r_max * s.indenter.radius
-    corner = math.sqrt(2.0) * (s.n_cells - 1) / 2.0 * s.cell_size  # radius of the corner cell centres
+    n_cells = odd_cells(window, s.cell_size)
+    corner = math.sqrt(2.0) * (n_cells - 1) / 2.0 * s.cell_size  # radius of the corner cell centres
     if corner > r_max:
         raise ConfigError(
             f"contact.window = {s.contact.window!r} is out of range: its corner cell centres lie at "
             f"r = {corner:.6g} m, beyond the radial domain r <= contact.r_max * R* = {r_max:.6g} m; "
             f"the window must be <= about sqrt(2) * contact.r_max = {math.sqrt(2) * s.contact.r_max:.4g} (R*)"
         )
-    if s.n_cells < 3:
+    if n_cells < 3:
         raise ConfigError(
             f"contact.window = {s.contact.window!r} is out of range: the window holds fewer than "
             f"3 cells of pitch 1/sqrt(eta) = {s.cell_size:.3g} m"
         )
-    _check_ensemble(s)
+    _check_ensemble(s, n_cells)
     longest = max(s.oxide.lambda_) * s.cell_size
     if s.oxide.period == "window" and longest > window:
-        n_modes = _modes_in_band(s, max(s.oxide.lambda_))
+        n_modes = _modes_in_band(s, n_cells, max(s.oxide.lambda_))
         if n_modes == 0:
             raise ConfigError(
                 f"oxide.lambda = {max(s.oxide.lambda_):g} is out of range: the window "
@@ -57,13 +60,13 @@ def check_domains(s: Scenario) -> None:
         )
 
 
-def _modes_in_band(s: Scenario, lam: float) -> int:
-    """Independent modes of ``lam``'s band on the window's lattice: the size of
-    :func:`pipeline.physics.oxide_band.band`, 0 where it holds none."""
+def _modes_in_band(s: Scenario, n_cells: int, lam: float) -> int:
+    """Independent modes of ``lam``'s band on the lattice of the window of ``n_cells`` cells a side:
+    the size of :func:`pipeline.physics.oxide_band.band`, 0 where it holds none."""
     from pipeline.physics import oxide_band  # here, not above: import pipeline stays free of numpy
 
     try:
-        return oxide_band.band(s.n_cells, s.cell_size, lam, s.oxide.ks_ratio, s.oxide.hurst).size
+        return oxide_band.band(n_cells, s.cell_size, lam, s.oxide.ks_ratio, s.oxide.hurst).size
     except ValueError:  # the band holds no lattice mode (every other argument is in range here)
         return 0
 
@@ -84,8 +87,9 @@ def _physical_memory() -> int:
     return int(psutil.virtual_memory().total)
 
 
-def _check_ensemble(s: Scenario) -> None:
-    """Adaptive-ensemble limits and the memory a spectral resolution needs."""
+def _check_ensemble(s: Scenario, n_cells: int) -> None:
+    """Adaptive-ensemble limits and the memory a spectral resolution needs on a window of
+    ``n_cells`` cells a side."""
     ox = s.oxide
     if ox.ensemble == "adaptive" and ox.max_realizations < ox.min_realizations:
         raise ConfigError(
@@ -94,7 +98,7 @@ def _check_ensemble(s: Scenario) -> None:
         )
     if ox.period != "spectral":
         return
-    top = math.floor(ox.ks_ratio * max(ox.spectral_resolution, s.n_cells / (2.0 * min(ox.lambda_))))
+    top = math.floor(ox.ks_ratio * max(ox.spectral_resolution, n_cells / (2.0 * min(ox.lambda_))))
     fields = max(ox.chunk, s.cube.chunk)
     need = FIELD_BYTES_PER_ENTRY * fields * (top + 1) * (2 * top + 1)
     have = _physical_memory()

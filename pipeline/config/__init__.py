@@ -10,17 +10,18 @@ chosen by name; any other value of ``--config`` is read as a TOML file path.
 
 The package, top down: ``declare`` (how a parameter is declared; :data:`AUTO`,
 :class:`ConfigError`), ``scene_sections`` and ``study_sections`` (the sections' parameters),
-``scenario`` (:class:`Scenario`, its derived values and config hashes), ``validation`` (each
-value against its declaration) and ``loading`` (:func:`load_scenario`). Config imports nothing
-else from the package; the checks across parameters live before work
-(:mod:`pipeline.before_work.scenario_checks`) and are set by ``pipeline/__init__.py``
-(:func:`~pipeline.config.loading.use_cross_checks`).
+``scenario`` (:class:`Scenario`, its derived values and config hashes; :class:`ResolvedScenario`,
+its domains resolved; :func:`odd_cells`), ``validation`` (each value against its declaration) and
+``loading`` (:func:`load_scenario`). Config imports nothing else from the package; the checks
+across parameters live before work (:mod:`pipeline.before_work.scenario_checks`) and are set by
+``pipeline/__init__.py`` (:func:`~pipeline.config.loading.use_cross_checks`).
 """
 
 from pipeline.config.declare import AUTO, ConfigError, format_range, parameter_key
 from pipeline.config.loading import (
     USED_ONLY_WITH, bundled_scenarios, load_scenario, parameter_table, read_input_text, use_cross_checks)
-from pipeline.config.scenario import SECTIONS, STAGE_EXCLUDED, STAGE_INPUTS, STAGE_UPSTREAM, Scenario
+from pipeline.config.scenario import (
+    SECTIONS, STAGE_EXCLUDED, STAGE_INPUTS, STAGE_UPSTREAM, ResolvedScenario, Scenario, odd_cells)
 from pipeline.config.scene_sections import Contact, Indenter, Loading, Material, Roughness
 from pipeline.config.study_sections import CHUNK_BYTES, Atlas, Cube, Fits, Oxide, Surrogate
 
@@ -29,6 +30,8 @@ __all__ = [
     "ConfigError",
     "read_input_text",
     "Scenario",
+    "ResolvedScenario",
+    "odd_cells",
     "load_scenario",
     "bundled_scenarios",
     "parameter_table",

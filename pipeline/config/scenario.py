@@ -3,6 +3,8 @@
 :class:`Scenario` holds one instance of every section (:data:`SECTIONS`); its config hashes cover
 each stage's parameters (:data:`STAGE_INPUTS`) and those of the stages it reads
 (:data:`STAGE_UPSTREAM`), so a stage file records exactly what it was built from.
+:class:`ResolvedScenario` is a scenario whose ``contact.r_max`` and ``contact.window`` are
+resolved numbers (:func:`pipeline.before_work.domains.resolve` makes it): what the stages take.
 """
 
 from __future__ import annotations
@@ -12,13 +14,14 @@ import hashlib
 import json
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Self
 
 from pipeline.config.declare import AUTO, ConfigError, parameter_key
 from pipeline.config.scene_sections import Contact, Indenter, Loading, Material, Roughness
 from pipeline.config.study_sections import Atlas, Cube, Fits, Oxide, Surrogate
 
-__all__ = ["SECTIONS", "STAGE_INPUTS", "STAGE_EXCLUDED", "STAGE_UPSTREAM", "Scenario"]
+__all__ = ["SECTIONS", "STAGE_INPUTS", "STAGE_EXCLUDED", "STAGE_UPSTREAM", "Scenario", "ResolvedScenario",
+           "odd_cells"]
 
 
 SECTIONS: dict[str, type] = {
@@ -124,9 +127,17 @@ class Scenario:
             raise ConfigError(
                 "contact.window = 'auto' is not resolved yet: call pipeline.before_work.domains.resolve(scenario)"
             )
-        n = self.contact.window * self.indenter.radius / self.cell_size
-        k = int(round((n - 1.0) / 2.0))
-        return 2 * max(k, 0) + 1
+        return odd_cells(self.contact.window * self.indenter.radius, self.cell_size)
+
+    @classmethod
+    def of(cls, scenario: Scenario, **changes: Any) -> Self:
+        """``scenario``'s fields as a ``cls``, those named in ``changes`` replaced.
+
+        ``dataclasses.replace`` keeps the class; this sets it: ``Scenario.of(resolved,
+        contact=...)`` is a plain scenario again (its domains to be resolved anew), and
+        :func:`pipeline.before_work.domains.resolve` alone makes a :class:`ResolvedScenario`.
+        """
+        return cls(**{f.name: getattr(scenario, f.name) for f in dataclasses.fields(Scenario)} | changes)
 
     # ----------------------------------------------------------------- provenance
     def to_dict(self) -> dict[str, Any]:
@@ -169,3 +180,26 @@ class Scenario:
         text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
+
+@dataclass(frozen=True)
+class ResolvedScenario(Scenario):
+    """A scenario whose ``contact.r_max`` and ``contact.window`` are resolved numbers, checked
+    against the contact they must hold (:func:`pipeline.before_work.domains.resolve` makes it).
+
+    It has no field of its own: the type says that its domains, and so its cell grid, are
+    settled. ``dataclasses.replace`` keeps the type, so a resolved scenario with a new window or
+    radial domain is made a plain one (:meth:`Scenario.of`) and resolved again.
+    """
+
+
+def odd_cells(side: float, cell_size: float) -> int:
+    """The odd number of cells of pitch ``cell_size`` closest to ``side / cell_size`` (at least 1).
+
+    Parameters
+    ----------
+    side
+        Length to cover, m (the window's side: ``contact.window`` times R*).
+    cell_size
+        Cell pitch, m.
+    """
+    return 2 * max(int(round((side / cell_size - 1.0) / 2.0)), 0) + 1
