@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from analysis.style import LABELS, context, equals, save, size
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario, Scenario
 from pipeline.physics import oxide_band, oxide_field
 from pipeline.physics.grid import cell_centres
 
@@ -26,7 +26,7 @@ FRACTIONS: tuple[float, ...] = (0.5, 0.2, 0.1)
 SUPERSAMPLING = 4
 
 
-def _field(scenario: Scenario, lam: float) -> tuple[oxide_band.Band, np.ndarray]:
+def _field(scenario: ResolvedScenario, lam: float) -> tuple[oxide_band.Band, np.ndarray]:
     """Band and coefficients of realization 0 at ``lam``, as the stage draws them."""
     ox = scenario.oxide
     modes = oxide_band.band(scenario.n_cells, scenario.cell_size, lam, ox.ks_ratio, ox.hurst)
@@ -41,7 +41,7 @@ def _threshold(scenario: Scenario, cells: np.ndarray, xi: float) -> float:
     return float(oxide_field.empirical_threshold(cells.ravel(), np.array([xi]))[0])
 
 
-def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
+def write(scenario: ResolvedScenario, data_dir: Path, out_dir: Path) -> list[Path]:
     """Draw Fig. 6 to ``<out_dir>/fig6_oxide.png`` and return ``[path]``.
 
     Parameters
@@ -64,7 +64,7 @@ def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
         return [save(fig, Path(out_dir) / "fig6_oxide.png")]
 
 
-def _draw(scenario: Scenario, fig: plt.Figure, axes: np.ndarray, centres: np.ndarray, display: np.ndarray,
+def _draw(scenario: ResolvedScenario, fig: plt.Figure, axes: np.ndarray, centres: np.ndarray, display: np.ndarray,
           extent: np.ndarray) -> None:
     """The fields (upper row) and their oxides with the oxidized cell centres (lower row)."""
     n, h = scenario.n_cells, scenario.cell_size

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario, Scenario
 from pipeline.physics import oxide_band, oxide_field
 from pipeline.physics.groups import Groups, groups
 
@@ -22,7 +22,7 @@ def scene_groups(scenario: Scenario) -> Groups:
     return groups(rough.sigma, rough.eta, rough.beta, scenario.indenter.radius)
 
 
-def bands(scenario: Scenario) -> list[oxide_band.Band]:
+def bands(scenario: ResolvedScenario) -> list[oxide_band.Band]:
     """The wave-vector band of every correlation length of the scenario, in ``oxide.lambda`` order.
 
     ``oxide.period = "window"`` puts the modes on the window's lattice (the published fields);
@@ -71,8 +71,8 @@ class FieldSource:
     cell_size: float
 
     @classmethod
-    def of(cls, scenario: Scenario) -> "FieldSource":
-        """The field source of a validated scenario."""
+    def of(cls, scenario: ResolvedScenario) -> "FieldSource":
+        """The field source of a resolved scenario (its window sets the cell grid)."""
         ox = scenario.oxide
         return cls(tuple(bands(scenario)), tuple(ox.lambda_), np.asarray(ox.xi, float), ox.seed,
                    ox.amplitudes, ox.threshold, scenario.n_cells, scenario.cell_size)

@@ -11,7 +11,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import pytest  # noqa: E402
 
-from pipeline.config import Scenario, load_scenario  # noqa: E402
+from pipeline.config import ResolvedScenario, load_scenario  # noqa: E402
 from pipeline.before_work.domains import resolve  # noqa: E402
 
 SMALL_OVERRIDES = {
@@ -30,19 +30,19 @@ SMALL_ARGS: tuple[str, ...] = ("--config", "paper_gt", *(a for k, v in SMALL_OVE
 
 
 @pytest.fixture(scope="session")
-def paper() -> Scenario:
+def paper() -> ResolvedScenario:
     """The default scenario (discrete asperities), unchanged."""
     return resolve(load_scenario("paper"))
 
 
 @pytest.fixture(scope="session")
-def paper_gt() -> Scenario:
+def paper_gt() -> ResolvedScenario:
     """The paper's study on Greenwood-Tripp's mean asperity layer (the grid spots' machinery), unchanged."""
     return resolve(load_scenario("paper_gt"))
 
 
 @pytest.fixture(scope="session")
-def small() -> Scenario:
+def small() -> ResolvedScenario:
     """``paper_gt`` shrunk to a few approaches, fractions, lengths and realizations: the grid
     machinery most tests exercise (the default's discrete scenes are in test_discrete_stages.py
     and test_pipeline_end_to_end.py)."""

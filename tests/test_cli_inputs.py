@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from pipeline.cli.main import main
-from pipeline.config import Scenario, load_scenario
+from pipeline.config import ResolvedScenario, load_scenario
 from tests.test_bad_inputs import _snapshot
 from tests.test_fits_stage import cli_overrides
 from tests.test_predict import data_dir  # noqa: F401 - the module's fixture: fits.nc and the surrogate files
@@ -35,7 +35,7 @@ def _refused(capsys: pytest.CaptureFixture, root: Path, argv: list[str], *expect
     return lines[0]
 
 
-def _predict(data: Path, small: Scenario, *args: str) -> list[str]:
+def _predict(data: Path, small: ResolvedScenario, *args: str) -> list[str]:
     return ["predict", "--data-dir", str(data), *cli_overrides(small), *args]
 
 

@@ -9,7 +9,7 @@ import pytest
 import xarray as xr
 
 from pipeline.compute import ComputeOptions
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario
 from pipeline.fitting import ensemble
 from pipeline.fitting.powerlaw import fit_power_law
 from pipeline.scene import FieldSource
@@ -55,7 +55,7 @@ def test_z_value_is_1_96_at_95_percent() -> None:
 
 
 # ------------------------------------------------------------------ the adaptive cube
-def _adaptive(small: Scenario, **changes) -> Scenario:
+def _adaptive(small: ResolvedScenario, **changes) -> ResolvedScenario:
     ox = dict(ensemble="adaptive", min_realizations=12, batch=7, max_realizations=60,
               target_half_width=0.03, lambda_=[1.0, 13.0], xi=[0.3, 0.8], period="spectral",
               spectral_resolution=6.0)
@@ -64,7 +64,7 @@ def _adaptive(small: Scenario, **changes) -> Scenario:
 
 
 @pytest.fixture(scope="module")
-def adaptive_inputs(small: Scenario) -> tuple[Scenario, xr.Dataset, xr.Dataset]:
+def adaptive_inputs(small: ResolvedScenario) -> tuple[ResolvedScenario, xr.Dataset, xr.Dataset]:
     scenario = _adaptive(small)
     return scenario, contact_stage.build(scenario), oxide_stage.build(scenario)
 
@@ -152,7 +152,7 @@ def test_fits_use_each_lambdas_realizations_and_flag_the_cap(adaptive_inputs, ad
     assert float(ratio.min()) > 0.6 and float(ratio.max()) < 1.6
 
 
-def test_doubling_the_spectral_resolution_stays_within_the_intervals(small: Scenario) -> None:
+def test_doubling_the_spectral_resolution_stays_within_the_intervals(small: ResolvedScenario) -> None:
     """A small case: resolution 6 against 12 at lambda 3 and 13 (the bench does the full grid)."""
     from pipeline.bench import convergence
 

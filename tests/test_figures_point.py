@@ -11,12 +11,12 @@ import pytest
 from analysis import figures_point
 from analysis.report import build_blocks
 from pipeline.cli.main import main
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario
 from tests.test_fits_stage import cli_overrides
 
 
 @pytest.fixture(scope="module")
-def compare_dir(tmp_path_factory, small: Scenario) -> Path:
+def compare_dir(tmp_path_factory, small: ResolvedScenario) -> Path:
     """The stages run by the CLI once per model under <data>/compare/<model>, as `make compare` does."""
     data = tmp_path_factory.mktemp("data")
     with warnings.catch_warnings():
@@ -30,7 +30,7 @@ def compare_dir(tmp_path_factory, small: Scenario) -> Path:
     return data
 
 
-def test_point_alpha_is_below_greenwood_and_the_report_shows_both(compare_dir: Path, small: Scenario) -> None:
+def test_point_alpha_is_below_greenwood_and_the_report_shows_both(compare_dir: Path, small: ResolvedScenario) -> None:
     fits = figures_point.load_comparison(compare_dir)
     assert fits is not None
     assert float(fits["point"]["alpha_clean"]) < float(fits["greenwood"]["alpha_clean"])
@@ -60,7 +60,7 @@ def test_film_sweep_runs_from_clean_to_insulating(compare_dir: Path) -> None:
     assert np.all(greenwood >= point * (1 - 1e-9))
 
 
-def test_figures_written_only_with_a_comparison(compare_dir: Path, small: Scenario, tmp_path: Path) -> None:
+def test_figures_written_only_with_a_comparison(compare_dir: Path, small: ResolvedScenario, tmp_path: Path) -> None:
     out = compare_dir / "figures"
     out.mkdir(exist_ok=True)
     paths = figures_point.write(small, compare_dir, out, films=np.logspace(-13, -9, 3))

@@ -21,7 +21,7 @@ from matplotlib.transforms import Bbox
 from analysis import figures_results, figures_validate, style
 from analysis.figures import write_figures
 from pipeline.cli.main import main
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario
 from pipeline.store import read_stage
 from tests.test_fits_stage import cli_overrides
 
@@ -30,7 +30,7 @@ RAW_SYMBOLS = re.compile(r"\b(lambda|kappa|sqrt|sigma|xi|alpha|gamma|eta|rho|del
 
 
 @pytest.fixture(scope="module")
-def run_dir(tmp_path_factory, small: Scenario) -> Path:
+def run_dir(tmp_path_factory, small: ResolvedScenario) -> Path:
     """The small run's stage files, the spots benchmark's file and a synthetic validate.nc."""
     data = tmp_path_factory.mktemp("data")
     with warnings.catch_warnings():
@@ -70,7 +70,7 @@ def synthetic_validation(lightest: float = 0.075, heaviest: float = 18.8) -> xr.
 
 
 @pytest.fixture(scope="module")
-def drawn(run_dir: Path, small: Scenario) -> dict[str, matplotlib.figure.Figure]:
+def drawn(run_dir: Path, small: ResolvedScenario) -> dict[str, matplotlib.figure.Figure]:
     """Every figure of ``write_figures`` on the small run, by file name, drawn (renderer ready)."""
     figures: dict[str, matplotlib.figure.Figure] = {}
     real = matplotlib.figure.Figure.savefig
@@ -111,7 +111,7 @@ def outside_math(text: str) -> str:
     return "".join(text.split("$")[::2])
 
 
-def test_no_symbol_is_spelled_in_ascii_outside_mathtext(drawn, small: Scenario) -> None:
+def test_no_symbol_is_spelled_in_ascii_outside_mathtext(drawn, small: ResolvedScenario) -> None:
     for name, fig in drawn.items():
         for text in _texts(fig):
             raw = RAW_SYMBOLS.search(outside_math(text).replace(small.name, ""))  # a name, not a symbol
@@ -205,7 +205,7 @@ def _flag_boxes(ax, renderer: RendererBase) -> list[Bbox]:
     return boxes
 
 
-def _realizations_figure(run_dir: Path, small: Scenario, tmp_path: Path) -> matplotlib.figure.Figure:
+def _realizations_figure(run_dir: Path, small: ResolvedScenario, tmp_path: Path) -> matplotlib.figure.Figure:
     """fig10_realizations with every cell flagged, kept open for inspection."""
     fits = read_stage(run_dir, "fits", small)
     fits["flagged"] = xr.ones_like(fits["flagged"])
@@ -230,11 +230,11 @@ def _overlaps(fig: matplotlib.figure.Figure) -> int:
     return count
 
 
-def test_fig10_numbers_are_clear_of_the_flag_marks(run_dir: Path, small: Scenario, tmp_path: Path) -> None:
+def test_fig10_numbers_are_clear_of_the_flag_marks(run_dir: Path, small: ResolvedScenario, tmp_path: Path) -> None:
     assert _overlaps(_realizations_figure(run_dir, small, tmp_path)) == 0
 
 
-def test_flag_marks_at_the_cell_centre_would_be_caught(run_dir: Path, small: Scenario, tmp_path: Path,
+def test_flag_marks_at_the_cell_centre_would_be_caught(run_dir: Path, small: ResolvedScenario, tmp_path: Path,
                                                         monkeypatch) -> None:
     monkeypatch.setattr(figures_results, "FLAG_OFFSET", (0.0, 0.0))
     assert _overlaps(_realizations_figure(run_dir, small, tmp_path)) >= 18  # each number under its own mark

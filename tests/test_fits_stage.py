@@ -16,7 +16,7 @@ from pipeline.reductions import (
     reduce_realizations,
 )
 from pipeline.cli.main import main
-from pipeline.config import ConfigError, Scenario, load_scenario
+from pipeline.config import ConfigError, ResolvedScenario, Scenario, load_scenario
 from pipeline.stages import fits
 from pipeline.store import read_stage, write_dataset
 from tests.conftest import SMALL_OVERRIDES
@@ -83,7 +83,7 @@ def synthetic_cube(
     return ds
 
 
-def test_known_power_law_within_intervals(small: Scenario) -> None:
+def test_known_power_law_within_intervals(small: ResolvedScenario) -> None:
     cube = synthetic_cube(small, noise=0.15)
     ds = fits.build(small, cube)
     lam, xi = np.asarray(small.oxide.lambda_), np.asarray(small.oxide.xi)
@@ -100,7 +100,7 @@ def test_known_power_law_within_intervals(small: Scenario) -> None:
     assert float(ds["alpha_clean"]) == pytest.approx(0.8, rel=1e-9)
 
 
-def test_noise_free_fit_is_exact(small: Scenario) -> None:
+def test_noise_free_fit_is_exact(small: ResolvedScenario) -> None:
     ds = fits.build(small, synthetic_cube(small, noise=0.0))
     lam, xi = np.asarray(small.oxide.lambda_), np.asarray(small.oxide.xi)
     np.testing.assert_allclose(ds["alpha"], true_alpha(lam, xi).T, rtol=1e-9)
@@ -126,7 +126,7 @@ def test_quantiles_treat_open_circuits_as_infinite() -> None:
     assert q[2] == np.inf and q[3] == 4.0
 
 
-def test_reductions_are_dask_friendly(small: Scenario) -> None:
+def test_reductions_are_dask_friendly(small: ResolvedScenario) -> None:
     cube = synthetic_cube(small, open_share=0.25)
     eager = reduce_realizations(cube["resistance"], 2.0)
     lazy = reduce_realizations(cube["resistance"].chunk({"realization": 3, "xi": 1}), 2.0)
@@ -135,7 +135,7 @@ def test_reductions_are_dask_friendly(small: Scenario) -> None:
     np.testing.assert_allclose(eager["open_probability"], 0.25)
 
 
-def test_open_share_reported_and_mean_unbiased(small: Scenario) -> None:
+def test_open_share_reported_and_mean_unbiased(small: ResolvedScenario) -> None:
     ds = fits.build(small, synthetic_cube(small, noise=0.0, open_share=0.25))
     np.testing.assert_allclose(ds["open_probability"], 0.25)
     lam, xi = np.asarray(small.oxide.lambda_), np.asarray(small.oxide.xi)
@@ -143,7 +143,7 @@ def test_open_share_reported_and_mean_unbiased(small: Scenario) -> None:
 
 
 @pytest.mark.parametrize("reduction", ["arithmetic_mean", "median"])
-def test_other_reductions(small: Scenario, reduction: str) -> None:
+def test_other_reductions(small: ResolvedScenario, reduction: str) -> None:
     scenario = load_scenario("paper_gt", {**SMALL_OVERRIDES, "fits.reduction": reduction})
     ds = fits.build(scenario, synthetic_cube(scenario, noise=0.05))
     lam, xi = np.asarray(scenario.oxide.lambda_), np.asarray(scenario.oxide.xi)
@@ -151,13 +151,13 @@ def test_other_reductions(small: Scenario, reduction: str) -> None:
     assert np.all(ds["alpha_ci"].sel(bound="lower") <= ds["alpha_ci"].sel(bound="upper"))
 
 
-def test_too_few_fitted_steps_is_a_config_error(small: Scenario) -> None:
+def test_too_few_fitted_steps_is_a_config_error(small: ResolvedScenario) -> None:
     scenario = load_scenario("paper_gt", {**SMALL_OVERRIDES, "fits.fit_range": "force", "fits.min_force": 1e6})
     with pytest.raises(ConfigError, match="fits.min_force"):
         fits.build(scenario, synthetic_cube(scenario))
 
 
-def test_stage_run_writes_fits(tmp_path, small: Scenario) -> None:
+def test_stage_run_writes_fits(tmp_path, small: ResolvedScenario) -> None:
     write_dataset(synthetic_cube(small), tmp_path, "cube", small)
     args = ["fits", "--data-dir", str(tmp_path), "--no-progress"]
     assert main(args + cli_overrides(small)) == 0
@@ -178,11 +178,11 @@ def assert_labelled(ds: xr.Dataset) -> None:
         assert var.attrs.get("long_name"), f"{name} has no long_name"
 
 
-def test_outputs_are_labelled(small: Scenario) -> None:
+def test_outputs_are_labelled(small: ResolvedScenario) -> None:
     assert_labelled(fits.build(small, synthetic_cube(small)))
 
 
-def test_bootstrap_redraws_realizations_jointly_across_steps(small: Scenario) -> None:
+def test_bootstrap_redraws_realizations_jointly_across_steps(small: ResolvedScenario) -> None:
     # Each realization is the exact power law times its own factor, the same at every step:
     # a resample that keeps whole realizations changes alpha but never gamma. Redrawing the
     # realizations independently at each step would scatter gamma.

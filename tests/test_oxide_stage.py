@@ -15,7 +15,7 @@ from pipeline import store
 from pipeline.cli import main as cli
 from pipeline.bench import oxide as bench_oxide
 from pipeline.compute import ComputeOptions
-from pipeline.config import ConfigError, Scenario, load_scenario
+from pipeline.config import ConfigError, ResolvedScenario, load_scenario
 from pipeline.before_work.domains import resolve
 from pipeline.physics import oxide_band, oxide_field
 from pipeline.physics.grid import cell_centres
@@ -23,16 +23,16 @@ from pipeline.scene import FieldSource, bands
 from pipeline.stages import oxide
 
 
-def _with(scenario: Scenario, **changes) -> Scenario:
+def _with(scenario: ResolvedScenario, **changes) -> ResolvedScenario:
     return dataclasses.replace(scenario, oxide=dataclasses.replace(scenario.oxide, **changes))
 
 
 @pytest.fixture(scope="module")
-def built(small: Scenario) -> xr.Dataset:
+def built(small: ResolvedScenario) -> xr.Dataset:
     return oxide.build(small)
 
 
-def test_layout_units_and_grid(small: Scenario, built: xr.Dataset) -> None:
+def test_layout_units_and_grid(small: ResolvedScenario, built: xr.Dataset) -> None:
     ox, n = small.oxide, small.n_cells
     assert built["psi"].dims == ("lambda", "realization", "y", "x")
     assert built["psi"].dtype == np.float32
@@ -59,7 +59,7 @@ def test_theoretical_thresholds_and_fractions_follow_the_rule(built: xr.Dataset)
     np.testing.assert_array_equal(built["oxide_fraction"], covered.transpose(*built["oxide_fraction"].dims))
 
 
-def test_stage_fields_are_the_physics_fields(small: Scenario, built: xr.Dataset) -> None:
+def test_stage_fields_are_the_physics_fields(small: ResolvedScenario, built: xr.Dataset) -> None:
     ox = small.oxide
     lam, r = ox.lambda_[0], 5
     modes = oxide_band.band(small.n_cells, small.cell_size, lam, ox.ks_ratio, ox.hurst)
@@ -69,7 +69,7 @@ def test_stage_fields_are_the_physics_fields(small: Scenario, built: xr.Dataset)
 
 
 @pytest.mark.parametrize("chunk", [1, 8])
-def test_psi_does_not_depend_on_chunking(small: Scenario, built: xr.Dataset, chunk: int) -> None:
+def test_psi_does_not_depend_on_chunking(small: ResolvedScenario, built: xr.Dataset, chunk: int) -> None:
     other = oxide.build(_with(small, chunk=chunk))
     assert small.oxide.chunk == 3
     np.testing.assert_array_equal(other["psi"], built["psi"])
@@ -81,17 +81,17 @@ def test_psi_does_not_depend_on_chunking(small: Scenario, built: xr.Dataset, chu
     [ComputeOptions(workers=1, progress=False), ComputeOptions(workers=2, progress=False)],
     ids=["1-thread", "2-distributed-workers"],
 )
-def test_psi_does_not_depend_on_workers(small: Scenario, built: xr.Dataset, options: ComputeOptions) -> None:
+def test_psi_does_not_depend_on_workers(small: ResolvedScenario, built: xr.Dataset, options: ComputeOptions) -> None:
     # `built` used the threaded scheduler with one thread per core.
     np.testing.assert_array_equal(oxide.build(small, options)["psi"], built["psi"])
 
 
-def test_adding_a_lambda_leaves_the_other_fields_unchanged(small: Scenario, built: xr.Dataset) -> None:
+def test_adding_a_lambda_leaves_the_other_fields_unchanged(small: ResolvedScenario, built: xr.Dataset) -> None:
     other = oxide.build(_with(small, lambda_=[2.0, 5.0]))
     np.testing.assert_array_equal(other["psi"].sel({"lambda": 5.0}), built["psi"].sel({"lambda": 5.0}))
 
 
-def test_mean_realized_fraction_is_xi_within_its_standard_error(small: Scenario) -> None:
+def test_mean_realized_fraction_is_xi_within_its_standard_error(small: ResolvedScenario) -> None:
     scenario = _with(small, lambda_=[1.0, 3.0, 7.0], xi=[0.1, 0.3, 0.5, 0.9], n_realizations=150, chunk=50)
     fraction = oxide.build(scenario)["oxide_fraction"]
     mean = fraction.mean("realization")
@@ -101,7 +101,7 @@ def test_mean_realized_fraction_is_xi_within_its_standard_error(small: Scenario)
 
 
 @pytest.mark.parametrize("amplitudes", ["ideal", "rayleigh"])
-def test_empirical_rule_hits_xi_exactly(small: Scenario, amplitudes: str) -> None:
+def test_empirical_rule_hits_xi_exactly(small: ResolvedScenario, amplitudes: str) -> None:
     scenario = _with(small, threshold="empirical", amplitudes=amplitudes, xi=[0.1, 0.25, 0.5, 0.8])
     ds = oxide.build(scenario)
     cells = small.n_cells**2
@@ -112,7 +112,7 @@ def test_empirical_rule_hits_xi_exactly(small: Scenario, amplitudes: str) -> Non
     assert float(ds["threshold"].std("realization").min()) > 0  # each field has its own threshold
 
 
-def test_run_writes_oxide_nc_with_provenance(small: Scenario, built: xr.Dataset, tmp_path: Path) -> None:
+def test_run_writes_oxide_nc_with_provenance(small: ResolvedScenario, built: xr.Dataset, tmp_path: Path) -> None:
     path = oxide.run(small, tmp_path, ComputeOptions(progress=False))
     assert path == tmp_path / "oxide.nc"
     ds = store.read_stage(tmp_path, "oxide", small)
@@ -176,7 +176,7 @@ def test_spectral_period_has_modes_at_any_lambda() -> None:
     assert bands(scenario)[0].size > 100
 
 
-def test_adaptive_record_is_the_first_batch_and_cube_regenerates_it(small: Scenario) -> None:
+def test_adaptive_record_is_the_first_batch_and_cube_regenerates_it(small: ResolvedScenario) -> None:
     scenario = dataclasses.replace(
         small, oxide=dataclasses.replace(small.oxide, ensemble="adaptive", min_realizations=5, chunk=2,
                                          period="spectral", threshold="empirical")
@@ -193,13 +193,13 @@ def test_adaptive_record_is_the_first_batch_and_cube_regenerates_it(small: Scena
     ]
 
 
-def test_figure_is_written(small: Scenario, tmp_path: Path) -> None:
+def test_figure_is_written(small: ResolvedScenario, tmp_path: Path) -> None:
     paths = figures_oxide.write(small, tmp_path, tmp_path)
     assert [p.name for p in paths] == ["fig6_oxide.png"]
     assert paths[0].stat().st_size > 10_000
 
 
-def test_bench_reports_ratio_and_error(small: Scenario, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_bench_reports_ratio_and_error(small: ResolvedScenario, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(bench_oxide, "REPEATS", 1)
     monkeypatch.setattr(bench_oxide, "PER_LAMBDA_FIELDS", 3)
     for period in ("window", "spectral"):

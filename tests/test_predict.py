@@ -11,7 +11,7 @@ import xarray as xr
 from numpy.polynomial import polynomial as P
 
 from pipeline.cli.main import main
-from pipeline.config import ConfigError, Scenario, load_scenario
+from pipeline.config import ConfigError, ResolvedScenario, load_scenario
 from pipeline.before_work.domains import resolve
 from pipeline.fitting.surrogate import evaluate
 from pipeline.predict.predictor import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
@@ -21,19 +21,19 @@ from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import cli_overrides, synthetic_cube
 
 
-def _build(small: Scenario, **kwargs) -> xr.Dataset:
+def _build(small: ResolvedScenario, **kwargs) -> xr.Dataset:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # orders reduced on the 3 x 3 grid
         return surrogate.build(small, fits.build(small, synthetic_cube(small, **kwargs)))
 
 
 @pytest.fixture(scope="module")
-def surrogate_ds(small: Scenario) -> xr.Dataset:
+def surrogate_ds(small: ResolvedScenario) -> xr.Dataset:
     return _build(small, noise=0.2)
 
 
 @pytest.fixture(scope="module")
-def data_dir(tmp_path_factory, small: Scenario):
+def data_dir(tmp_path_factory, small: ResolvedScenario):
     """fits.nc written, then the surrogate stage run: surrogate.nc and surrogate.json."""
     path = tmp_path_factory.mktemp("predict")
     write_dataset(fits.build(small, synthetic_cube(small, noise=0.2)), path, "fits", small)
@@ -49,7 +49,7 @@ def _quiet(*args, **kwargs) -> xr.Dataset:
         return predict(*args, **kwargs)
 
 
-def test_equals_eq27_by_hand(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+def test_equals_eq27_by_hand(small: ResolvedScenario, surrogate_ds: xr.Dataset) -> None:
     force, xi, lam = 1500.0, 0.4, 4.0
     m, r, s = small.material, small.indenter.radius, small.roughness.sigma
     e_star = m.E / (2 * (1 - m.nu**2))
@@ -69,7 +69,7 @@ def test_equals_eq27_by_hand(small: Scenario, surrogate_ds: xr.Dataset) -> None:
     assert result["resistance"].attrs["units"] == "ohm"
 
 
-def test_band_components_add_up(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+def test_band_components_add_up(small: ResolvedScenario, surrogate_ds: xr.Dataset) -> None:
     rng = np.random.default_rng(0)
     f_range = surrogate_ds["force"].values
     force = rng.uniform(f_range.min(), f_range.max(), 200)
@@ -89,7 +89,7 @@ def test_band_components_add_up(small: Scenario, surrogate_ds: xr.Dataset) -> No
     assert (r["lower"] < r["realization_lower"]).all() and (r["upper"] > r["realization_upper"]).all()
 
 
-def test_band_components_match_the_tables_on_the_grid(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+def test_band_components_match_the_tables_on_the_grid(small: ResolvedScenario, surrogate_ds: xr.Dataset) -> None:
     xi, lam, step = small.oxide.xi[1], small.oxide.lambda_[1], 1
     cell = {"xi": xi, "lambda": lam}
     f = float(surrogate_ds["force"][step])
@@ -106,7 +106,7 @@ def test_band_components_match_the_tables_on_the_grid(small: Scenario, surrogate
     assert s_a == pytest.approx(float(np.log(ci[1] / ci[0])) / (2 * 1.959963984540054), rel=1e-9)
 
 
-def test_vectorized_xarray_queries(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+def test_vectorized_xarray_queries(small: ResolvedScenario, surrogate_ds: xr.Dataset) -> None:
     force = xr.DataArray([1000.0, 2000.0, 3000.0], dims="force", coords={"force": [1000.0, 2000.0, 3000.0]})
     xi = xr.DataArray([0.3, 0.5], dims="xi")
     r = _quiet(surrogate_ds, small, force, xi, 5.0)
@@ -118,7 +118,7 @@ def test_vectorized_xarray_queries(small: Scenario, surrogate_ds: xr.Dataset) ->
     assert grid["resistance"].shape == (2, 3)
 
 
-def test_extrapolation_is_refused_unless_asked(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+def test_extrapolation_is_refused_unless_asked(small: ResolvedScenario, surrogate_ds: xr.Dataset) -> None:
     for kwargs, name in (({"xi": 0.95}, "xi"), ({"lam": 40.0}, "lambda"), ({"force": 1.0}, "F'")):
         args = {"force": 1500.0, "xi": 0.4, "lam": 4.0, **kwargs}
         with pytest.raises(ConfigError, match=f"{name} = .* outside the fitted range .* pass --extrapolate"):
@@ -127,7 +127,7 @@ def test_extrapolation_is_refused_unless_asked(small: Scenario, surrogate_ds: xr
             _quiet(surrogate_ds, small, **args, extrapolate=True)
 
 
-def test_warns_where_the_surrogate_error_is_large(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+def test_warns_where_the_surrogate_error_is_large(small: ResolvedScenario, surrogate_ds: xr.Dataset) -> None:
     r = _quiet(surrogate_ds, small, 1500.0, 0.4, 4.0)
     below, above = 2 * float(r["surrogate_error"]), 0.5 * float(r["surrogate_error"])
     with warnings.catch_warnings():
@@ -145,13 +145,13 @@ def test_warns_where_the_surrogate_error_is_large(small: Scenario, surrogate_ds:
     ({"lam": [1.0, 2.0, -1.0]}, r"lambda = -1.0 \(query 3 of 3\) is out of range"),
     ({"force": [1000.0, 2000.0], "xi": [0.3, 0.4, 0.5]}, "must be numbers or arrays that broadcast"),
 ])
-def test_bad_input_raises(small: Scenario, surrogate_ds: xr.Dataset, kwargs: dict, message: str) -> None:
+def test_bad_input_raises(small: ResolvedScenario, surrogate_ds: xr.Dataset, kwargs: dict, message: str) -> None:
     args = {"force": 1500.0, "xi": 0.4, "lam": 4.0, **kwargs}
     with pytest.raises(ConfigError, match=message):
         predict(surrogate_ds, small, **args)
 
 
-def test_json_gives_the_same_predictions_as_netcdf(small: Scenario, data_dir) -> None:
+def test_json_gives_the_same_predictions_as_netcdf(small: ResolvedScenario, data_dir) -> None:
     from_json = load_surrogate(data_dir / "surrogate.json")
     from_nc = load_surrogate(data_dir / "surrogate.nc")
     rng = np.random.default_rng(1)
@@ -161,7 +161,7 @@ def test_json_gives_the_same_predictions_as_netcdf(small: Scenario, data_dir) ->
     assert from_json.info["alpha_formula"].startswith("alpha = EXP(")
 
 
-def test_band_is_unbounded_with_many_open_circuits(small: Scenario) -> None:
+def test_band_is_unbounded_with_many_open_circuits(small: ResolvedScenario) -> None:
     ds = _build(small, noise=0.2, open_share=0.25)
     result = _quiet(ds, small, 1500.0, 0.4, 4.0)
     assert float(result["upper"]) == math.inf and 0 < float(result["lower"]) < float(result["resistance"])
@@ -175,7 +175,7 @@ def _rows(text: str) -> list[dict[str, float]]:
     return [dict(zip(keys, map(float, line.split(",")))) for line in lines]
 
 
-def test_cli_lists_csv_and_output(tmp_path, capsys, small: Scenario, data_dir) -> None:
+def test_cli_lists_csv_and_output(tmp_path, capsys, small: ResolvedScenario, data_dir) -> None:
     base = ["predict", "--data-dir", str(data_dir), *cli_overrides(small)]
     assert main(base + ["--force", "1500,2500", "--xi", "0.4", "--lambda", "4,6"]) == 0
     rows = _rows(capsys.readouterr().out)
@@ -210,7 +210,7 @@ def test_cli_lists_csv_and_output(tmp_path, capsys, small: Scenario, data_dir) -
     (["--force", "1500", "--xi", "0.95", "--lambda", "4"], "xi = 0.95 lies outside the fitted range"),
     (["--force", "5", "--xi", "0.4", "--lambda", "4", "--surrogate", "/nonexistent/s.nc"], "does not exist"),
 ])
-def test_cli_bad_input(capsys, small: Scenario, data_dir, args: list[str], message: str) -> None:
+def test_cli_bad_input(capsys, small: ResolvedScenario, data_dir, args: list[str], message: str) -> None:
     assert main(["predict", "--data-dir", str(data_dir), *cli_overrides(small), *args]) == 2
     captured = capsys.readouterr()
     assert message in captured.err and captured.err.count("\n") == 1 and captured.out == ""
@@ -223,7 +223,7 @@ def test_cli_bad_input(capsys, small: Scenario, data_dir, args: list[str], messa
     ("force,xi,lambda\n", "at least one query"),
     ("force,xi,lambda\n1500,0.4,4\n-3,0.4,4\n", "force = -3.0 (query 2 of 2) is out of range"),
 ])
-def test_cli_malformed_csv(tmp_path, capsys, small: Scenario, data_dir, text: str, message: str) -> None:
+def test_cli_malformed_csv(tmp_path, capsys, small: ResolvedScenario, data_dir, text: str, message: str) -> None:
     path = tmp_path / "q.csv"
     path.write_text(text)
     assert main(["predict", "--data-dir", str(data_dir), *cli_overrides(small), "--csv", str(path)]) == 2
@@ -231,7 +231,7 @@ def test_cli_malformed_csv(tmp_path, capsys, small: Scenario, data_dir, text: st
     assert message in captured.err and captured.err.count("\n") == 1
 
 
-def test_bench_vectorized_agrees_with_one_at_a_time(small: Scenario, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_bench_vectorized_agrees_with_one_at_a_time(small: ResolvedScenario, monkeypatch: pytest.MonkeyPatch) -> None:
     from pipeline.bench import predict as bench_predict
 
     for name, value in (("_REPEATS", 1), ("_QUERIES", 2000), ("_LOOP_QUERIES", 20)):
@@ -254,7 +254,7 @@ def test_json_round_trips_every_table_value(data_dir) -> None:
     assert back.ranges == tables.ranges
 
 
-def test_json_carries_the_lambda_map(tmp_path, small: Scenario) -> None:
+def test_json_carries_the_lambda_map(tmp_path, small: ResolvedScenario) -> None:
     scenario = resolve(load_scenario("paper_gt", {**SMALL_OVERRIDES, "surrogate.lambda_map": "lambda"}))
     write_dataset(fits.build(scenario, synthetic_cube(scenario, noise=0.2)), tmp_path, "fits", scenario)
     with warnings.catch_warnings():
@@ -275,7 +275,7 @@ def test_json_carries_the_lambda_map(tmp_path, small: Scenario) -> None:
     xr.testing.assert_identical(_quiet(from_json, scenario, *args), _quiet(from_nc, scenario, *args))
 
 
-def test_curve_model_reproduces_every_cell_at_every_fitted_step(small: Scenario) -> None:
+def test_curve_model_reproduces_every_cell_at_every_fitted_step(small: ResolvedScenario) -> None:
     """The default predictor (the curve model) at a grid cell's (xi, lambda) and a fitted step is
     that cell's curve, within max(3 %, the step's interval) of the cell's mean (issue 21's target)."""
     fits_ds = fits.build(small, synthetic_cube(small, noise=0.2))
@@ -302,7 +302,7 @@ def test_curve_model_reproduces_every_cell_at_every_fitted_step(small: Scenario)
             assert np.all(r["fit_error"].values > 0) and np.all(np.isfinite(r["surrogate_error"].values))
 
 
-def test_curve_between_cells_is_the_linear_interpolation_of_the_cells(small: Scenario, surrogate_ds: xr.Dataset) -> None:
+def test_curve_between_cells_is_the_linear_interpolation_of_the_cells(small: ResolvedScenario, surrogate_ds: xr.Dataset) -> None:
     lam = np.asarray(small.oxide.lambda_)
     xi = small.oxide.xi[1]
     mid = float(np.exp(0.5 * (np.log(lam[0]) + np.log(lam[1]))))  # halfway in w = ln lambda

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from pipeline.cli.main import main
-from pipeline.config import ConfigError, Scenario, load_scenario
+from pipeline.config import ConfigError, ResolvedScenario, load_scenario
 from pipeline.physics.groups import groups, surface_from_groups
 from pipeline.predict.predictor import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
 from pipeline.heightmap import measure
@@ -28,7 +28,7 @@ def _predict(data_dir, small, capsys, *extra: str) -> tuple[int, str, str]:
     return status, captured.out, captured.err
 
 
-def test_surrogate_records_its_scene(data_dir, small: Scenario) -> None:
+def test_surrogate_records_its_scene(data_dir, small: ResolvedScenario) -> None:
     g = groups(small.roughness.sigma, small.roughness.eta, small.roughness.beta, small.indenter.radius)
     info = json.loads((data_dir / "surrogate.json").read_text())["info"]
     assert info["mu"] == pytest.approx(8.2624, abs=5e-5) and info["mu"] == g.mu
@@ -36,7 +36,7 @@ def test_surrogate_records_its_scene(data_dir, small: Scenario) -> None:
     assert load_surrogate(data_dir / "surrogate.nc").info["mu"] == g.mu
 
 
-def test_another_surface_is_refused_naming_the_group(data_dir, small: Scenario, capsys) -> None:
+def test_another_surface_is_refused_naming_the_group(data_dir, small: ResolvedScenario, capsys) -> None:
     status, out, err = _predict(data_dir, small, capsys, "--set", "roughness.beta=3e-4")
     mu = groups(small.roughness.sigma, small.roughness.eta, 3e-4, small.indenter.radius).mu
     assert status == 2 and out == "" and err.count("\n") == 1
@@ -44,7 +44,7 @@ def test_another_surface_is_refused_naming_the_group(data_dir, small: Scenario, 
     assert "single-scene surrogate" in err and "--extrapolate" in err
 
 
-def test_extrapolate_accepts_it_with_a_warning(data_dir, small: Scenario, capsys) -> None:
+def test_extrapolate_accepts_it_with_a_warning(data_dir, small: ResolvedScenario, capsys) -> None:
     status, out, err = _predict(data_dir, small, capsys, "--set", "roughness.eta=1e9", "--extrapolate")
     assert status == 0
     assert "warning: mu = " in err and "another surface's coefficients" in err
@@ -56,7 +56,7 @@ def test_extrapolate_accepts_it_with_a_warning(data_dir, small: Scenario, capsys
     assert header[:2] == ["force_N", "xi"] and header[-2:] == ["mu", "Pi"]  # new columns after today's
 
 
-def test_same_groups_other_dimensions_scale_exactly(data_dir, small: Scenario, capsys) -> None:
+def test_same_groups_other_dimensions_scale_exactly(data_dir, small: ResolvedScenario, capsys) -> None:
     """Inside the domain but with other dimensions: other numbers, the same R'(F')."""
     other = surface_from_groups(*groups(small.roughness.sigma, small.roughness.eta, small.roughness.beta,
                                         small.indenter.radius).__dict__.values(), sigma=40e-6, radius=5e-3)
@@ -73,7 +73,7 @@ def test_same_groups_other_dimensions_scale_exactly(data_dir, small: Scenario, c
         float(a_res["resistance"]) / small.resistance_scale, rel=1e-12)
 
 
-def test_surrogate_without_groups_is_refused(data_dir, small: Scenario) -> None:
+def test_surrogate_without_groups_is_refused(data_dir, small: ResolvedScenario) -> None:
     tables = load_surrogate(data_dir / "surrogate.json")
     tables.info.pop("mu")
     with pytest.raises(ConfigError, match="records no \\(mu, Pi\\)"):
@@ -82,7 +82,7 @@ def test_surrogate_without_groups_is_refused(data_dir, small: Scenario) -> None:
         _quiet(tables, small, 1500.0, 0.4, 4.0, extrapolate=True)
 
 
-def test_measured_roughness_feeds_the_groups(tmp_path, data_dir, small: Scenario, capsys) -> None:
+def test_measured_roughness_feeds_the_groups(tmp_path, data_dir, small: ResolvedScenario, capsys) -> None:
     z, *_ = wave_surface(128)
     path = tmp_path / "surface.npy"
     np.save(path, z)
@@ -98,7 +98,7 @@ def test_measured_roughness_feeds_the_groups(tmp_path, data_dir, small: Scenario
     assert status == 2 and "--pixel-size is only used with --roughness" in err
 
 
-def test_another_surface_in_the_atlas_domain_is_answered_by_the_atlas(data_dir, small: Scenario, capsys) -> None:
+def test_another_surface_in_the_atlas_domain_is_answered_by_the_atlas(data_dir, small: ResolvedScenario, capsys) -> None:
     """Without --surrogate, a surface other than the run's is answered by the atlas surrogate the
     package ships (never by the run's coefficients), and the run's own surface by the run's."""
     query = ["predict", "--data-dir", str(data_dir), *cli_overrides(small), *QUERY]

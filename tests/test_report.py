@@ -16,7 +16,7 @@ from analysis.report import write_report
 from analysis.report_blocks import Block
 from analysis.report_render import to_html, to_markdown
 from pipeline.cli.main import main
-from pipeline.config import Scenario, load_scenario
+from pipeline.config import ResolvedScenario, load_scenario
 from pipeline.stages import fits as fits_stage
 from pipeline.store import write_dataset
 from tests.conftest import SMALL_OVERRIDES
@@ -26,7 +26,7 @@ FIGURES = ["fig3_bounds.png", "fig8_resistance.png", "fig9_conductance.png", "fi
 
 
 @pytest.fixture(scope="module")
-def run_dir(tmp_path_factory, small: Scenario) -> Path:
+def run_dir(tmp_path_factory, small: ResolvedScenario) -> Path:
     """fits and surrogate stages run by the CLI on a synthetic cube with some open circuits."""
     data = tmp_path_factory.mktemp("data")
     write_dataset(synthetic_cube(small, open_share=0.25), data, "cube", small)
@@ -49,7 +49,7 @@ def test_stage_files(run_dir: Path) -> None:
     assert len((run_dir / "table3.csv").read_text().splitlines()) == 10
 
 
-def test_figures_written_and_non_empty(run_dir: Path, small: Scenario) -> None:
+def test_figures_written_and_non_empty(run_dir: Path, small: ResolvedScenario) -> None:
     out = run_dir / "figures"
     out.mkdir(exist_ok=True)
     paths = figures_results.write(small, run_dir, out)
@@ -58,7 +58,7 @@ def test_figures_written_and_non_empty(run_dir: Path, small: Scenario) -> None:
         assert p.stat().st_size > 10_000, p
 
 
-def test_report_has_everything(run_dir: Path, small: Scenario) -> None:
+def test_report_has_everything(run_dir: Path, small: ResolvedScenario) -> None:
     out = run_dir / "figures"
     out.mkdir(exist_ok=True)
     (out / "extra_stage_figure.png").write_bytes(b"\x89PNG")
@@ -79,7 +79,7 @@ def test_report_has_everything(run_dir: Path, small: Scenario) -> None:
     assert "Flagged cells (stopped at the cap short of the target): 0." in md
 
 
-def test_report_without_stage_files(tmp_path, small: Scenario) -> None:
+def test_report_without_stage_files(tmp_path, small: ResolvedScenario) -> None:
     paths = write_report(small, tmp_path)
     assert "Not available" in paths[0].read_text()
 
@@ -110,7 +110,7 @@ def test_load_figure_markers_are_the_fitted_reduction() -> None:
     assert not np.allclose(ds["median"].sel(cell), ds["geometric_mean"].sel(cell))
 
 
-def test_report_parameters_carry_units(run_dir: Path, small: Scenario) -> None:
+def test_report_parameters_carry_units(run_dir: Path, small: ResolvedScenario) -> None:
     assert main(["report", "--data-dir", str(run_dir), *cli_overrides(small)]) == 0
     md = (run_dir / "report.md").read_text()
     assert "| roughness.sigma | 2e-05 | m | standard deviation of asperity heights |" in md
@@ -148,13 +148,13 @@ def test_a_stage_markdown_section_becomes_headings_paragraphs_and_tables(tmp_pat
     assert kinds[:2] == ["h2", "h3"] and "pre" not in kinds and "table" in kinds
 
 
-def _report(run_dir: Path, small: Scenario) -> tuple[str, str]:
+def _report(run_dir: Path, small: ResolvedScenario) -> tuple[str, str]:
     """report.md and report.html of the small run, written by the CLI."""
     assert main(["report", "--data-dir", str(run_dir), *cli_overrides(small)]) == 0
     return (run_dir / "report.md").read_text(), (run_dir / "report.html").read_text()
 
 
-def test_report_reads_top_to_bottom(run_dir: Path, small: Scenario) -> None:
+def test_report_reads_top_to_bottom(run_dir: Path, small: ResolvedScenario) -> None:
     md, _ = _report(run_dir, small)
     lines = md.splitlines()
     first_table = next(i for i, line in enumerate(lines) if line.startswith("|"))
@@ -170,7 +170,7 @@ def test_report_reads_top_to_bottom(run_dir: Path, small: Scenario) -> None:
         assert text in summary, text
 
 
-def test_report_contents_links_resolve(run_dir: Path, small: Scenario) -> None:
+def test_report_contents_links_resolve(run_dir: Path, small: ResolvedScenario) -> None:
     md, page = _report(run_dir, small)
     contents = md[md.index("## Contents"):md.index("## Figures")]
     anchors = re.findall(r"\]\(#([^)]+)\)", contents)
@@ -180,7 +180,7 @@ def test_report_contents_links_resolve(run_dir: Path, small: Scenario) -> None:
     assert set(anchors) <= ids, set(anchors) - ids
 
 
-def test_report_lists_benchmarks_and_renders_code(run_dir: Path, small: Scenario) -> None:
+def test_report_lists_benchmarks_and_renders_code(run_dir: Path, small: ResolvedScenario) -> None:
     md, page = _report(run_dir, small)
     # the nested record is listed, not printed: no raw JSON lines, and the report is shorter than the
     # 393 lines the same run gave when records were dumped (issue 32)
@@ -193,7 +193,7 @@ def test_report_lists_benchmarks_and_renders_code(run_dir: Path, small: Scenario
     assert "<table>" in page and 'id="summary"' in page and "overflow-wrap:anywhere" in page
 
 
-def test_summary_quotes_the_validation_flags(tmp_path, small: Scenario) -> None:
+def test_summary_quotes_the_validation_flags(tmp_path, small: ResolvedScenario) -> None:
     from analysis.report import _summary_blocks
     from analysis.report_physics import validation_blocks
 

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.config import ConfigError, Scenario
+from pipeline.config import ConfigError, ResolvedScenario, Scenario
 
 __all__ = ["check_data_dir", "check_output_file", "check_scheduler", "check_scene", "check_discrete_reach",
            "scene_forces", "preflight"]
@@ -129,7 +129,7 @@ def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
                           f"({reason}); start one with `dask scheduler` or drop --scheduler") from None
 
 
-def scene_forces(scenario: Scenario, data_dir: str | Path | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def scene_forces(scenario: ResolvedScenario, data_dir: str | Path | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Force (N) of every approach, how many cells touch at each, and how many asperities
     Greenwood-Tripp expects to touch at each (``2 pi eta int P(z > h(r)) r dr``).
 
@@ -190,7 +190,7 @@ def check_discrete_reach(scenario: Scenario, expected: float) -> None:
             f"'greenwood_tripp' (the scenario paper_gt)")
 
 
-def check_scene(scenario: Scenario, data_dir: str | Path | None = None) -> None:
+def check_scene(scenario: ResolvedScenario, data_dir: str | Path | None = None) -> None:
     """The cross-stage constraints that need the contact solution (see the module docstring).
 
     Raises
@@ -227,7 +227,7 @@ def check_scene(scenario: Scenario, data_dir: str | Path | None = None) -> None:
             f"must be <= {top:.3g}{unit} for this scene")
 
 
-def preflight(scenario: Scenario, data_dir: str | Path, scheduler: str | None = None,
+def preflight(scenario: ResolvedScenario, data_dir: str | Path, scheduler: str | None = None,
               scene: bool = True) -> None:
     """Everything a computing command checks before it starts: directory, scheduler, scene."""
     check_data_dir(data_dir)

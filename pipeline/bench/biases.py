@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from pipeline.compute import ComputeOptions
-from pipeline.config import Scenario, load_scenario
+from pipeline.config import ResolvedScenario, Scenario, load_scenario
 from pipeline.before_work.domains import resolve
 from pipeline.stages import contact, cube, fits, oxide
 
@@ -61,7 +61,7 @@ def _one(overrides: dict[str, Any], contacts: dict[str, Any]) -> dict[str, Any]:
     """alpha, gamma and R at :data:`LOADS` (clean and per cell) of the published scenario with
     ``overrides``; ``contacts`` keeps the contact datasets by configuration hash (steps that change
     only the oxide or the cube share one)."""
-    scenario: Scenario = resolve(load_scenario("published", {**STUDY, **overrides}))
+    scenario: ResolvedScenario = resolve(load_scenario("published", {**STUDY, **overrides}))
     options = ComputeOptions(progress=False)
     start = time.perf_counter()
     key = scenario.config_hash("contact")

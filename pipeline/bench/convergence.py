@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline.compute import ComputeOptions
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario
 from pipeline.stages import contact, cube, fits, oxide
 
 __all__ = ["run", "compare", "fit_at"]
@@ -29,7 +29,7 @@ __all__ = ["run", "compare", "fit_at"]
 CAP = 4000
 
 
-def fit_at(scenario: Scenario, contact_ds: xr.Dataset, options: ComputeOptions) -> tuple[xr.Dataset, float]:
+def fit_at(scenario: ResolvedScenario, contact_ds: xr.Dataset, options: ComputeOptions) -> tuple[xr.Dataset, float]:
     """Cube and fits of ``scenario`` on a given contact; returns fits.nc's dataset and the seconds."""
     start = time.perf_counter()
     record = oxide.build(scenario, options)
@@ -88,7 +88,7 @@ def _table(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def run(scenario: Scenario) -> dict[str, Any]:
+def run(scenario: ResolvedScenario) -> dict[str, Any]:
     """Resolution r against 2 r, and the window period against r, on the scenario's grid.
 
     Returns

@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline.compute import ComputeOptions
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario, Scenario
 from pipeline.physics import constriction
 from pipeline.physics.crops import choose_crops
 from pipeline.physics.spot_geometry import SpotGeometry
@@ -37,7 +37,7 @@ N_TIMED_MASKS = 256
 REPEATS = 3
 
 
-def _inputs(scenario: Scenario) -> tuple[xr.Dataset, xr.Dataset]:
+def _inputs(scenario: ResolvedScenario) -> tuple[xr.Dataset, xr.Dataset]:
     """Contact spots and oxide ensemble of ``scenario``, built in memory by their stages."""
     return contact_stage.build(scenario), oxide_stage.build(scenario)
 

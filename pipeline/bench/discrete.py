@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from pipeline.compute import ComputeOptions
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario, Scenario
 from pipeline.before_work.domains import resolve, solve_scenario
 from pipeline.contact_solution import fields
 from pipeline.physics import discrete_contact as dc
@@ -36,7 +36,7 @@ REFERENCE_SURFACES = 3
 MAPS = 12
 
 
-def _discrete(scenario: Scenario) -> Scenario:
+def _discrete(scenario: Scenario) -> ResolvedScenario:
     return resolve(dataclasses.replace(
         scenario, contact=dataclasses.replace(scenario.contact, model="discrete", surfaces=SURFACES)))
 
@@ -92,7 +92,7 @@ def _contact(scenario: Scenario) -> tuple[dict[str, Any], np.ndarray]:
     return figures, forces
 
 
-def _maps(scenario: Scenario) -> list[dict[str, Any]]:
+def _maps(scenario: ResolvedScenario) -> list[dict[str, Any]]:
     pool_ds = contact.build(scenario, ComputeOptions(progress=False))
     pool, _, base = cube.work_settings(scenario, pool_ds)
     source = FieldSource.of(scenario)

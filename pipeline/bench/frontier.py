@@ -36,7 +36,7 @@ from pipeline.bench.frontier_plot import plot
 from pipeline.bench.frontier_prefix import adaptive_prefix, prefix_summary
 from pipeline.bench.frontier_sweeps import contact_frontier, cube_frontier, ensemble_frontier
 from pipeline.bench.schema import sweep_column, sweep_index
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario
 from pipeline.stages.schema import labelled
 from pipeline.store import atomic_path
 
@@ -105,7 +105,7 @@ def write(contact_rows: list[dict[str, Any]], cube_rows: list[dict[str, Any]], e
     return target
 
 
-def run(scenario: Scenario, data_dir: str | Path | None = None) -> dict[str, Any]:
+def run(scenario: ResolvedScenario, data_dir: str | Path | None = None) -> dict[str, Any]:
     """All three sweeps; with ``data_dir``, save frontier.nc and the figures; JSON-ready summary."""
     contact_rows = contact_frontier(scenario)
     cube_rows = cube_frontier(scenario)

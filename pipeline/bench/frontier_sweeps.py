@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, Callable
+from typing import Any, Callable, TypeVar
 
 import numpy as np
 import xarray as xr
@@ -16,7 +16,7 @@ import xarray as xr
 from pipeline.bench.schema import FRONTIER
 from pipeline.bench.timing import median_time
 from pipeline.compute import ComputeOptions
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario, Scenario
 from pipeline.physics.radial_grid import force_weights
 from pipeline.stages.schema import labelled
 
@@ -41,7 +41,11 @@ def _median_time(fn: Callable[[], Any], repeats: int | None = None) -> tuple[flo
     return median_time(fn, REPEATS if repeats is None else repeats)
 
 
-def _replace(scenario: Scenario, section: str, **changes: Any) -> Scenario:
+#: A scenario's type, resolved or not: :func:`_replace` keeps it.
+_S = TypeVar("_S", bound=Scenario)
+
+
+def _replace(scenario: _S, section: str, **changes: Any) -> _S:
     return dataclasses.replace(scenario, **{section: dataclasses.replace(getattr(scenario, section), **changes)})
 
 
@@ -94,7 +98,7 @@ def _float32(contact_ds: xr.Dataset) -> xr.Dataset:
     return out
 
 
-def cube_frontier(scenario: Scenario) -> list[dict[str, Any]]:
+def cube_frontier(scenario: ResolvedScenario) -> list[dict[str, Any]]:
     """Every (algorithm, crop tolerance, precision) with its time and errors in R, alpha, gamma."""
     from pipeline.stages import contact, cube, fits, oxide
 
@@ -125,7 +129,7 @@ def cube_frontier(scenario: Scenario) -> list[dict[str, Any]]:
     return rows
 
 
-def ensemble_frontier(scenario: Scenario) -> xr.Dataset:
+def ensemble_frontier(scenario: ResolvedScenario) -> xr.Dataset:
     """Interval widths of alpha and gamma and time against the number of realizations."""
     from pipeline.stages import contact, cube, fits, oxide
 

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from pipeline.compute import ComputeOptions
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario
 from pipeline.physics import oxide_band, oxide_field
 from pipeline.physics.grid import cell_centres
 from pipeline.scene import FieldSource, bands
@@ -32,7 +32,7 @@ PER_LAMBDA_FIELDS = 100
 SUBSET_REALIZATIONS = 2
 
 
-def _per_lambda(scenario: Scenario) -> list[dict[str, Any]]:
+def _per_lambda(scenario: ResolvedScenario) -> list[dict[str, Any]]:
     """Seconds per field (stream, coefficients, evaluation, thresholds) at every lambda."""
     source = FieldSource.of(scenario)
     rows = []
@@ -45,7 +45,7 @@ def _per_lambda(scenario: Scenario) -> list[dict[str, Any]]:
     return rows
 
 
-def _direct_subset(scenario: Scenario, psi: np.ndarray) -> tuple[float, float]:
+def _direct_subset(scenario: ResolvedScenario, psi: np.ndarray) -> tuple[float, float]:
     """Time the direct summation of a subset; return (seconds per field, max error)."""
     ox = scenario.oxide
     x = cell_centres(scenario.n_cells, scenario.cell_size)
@@ -60,7 +60,7 @@ def _direct_subset(scenario: Scenario, psi: np.ndarray) -> tuple[float, float]:
     return (time.perf_counter() - start) / fields, error
 
 
-def run(scenario: Scenario) -> dict[str, Any]:
+def run(scenario: ResolvedScenario) -> dict[str, Any]:
     """Median wall time of the stage build, per-field and per-lambda cost, the direct comparison.
 
     Returns

@@ -21,7 +21,7 @@ import numpy as np
 
 from pipeline.bench.cube import _max_rel_error, _subset_masks
 from pipeline.compute import ComputeOptions
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario, Scenario
 from pipeline.physics import constriction, point_model
 from pipeline.physics.crops import choose_crops
 from pipeline.physics.spot_geometry import SpotGeometry
@@ -42,7 +42,7 @@ DELTA_STRIDE = 5
 N_CROP_MASKS = 128
 
 
-def _timed_cube(scenario: Scenario, contact: Any, oxide: Any) -> tuple[Any, list[float]]:
+def _timed_cube(scenario: ResolvedScenario, contact: Any, oxide: Any) -> tuple[Any, list[float]]:
     seconds, ds = [], None
     for _ in range(REPEATS):
         start = time.perf_counter()
@@ -101,7 +101,7 @@ def _cropping(scenario: Scenario, contact: Any, oxide: Any) -> dict[str, Any]:
     }
 
 
-def run(scenario: Scenario) -> dict[str, Any]:
+def run(scenario: ResolvedScenario) -> dict[str, Any]:
     """Time both models on the cube subset and check the point solve; JSON-ready figures."""
     subset = dataclasses.replace(
         scenario, oxide=dataclasses.replace(scenario.oxide, n_realizations=N_REALIZATIONS, film="insulating", ensemble="fixed"),

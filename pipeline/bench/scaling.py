@@ -26,7 +26,7 @@ import numpy as np
 
 from pipeline.before_work import plan
 from pipeline.compute import ComputeOptions
-from pipeline.config import Scenario, load_scenario
+from pipeline.config import ResolvedScenario, Scenario, load_scenario
 from pipeline.before_work.domains import resolve
 from pipeline.physics import constriction, interaction
 from pipeline.physics.crops import choose_crops
@@ -53,12 +53,12 @@ def _timed(func: Any, *args: Any) -> float:
     return time.perf_counter() - start
 
 
-def _scene(eta: float) -> Scenario:
+def _scene(eta: float) -> ResolvedScenario:
     return resolve(load_scenario("paper_gt", {"roughness.eta": eta, "oxide.xi": [0.5], "oxide.lambda": [5.0, 13.0],
                                            "oxide.n_realizations": N_MASKS // 2, "oxide.chunk": N_MASKS}))
 
 
-def _kernel_inputs(s: Scenario) -> tuple:
+def _kernel_inputs(s: ResolvedScenario) -> tuple:
     """The cube kernel's arguments (masks, spots, rho) on the scene's real masks (tiled to whole
     blocks) and crops."""
     quiet = ComputeOptions(progress=False)

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from pipeline.bench.timing import median_time
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario, Scenario
 from pipeline.before_work.domains import resolve
 from pipeline.physics.spot_models import DISCRETIZATIONS
 from pipeline.stages import contact, cube, cube_chunks
@@ -38,13 +38,13 @@ REPEATS = 5
 TARGETS = {"expected": 0.04, "asperities": 0.05, "point_lattice": 1e-4, "time_ratio": 1.3}
 
 
-def _with_spots(scenario: Scenario, spots: str) -> Scenario:
+def _with_spots(scenario: Scenario, spots: str) -> ResolvedScenario:
     """``scenario`` with ``contact.spots`` and its own auto window (the windows differ by spots)."""
     return resolve(dataclasses.replace(scenario, contact=dataclasses.replace(
         scenario.contact, spots=spots, window="auto", r_max="auto")))
 
 
-def _per_map_seconds(scenario: Scenario, contact_ds: Any) -> float:
+def _per_map_seconds(scenario: ResolvedScenario, contact_ds: Any) -> float:
     """Median wall time (s) per map of one Greenwood cube task of :data:`N_REALIZATIONS` fields."""
     greenwood = dataclasses.replace(scenario, cube=dataclasses.replace(scenario.cube, model="greenwood"))
     radius, weights, settings = cube.work_settings(greenwood, contact_ds)

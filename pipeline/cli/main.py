@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Callable, NoReturn, Sequence  # noqa: E402
 
 from pipeline import __version__  # noqa: E402
 from pipeline.config import (  # noqa: E402
-    STAGE_INPUTS, ConfigError, Scenario, bundled_scenarios, load_scenario, parameter_table)
+    STAGE_INPUTS, ConfigError, ResolvedScenario, Scenario, bundled_scenarios, load_scenario, parameter_table)
 from pipeline.errors import StaleInputError  # noqa: E402
 from pipeline.before_work.plan import prepare  # noqa: E402
 from pipeline.before_work.surrogate_grid import check_surrogate_grid  # noqa: E402
@@ -78,7 +78,7 @@ def _options(args: argparse.Namespace) -> ComputeOptions:
     )
 
 
-def _preflight(args: argparse.Namespace, scenario: Scenario, scene: bool = True) -> None:
+def _preflight(args: argparse.Namespace, scenario: ResolvedScenario, scene: bool = True) -> None:
     """Directory, scheduler and cross-stage checks before any work (pipeline.before_work.preflight)."""
     from pipeline.before_work.preflight import preflight
 
@@ -87,7 +87,7 @@ def _preflight(args: argparse.Namespace, scenario: Scenario, scene: bool = True)
         print(note, file=sys.stderr)
 
 
-def _run_stage(name: str, scenario: Scenario, args: argparse.Namespace) -> None:
+def _run_stage(name: str, scenario: ResolvedScenario, args: argparse.Namespace) -> None:
     options = _options(args)
     module = importlib.import_module(STAGES[name])
     start = time.perf_counter()
@@ -116,12 +116,12 @@ def _record_timing(data_dir: Path, step: str, seconds: float, config_hash: str) 
         tmp.write_text(json.dumps(timings, indent=1, sort_keys=True) + "\n")
 
 
-def _cmd_stage(args: argparse.Namespace, scenario: Scenario) -> None:
+def _cmd_stage(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     _preflight(args, scenario)
     _run_stage(args.command, scenario, args)
 
 
-def _cmd_run(args: argparse.Namespace, scenario: Scenario) -> None:
+def _cmd_run(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     _preflight(args, scenario)
     if args.check:
         print("run: every check before work passed (configuration, surrogate grid, plan, scene)", file=sys.stderr)
@@ -145,7 +145,7 @@ def _cmd_run(args: argparse.Namespace, scenario: Scenario) -> None:
     _cmd_report(args, scenario)
 
 
-def _cmd_figures(args: argparse.Namespace, scenario: Scenario) -> None:
+def _cmd_figures(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     from analysis.figures import write_figures
 
     from pipeline.store import stage_problem
@@ -183,7 +183,7 @@ def _report_problems(data_dir: Path, scenario: Scenario) -> list[str]:
     return problems
 
 
-def _cmd_report(args: argparse.Namespace, scenario: Scenario) -> None:
+def _cmd_report(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     from analysis.report import write_report
 
     _preflight(args, scenario, scene=False)
@@ -192,14 +192,14 @@ def _cmd_report(args: argparse.Namespace, scenario: Scenario) -> None:
         print(f"report: {path}", file=sys.stderr)
 
 
-def _cmd_bench(args: argparse.Namespace, scenario: Scenario) -> None:
+def _cmd_bench(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     from pipeline.bench import run_benchmarks
 
     _preflight(args, scenario, scene=False)
     run_benchmarks(scenario, args.data_dir, only=args.only, verbose=args.verbose)
 
 
-def _cmd_stamp(args: argparse.Namespace, scenario: Scenario) -> None:
+def _cmd_stamp(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     """Write ``<data>/.stamps/<stage>.json`` only when its content changes (for make).
 
     A stamp is also touched when its stage file exists but is unreadable (a truncated or
@@ -233,7 +233,7 @@ def _cmd_params(args: argparse.Namespace, scenario: Scenario) -> None:
         print(f"{key:32s} {flat[key]!s:>24}  [{unit}]  {allowed}: {doc}")
 
 
-def _cmd_plan(args: argparse.Namespace, scenario: Scenario) -> None:
+def _cmd_plan(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     from pipeline.before_work.plan import format_plan
 
     if args.validate:
@@ -264,7 +264,7 @@ def _cmd_predict(args: argparse.Namespace, scenario: Scenario) -> None:
     predict_cli(args, scenario)
 
 
-def _cmd_atlas(args: argparse.Namespace, scenario: Scenario) -> None:
+def _cmd_atlas(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     from pipeline.atlas.run import run_atlas
     from pipeline.atlas.design import AtlasDesign
 

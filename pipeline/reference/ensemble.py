@@ -30,7 +30,7 @@ from typing import Callable
 
 import numpy as np
 
-from pipeline.config import Scenario, load_scenario
+from pipeline.config import ResolvedScenario, Scenario, load_scenario
 from pipeline.reference import discrete_spots, scene, statistics
 from pipeline.reference.cases import Case, ensemble_cases
 from pipeline.reference.statistics import LogMean
@@ -79,7 +79,7 @@ class ModelEnsemble:
     description: str
 
 
-def validated_scenario(vset: scene.ValidationSet, config: str) -> Scenario:
+def validated_scenario(vset: scene.ValidationSet, config: str) -> ResolvedScenario:
     """``config`` on the validation scene with a fixed ensemble of ``vset.model_realizations`` oxide
     fields (and, for ``contact.model = "discrete"``, a pool of at least as many surfaces): its
     contact model, spots, spot rule and resistance model are its own."""

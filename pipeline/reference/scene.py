@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline.config import Scenario, load_scenario
+from pipeline.config import ResolvedScenario, load_scenario
 from pipeline.before_work.domains import resolve
 from pipeline.reference import surfaces
 from pipeline.stages import contact as contact_stage
@@ -210,7 +210,7 @@ def scene_overrides(vset: ValidationSet, realizations: int) -> dict[str, object]
     }
 
 
-def scenario_of(vset: ValidationSet, config: str, overrides: dict[str, object]) -> Scenario:
+def scenario_of(vset: ValidationSet, config: str, overrides: dict[str, object]) -> ResolvedScenario:
     """``config`` (a bundled scenario or a TOML file) with ``overrides``, its domains resolved; its
     load steps checked to be the set's approaches."""
     scenario = resolve(load_scenario(config, overrides))
@@ -220,7 +220,7 @@ def scenario_of(vset: ValidationSet, config: str, overrides: dict[str, object]) 
     return scenario
 
 
-def g2tom_scenario(vset: ValidationSet, model: str, spots: str) -> Scenario:
+def g2tom_scenario(vset: ValidationSet, model: str, spots: str) -> ResolvedScenario:
     """Part 1's g2tom scenario of the validation scene: Greenwood-Tripp's contact model (whatever
     the default's), one spot discretization, the spots' centre rule and one ``cube.model``."""
     overrides = {**scene_overrides(vset, max(vset.realizations) + 1), "contact.model": "greenwood_tripp",

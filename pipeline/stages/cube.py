@@ -32,7 +32,7 @@ import xarray as xr
 
 from pipeline import store
 from pipeline.compute import ComputeOptions, single_threaded
-from pipeline.config import Scenario
+from pipeline.config import ResolvedScenario, Scenario
 from pipeline.physics.crops import choose_crops
 from pipeline.physics.interaction import AUTO_METHOD
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
@@ -219,7 +219,7 @@ def clean_conductances(scenario: Scenario, contact: xr.Dataset,
 
 @single_threaded
 def build(
-    scenario: Scenario,
+    scenario: ResolvedScenario,
     contact: xr.Dataset,
     oxide: xr.Dataset,
     options: ComputeOptions = ComputeOptions(progress=False),
@@ -230,7 +230,7 @@ def build(
     Parameters
     ----------
     scenario
-        The validated scenario (sections ``material`` for rho*, ``cube``, ``oxide`` for the
+        The resolved scenario (sections ``material`` for rho*, ``cube``, ``oxide`` for the
         ensemble, ``fits.min_force`` and ``fits.confidence`` for the stopping rule).
     contact
         ``spot_radius`` and ``spot_area`` (delta, y, x), ``force``, ``force_normalized``.
@@ -270,7 +270,7 @@ def build(
 
 
 @single_threaded
-def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
+def run(scenario: ResolvedScenario, data_dir: str | Path, options: ComputeOptions) -> Path:
     """Read contact.nc and oxide.nc, build the cube and write ``<data_dir>/cube.nc`` atomically."""
     contact = store.read_stage(data_dir, "contact", scenario)
     oxide = store.read_stage(data_dir, "oxide", scenario)

@@ -28,7 +28,7 @@ import xarray as xr
 
 from pipeline import store
 from pipeline.compute import ComputeOptions, compute, single_threaded
-from pipeline.config import CHUNK_BYTES, Scenario
+from pipeline.config import CHUNK_BYTES, ResolvedScenario, Scenario
 from pipeline.physics.grid import cell_centres
 from pipeline.scene import FieldSource, bands, threshold_block
 from pipeline.stages.schema import variable
@@ -58,7 +58,7 @@ class RecordedFields:
     threshold: np.ndarray  # float32 (xi, lambda, realization)
 
     @classmethod
-    def of(cls, scenario: Scenario, record: xr.Dataset, limit: int = RECORD_BYTES) -> "FieldSource | RecordedFields":
+    def of(cls, scenario: ResolvedScenario, record: xr.Dataset, limit: int = RECORD_BYTES) -> "FieldSource | RecordedFields":
         """The record of ``scenario``'s fields in front of its source, or the bare source when
         the record exceeds ``limit`` bytes (tasks then regenerate every field, bounding memory)."""
         source = FieldSource.of(scenario)
@@ -112,7 +112,7 @@ def _fraction_block(psi: np.ndarray, threshold: np.ndarray) -> np.ndarray:
     return counts / flat.shape[-1]
 
 
-def _lazy(scenario: Scenario) -> tuple[da.Array, da.Array, da.Array]:
+def _lazy(scenario: ResolvedScenario) -> tuple[da.Array, da.Array, da.Array]:
     """Dask arrays psi, threshold and oxide_fraction, chunked over realization."""
     ox = scenario.oxide
     n = scenario.n_cells
@@ -142,7 +142,7 @@ def _lazy(scenario: Scenario) -> tuple[da.Array, da.Array, da.Array]:
     return psi, threshold, fraction
 
 
-def _dataset(scenario: Scenario, psi: np.ndarray, threshold: np.ndarray, fraction: np.ndarray) -> xr.Dataset:
+def _dataset(scenario: ResolvedScenario, psi: np.ndarray, threshold: np.ndarray, fraction: np.ndarray) -> xr.Dataset:
     """Wrap the computed arrays with coordinates and attributes."""
     ox = scenario.oxide
     centres = cell_centres(scenario.n_cells, scenario.cell_size)
@@ -182,13 +182,13 @@ def _dataset(scenario: Scenario, psi: np.ndarray, threshold: np.ndarray, fractio
 
 
 @single_threaded
-def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=False)) -> xr.Dataset:
+def build(scenario: ResolvedScenario, options: ComputeOptions = ComputeOptions(progress=False)) -> xr.Dataset:
     """Compute the oxide ensemble of ``scenario`` with dask over realization chunks.
 
     Parameters
     ----------
     scenario
-        The validated scenario (section ``oxide``, the cell grid).
+        The resolved scenario (section ``oxide``, the cell grid).
     options
         Where dask runs (see :func:`pipeline.compute.compute`).
 
@@ -231,6 +231,6 @@ def _computed(
 
 
 @single_threaded
-def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
+def run(scenario: ResolvedScenario, data_dir: str | Path, options: ComputeOptions) -> Path:
     """Build the ensemble and write ``<data_dir>/oxide.nc`` atomically; return its path."""
     return store.write_dataset(build(scenario, options), data_dir, "oxide", scenario)
