@@ -11,7 +11,7 @@ import xarray as xr
 from pipeline.bench import contact as bench_contact
 from pipeline.cli.main import main
 from pipeline.compute import ComputeOptions
-from pipeline.config import ConfigError, load_scenario
+from pipeline.config import ConfigError, Scenario, load_scenario
 from pipeline.physics import spot_models
 from pipeline.physics.asperity import area_fraction
 from pipeline.physics.grid import cell_centres
@@ -119,7 +119,7 @@ def test_window_corner_outside_radial_domain(tmp_path, capsys):
 
 def test_window_check_of_the_stage_itself(small):
     """A scenario built around the validation still gets a ConfigError naming the radial domain."""
-    sc = dataclasses.replace(small, contact=dataclasses.replace(small.contact, r_max=0.25))
+    sc = Scenario.of(small, contact=dataclasses.replace(small.contact, r_max=0.25))
     with pytest.raises(ConfigError, match="contact.r_max = 0.25 truncates the contact"):
         contact.build(sc)
 

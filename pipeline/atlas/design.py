@@ -150,8 +150,8 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
     # every step is fitted: the lightest lies at FORCE_RANGE[0] / (1 + END_MARGIN)
     fits = dataclasses.replace(base.fits, fit_range="force_normalized",
                                min_force_normalized=round(FORCE_RANGE[0] / (1.0 + 2.0 * END_MARGIN), 6))
-    scenario = dataclasses.replace(base, name=f"{base.name}/{scene.name}", roughness=roughness, contact=contact,
-                                   fits=fits)
+    scenario = Scenario.of(base, name=f"{base.name}/{scene.name}", roughness=roughness, contact=contact,
+                           fits=fits)
     try:
         scenario = loading_for_range(scenario) if loading is None else dataclasses.replace(scenario, loading=loading)
         if scenario.contact.model == "discrete":  # as many touching caps in the pool as the paper's

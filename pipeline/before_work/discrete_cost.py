@@ -82,7 +82,7 @@ def probe(scenario: Scenario, delta_sigma: np.ndarray) -> tuple[np.ndarray, dict
     r = scenario.indenter.radius * 1e-6
     while (deltas.min() * sigma + float(indenter_profile(scenario, np.array([r]))[0])) < _FAR_GAP * sigma:
         r *= 1.5
-    probe_scenario = dataclasses.replace(
+    probe_scenario = Scenario.of(
         scenario,
         loading=dataclasses.replace(scenario.loading, delta_max=float(deltas[0]), delta_min=float(deltas[-1]),
                                     n_delta=deltas.size),

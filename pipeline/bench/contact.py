@@ -47,7 +47,8 @@ def _case(scenario: Scenario, solver: str, reference: np.ndarray) -> dict[str, A
 
 
 def _with_contact(scenario: Scenario, **changes: Any) -> Scenario:
-    return dataclasses.replace(scenario, contact=dataclasses.replace(scenario.contact, **changes))
+    """``scenario`` with ``changes`` to its contact section: a plain scenario (``r_max`` may be among them)."""
+    return Scenario.of(scenario, contact=dataclasses.replace(scenario.contact, **changes))
 
 
 def run(scenario: Scenario) -> dict[str, Any]:

@@ -40,7 +40,7 @@ TARGETS = {"expected": 0.04, "asperities": 0.05, "point_lattice": 1e-4, "time_ra
 
 def _with_spots(scenario: Scenario, spots: str) -> ResolvedScenario:
     """``scenario`` with ``contact.spots`` and its own auto window (the windows differ by spots)."""
-    return resolve(dataclasses.replace(scenario, contact=dataclasses.replace(
+    return resolve(Scenario.of(scenario, contact=dataclasses.replace(
         scenario.contact, spots=spots, window="auto", r_max="auto")))
 
 

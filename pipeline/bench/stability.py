@@ -71,11 +71,12 @@ CASES: list[Case] = [
 
 
 def _window(scenario: Scenario) -> Scenario:
-    """The scenario with its spot window shrunk to at most ``MAX_CELLS`` cells per side."""
+    """The scenario with its spot window shrunk to at most ``MAX_CELLS`` cells per side (then a plain
+    scenario: the contact stage resolves it again)."""
     cells = MAX_CELLS * scenario.cell_size / scenario.indenter.radius
     if scenario.contact.window <= cells:
         return scenario
-    return dataclasses.replace(scenario, contact=dataclasses.replace(scenario.contact, window=cells))
+    return Scenario.of(scenario, contact=dataclasses.replace(scenario.contact, window=cells))
 
 
 def evaluate(case: Case) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
