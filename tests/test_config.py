@@ -7,7 +7,7 @@ import warnings
 
 import pytest
 
-from pipeline.config import ConfigError, bundled_scenarios, load_scenario, parameter_table
+from pipeline.config import ConfigError, bundled_scenarios, load_scenario, odd_cells, parameter_table
 from pipeline.before_work.domains import resolve
 
 
@@ -27,7 +27,7 @@ def test_paper_scenario_embeds_tables_1_and_2(paper) -> None:
     assert deltas[0] == pytest.approx(2 * 20e-6) and deltas[-1] == pytest.approx(-3 * 20e-6)
     # auto window: the spots outside 55 cells change R by < cube.crop_tolerance at -3 sigma
     assert paper.n_cells == 49  # the auto window of expected spots (mean_area spots need 55)
-    assert load_scenario("published").n_cells == 57  # explicit 0.4 R* sqrt(eta) = 56.6 -> nearest odd
+    assert resolve(load_scenario("published")).n_cells == 57  # explicit 0.4 R* sqrt(eta) = 56.6 -> nearest odd
 
 
 def test_published_differs_only_in_its_conventions(paper_gt) -> None:
@@ -111,7 +111,8 @@ def test_unknown_key_suggests_nearest(override: str, suggestion: str) -> None:
 
 def test_window_fits_the_radial_domain_exactly() -> None:
     """sqrt(2) * 28 cells * 1/sqrt(eta) = 0.28 R*: r_max = 0.28 is enough, 0.279 is not."""
-    assert load_scenario("paper", ["contact.window=0.4", "contact.r_max=0.28"]).n_cells == 57
+    s = load_scenario("paper", ["contact.window=0.4", "contact.r_max=0.28"])
+    assert odd_cells(0.4 * s.indenter.radius, s.cell_size) == 57
     with pytest.raises(ConfigError, match="contact.window = 0.4 is out of range"):
         load_scenario("paper", ["contact.window=0.4", "contact.r_max=0.279"])
     with pytest.raises(ConfigError) as err:

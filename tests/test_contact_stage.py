@@ -12,6 +12,7 @@ from pipeline.bench import contact as bench_contact
 from pipeline.cli.main import main
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Scenario, load_scenario
+from pipeline.before_work.domains import resolve
 from pipeline.physics import spot_models
 from pipeline.physics.asperity import area_fraction
 from pipeline.physics.grid import cell_centres
@@ -69,7 +70,7 @@ def test_area_conservation_spots_vs_continuous(ds):
 
 
 def test_published_conventions():
-    sc = load_scenario("published", {"loading.n_delta": 4})
+    sc = resolve(load_scenario("published", {"loading.n_delta": 4}))
     out = contact.build(sc)
     assert out.sizes["r"] == 20 and out.r.values[-1] == pytest.approx(0.3 * sc.indenter.radius)
     np.testing.assert_allclose(np.diff(out.r), out.r.values[1])

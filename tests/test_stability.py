@@ -129,9 +129,10 @@ def test_unconverged_solve_is_reported_naming_the_case() -> None:
 
 @pytest.mark.stress
 def test_oxide_fraction_at_its_edges() -> None:
-    scenario = load_scenario("paper_gt", {
-        **FAST, "oxide.xi": [1e-6, 0.5, 1 - 1e-6], "oxide.lambda": [1.0, 19.0], "oxide.n_realizations": 12,
-    })
+    scenario = resolve(load_scenario("paper_gt", {
+        **FAST, "oxide.xi": [1e-6, 0.5, 1 - 1e-6], "oxide.lambda": [1.0, 19.0], "oxide.ensemble": "fixed",
+        "oxide.n_realizations": 12,
+    }))
     quiet = ComputeOptions(progress=False)
     result = cube.build(scenario, contact.build(scenario), oxide.build(scenario, quiet), quiet)
     r = result["resistance"]
