@@ -10,7 +10,8 @@ import xarray as xr
 import pytest
 
 from pipeline import __version__
-from pipeline.cli.main import STAGES, main
+from pipeline.cli.commands import STAGES
+from pipeline.cli.main import main
 from pipeline.config import load_scenario
 from pipeline.store import read_stage
 from tests.conftest import SMALL_ARGS, SMALL_OVERRIDES

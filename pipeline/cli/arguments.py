@@ -1,0 +1,152 @@
+"""``g2tom``'s arguments: every subcommand, its options and its handler, declared for argparse."""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+from typing import Callable, NoReturn, Sequence
+
+from pipeline import __version__
+from pipeline.cli import commands
+from pipeline.config import bundled_scenarios
+
+__all__ = ["attach_negative_values", "build_parser"]
+
+
+def _scenario_args(p: argparse.ArgumentParser) -> None:
+    """Every subcommand's options: the scenario (``--config``, ``--set``) and ``--data-dir``."""
+    p.add_argument(
+        "--config",
+        default="paper",
+        help=f"bundled scenario name ({', '.join(bundled_scenarios())}) or a TOML file (default: paper)",
+    )
+    p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override one parameter, e.g. --set roughness.sigma=2e-5 (repeatable)",
+    )
+    p.add_argument("--data-dir", type=Path, default=Path("data"), help="where stage files live")
+
+
+def _compute_args(p: argparse.ArgumentParser) -> None:
+    """A computing subcommand's options: where dask runs and whether progress is shown."""
+    p.add_argument("--scheduler", default=None, help="address of a dask.distributed scheduler")
+    p.add_argument("--workers", type=int, default=None, help="local dask workers (default: cores)")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+
+def _version() -> str:
+    """``--version``'s line: the package version and, in a git checkout, its commit."""
+    from pipeline.store import git_commit
+
+    commit = git_commit()
+    return f"g2tom {__version__}" + (f" (git {commit})" if commit else "")
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with its refusals as one ``g2tom: error:`` line (exit status 2)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"g2tom: error: {self.prog}: {message} (see `{self.prog} --help`)\n")
+
+
+_NEGATIVE = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|nan)$", re.IGNORECASE)
+
+
+def attach_negative_values(argv: Sequence[str]) -> list[str]:
+    """``--opt -1e-6`` as ``--opt=-1e-6``: argparse takes ``-1e-6`` for an option otherwise."""
+    out: list[str] = []
+    for item in argv:
+        if out and out[-1].startswith("--") and "=" not in out[-1] and _NEGATIVE.match(item):
+            out[-1] = f"{out[-1]}={item}"
+        else:
+            out.append(item)
+    return out
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``g2tom`` parser: each subcommand's options, and its handler as ``handler``
+    (:mod:`pipeline.cli.commands`)."""
+    parser = _Parser(
+        prog="g2tom",
+        description="Electrical contact resistance of rough, partially oxidized sphere-on-flat contacts.",
+    )
+    parser.add_argument("--version", action="version", version=_version())
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    def add(name: str, handler: Callable, help_text: str, compute: bool = False) -> argparse.ArgumentParser:
+        p = sub.add_parser(name, help=help_text)
+        _scenario_args(p)
+        if compute:
+            _compute_args(p)
+        p.set_defaults(handler=handler)
+        return p
+
+    for stage in commands.STAGES:
+        add(stage, commands.stage, f"run the {stage} stage", compute=True)
+    run = add("run", commands.run, "run every stage not up to date, the physics benchmarks, the figures and the report", compute=True)
+    run.add_argument("--check", action="store_true",
+                     help="only the checks a run makes before work (make run calls it before the first stage)")
+    run.add_argument("--no-bench", action="store_true",
+                     help="leave out the physics benchmarks the report shows (spots, biases; about a minute)")
+    add("figures", commands.figures, "write the figures under <data-dir>/figures")
+    add("report", commands.report, "write <data-dir>/report.md and report.html")
+    bench = add("bench", commands.bench, "benchmarks: run time against error, printed and saved")
+    bench.add_argument("--only", action="append", default=None, help="run only this benchmark")
+    bench.add_argument("--verbose", action="store_true", help="print every figure, not only where it was saved")
+    add("stamp", commands.stamp, "update per-stage configuration stamps (used by make)")
+    plan = add("plan", commands.plan, "estimate each stage's peak memory and run time; refuse what cannot fit",
+               compute=True)
+    plan.add_argument("--atlas", action="store_true",
+                      help="plan the atlas's default design over (mu, Pi) on this scenario (one scene per worker)")
+    plan.add_argument("--validate", action="store_true",
+                      help="plan `g2tom validate`'s default set on both surfaces, part 2 validating this scenario")
+    add("atlas", commands.atlas, "run the chain on every scene of the atlas's design over (mu, Pi), one scene per "
+        "task, resumable (<data-dir>/atlas/)", compute=True)
+    add("params", commands.params, "list every parameter with its value, unit and range")
+    predict = add("predict", commands.predict, "predict R_el with the surrogate (Eq. 27)")
+    predict.add_argument("--force", default=None, help="normal force F, N: a number or a comma-separated list")
+    predict.add_argument("--xi", default=None, help="oxide fraction in (0, 1): a number or a comma-separated list")
+    predict.add_argument("--lambda", dest="lam", default=None, help="l_O sqrt(eta) > 0: a number or a comma-separated list")
+    predict.add_argument("--csv", type=Path, default=None, help="CSV file of queries with columns force, xi, lambda")
+    predict.add_argument("--output", type=Path, default=None,
+                         help="write the CSV (or --json) result here (default: stdout; on a terminal, a short table)")
+    predict.add_argument("--json", action="store_true", help="the result as one JSON object (SI units)")
+    predict.add_argument("--extrapolate", action="store_true", help="allow queries outside the fitted ranges (with a warning)")
+    predict.add_argument("--model", choices=("curve", "power_law"), default="curve",
+                         help="curve: each cell's ln R'(ln F') curve, interpolated (default); power_law: Eq. 27")
+    predict.add_argument("--roughness", type=Path, default=None,
+                         help="a measured topography (see `g2tom roughness`): its summit sigma, eta and beta "
+                              "replace roughness.*")
+    predict.add_argument("--pixel-size", type=float, default=None,
+                         help="with --roughness: pixel size, m (for .npy, netCDF and text maps)")
+    predict.add_argument("--surrogate", type=Path, default=None,
+                         help="surrogate.json or surrogate.nc (default: <data-dir>/surrogate.json, else surrogate.nc)")
+    validate = add("validate", commands.validate,
+                   "the full-field elastic contact (tamaas) against g2tom, part 1 per surface and part 2 the "
+                   "--config scenario's ensemble: <data-dir>/validate/", compute=True)
+    validate.add_argument("--quick", action="store_true",
+                          help="256^2 grid, two realizations, two loads, clean and one oxidized case; part 2 on 128^2")
+    validate.add_argument("--realizations", type=int, default=None,
+                          help="part 1's surfaces (and oxide fields) 0 .. N-1 instead of the set's (>= 2)")
+    validate.add_argument("--loads", type=int, default=None,
+                          help="load steps evenly spaced in delta/sigma over the set's range (>= 2)")
+    validate.add_argument("--surface", choices=("gw", "random_process"), default="gw",
+                          help="gw: asperities with g2tom's own parameters (<data-dir>/validate/); random_process: a "
+                               "Gaussian self-affine surface, g2tom fed its summit statistics (<data-dir>/validate_random_process/)")
+    rough = add("roughness", commands.roughness, "sigma, eta and beta from a measured height map")
+    rough.add_argument("heightmap", type=Path, help=".npy, netCDF or text (heights in m), or an instrument file "
+                       "(read by the optional package SurfaceTopography)")
+    rough.add_argument("--pixel-size", type=float, default=None,
+                       help="pixel size, m (required for .npy, netCDF and text; overrides an instrument file's)")
+    rough.add_argument("--cutoff", type=float, default=None,
+                       help="shortest wavelength in the moments, m (default: 4 pixels)")
+    rough.add_argument("--periodic", action="store_true", help="the map is one period (no window, mean removed)")
+    rough.add_argument("--beta-rule", choices=("paper", "nayak"), default="paper",
+                       help="beta = 0.737/sqrt(m4) (paper, default) or 0.375 sqrt(pi/m4) (nayak)")
+    rough.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
+    return parser

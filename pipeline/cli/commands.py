@@ -1,0 +1,293 @@
+"""``g2tom``'s command handlers: each subcommand's work on its loaded scenario, resolved where it computes."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import os
+import sys
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from pipeline.config import STAGE_INPUTS, ConfigError, ResolvedScenario, Scenario, parameter_table
+from pipeline.errors import StaleInputError
+
+if TYPE_CHECKING:
+    from pipeline.compute import ComputeOptions
+
+__all__ = ["STAGES", "compute_options", "stage", "run", "figures", "report", "bench", "stamp", "params", "plan",
+           "predict", "atlas", "roughness", "validate"]
+
+#: Stage name -> module implementing ``run(scenario, data_dir, options) -> Path``, in order.
+STAGES: dict[str, str] = {
+    "contact": "pipeline.stages.contact",
+    "oxide": "pipeline.stages.oxide",
+    "cube": "pipeline.stages.cube",
+    "fits": "pipeline.stages.fits",
+    "surrogate": "pipeline.stages.surrogate",
+}
+
+
+def compute_options(args: argparse.Namespace) -> ComputeOptions:
+    """Where dask runs, from ``--scheduler``, ``--workers`` and ``--no-progress``; a refused
+    ``--workers`` is a ConfigError."""
+    from pipeline.compute import ComputeOptions  # dask only for commands that compute
+
+    if args.workers is not None and args.workers < 1:
+        raise ConfigError(f"--workers = {args.workers} is out of range: must be >= 1")
+    return ComputeOptions(
+        scheduler=args.scheduler, workers=args.workers, progress=not args.no_progress
+    )
+
+
+def _preflight(args: argparse.Namespace, scenario: ResolvedScenario, scene: bool = True) -> None:
+    """Directory, scheduler and cross-stage checks before any work (pipeline.before_work.preflight)."""
+    from pipeline.before_work.preflight import preflight
+
+    preflight(scenario, args.data_dir, getattr(args, "scheduler", None), scene=scene)
+    for note in getattr(args, "plan_notes", ()):  # the plan, once every check has passed
+        print(note, file=sys.stderr)
+
+
+def _run_stage(name: str, scenario: ResolvedScenario, args: argparse.Namespace) -> None:
+    """Run stage ``name`` where ``args`` says, and record its wall time."""
+    options = compute_options(args)
+    module = importlib.import_module(STAGES[name])
+    start = time.perf_counter()
+    path = module.run(scenario, args.data_dir, options)
+    elapsed = time.perf_counter() - start
+    _record_timing(args.data_dir, name, elapsed, scenario.config_hash(name))
+    print(f"{name}: wrote {path} in {elapsed:.2f} s", file=sys.stderr)
+
+
+def _record_timing(data_dir: Path, step: str, seconds: float, config_hash: str) -> None:
+    """Merge a step's wall time into ``<data_dir>/timings.json`` (read by the report).
+
+    Each entry records the configuration hash it was run with, so the report shows only the
+    times of the outputs it describes.
+    """
+    from pipeline.store import atomic_path
+
+    path = Path(data_dir) / "timings.json"
+    try:
+        timings = json.loads(path.read_text()) if path.is_file() else {}
+    except (OSError, ValueError):
+        timings = {}  # a damaged timings file is only a cache of wall times
+    timings[step] = {"seconds": round(seconds, 3), "config_hash": config_hash,
+                     "finished": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(timings, indent=1, sort_keys=True) + "\n")
+
+
+def stage(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
+    """``g2tom <stage>``: the checks before work, then that one stage."""
+    _preflight(args, scenario)
+    _run_stage(args.command, scenario, args)
+
+
+def run(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
+    """``g2tom run``: every stage not up to date, the physics benchmarks, the figures and the report
+    (``--check``: the checks before work only)."""
+    _preflight(args, scenario)
+    if args.check:
+        print("run: every check before work passed (configuration, surrogate grid, plan, scene)", file=sys.stderr)
+        return
+    from pipeline.config import STAGE_UPSTREAM
+    from pipeline.store import stage_path, stage_problem
+
+    rebuilt: set[str] = set()
+    for name in STAGES:  # as make: a stage file built from this configuration, on kept inputs, is kept
+        if stage_problem(args.data_dir, name, scenario) is None and not rebuilt & set(STAGE_UPSTREAM[name]):
+            print(f"{name}: up to date, kept {stage_path(args.data_dir, name)}", file=sys.stderr)
+            continue
+        _run_stage(name, scenario, args)
+        rebuilt.add(name)
+    if not args.no_bench:  # what make run adds to the report (the Makefile's PHYSICS_BENCH)
+        from pipeline.bench import physics_benchmarks
+
+        for line in physics_benchmarks(scenario, args.data_dir):
+            print(line, file=sys.stderr)
+    figures(args, scenario)
+    report(args, scenario)
+
+
+def figures(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
+    """``g2tom figures``: the figures of current stage files (refused before any is drawn otherwise)."""
+    from analysis.figures import write_figures
+
+    from pipeline.store import stage_problem
+
+    _preflight(args, scenario, scene=False)
+    # checked before drawing, so that no figure is replaced by half a set
+    _refuse_if("figures", [p for p in (stage_problem(args.data_dir, s, scenario) for s in STAGES) if p])
+    start = time.perf_counter()
+    for path in write_figures(scenario, args.data_dir):
+        print(f"figure: {path}", file=sys.stderr)
+    _record_timing(args.data_dir, "figures", time.perf_counter() - start, scenario.config_hash())
+
+
+def _refuse_if(what: str, problems: list[str]) -> None:
+    """One line for the first problem (and how many more) before anything is written."""
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise StaleInputError(f"{what} not written: {problems[0]}{more}")
+
+
+def _report_problems(data_dir: Path, scenario: Scenario) -> list[str]:
+    """Why a report of ``data_dir`` would describe missing, stale or outdated results."""
+    from pipeline.store import stage_path, stage_problem
+
+    problems = [p for p in (stage_problem(data_dir, s, scenario) for s in ("fits", "surrogate")) if p]
+    stages = [stage_path(data_dir, s) for s in STAGES if stage_path(data_dir, s).is_file()]
+    drawn = sorted((data_dir / "figures").glob("fig*.png"))  # the study's figures, not the benchmarks'
+    if not drawn:
+        problems.append(f"{data_dir / 'figures'} holds no figures: run `g2tom figures` (or `make figures`)")
+    elif stages:
+        newest = max(stages, key=lambda p: p.stat().st_mtime_ns)
+        oldest = min(drawn, key=lambda p: p.stat().st_mtime_ns)
+        if oldest.stat().st_mtime_ns < newest.stat().st_mtime_ns:
+            problems.append(f"{oldest} is older than {newest}: run `g2tom figures` (or `make figures`)")
+    return problems
+
+
+def report(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
+    """``g2tom report``: report.md and report.html of current results and figures."""
+    from analysis.report import write_report
+
+    _preflight(args, scenario, scene=False)
+    _refuse_if("report", _report_problems(args.data_dir, scenario))
+    for path in write_report(scenario, args.data_dir):
+        print(f"report: {path}", file=sys.stderr)
+
+
+def bench(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
+    """``g2tom bench``: the benchmarks (all, or ``--only`` those), saved under ``<data-dir>/bench``."""
+    from pipeline.bench import run_benchmarks
+
+    _preflight(args, scenario, scene=False)
+    run_benchmarks(scenario, args.data_dir, only=args.only, verbose=args.verbose)
+
+
+def stamp(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
+    """Write ``<data>/.stamps/<stage>.json`` only when its content changes (for make).
+
+    A stamp is also touched when its stage file exists but is unreadable (a truncated or
+    damaged file) or was built from another configuration (e.g. by ``g2tom fits --set
+    ...``), so that make rebuilds it instead of failing on it forever.
+    """
+    from pipeline.store import stage_path, stage_problem
+
+    _preflight(args, scenario, scene=False)
+    stamps = args.data_dir / ".stamps"
+    stamps.mkdir(parents=True, exist_ok=True)
+    for name in STAGE_INPUTS:
+        text = json.dumps(
+            {"config_hash": scenario.config_hash(name), "parameters": scenario.stage_parameters(name)},
+            indent=1,
+            sort_keys=True,
+        )
+        path = stamps / f"{name}.json"
+        if not path.is_file() or path.read_text() != text:
+            path.write_text(text)
+        elif stage_path(args.data_dir, name).is_file():
+            problem = stage_problem(args.data_dir, name, scenario)
+            if problem:
+                print(f"g2tom: {problem}; make will rebuild it", file=sys.stderr)
+                os.utime(path)
+
+
+def params(args: argparse.Namespace, scenario: Scenario) -> None:
+    """``g2tom params``: every parameter with its value, unit, range and meaning."""
+    flat = scenario.flat()
+    for key, _default, unit, allowed, doc in parameter_table():
+        print(f"{key:32s} {flat[key]!s:>24}  [{unit}]  {allowed}: {doc}")
+
+
+def plan(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
+    """``g2tom plan``: each stage's estimate (``--atlas``: the atlas's scenes; ``--validate``: the
+    validation's cases)."""
+    from pipeline.before_work.plan import format_plan
+
+    if args.validate:
+        from pipeline.reference.validate import format_validate_plan
+
+        print("\n".join(format_validate_plan(args.config, args.workers)))
+        return
+
+    if args.atlas:
+        from pipeline.atlas.design import AtlasDesign, format_atlas_plan, plan_atlas
+
+        # one single-threaded scene per worker
+        parallel = max(1, args.workers or os.cpu_count() or 1)
+        print("\n".join(format_atlas_plan(plan_atlas(scenario, AtlasDesign.of(scenario)), parallel)))
+        return
+    print("\n".join(format_plan(scenario, getattr(args, "workers", None))))
+
+
+def predict(args: argparse.Namespace, scenario: Scenario) -> None:
+    """``g2tom predict``: the surrogate's resistances (an unreadable surrogate.nc refused first)."""
+    from pipeline.cli.predict import predict_cli
+    from pipeline.store import stage_path, unreadable
+
+    surrogate = args.surrogate or stage_path(args.data_dir, "surrogate")
+    problem = Path(surrogate).suffix != ".json" and Path(surrogate).is_file() and unreadable(surrogate, "surrogate")
+    if problem:
+        raise StaleInputError(problem)
+
+    predict_cli(args, scenario)
+
+
+def atlas(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
+    """``g2tom atlas``: every scene of the atlas's design, then its surrogate and held-out errors."""
+    from pipeline.atlas.run import run_atlas
+    from pipeline.atlas.design import AtlasDesign
+
+    _preflight(args, scenario, scene=False)
+    if args.workers is None and args.scheduler is None:
+        args.workers = os.cpu_count() or 1  # a local cluster, one single-threaded scene per core
+    path = run_atlas(scenario, AtlasDesign.of(scenario), args.data_dir, compute_options(args))
+    print(f"atlas: wrote {path}", file=sys.stderr)
+    from pipeline.atlas.fit import write_atlas_surrogate
+
+    target, doc = write_atlas_surrogate(path)
+    held, worst = doc["heldout"], doc["heldout"]["worst"]
+    curve = doc["log_resistance"]
+    print(f"atlas: wrote {target}: curve model the grid surrogate (degree {curve['degree']} in the groups, order "
+          f"{curve['order']} in ln F', by leave-one-scene-out cross-validation); held out: {held['cells_within']} of "
+          f"{held['cells']} cells within max(5 %, interval) at every step; worst {worst['scene']} (xi {worst['xi']:g}, "
+          f"lambda {worst['lambda']:g}, F' {worst['force_normalized']:.3g}): {worst['error']:.3g} in ln R' vs "
+          f"{worst['allowed']:.3g} allowed; targets {'met' if held['met'] else 'not met'}", file=sys.stderr)
+
+
+def roughness(args: argparse.Namespace, scenario: Scenario) -> None:
+    """``g2tom roughness``: sigma, eta and beta of a measured height map (no scenario used)."""
+    from pipeline.cli.roughness import roughness_cli
+
+    roughness_cli(args)
+
+
+def validate(args: argparse.Namespace, scenario: Scenario) -> None:
+    """The full-field reference against g2tom (pipeline.reference); the extra is checked first."""
+    from pipeline.reference import missing_extra
+
+    if args.overrides:
+        raise ConfigError("g2tom validate runs its own validation scene (the default set or --quick): --set is "
+                          "not used by it; leave it out (--config names the scenario whose model part 2 validates)")
+    from pipeline.before_work.preflight import check_data_dir, check_scheduler
+    from pipeline.reference.validate import chosen_set, output_folder, run_validation
+
+    vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads)
+    check_data_dir(args.data_dir)
+    if args.scheduler:
+        check_scheduler(args.scheduler)
+    problem = missing_extra()
+    if problem:
+        raise ConfigError(problem)
+    if args.workers is None and args.scheduler is None:
+        args.workers = os.cpu_count() or 1  # a local cluster, one single-threaded case per core (as the atlas)
+    from analysis.figures_validate import figure
+
+    run_validation(vset, output_folder(args.data_dir, args.surface), progress=not args.no_progress, draw=figure,
+                   config=args.config, options=compute_options(args))
