@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import importlib
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -11,6 +14,8 @@ from threadpoolctl import threadpool_info, threadpool_limits
 from pipeline.compute import single_threaded
 
 STAGE_MODULES = ("contact", "oxide", "cube", "fits", "surrogate")
+#: The variables the console script sets to one thread before numpy loads.
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 def _blas_threads() -> list[int]:
@@ -68,3 +73,12 @@ def test_a_stage_build_runs_single_threaded(monkeypatch, small) -> None:
         fits.build(small, cube)
         assert _blas_threads() == [2] * len(_blas_threads())
     assert seen and all(c == [1] * len(c) for c in seen)
+
+
+def test_the_entry_point_sets_one_thread_before_numpy_loads() -> None:
+    """``pipeline.cli.main`` (the console script) sets the thread variables and loads no numpy on import."""
+    probe = ("import os, sys; import pipeline.cli.main; "
+             f"print('numpy' in sys.modules, *(os.environ.get(v) for v in {THREAD_VARIABLES!r}))")
+    env = {k: v for k, v in os.environ.items() if k not in THREAD_VARIABLES}
+    out = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "1", "1", "1"]
