@@ -99,9 +99,11 @@ def test_replace_keeps_the_resolved_type_and_of_drops_it(small):
     assert type(resolve(plain)) is ResolvedScenario
 
 
-def test_unresolved_window_has_no_cell_count():
-    with pytest.raises(ConfigError, match="pipeline.before_work.domains.resolve"):
-        load_scenario("paper_gt").n_cells
+def test_only_a_resolved_scenario_has_a_cell_count(paper):
+    for name in ("paper", "published"):  # auto domains, and both explicit but not resolved
+        with pytest.raises(AttributeError, match="n_cells"):
+            load_scenario(name).n_cells
+    assert paper.n_cells == resolve(load_scenario("paper")).n_cells == 49
 
 
 def test_cheap_cell_estimate_bounds_the_resolved_count():

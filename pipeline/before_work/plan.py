@@ -23,7 +23,7 @@ import warnings
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from pipeline.config import AUTO, CHUNK_BYTES, ConfigError, Scenario, load_scenario
+from pipeline.config import AUTO, CHUNK_BYTES, ConfigError, ResolvedScenario, Scenario, load_scenario, odd_cells
 
 __all__ = ["StageEstimate", "Realizations", "realizations", "estimate", "check_resources", "prepare", "format_plan",
            "available_memory", "MAX_SECONDS", "BASE_BYTES"]
@@ -183,9 +183,9 @@ def available_memory() -> float:
 
 
 def _cells(scenario: Scenario) -> int:
-    """Cells per window side: the resolved count, or a cheap estimate while ``auto``."""
+    """Cells per window side: the explicit or resolved window's, or a cheap estimate while ``auto``."""
     if scenario.contact.window != AUTO:
-        return scenario.n_cells
+        return odd_cells(float(scenario.contact.window) * scenario.indenter.radius, scenario.cell_size)
     from pipeline.before_work.domains import estimate_cells
 
     return estimate_cells(scenario)
@@ -345,9 +345,10 @@ _DRIVERS: tuple[str, ...] = (
 
 
 def _with(scenario: Scenario, key: str, value: Any) -> Scenario:
+    """``scenario`` with ``key`` set to ``value``: a plain scenario (the key may be a domain)."""
     section, _, name = key.partition(".")
     attr = "lambda_" if name == "lambda" else name
-    return dataclasses.replace(scenario, **{section: dataclasses.replace(getattr(scenario, section), **{attr: value})})
+    return Scenario.of(scenario, **{section: dataclasses.replace(getattr(scenario, section), **{attr: value})})
 
 
 def _culprit(scenario: Scenario, measure: Callable[[Scenario], float]) -> tuple[str, Any, float]:
@@ -461,7 +462,7 @@ def prepare(command: str, scenario: Scenario, workers: int | None = None) -> tup
     return resolved, notes
 
 
-def format_plan(scenario: Scenario, workers: int | None = None) -> list[str]:
+def format_plan(scenario: ResolvedScenario, workers: int | None = None) -> list[str]:
     """Lines of ``g2tom plan``: the resolved domains and each stage's estimate."""
     n = scenario.n_cells
     ox = scenario.oxide

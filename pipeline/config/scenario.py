@@ -4,7 +4,8 @@
 each stage's parameters (:data:`STAGE_INPUTS`) and those of the stages it reads
 (:data:`STAGE_UPSTREAM`), so a stage file records exactly what it was built from.
 :class:`ResolvedScenario` is a scenario whose ``contact.r_max`` and ``contact.window`` are
-resolved numbers (:func:`pipeline.before_work.domains.resolve` makes it): what the stages take.
+resolved numbers (:func:`pipeline.before_work.domains.resolve` makes it): what the stages take,
+and the only kind with a cell count (:attr:`ResolvedScenario.n_cells`).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Self
 
-from pipeline.config.declare import AUTO, ConfigError, parameter_key
+from pipeline.config.declare import parameter_key
 from pipeline.config.scene_sections import Contact, Indenter, Loading, Material, Roughness
 from pipeline.config.study_sections import Atlas, Cube, Fits, Oxide, Surrogate
 
@@ -120,15 +121,6 @@ class Scenario:
         """E* sqrt(R* sigma^3) / 2, in N: F' = F / force_scale (Eq. 25)."""
         return self.material.E_star * math.sqrt(self.indenter.radius * self.roughness.sigma**3) / 2.0
 
-    @property
-    def n_cells(self) -> int:
-        """Cells along one side of the window: the odd number closest to window/cell size."""
-        if self.contact.window == AUTO:
-            raise ConfigError(
-                "contact.window = 'auto' is not resolved yet: call pipeline.before_work.domains.resolve(scenario)"
-            )
-        return odd_cells(self.contact.window * self.indenter.radius, self.cell_size)
-
     @classmethod
     def of(cls, scenario: Scenario, **changes: Any) -> Self:
         """``scenario``'s fields as a ``cls``, those named in ``changes`` replaced.
@@ -190,6 +182,11 @@ class ResolvedScenario(Scenario):
     settled. ``dataclasses.replace`` keeps the type, so a resolved scenario with a new window or
     radial domain is made a plain one (:meth:`Scenario.of`) and resolved again.
     """
+
+    @property
+    def n_cells(self) -> int:
+        """Cells along one side of the window: the odd number closest to window/cell size."""
+        return odd_cells(self.contact.window * self.indenter.radius, self.cell_size)
 
 
 def odd_cells(side: float, cell_size: float) -> int:
