@@ -6,7 +6,8 @@ import os
 
 import psutil
 
-from pipeline.before_work.plan import available_memory, check_resources
+from pipeline.before_work.plan import available_memory
+from pipeline.before_work.resources import check_resources
 from pipeline.config import load_scenario
 
 

@@ -8,7 +8,7 @@ import warnings
 
 import pytest
 
-from pipeline.before_work import plan
+from pipeline.before_work import plan, resources
 from pipeline.cli.main import main
 from pipeline.config import ConfigError, load_scenario
 from pipeline.before_work.domains import resolve
@@ -30,7 +30,7 @@ MEMORY = 16.0 * 2**30  # a fixed machine, so the refusals do not depend on the o
 )
 def test_exhausting_parameters_are_refused_naming_them(overrides, parameter):
     with pytest.raises(ConfigError) as err:
-        plan.check_resources(load_scenario("paper_gt", overrides), memory=MEMORY)
+        resources.check_resources(load_scenario("paper_gt", overrides), memory=MEMORY)
     assert str(err.value).startswith(parameter), str(err.value)
 
 
@@ -42,7 +42,7 @@ def test_refused_before_work_by_the_cli(tmp_path, capsys):
 
 
 def test_paper_scene_fits_and_plan_prints_every_stage(capsys):
-    estimates = plan.check_resources(resolve(load_scenario("paper_gt")), memory=MEMORY)
+    estimates = resources.check_resources(resolve(load_scenario("paper_gt")), memory=MEMORY)
     assert [e.stage for e in estimates] == ["contact", "oxide", "cube", "fits", "surrogate"]
     assert main(["plan", "--config", "paper_gt"]) == 0
     out = capsys.readouterr().out
@@ -144,13 +144,13 @@ def test_adaptive_memory_is_typical_with_the_cap_beside():
     assert adaptive["fits"].peak_bytes_cap >= adaptive["fits"].peak_bytes > base["fits"]
     for stage in ("contact", "oxide", "surrogate"):
         assert adaptive[stage].peak_bytes == base[stage] and adaptive[stage].peak_bytes_cap is None
-    plan.check_resources(scenario, memory=MEMORY)  # the default scenario is not refused
+    resources.check_resources(scenario, memory=MEMORY)  # the default scenario is not refused
     # a cap that would not fit only warns: typical runs stop far below it
     with pytest.warns(ResourceWarning, match="oxide.max_realizations = 3000000"):
-        plan.check_resources(resolve(load_scenario("paper_gt", {"oxide.max_realizations": 3_000_000})), memory=MEMORY)
+        resources.check_resources(resolve(load_scenario("paper_gt", {"oxide.max_realizations": 3_000_000})), memory=MEMORY)
     # typical counts that would not fit are refused, naming the parameter
     with pytest.raises(ConfigError) as err:
-        plan.check_resources(resolve(load_scenario("paper_gt", {"oxide.min_realizations": 300_000,
+        resources.check_resources(resolve(load_scenario("paper_gt", {"oxide.min_realizations": 300_000,
                                                              "oxide.max_realizations": 300_000})), memory=MEMORY)
     assert "is out of range for this machine" in str(err.value) and "_realizations = 300000" in str(err.value)
 
@@ -159,7 +159,7 @@ def test_an_8_gb_laptop_runs_the_default():
     """6 GiB available: the default run fits (refused before the fits' memory was calibrated)."""
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        plan.check_resources(resolve(load_scenario("paper_gt")), memory=6.0 * 2**30)
+        resources.check_resources(resolve(load_scenario("paper_gt")), memory=6.0 * 2**30)
 
 
 def test_a_typical_run_that_cannot_fit_is_refused_before_work_by_the_cli(tmp_path, capsys):

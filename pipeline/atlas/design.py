@@ -179,25 +179,25 @@ class SceneEstimate:
 def plan_atlas(base: Scenario, design: AtlasDesign, workers: int | None = 1) -> list[SceneEstimate]:
     """Every scene's resolved window, peak memory and modelled time, before any work.
 
-    Memory comes from :func:`pipeline.before_work.plan.check_resources` (a scene that does not fit
+    Memory comes from :func:`pipeline.before_work.resources.check_resources` (a scene that does not fit
     is refused there), time from :func:`pipeline.atlas.cost.scene_cost` (on discrete asperities it
     grows with the touching asperities, not with a grid). ``workers`` is the per-scene worker
     count (1: one scene per single-threaded task). A scene the plan or the preflight refuses
     carries the refusal as ``problem`` instead of raising, so the whole design is seen at once.
     """
     from pipeline.atlas.cost import scene_cost
-    from pipeline.before_work import plan
     from pipeline.before_work.domains import resolve
     from pipeline.before_work.preflight import check_scene
+    from pipeline.before_work.resources import check_resources
 
     out = []
     for scene in design_scenes(design):
         try:
             scenario = scene_scenario(base, scene)
-            plan.check_resources(scenario, workers)
+            check_resources(scenario, workers)
             resolved = resolve(scenario)
             check_scene(resolved)
-            estimates = plan.check_resources(resolved, workers)
+            estimates = check_resources(resolved, workers)
         except ConfigError as exc:
             out.append(SceneEstimate(scene, None, math.nan, math.nan, str(exc)))
             continue

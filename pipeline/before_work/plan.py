@@ -3,36 +3,27 @@
 :func:`estimate` models each stage's largest arrays (the stored results and the work arrays
 of its concurrently running tasks) and its run time (flop-count models with constants
 measured on the 2-core reference machine; ``make bench`` measures the real ones).
-:func:`check_resources` refuses, with :class:`~pipeline.config.ConfigError` naming the
-parameter, a run whose estimate exceeds the machine's memory or :data:`MAX_SECONDS`.
+The checks that refuse a run on these estimates are :mod:`pipeline.before_work.resources`'.
 An adaptive ensemble's realization count is known only after the work, so its estimates
 carry a range (every cell stopped at ``oxide.min_realizations`` .. every cell at the cap
 ``oxide.max_realizations``) and a central value typical of the paper's scene
 (:func:`realizations`); memory is checked at the typical counts (a run refused), and at the
 cap, the padded realization axis the cube and fits hold in the worst case (a warning).
-:func:`prepare` is what the CLI runs before any stage: the checks, then the resolution of
-``auto`` domains (:func:`pipeline.before_work.domains.resolve`), then the checks on the resolved cell count.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
-import warnings
 from dataclasses import dataclass
-from typing import Any, Callable
 
-from pipeline.config import AUTO, CHUNK_BYTES, ConfigError, ResolvedScenario, Scenario, load_scenario, odd_cells
+from pipeline.config import AUTO, CHUNK_BYTES, ResolvedScenario, Scenario, odd_cells
 
-__all__ = ["StageEstimate", "Realizations", "realizations", "estimate", "check_resources", "prepare", "format_plan",
-           "available_memory", "MAX_SECONDS", "BASE_BYTES"]
+__all__ = ["StageEstimate", "Realizations", "realizations", "estimate", "format_plan", "available_memory", "BASE_BYTES"]
 
 #: Resident memory of a g2tom stage's process with its small arrays: the surrogate stage of the
 #: default run peaked at 217 MiB (process tree, sampled every 0.1 s; 2026-11-25).
 BASE_BYTES = 210 * 2**20
-#: Longest estimated run time accepted (s): beyond it a run is refused before work.
-MAX_SECONDS = 7 * 24 * 3600.0
 #: Seconds per flop-like unit of the models below (measured on the reference machine, one thread).
 _FOLDED_S = 1.35e-10  # per n^3 of one folded map (fixed 400-realization cubes of the paper's scene on one
                       # thread: 864,000 maps in 26.1 s at 55^2 cells, 18.7 s at 49^2, fields apart)
@@ -110,10 +101,6 @@ CUBE_RESULT_COPIES = (3470 - 210 - 119) / 2470
 #: on one thread and 12.1 s on two; the adaptive default 164.5 s for 196.5 s of CPU (its late
 #: rounds hold few tasks and end in a serial decision). Beyond two threads it is not measured.
 THREADED_FOLDED_SPEEDUP = {"fixed": 18.71 / 12.09, "adaptive": 196.5 / 164.5}
-#: Commands that need no resolved domains nor resource checks.
-_NO_DOMAINS = ("params", "predict", "roughness", "validate")
-#: Stages whose estimate is printed when they are expected to take longer than this (s).
-ANNOUNCE_AFTER = 10.0
 
 
 @dataclass(frozen=True)
@@ -332,134 +319,6 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
                       BASE_BYTES + fits_mem_of(n_cap) if counts.adaptive else None),
         StageEstimate("surrogate", BASE_BYTES + surrogate_mem, SURROGATE_SECONDS_PER_CELL * n_xi * n_lam),
     ]
-
-
-#: Parameters whose values drive memory or time, in the order they are blamed.
-_DRIVERS: tuple[str, ...] = (
-    "roughness.eta", "contact.window", "oxide.lambda", "oxide.ks_ratio", "oxide.n_realizations",
-    "oxide.max_realizations", "oxide.target_half_width", "oxide.min_realizations", "oxide.ensemble",
-    "oxide.spectral_resolution", "oxide.period",
-    "oxide.xi", "loading.n_delta", "contact.n_radial", "oxide.chunk", "cube.chunk",
-    "fits.n_bootstrap", "indenter.radius", "indenter.shape", "roughness.sigma",
-)
-
-
-def _with(scenario: Scenario, key: str, value: Any) -> Scenario:
-    """``scenario`` with ``key`` set to ``value``: a plain scenario (the key may be a domain)."""
-    section, _, name = key.partition(".")
-    attr = "lambda_" if name == "lambda" else name
-    return Scenario.of(scenario, **{section: dataclasses.replace(getattr(scenario, section), **{attr: value})})
-
-
-def _culprit(scenario: Scenario, measure: Callable[[Scenario], float]) -> tuple[str, Any, float]:
-    """The parameter whose change from the paper's value grows ``measure`` the most."""
-    reference = load_scenario("paper")
-    current = measure(scenario)
-    best: tuple[str, Any, float] = ("", None, 1.0)
-    flat, ref_flat = scenario.flat(), reference.flat()
-    for key in _DRIVERS:
-        if flat[key] == ref_flat[key]:
-            continue
-        try:
-            factor = current / measure(_with(scenario, key, ref_flat[key]))
-        except (ConfigError, ValueError, ZeroDivisionError, OverflowError):
-            continue
-        if factor > best[2]:
-            best = (key, flat[key], factor)
-    return best
-
-
-def _refuse(scenario: Scenario, what: str, needed: float, limit: float, unit: str,
-            measure: Callable[[Scenario], float]) -> ConfigError:
-    key, value, factor = _culprit(scenario, measure)
-    value = f"{value:g}" if isinstance(value, float) else repr(value)
-    fmt = (lambda v: f"{v / 2**30:.3g} GiB") if unit == "bytes" else (lambda v: f"{v / 3600:.3g} h")
-    if key:
-        return ConfigError(
-            f"{key} = {value} is out of range for this machine: the {what} would need about "
-            f"{fmt(needed)}, more than the {fmt(limit)} available ({factor:.3g} x the paper's value "
-            f"{load_scenario('paper').flat()[key]!r}); lower it (see `g2tom plan`)"
-        )
-    return ConfigError(f"the {what} would need about {fmt(needed)}, more than the {fmt(limit)} available "
-                       f"(see `g2tom plan`)")
-
-
-def _stage_measure(stage: str, field: str, workers: int | None) -> Callable[[Scenario], float]:
-    def measure(s: Scenario) -> float:
-        return next(getattr(e, field) for e in estimate(s, workers) if e.stage == stage)
-    return measure
-
-
-def check_resources(scenario: Scenario, workers: int | None = None, memory: float | None = None) -> list[StageEstimate]:
-    """Refuse a run that cannot fit in memory (or would run longer than :data:`MAX_SECONDS`).
-
-    An adaptive ensemble is judged at its typical counts; where a cell running to
-    ``oxide.max_realizations`` would not fit, a warning says so (the run goes on: a typical run
-    stops far below the cap).
-
-    Parameters
-    ----------
-    scenario
-        Resolved or not.
-    workers
-        Concurrent tasks (default: the core count).
-    memory
-        Bytes available (default: :func:`available_memory`).
-
-    Returns
-    -------
-    list of StageEstimate
-        The estimates, when the run fits.
-
-    Raises
-    ------
-    ConfigError
-        Naming the parameter that drives the excess, its value and the estimate.
-    """
-    from pipeline.before_work.domains import check_cell_count
-
-    check_cell_count(scenario, memory or available_memory())
-    limit = memory or available_memory()
-    estimates = estimate(scenario, workers)
-    for e in estimates:
-        if not e.peak_bytes <= limit:
-            raise _refuse(scenario, f"{e.stage} stage", e.peak_bytes, limit, "bytes",
-                          _stage_measure(e.stage, "peak_bytes", workers))
-    for e in estimates:
-        if e.peak_bytes_cap is not None and not e.peak_bytes_cap <= limit:
-            warnings.warn(f"the {e.stage} stage would need about {e.peak_bytes_cap / 2**30:.3g} GiB if a cell ran to "
-                          f"oxide.max_realizations = {scenario.oxide.max_realizations}, more than the "
-                          f"{limit / 2**30:.3g} GiB available (typical runs need {e.peak_bytes / 2**30:.3g} GiB); "
-                          f"lower oxide.max_realizations if cells may run that far", ResourceWarning, stacklevel=2)
-    total = sum(e.seconds for e in estimates)
-    if not total <= MAX_SECONDS:
-        worst = max(estimates, key=lambda e: e.seconds)
-        raise _refuse(scenario, f"{worst.stage} stage's run time", worst.seconds, MAX_SECONDS, "seconds",
-                      _stage_measure(worst.stage, "seconds", workers))
-    return estimates
-
-
-def prepare(command: str, scenario: Scenario, workers: int | None = None) -> tuple[Scenario, list[str]]:
-    """What the CLI runs before any work: resource checks and the resolution of ``auto`` domains.
-
-    Returns the resolved scenario (``scenario`` unchanged for commands that need neither: params,
-    predict, roughness) and the plan's lines to announce once the other checks have passed (the
-    stages' estimates that exceed :data:`ANNOUNCE_AFTER`).
-    """
-    if command in _NO_DOMAINS:
-        return scenario, []
-    from pipeline.before_work.domains import resolve
-
-    check_resources(scenario, workers)
-    resolved = resolve(scenario)
-    notes = []
-    for e in check_resources(resolved, workers):
-        if e.seconds > ANNOUNCE_AFTER and command in (e.stage, "run"):
-            span = (f" (adaptive ensemble: {e.seconds_range[0]:.3g} .. {e.seconds_range[1]:.3g} s)"
-                    if e.seconds_range else "")
-            notes.append(f"plan: {e.stage} estimated at ~{e.seconds:.3g} s{span} and ~{e.peak_bytes / 2**20:.0f} MiB "
-                         f"peak (`g2tom plan` for all stages)")
-    return resolved, notes
 
 
 def format_plan(scenario: ResolvedScenario, workers: int | None = None) -> list[str]:

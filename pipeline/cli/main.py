@@ -15,7 +15,7 @@ import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Sequence  # noqa: E402
 
-from pipeline.before_work.plan import prepare  # noqa: E402
+from pipeline.before_work.resources import prepare  # noqa: E402
 from pipeline.before_work.surrogate_grid import check_surrogate_grid  # noqa: E402
 from pipeline.cli.arguments import attach_negative_values, build_parser  # noqa: E402
 from pipeline.cli.commands import compute_options  # noqa: E402
