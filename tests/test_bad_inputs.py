@@ -340,3 +340,18 @@ def test_catalog_scenarios_are_otherwise_valid() -> None:
     """The parameter table cases each break exactly one parameter of a valid scenario."""
     load_scenario("paper_gt", SMALL_OVERRIDES)
     assert sum(c.argv[0] == "params" for c in CASES) > 100
+
+
+def test_a_reader_that_closes_the_pipe_early_gets_no_traceback() -> None:
+    """`g2tom params | head -1`: the pipe closes while g2tom still writes; it stops quietly with the
+    shell's status for SIGPIPE (141), no traceback on standard error."""
+    import subprocess
+    import sys
+
+    g2tom = [sys.executable, "-c", "import sys; from pipeline.cli.main import main; sys.exit(main())"]
+    proc = subprocess.Popen([*g2tom, "params"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.readline()
+    proc.stdout.close()  # the reader goes away after one line
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) == 141, err
+    assert "Traceback" not in err and "BrokenPipeError" not in err, err

@@ -69,6 +69,8 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:  #
 
 #: Exit status after Ctrl-C (128 + SIGINT, as a shell reports a command killed by it).
 INTERRUPTED = 130
+#: Exit status when standard output's reader has gone (128 + SIGPIPE, as a shell reports it).
+BROKEN_PIPE = 141
 
 
 def _kept(args: argparse.Namespace) -> str:
@@ -109,6 +111,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"g2tom: interrupted: {_kept(args)}", file=sys.stderr)
         return INTERRUPTED
+    except BrokenPipeError:
+        # the reader of standard output went away (`g2tom plan | head`): no traceback, and none
+        # again when Python flushes the closed pipe at exit
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return BROKEN_PIPE
     finally:
         warnings.formatwarning = formatwarning
     return 0
