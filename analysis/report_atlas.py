@@ -74,7 +74,7 @@ def atlas_blocks(data_dir: Path) -> list[Block]:
             chain_blocks(data_dir)
     doc = json.loads((folder / "surrogate.json").read_text())
     if int(doc.get("format_version", 1)) < 2:
-        return blocks + [Block("p", "The atlas surrogate is of format 1 (one polynomial in five logs, before issue 31): "
+        return blocks + [Block("p", "The atlas surrogate is of format 1 (one polynomial in five logs, an earlier version's): "
                                     "rerun `make atlas` for this section.")] + chain_blocks(data_dir)
     rows = read_heldout(folder / "heldout.csv")
     held = verdict(rows)

@@ -78,7 +78,7 @@ def _at(ds: xr.Dataset, name: str, sel: dict, k: int, suffix: str = "") -> float
 
 
 def _ensemble_flags(ds: xr.Dataset) -> list[str]:
-    """Part 2's first lines: where the validated scenario's ensemble is outside issue 29's targets, and
+    """Part 2's first lines: where the validated scenario's ensemble is outside the accuracy targets, and
     where a standard error misses the set's (both with numbers)."""
     if "ensemble_ratio" not in ds:
         return []
@@ -97,10 +97,10 @@ def _ensemble_flags(ds: xr.Dataset) -> list[str]:
     name = ds.attrs.get("validated_scenario", "the default")
     lines = []
     if outside:
-        lines.append(f"**Part 2: the ensemble of {name} is outside issue 29's targets against the full field's in "
+        lines.append(f"**Part 2: the ensemble of {name} is outside the accuracy targets against the full field's in "
                      f"{len(outside)} (case, load) pairs: " + "; ".join(outside) + ".**")
     else:
-        lines.append(f"Part 2: the ensemble of {name} is within issue 29's targets against the full field's at every "
+        lines.append(f"Part 2: the ensemble of {name} is within the accuracy targets against the full field's at every "
                      "load and case that has one.")
     if loose:
         lines.append(f"Part 2's standard error of ln ratio misses the set's ({ds.attrs['scene_clean_error']:g} clean, "
@@ -119,7 +119,7 @@ def _ensemble_table(ds: xr.Dataset) -> list[str]:
              f"The validated scenario's ensemble (clean: {int(ds['ensemble_model_count_clean'])} "
              + ("value, one exact answer" if int(ds["ensemble_model_count_clean"]) == 1 else "surfaces")
              + f"; oxidized: {int(ds['ensemble_model_count'])} realizations) against the full field's, each as the geometric mean of R over its conducting realizations at equal force; ratio ± the "
-             "standard error of its log (both ensembles', in squares); ✓ within issue 29's target at that F', ✗ outside, "
+             "standard error of its log (both ensembles', in squares); ✓ within the accuracy target at that F', ✗ outside, "
              "no mark where the issue sets none (oxidized below F' 1). The full field's ensemble: N realizations, a "
              "proxy on all N corrected by part 1's paired main-grid solves (two-phase; N = part 1's realizations: "
              "those alone). Open circuits (R = +inf) are counted, full field / model, where any.", "",

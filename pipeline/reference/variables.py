@@ -110,8 +110,8 @@ VARIABLES: dict[str, Variable] = {
                          "mean of R at equal force"),
     "ensemble_ratio_standard_error": _v(_EX, "1", "standard error of ln of the oxidized ensemble ratio (both "
                                         "ensembles' in squares)"),
-    "ensemble_target_clean": _v("load", "1", "issue 29's allowed |clean ratio - 1| at the load's F'"),
-    "ensemble_target": _v(_EX, "1", "issue 29's allowed |oxidized ratio - 1| at the load's F' (NaN: none)"),
+    "ensemble_target_clean": _v("load", "1", "allowed |clean ratio - 1| at the load's F' (accuracy target)"),
+    "ensemble_target": _v(_EX, "1", "allowed |oxidized ratio - 1| at the load's F' (accuracy target; NaN: none)"),
     "ensemble_grid_check_clean": _v("load", "1", "geometric mean over part 1's realizations of the ensemble "
                                     "grid's clean R over the main grid's (NaN: no ensemble case)"),
 }
