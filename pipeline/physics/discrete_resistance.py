@@ -163,13 +163,7 @@ def _step(kernel: np.ndarray, a: np.ndarray, out: np.ndarray) -> int:
     for s in range(sets):
         shared += width[s] ** 2 * m + width[s] ** 3
     if shared <= alone:
-        factor = np.empty((m + 1, m + 1))
-        for p in range(m):
-            for q in range(p):
-                factor[p, q] = kernel[union[p], union[q]]
-            factor[p, p] = 0.5 / top[union[p]]
-            factor[m, p] = 1.0
-        factor[m, m] = CORNER
+        factor = _bordered(kernel, top, union)
         if _cholesky(factor, m + 1):
             for s in range(sets):
                 out[s] = _schur_total(kernel, a[s], union, factor, inside[s], width[s])
@@ -227,13 +221,7 @@ def _set_total(kernel: np.ndarray, a: np.ndarray, union: np.ndarray) -> tuple[fl
     c = spots.size
     if c == 0:
         return 0.0, True
-    matrix = np.empty((c + 1, c + 1))
-    for p in range(c):
-        for q in range(c):
-            matrix[p, q] = kernel[spots[p], spots[q]]
-        matrix[p, p] = 0.5 / a[spots[p]]
-        matrix[c, p] = 1.0
-    matrix[c, c] = CORNER
+    matrix = _bordered(kernel, a, spots)
     bordered = matrix.copy()
     if _cholesky(bordered, c + 1):
         total = 0.0
@@ -246,6 +234,23 @@ def _set_total(kernel: np.ndarray, a: np.ndarray, union: np.ndarray) -> tuple[fl
 #: Size from which a factorization calls LAPACK (``potrf`` through NumPy's Cholesky, on a copy)
 #: instead of the compiled loop, which is faster on small matrices and 2-4x slower on large ones.
 LAPACK_FROM = 64
+
+
+@numba.njit(cache=True, nogil=True)
+def _bordered(kernel: np.ndarray, radius: np.ndarray, spots: np.ndarray) -> np.ndarray:
+    """The point model's matrix of ``spots`` bordered by ones: shape (c + 1, c + 1), ``kernel``
+    between spots, ``1 / (2 a)`` on the diagonal (``radius`` a, m), a row of ones below and
+    :data:`CORNER` at the corner; the border's column above the corner is left unset (the
+    factorizations read the lower triangle, LU the leading c x c block)."""
+    c = spots.size
+    matrix = np.empty((c + 1, c + 1))
+    for p in range(c):
+        for q in range(c):
+            matrix[p, q] = kernel[spots[p], spots[q]]
+        matrix[p, p] = 0.5 / radius[spots[p]]
+        matrix[c, p] = 1.0
+    matrix[c, c] = CORNER
+    return matrix
 
 
 @numba.njit(cache=True, nogil=True)
