@@ -343,15 +343,15 @@ def test_catalog_scenarios_are_otherwise_valid() -> None:
 
 
 def test_a_reader_that_closes_the_pipe_early_gets_no_traceback() -> None:
-    """`g2tom params | head -1`: the pipe closes while g2tom still writes; it stops quietly with the
-    shell's status for SIGPIPE (141), no traceback on standard error."""
+    """`g2tom plan | head -1`: the reader goes away while g2tom writes (here: before it writes
+    at all, so the test does not depend on the pipe's buffer); g2tom stops quietly with the shell's
+    status for SIGPIPE (141), no traceback and no "Exception ignored" on standard error."""
     import subprocess
     import sys
 
     g2tom = [sys.executable, "-c", "import sys; from pipeline.cli.main import main; sys.exit(main())"]
-    proc = subprocess.Popen([*g2tom, "params"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    proc.stdout.readline()
-    proc.stdout.close()  # the reader goes away after one line
+    proc = subprocess.Popen([*g2tom, "plan"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # the reader is gone before the first write
     err = proc.stderr.read().decode()
-    assert proc.wait(timeout=60) == 141, err
-    assert "Traceback" not in err and "BrokenPipeError" not in err, err
+    assert proc.wait(timeout=120) == 141, err
+    assert "Traceback" not in err and "BrokenPipeError" not in err and "Exception ignored" not in err, err

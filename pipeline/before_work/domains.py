@@ -255,6 +255,12 @@ def domains(scenario: Scenario) -> Domains:
     return result
 
 
+def resolved(scenario: Scenario) -> ResolvedScenario:
+    """``scenario`` itself where it is a :class:`~pipeline.config.ResolvedScenario` already, else
+    :func:`resolve` of it: what a stage called from Python with a loaded scenario does first."""
+    return scenario if isinstance(scenario, ResolvedScenario) else resolve(scenario)
+
+
 def resolve(scenario: Scenario) -> ResolvedScenario:
     """``scenario`` with numeric ``contact.r_max`` and ``contact.window`` (``auto`` resolved).
 

@@ -31,8 +31,9 @@ import numpy as np
 import xarray as xr
 
 from pipeline import store
+from pipeline.before_work.domains import resolved
 from pipeline.compute import ComputeOptions, single_threaded
-from pipeline.config import ResolvedScenario, Scenario
+from pipeline.config import Scenario
 from pipeline.physics.crops import choose_crops
 from pipeline.physics.interaction import AUTO_METHOD
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
@@ -219,7 +220,7 @@ def clean_conductances(scenario: Scenario, contact: xr.Dataset,
 
 @single_threaded
 def build(
-    scenario: ResolvedScenario,
+    scenario: Scenario,
     contact: xr.Dataset,
     oxide: xr.Dataset,
     options: ComputeOptions = ComputeOptions(progress=False),
@@ -230,8 +231,9 @@ def build(
     Parameters
     ----------
     scenario
-        The resolved scenario (sections ``material`` for rho*, ``cube``, ``oxide`` for the
-        ensemble, ``fits.min_force`` and ``fits.confidence`` for the stopping rule).
+        The scenario (sections ``material`` for rho*, ``cube``, ``oxide`` for the ensemble,
+        ``fits.min_force`` and ``fits.confidence`` for the stopping rule; resolved first where it
+        is not: :func:`pipeline.before_work.domains.resolved`).
     contact
         ``spot_radius`` and ``spot_area`` (delta, y, x), ``force``, ``force_normalized``.
     oxide
@@ -251,6 +253,7 @@ def build(
         ``n_open`` (xi, lambda, delta), ``n_realizations`` (lambda), the fast rule's half-widths
         (xi, lambda), the clean-surface terms and ``crop_cells`` (delta).
     """
+    scenario = resolved(scenario)
     _check_grids(contact, oxide)
     source = RecordedFields.of(scenario, oxide) if source is None else source
     radius, weights, settings = work_settings(scenario, contact)
@@ -270,7 +273,7 @@ def build(
 
 
 @single_threaded
-def run(scenario: ResolvedScenario, data_dir: str | Path, options: ComputeOptions) -> Path:
+def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
     """Read contact.nc and oxide.nc, build the cube and write ``<data_dir>/cube.nc`` atomically."""
     contact = store.read_stage(data_dir, "contact", scenario)
     oxide = store.read_stage(data_dir, "oxide", scenario)

@@ -27,6 +27,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline import store
+from pipeline.before_work.domains import resolved
 from pipeline.compute import ComputeOptions, compute, single_threaded
 from pipeline.config import CHUNK_BYTES, ResolvedScenario, Scenario
 from pipeline.physics.grid import cell_centres
@@ -182,13 +183,14 @@ def _dataset(scenario: ResolvedScenario, psi: np.ndarray, threshold: np.ndarray,
 
 
 @single_threaded
-def build(scenario: ResolvedScenario, options: ComputeOptions = ComputeOptions(progress=False)) -> xr.Dataset:
+def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=False)) -> xr.Dataset:
     """Compute the oxide ensemble of ``scenario`` with dask over realization chunks.
 
     Parameters
     ----------
     scenario
-        The resolved scenario (section ``oxide``, the cell grid).
+        The scenario (section ``oxide``, the cell grid; resolved first where it is not:
+        :func:`pipeline.before_work.domains.resolved`).
     options
         Where dask runs (see :func:`pipeline.compute.compute`).
 
@@ -198,6 +200,7 @@ def build(scenario: ResolvedScenario, options: ComputeOptions = ComputeOptions(p
         In memory: ``psi`` (lambda, realization, y, x) float32, ``threshold`` and
         ``oxide_fraction`` (xi, lambda, realization), ``n_modes`` (lambda).
     """
+    scenario = resolved(scenario)
     psi, threshold, fraction = _lazy(scenario)
     return _dataset(scenario, *_computed(psi, threshold, fraction, options))
 
@@ -231,6 +234,6 @@ def _computed(
 
 
 @single_threaded
-def run(scenario: ResolvedScenario, data_dir: str | Path, options: ComputeOptions) -> Path:
+def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Path:
     """Build the ensemble and write ``<data_dir>/oxide.nc`` atomically; return its path."""
     return store.write_dataset(build(scenario, options), data_dir, "oxide", scenario)
