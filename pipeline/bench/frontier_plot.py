@@ -28,9 +28,23 @@ def plot(frontier: xr.Dataset, out_dir: str | Path) -> list[Path]:
         ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         ax.xaxis.set_minor_formatter(NullFormatter())
 
+    def error_panel(ax: Any, xlabel: str, err: str) -> None:
+        """An error-against-time panel's axes: plain time ticks, labels, the major grid."""
+        plain_time_axis(ax)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(f"max relative {err.replace('_error', '')} error")
+        ax.grid(True, which="major", alpha=0.3)
+
+    def save(fig: Any, title: str, name: str) -> None:
+        """Title ``fig``, write it as ``out_dir/name`` and close it."""
+        fig.suptitle(title)
+        paths.append(out_dir / name)
+        fig.savefig(paths[-1], dpi=120)
+        plt.close(fig)
+
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    paths = []
+    paths: list[Path] = []
     floor = 1e-16
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
@@ -47,15 +61,9 @@ def plot(frontier: xr.Dataset, out_dir: str | Path) -> list[Path]:
         fp = solver == "fixed_point"
         ax.loglog(frontier["contact_seconds"].values[fp], np.maximum(frontier[f"contact_{err}"].values[fp], floor),
                   "s", color="k", label="relaxed fixed point (20 uniform; default grid)")
-        plain_time_axis(ax)
-        ax.set_xlabel("solve time, s")
-        ax.set_ylabel(f"max relative {err.replace('_error', '')} error")
-        ax.grid(True, which="major", alpha=0.3)
+        error_panel(ax, "solve time, s", err)
     axes[0].legend(fontsize=7)
-    fig.suptitle("Contact: radial nodes (labels) and tolerance against error and time")
-    paths.append(out_dir / "frontier_contact.png")
-    fig.savefig(paths[-1], dpi=120)
-    plt.close(fig)
+    save(fig, "Contact: radial nodes (labels) and tolerance against error and time", "frontier_contact.png")
 
     fig, axes = plt.subplots(1, 3, figsize=(13, 4), constrained_layout=True)
     for ax, err in zip(axes, ("resistance_error", "alpha_error", "gamma_error")):
@@ -65,15 +73,9 @@ def plot(frontier: xr.Dataset, out_dir: str | Path) -> list[Path]:
                 if sel.any():
                     ax.loglog(frontier["cube_seconds"].values[sel], np.maximum(frontier[f"cube_{err}"].values[sel], floor),
                               marker, label=f"{method} {precision}")
-        plain_time_axis(ax)
-        ax.set_xlabel("cube time, s")
-        ax.set_ylabel(f"max relative {err.replace('_error', '')} error")
-        ax.grid(True, which="major", alpha=0.3)
+        error_panel(ax, "cube time, s", err)
     axes[0].legend(fontsize=7)
-    fig.suptitle("Cube: algorithm, crop tolerance (0, 1e-6, 1e-4, 1e-2 along each line) and precision")
-    paths.append(out_dir / "frontier_cube.png")
-    fig.savefig(paths[-1], dpi=120)
-    plt.close(fig)
+    save(fig, "Cube: algorithm, crop tolerance (0, 1e-6, 1e-4, 1e-2 along each line) and precision", "frontier_cube.png")
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
     n = frontier["n_realizations"].values
@@ -92,10 +94,7 @@ def plot(frontier: xr.Dataset, out_dir: str | Path) -> list[Path]:
         top.set_xticks(n, [f"{t:.2g} s" for t in frontier["ensemble_seconds"].values], fontsize=7)
         top.xaxis.set_minor_locator(NullLocator())
     axes[1].legend(fontsize=6, ncol=2)
-    fig.suptitle("Ensemble: interval width against realizations (top: time)")
-    paths.append(out_dir / "frontier_ensemble.png")
-    fig.savefig(paths[-1], dpi=120)
-    plt.close(fig)
+    save(fig, "Ensemble: interval width against realizations (top: time)", "frontier_ensemble.png")
 
     if "prefix_n" in frontier:
         fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
@@ -122,8 +121,6 @@ def plot(frontier: xr.Dataset, out_dir: str | Path) -> list[Path]:
         axes[0].legend([h for h, t in zip(handles, labels) if not t.startswith("lambda")],
                        [t for t in labels if not t.startswith("lambda")], fontsize=7, loc="lower left")
         axes[1].legend(fontsize=6, ncol=2)
-        fig.suptitle("Adaptive ensemble: prefixes of every (xi, lambda) cell against the fast rule's half-width")
-        paths.append(out_dir / "frontier_prefix.png")
-        fig.savefig(paths[-1], dpi=120)
-        plt.close(fig)
+        save(fig, "Adaptive ensemble: prefixes of every (xi, lambda) cell against the fast rule's half-width",
+             "frontier_prefix.png")
     return paths
