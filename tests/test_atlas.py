@@ -8,6 +8,7 @@ import xarray as xr
 
 from pipeline.atlas import run as atlas
 from pipeline.atlas.design import AtlasDesign, design_scenes
+from pipeline.atlas.schema import ATLAS
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, load_scenario
 from tests.conftest import SMALL_OVERRIDES
@@ -52,6 +53,11 @@ def test_atlas_holds_every_scene_labelled(uninterrupted, base) -> None:
     for name, var in uninterrupted.variables.items():
         if var.dtype.kind not in "OSU":
             assert var.attrs.get("units") is not None and var.attrs.get("long_name"), name
+    # the atlas's own variables as its schema declares them (atlas.nc adds the scene dimension)
+    for name, declared in ATLAS.items():
+        var = uninterrupted[name]
+        assert var.dims in (declared.dims, ("scene", *declared.dims)), name
+        assert var.attrs["units"] == declared.units and declared.pattern().match(var.attrs["long_name"]), name
     # the scene's slice is the chain run on its own
     alone = atlas.scene_dataset(base, scenes[3])
     np.testing.assert_array_equal(uninterrupted["alpha"].values[3], alone["alpha"].values)

@@ -8,11 +8,13 @@ from pathlib import Path
 
 import xarray as xr
 
+from pipeline.atlas.schema import ATLAS
 from pipeline.bench.schema import FRONTIER, STABILITY
 from pipeline.stages.schema import SCHEMA, matches
 
 STORED = Path(__file__).parent / "fixtures" / "schema.json"
 BENCH_STORED = Path(__file__).parent / "fixtures" / "bench_schema.json"
+ATLAS_STORED = Path(__file__).parent / "fixtures" / "atlas_schema.json"
 
 
 def test_schema_is_the_stored_list() -> None:
@@ -28,6 +30,12 @@ def test_bench_schema_is_the_stored_list() -> None:
     declared = {"frontier": FRONTIER, "stability": STABILITY}
     rows = [[name, var, list(v.dims), v.units, v.long_name] for name, vs in declared.items() for var, v in sorted(vs.items())]
     assert rows == json.loads(BENCH_STORED.read_text())
+
+def test_atlas_schema_is_the_stored_list() -> None:
+    """The atlas files' own variables as they were written before their schema (pipeline.atlas.schema)."""
+    rows = [[name, list(v.dims), v.units, v.long_name] for name, v in sorted(ATLAS.items())]
+    assert rows == json.loads(ATLAS_STORED.read_text())
+
 
 def written_against_schema(data_dir: Path) -> list[str]:
     """The variables of the stage files under ``data_dir`` that their schema lacks or labels otherwise."""

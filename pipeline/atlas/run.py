@@ -26,6 +26,7 @@ from pathlib import Path
 import xarray as xr
 
 from pipeline.atlas.design import AtlasDesign, Scene, design_scenes, format_atlas_plan, plan_atlas, scene_scenario
+from pipeline.atlas.schema import ATLAS, SCALARS
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Loading, Scenario
 from pipeline.store import atomic_path, provenance
@@ -58,6 +59,11 @@ def scene_dataset(base: Scenario, scene: Scene, loading: Loading | None = None) 
     def take(name: str, dims: tuple[str, ...]) -> tuple:
         return dims, f[name].transpose(*dims).values, dict(f[name].attrs)
 
+    def own(name: str, data: object) -> tuple:
+        """``(dims, data, attrs)`` of one of the atlas's own variables (:data:`pipeline.atlas.schema.ATLAS`)."""
+        var = ATLAS[name]
+        return var.dims, data, var.attrs(reduction=scenario.fits.reduction)
+
     reduced = f[f"{scenario.fits.reduction}_normalized"].transpose("xi", "lambda", "delta").values
     reduced_ci = f[f"{scenario.fits.reduction}_normalized_ci"].transpose("xi", "lambda", "delta", "bound").values
     ds = xr.Dataset(
@@ -68,29 +74,22 @@ def scene_dataset(base: Scenario, scene: Scene, loading: Loading | None = None) 
             # the curve model of the fits stage (ln R' polynomial in ln F')
             **{name: take(name, grid) for name in ("curve_order", "curve_max_error", "curve_within")},
             "curve_coefficients": take("curve_coefficients", grid + ("power",)),
-            "resistance_normalized": (grid + ("step",), reduced, {
-                "units": "1", "long_name": f"R' of the fitted reduction ({scenario.fits.reduction}) over realizations"}),
-            "resistance_normalized_ci": (grid + ("step", "bound"), reduced_ci, {
-                "units": "1", "long_name": f"bootstrap interval of the {scenario.fits.reduction} of R' at each step"}),
+            "resistance_normalized": own("resistance_normalized", reduced),
+            "resistance_normalized_ci": own("resistance_normalized_ci", reduced_ci),
             "open_probability": (grid + ("step",), f["open_probability"].transpose("xi", "lambda", "delta").values,
                                  dict(f["open_probability"].attrs)),
-            "resistance_clean_normalized": (("step",), f["resistance_clean_normalized"].values, {
-                "units": "1", "long_name": "R' of the oxide-free surface"}),
-            "force_normalized": (("step",), k["force_normalized"].values, {
-                "units": "1", "long_name": "F' = 2F/(E* sqrt(R* sigma^3))"}),
-            "fitted": (("step",), f["fitted"].values, {"units": "1", "long_name": "1 where the step was fitted"}),
+            "resistance_clean_normalized": own("resistance_clean_normalized", f["resistance_clean_normalized"].values),
+            "force_normalized": own("force_normalized", k["force_normalized"].values),
+            "fitted": own("fitted", f["fitted"].values),
         },
         coords={name: (name, f[name].values, SURROGATE_COORDINATES[name].attrs())
                 for name in grid},
     )
-    ds = ds.assign_coords(bound=("bound", f["bound"].values, {"units": "1", "long_name": "end of the interval"}),
-                          power=("power", f["power"].values, {"units": "1", "long_name": "power of ln F'"}))
-    scalars = {"mu": (scene.mu, "(8/3) eta sigma sqrt(2 R* beta)"), "Pi": (scene.Pi, "eta R* sigma"),
-               "heldout": (int(scene.heldout), "1: held out (never used in a fit)"),
-               "n_cells": (scenario.n_cells, "cells along the window's side"),
-               "wall_seconds": (time.perf_counter() - start, "wall time of the scene's chain (s)")}
-    for name, (value, long_name) in scalars.items():
-        ds[name] = xr.DataArray(value, attrs={"units": "s" if name == "wall_seconds" else "1", "long_name": long_name})
+    ds = ds.assign_coords(bound=own("bound", f["bound"].values), power=own("power", f["power"].values))
+    scalars = {"mu": scene.mu, "Pi": scene.Pi, "heldout": int(scene.heldout), "n_cells": scenario.n_cells,
+               "wall_seconds": time.perf_counter() - start}
+    for name in SCALARS:
+        ds[name] = xr.DataArray(scalars[name], attrs=ATLAS[name].attrs())
     ds.attrs.update(provenance(scene_scenario(base, scene, loading), "fits"))
     ds.attrs.update(scene=scene.name, title=f"g2tom atlas scene {scene.name}", stage="atlas scene")
     return ds
@@ -156,7 +155,7 @@ def _gather(base: Scenario, scenes: list[Scene], data_dir: Path) -> Path:
         with xr.open_dataset(scene_path(data_dir, scene), engine="netcdf4") as ds:
             parts.append(ds.load())
     atlas = xr.concat(parts, dim="scene", combine_attrs="drop_conflicts").assign_coords(scene=[s.name for s in scenes])
-    atlas["scene"].attrs = {"units": "1", "long_name": "scene name (d: design, h: held out)"}
+    atlas["scene"].attrs = ATLAS["scene"].attrs()
     atlas.attrs.update(provenance(base, "fits"))
     atlas.attrs.update(title="g2tom atlas over the groups (mu, Pi)", stage="atlas",
                        base_scenario="the scenario every scene starts from (sigma and R* kept, eta and beta "
