@@ -14,8 +14,7 @@ from pipeline.stages.schema import Variable
 __all__ = ["ATLAS", "SCALARS"]
 
 
-def _v(dims: str, units: str, long_name: str) -> Variable:
-    return Variable(tuple(dims.split()), units, long_name)
+_v = Variable.of
 
 
 #: The atlas's own variables and labelled coordinates (``scene`` only in atlas.nc).

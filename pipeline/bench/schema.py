@@ -14,8 +14,7 @@ from pipeline.stages.schema import Variable
 __all__ = ["FRONTIER", "STABILITY", "SWEEP_UNITS", "sweep_column", "sweep_index"]
 
 
-def _v(dims: str, units: str, long_name: str) -> Variable:
-    return Variable(tuple(dims.split()), units, long_name)
+_v = Variable.of
 
 
 _ENSEMBLE = "n_realizations xi lambda"

@@ -35,14 +35,18 @@ class Variable:
         """``units`` and ``long_name``, the long name's slots filled from ``fields``."""
         return {"units": self.units, "long_name": self.long_name.format(**fields)}
 
+    @classmethod
+    def of(cls, dims: str, units: str, long_name: str) -> "Variable":
+        """A variable whose dimensions are written as one space-separated string (``""``: a scalar)."""
+        return cls(tuple(dims.split()), units, long_name)
+
     def pattern(self) -> re.Pattern[str]:
         """A regular expression of the long name, any text in place of each slot."""
         parts = re.split(r"\{\w+\}", self.long_name)
         return re.compile(".+".join(re.escape(p) for p in parts) + r"\Z")
 
 
-def _v(dims: str, units: str, long_name: str) -> Variable:
-    return Variable(tuple(dims.split()), units, long_name)
+_v = Variable.of
 
 
 #: The coordinates that several files share, under the label most of them carry.
