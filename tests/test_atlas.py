@@ -208,3 +208,18 @@ def test_the_atlas_runs_on_discrete_asperities(tmp_path) -> None:
     assert ds.attrs["invariance_max_ln_error"] <= 1e-6  # the twin: equal groups, other dimensions
     doc, rows = fit_atlas(ds)
     assert doc["heldout"]["cells"] == 2 and len(rows) == doc["heldout"]["steps"]
+
+
+def test_scenes_are_submitted_longest_first_as_the_plan_assumes() -> None:
+    from pipeline.atlas.design import Scene, SceneEstimate, wall_seconds
+
+    scenes = [Scene(f"d{k:02d}", 1.0, 5.0, False) for k in range(4)]
+    seconds = [10.0, 300.0, 20.0, 300.0]
+    estimates = [SceneEstimate(s, 17, 0.0, t, None) for s, t in zip(scenes, seconds)]
+    ordered = atlas.longest_first(scenes, estimates)
+    assert [s.name for s in ordered] == ["d01", "d03", "d02", "d00"]
+    # two workers taking the next scene when free: the plan's wall time is this order's
+    loads = [0.0, 0.0]
+    for s in ordered:
+        loads[loads.index(min(loads))] += seconds[scenes.index(s)]
+    assert max(loads) == wall_seconds(seconds, 2) == 320.0

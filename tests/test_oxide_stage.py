@@ -205,5 +205,7 @@ def test_bench_reports_ratio_and_error(small: ResolvedScenario, monkeypatch: pyt
     for period in ("window", "spectral"):
         result = bench_oxide.run(_with(small, lambda_=[1.0, 5.0], n_realizations=4, period=period))
         assert result["direct_subset_max_abs_error"] < 1e-5  # float32 rounding of unit-variance values
-        assert result["speedup_per_field"] > 1
+        # a ratio, not a timed claim: on this tiny scene the stage's fixed costs may outweigh the sums
+        assert result["speedup_per_field"] == pytest.approx(result["direct_per_field_seconds"] / result["per_field_seconds"])
+        assert np.isfinite(result["speedup_per_field"]) and result["speedup_per_field"] > 0
         assert [row["lambda"] for row in result["per_lambda"]] == [1.0, 5.0]

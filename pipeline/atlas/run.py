@@ -25,13 +25,14 @@ from pathlib import Path
 
 import xarray as xr
 
-from pipeline.atlas.design import AtlasDesign, Scene, design_scenes, format_atlas_plan, plan_atlas, scene_scenario
+from pipeline.atlas.design import (AtlasDesign, Scene, SceneEstimate, design_scenes, format_atlas_plan, plan_atlas,
+                                   scene_scenario)
 from pipeline.atlas.schema import ATLAS, SCALARS
 from pipeline.compute import ComputeOptions
 from pipeline.config import ConfigError, Loading, Scenario
 from pipeline.store import atomic_path, provenance
 
-__all__ = ["scene_dataset", "scene_path", "run_atlas", "ATLAS_FILE"]
+__all__ = ["scene_dataset", "scene_path", "run_atlas", "longest_first", "ATLAS_FILE"]
 
 ATLAS_FILE = "atlas.nc"
 _ONE = ComputeOptions(workers=1, progress=False)
@@ -178,6 +179,14 @@ def _line(done: int, total: int, name: str, seconds: float, scene: Scene) -> Non
           file=sys.stderr)
 
 
+def longest_first(scenes: list[Scene], estimates: list[SceneEstimate]) -> list[Scene]:
+    """``scenes`` by their planned seconds, longest first (ties in the given order): the order the
+    plan's wall time assumes (:func:`pipeline.atlas.design.wall_seconds`); a long scene started
+    last would run alone at the end."""
+    seconds = {e.scene.name: e.seconds for e in estimates}
+    return sorted(scenes, key=lambda s: -seconds[s.name])
+
+
 def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
               options: ComputeOptions = _ONE) -> Path:
     """Every scene not yet written, one per task, then ``atlas.nc``.
@@ -227,7 +236,9 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
         else:
             from distributed import as_completed
 
-            futures = [client.submit(_run_scene, base, s, data_dir, key=f"atlas-{s.name}", pure=False) for s in pending]
+            ordered = longest_first(pending, estimates)
+            futures = [client.submit(_run_scene, base, s, data_dir, key=f"atlas-{s.name}", pure=False,
+                                     priority=len(ordered) - k) for k, s in enumerate(ordered)]
             for k, future in enumerate(as_completed(futures), 1):
                 name, seconds = future.result()
                 _line(k, len(pending), name, seconds, by_name[name])

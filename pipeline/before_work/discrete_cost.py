@@ -8,15 +8,18 @@ the conducting spots at every step. Both are modelled per load step from Greenwo
 expected count of touching asperities N_s and of candidates C_s (:func:`expected_counts`, one
 fast solve, :func:`probe`; within a few % of the discrete pool's at the heavy steps):
 
-* one surface of the pool: ``sum_s (CONTACT_STEP_S + CONTACT_SQUARE_S C_s^2 + CONTACT_CUBE_S N_s^3)``
-  (:func:`surface_seconds`), C_s the expected candidates (asperities above the undeformed indenter);
+* one surface of the pool: ``sum_s (CONTACT_STEP_S + CONTACT_SQUARE_S C_s^2 + CONTACT_POWER_S
+  N_s^2.5)`` (:func:`surface_seconds`), C_s the expected candidates (asperities above the undeformed
+  indenter);
 * one oxide field (one realization at one lambda, all its xi at once: the point solves of a step
-  share one factorization): ``sum_s (FIELD_STEP_S + FIELD_SQUARE_S N_s^2 + FIELD_MIXED_S C_s N_s
-  + FIELD_CUBE_S N_s^3)`` (:func:`field_seconds`).
+  share one factorization, or one conjugate-gradient sweep from a union of
+  :data:`pipeline.physics.discrete_resistance.ITERATIVE_FROM` spots): ``sum_s (FIELD_STEP_S +
+  FIELD_SQUARE_S N_s^2 + FIELD_MIXED_S C_s N_s + FIELD_CUBE_S N_s^3)`` over the factorized steps
+  and ``FIELD_ITERATIVE_S N_s^2`` in place of the cube on the others (:func:`field_seconds`).
 
 The constants are one thread's CPU seconds measured on a 2-core machine (2026-11-27, small fixed
 ensembles of atlas design scenes d02, d12, d22, d24: mu 7.07 at Pi 5, 40, 320, and mu 50 at Pi 320;
-see each constant). ``g2tom plan`` scales its estimates of the default scene by these models'
+d21 and d20, mu 2.66 and 1 at Pi 320, for the large unions; see each constant). ``g2tom plan`` scales its estimates of the default scene by these models'
 ratio (:mod:`pipeline.before_work.plan`); ``g2tom plan --atlas`` adds them up per scene
 (:mod:`pipeline.atlas.cost`).
 """
@@ -38,12 +41,15 @@ _N_RADIAL = 400
 #: Rigid gap (units of sigma) at the fast solve's outer radius: f_{3/2}(12) ~ 1e-33 of the peak.
 _FAR_GAP = 12.0
 #: Contact pool, one surface: seconds per load step, per candidate squared (the coupling kernel
-#: over the candidates) and per touching asperity cubed (the Newton factorizations), each summed
-#: over the steps; fitted exactly to d12: 0.085 s per surface of 20 steps (candidates <= 832,
-#: N <= 249), d22: 11.4 s (6,657, 1,993), d24 (mu 50, Pi 320): 1.94 s (4,792, 469).
+#: over the candidates) and per touching asperity to the power 2.5 (the Newton factorizations:
+#: LAPACK runs faster on larger matrices, so a cube overstated large pools), each summed over the
+#: steps. Step and square fitted exactly to d12: 0.085 s per surface of 20 steps (candidates <=
+#: 832, N <= 249) and d24 (mu 50, Pi 320): 1.94 s (4,792, 469); the power term by least squares in
+#: relative error on the contact stage's CPU seconds per surface (2026-11-27): d22 10.1 s (6,657,
+#: 1,993), d21 29.1 s (N <= 3,676), d20 80.4 s (6,084), which the model gives as 0.85, 0.94, 1.11.
 CONTACT_STEP_S = 2.0e-4
 CONTACT_SQUARE_S = 2.15e-8
-CONTACT_CUBE_S = 2.35e-10
+CONTACT_POWER_S = 5.63e-9
 #: Cube, one field (all xi): seconds per step, per N^2, per candidate x N and per N^3 of a step,
 #: fitted exactly to the compiled (numba) cube of 01f6c8d after a warm-up call: d02: 2.31 ms per field
 #: (N <= 31), d12: 11.1 ms (N <= 249), d24: 54.9 ms (N <= 469), d22: 1.99 s (N <= 1,993); fixed
@@ -54,6 +60,13 @@ FIELD_STEP_S = 1.1e-4
 FIELD_SQUARE_S = 1.18e-8
 FIELD_MIXED_S = 2.07e-9
 FIELD_CUBE_S = 5.4e-11
+#: Cube, one field, a step of N_s >= ITERATIVE_FROM: seconds per N_s^2 of the conjugate-gradient
+#: sweeps (about 16, all xi at once, bound by reading the union's kernel), in place of the cube;
+#: least squares in relative error on the cube's CPU seconds per field (2026-11-27, 3-16 fields
+#: at lambda 1 and 23): d24 58.6 ms (its last steps), d22 0.456 s, d21 2.09 s (N <= 3,676), d20
+#: 5.68 s (N <= 6,084); with the factorized steps' constants above the model gives 0.83, 1.22, 0.86
+#: and 0.89 of those (d02 and d12: 0.93, 0.90).
+FIELD_ITERATIVE_S = 9.49e-9
 #: The expected touching and candidate counts found so far, by the parameters that set them.
 _COUNTS: dict[str, tuple[np.ndarray, np.ndarray]] = {}
 
@@ -132,7 +145,7 @@ def surface_seconds(touching: np.ndarray, candidates: np.ndarray) -> float:
         (steps,) expected touching asperities and candidates per load step (:func:`expected_counts`).
     """
     return (CONTACT_STEP_S * touching.size + CONTACT_SQUARE_S * float(np.sum(candidates**2))
-            + CONTACT_CUBE_S * float(np.sum(touching**3)))
+            + CONTACT_POWER_S * float(np.sum(touching**2.5)))
 
 
 def field_seconds(touching: np.ndarray, candidates: np.ndarray) -> float:
@@ -143,5 +156,10 @@ def field_seconds(touching: np.ndarray, candidates: np.ndarray) -> float:
     touching, candidates
         (steps,) expected touching asperities and candidates per load step (:func:`expected_counts`).
     """
+    from pipeline.physics.discrete_resistance import ITERATIVE_FROM  # numba: only where a field is costed
+
+    factorized = touching < ITERATIVE_FROM
     return (FIELD_STEP_S * touching.size + FIELD_SQUARE_S * float(np.sum(touching**2))
-            + FIELD_MIXED_S * float(np.sum(candidates * touching)) + FIELD_CUBE_S * float(np.sum(touching**3)))
+            + FIELD_MIXED_S * float(np.sum(candidates * touching))
+            + FIELD_CUBE_S * float(np.sum(touching[factorized]**3))
+            + FIELD_ITERATIVE_S * float(np.sum(touching[~factorized]**2)))

@@ -72,8 +72,8 @@ DISCRETE_XI_MAP_S = {("disc", "point"): 2 * 92.05 / 188_200, ("centre", "point")
 #: 20 steps' expected counts: at most 210 touching asperities and 754 candidates), CPU seconds of
 #: one thread: one surface of the pool, one oxide field's point solves (every xi). Another scene's
 #: discrete pool and cube are estimated as the default's measured constants above times the
-#: models' ratio, so the cost follows the touching count (dense solves: N^3 at large N).
-DEFAULT_SURFACE_MODEL_S = 0.06703674989319493
+#: models' ratio, so the cost follows the touching count (dense solves: N^2.5 to N^3 at large N).
+DEFAULT_SURFACE_MODEL_S = 0.07436773256159718
 DEFAULT_HEAVIEST_TOUCHING = 210
 DEFAULT_FIELD_MODEL_S = 0.008316928707799072
 #: Stage times of the two default studies measured on 2026-11-27 (2 cores; each stage run by
