@@ -171,3 +171,20 @@ def test_large_unions_take_conjugate_gradients_by_default():
     below, path_below = dr.currents(kernel, radii[:, None, :], iterative_from=n + 1)
     assert int(path_below[0]) != dr.ITERATIVE
     np.testing.assert_allclose(got, below[:, 0], rtol=1e-9)
+
+
+def test_bench_of_large_unions_compares_both_paths_on_a_solved_surface(monkeypatch):
+    """The bench's large unions on a small scene (mu 7, Pi 40: unions of ~100-250 spots): both
+    paths timed on the same sets of a solved surface, equal within 1e-9."""
+    from pipeline.bench import discrete as bench_discrete
+    from pipeline.config import load_scenario
+
+    monkeypatch.setattr(bench_discrete, "LARGE_SCENE", (7.0, 40.0))
+    monkeypatch.setattr(bench_discrete, "LARGE_UNIONS", (100, 200))
+    monkeypatch.setattr(bench_discrete, "LARGE_REPEATS", 1)
+    scenario = load_scenario("paper", {"oxide.xi": [0.3, 0.7], "oxide.lambda": [1.0, 23.0], "loading.n_delta": 8})
+    rows = bench_discrete._large_unions(scenario)
+    assert [(r["lambda"], r["sets"]) for r in rows] == [(1.0, 2), (1.0, 2), (23.0, 2), (23.0, 2)]
+    assert all(r["iterative_path"] for r in rows)
+    assert max(r["max_relative_difference"] for r in rows) < 1e-9
+    assert all(r["union"] > 50 and r["ratio_factorized_to_iterative"] > 0 for r in rows)

@@ -8,7 +8,12 @@ approaches:
   asperity of the disc (no candidate selection: the slow exact reference) on the first
   :data:`REFERENCE_SURFACES`, with the largest differences in approach and in resistance;
 * the cube's work per oxide map (one field at one lambda: every xi at every load step) on the
-  pool, for both spot rules and both resistance models, median over :data:`MAPS` maps.
+  pool, for both spot rules and both resistance models, median over :data:`MAPS` maps;
+* the point model's large unions (the atlas's scenes at Pi 320 reach 2,000-6,000 touching caps,
+  the default ~200): on one solved surface of a scene at :data:`LARGE_SCENE`, the steps of about
+  :data:`LARGE_UNIONS` conducting spots with every oxide fraction of one field, conjugate
+  gradients against the factorizations in the same process (median of :data:`LARGE_REPEATS`,
+  their ratio) and the largest relative difference of ``1^T f``.
 """
 
 from __future__ import annotations
@@ -25,7 +30,8 @@ from pipeline.config import ResolvedScenario, Scenario
 from pipeline.before_work.domains import resolve, solve_scenario
 from pipeline.contact_solution import fields
 from pipeline.physics import discrete_contact as dc
-from pipeline.physics.discrete_resistance import resistances
+from pipeline.physics import oxide_band
+from pipeline.physics.discrete_resistance import ITERATIVE, currents, resistances
 from pipeline.scene import FieldSource
 from pipeline.stages import contact, contact_discrete, cube, cube_discrete
 
@@ -34,6 +40,11 @@ __all__ = ["run"]
 SURFACES = 24
 REFERENCE_SURFACES = 3
 MAPS = 12
+#: The scene of the large unions (mu, Pi: the atlas's d22, up to ~2,000 touching caps), the union
+#: sizes timed, and timed solves of each (the median is reported).
+LARGE_SCENE = (7.071, 320.0)
+LARGE_UNIONS = (400, 1000, 2000)
+LARGE_REPEATS = 3
 
 
 def _discrete(scenario: Scenario) -> ResolvedScenario:
@@ -114,8 +125,55 @@ def _maps(scenario: ResolvedScenario) -> list[dict[str, Any]]:
     return out
 
 
+def _large_unions(scenario: ResolvedScenario) -> list[dict[str, Any]]:
+    """Conjugate gradients against the factorizations on the steps of one solved surface of a scene
+    at :data:`LARGE_SCENE` (mu, Pi), the scenario's sigma and R* (loads spanning F' 0.05-20, as an
+    atlas scene): at the steps whose union of conducting spots is nearest each of
+    :data:`LARGE_UNIONS`, every oxide fraction of the first field at the smallest and largest lambda."""
+    from pipeline.atlas.design import Scene, scene_scenario
+
+    mu, pi = LARGE_SCENE
+    big = scene_scenario(scenario, Scene("bench", mu, pi, False))
+    big = resolve(dataclasses.replace(big, contact=dataclasses.replace(big.contact, surfaces=1)))
+    pool, _, _ = cube.work_settings(big, contact.build(big, ComputeOptions(progress=False)))
+    x, y, radius = pool.spots(0)
+    kernel = pool.kernel(0)
+    source = FieldSource.of(big)
+    out = []
+    for index, lam in enumerate(source.lambdas):
+        if lam not in (min(source.lambdas), max(source.lambdas)):
+            continue
+        modes = source.modes[index]
+        coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(source.seed, lam, 0), source.amplitudes)
+        share = cube_discrete.clean_shares(modes, coeffs, x, y, radius, source.thresholds(index, np.array([0]))[:, 0],
+                                           big.oxide.spot_rule, lam * source.cell_size)
+        radii = radius[None] * np.sqrt(share)  # (xi, delta, spot)
+        unions = (radii > 0).any(axis=0).sum(axis=-1)
+        for n in LARGE_UNIONS:
+            step = int(np.argmin(np.abs(unions - n)))
+            sets = np.ascontiguousarray(radii[:, step:step + 1])
+            seconds, totals, paths = {}, {}, {}
+            for name, start_at in (("iterative", 1), ("factorized", int(unions[step]) + 1)):
+                times = []
+                for _ in range(LARGE_REPEATS):
+                    start = time.perf_counter()
+                    totals[name], paths[name] = currents(kernel, sets, iterative_from=start_at)
+                    times.append(time.perf_counter() - start)
+                seconds[name] = statistics.median(times)
+            live = totals["factorized"] > 0
+            out.append({"lambda": lam, "union": int(unions[step]), "sets": int(sets.shape[0]),
+                        "iterative_path": bool(paths["iterative"][0] == ITERATIVE),
+                        "median_seconds_iterative": round(seconds["iterative"], 5),
+                        "median_seconds_factorized": round(seconds["factorized"], 5),
+                        "ratio_factorized_to_iterative": round(seconds["factorized"] / seconds["iterative"], 3),
+                        "max_relative_difference": float(np.max(np.abs(totals["iterative"][live]
+                                                                       / totals["factorized"][live] - 1.0)))})
+    return out
+
+
 def run(scenario: Scenario) -> dict[str, Any]:
-    """Time the discrete contact solve and the cube's work per map; JSON-ready figures."""
+    """Time the discrete contact solve, the cube's work per map and the point model's large unions;
+    JSON-ready figures."""
     discrete = _discrete(scenario)
     figures, _ = _contact(discrete)
-    return {"contact": figures, "cube_per_map": _maps(discrete)}
+    return {"contact": figures, "cube_per_map": _maps(discrete), "large_unions": _large_unions(discrete)}
