@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from pipeline.compute import ComputeOptions
+from pipeline import config
 from pipeline.config import load_scenario
 from pipeline.before_work.domains import resolve
 from pipeline.physics import oxide_band
@@ -119,3 +120,15 @@ def test_pool_kernels_are_made_once_per_surface_and_exact(pool):
     np.testing.assert_array_equal(first, interaction_kernel(x, y, surfaces.floor))
     assert surfaces.kernel(3 + surfaces.size) is first  # realization k + S meets surface k again
     assert surfaces == cube_discrete.DiscretePool.of(pool)  # the cache is not part of the pool's value
+
+
+def test_pool_kernels_beyond_the_cache_budget_are_made_again_equal(pool, monkeypatch):
+    surfaces = cube_discrete.DiscretePool.of(pool)
+    one = surfaces.kernel(0).nbytes
+    monkeypatch.setattr(config, "KERNEL_CACHE_BYTES", one + surfaces.kernel(1).nbytes)
+    kept = [surfaces.kernel(k) for k in range(surfaces.size)]
+    assert len(surfaces._kernels) == 2  # surfaces 0 and 1 fit the budget; the others are not kept
+    again = surfaces.kernel(2)
+    assert again is not kept[2]
+    np.testing.assert_array_equal(again, kept[2])
+    assert surfaces.kernel(surfaces.size) is kept[0]

@@ -17,7 +17,7 @@ import math
 import os
 from dataclasses import dataclass
 
-from pipeline.config import AUTO, CHUNK_BYTES, ResolvedScenario, Scenario, odd_cells
+from pipeline.config import AUTO, CHUNK_BYTES, KERNEL_CACHE_BYTES, ResolvedScenario, Scenario, odd_cells
 
 __all__ = ["StageEstimate", "Realizations", "realizations", "estimate", "format_plan", "available_memory", "BASE_BYTES"]
 
@@ -297,6 +297,14 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
         contact_s += DISCRETE_SOLVE_S * DEFAULT_STEPS * surface_scale * scenario.contact.surfaces / t
         per_realization = n_xi * n_lam * DISCRETE_XI_MAP_S[(ox.spot_rule, scenario.cube.model)] * field_scale / t
         cube_s = per_realization * counts.computed
+        # dense matrices per thread: the contact's coupling over the candidates and its Newton
+        # copies over the touching caps; the cube's kept kernels (one per surface, bounded), a
+        # kernel made in a task and the conjugate gradients' union coupling
+        spots = float(touching[-1])
+        contact_mem += t * 8.0 * (float(candidates[-1]) ** 2 + 3.0 * spots**2)
+        kept = min(KERNEL_CACHE_BYTES, scenario.contact.surfaces * 8.0 * spots**2)
+        cube_fixed += kept + t * 2.0 * 8.0 * spots**2
+        cube_mem = cube_fixed + CUBE_RESULT_COPIES * results
     # fits: the cube's terms, the bootstrap's resample counts and means.
     boot = scenario.fits.n_bootstrap
     def fits_mem_of(n_axis: float) -> float:

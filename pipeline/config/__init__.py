@@ -23,7 +23,7 @@ from pipeline.config.loading import (
 from pipeline.config.scenario import (
     SECTIONS, STAGE_EXCLUDED, STAGE_INPUTS, STAGE_UPSTREAM, ResolvedScenario, Scenario, odd_cells)
 from pipeline.config.scene_sections import Contact, Indenter, Loading, Material, Roughness
-from pipeline.config.study_sections import CHUNK_BYTES, Atlas, Cube, Fits, Oxide, Surrogate
+from pipeline.config.study_sections import CHUNK_BYTES, KERNEL_CACHE_BYTES, Atlas, Cube, Fits, Oxide, Surrogate
 
 __all__ = [
     "AUTO",
@@ -54,4 +54,5 @@ __all__ = [
     "Surrogate",
     "Atlas",
     "CHUNK_BYTES",
+    "KERNEL_CACHE_BYTES",
 ]

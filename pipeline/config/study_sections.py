@@ -10,12 +10,17 @@ from dataclasses import dataclass
 
 from pipeline.config.declare import param
 
-__all__ = ["Oxide", "Cube", "Fits", "Surrogate", "Atlas", "CHUNK_BYTES"]
+__all__ = ["Oxide", "Cube", "Fits", "Surrogate", "Atlas", "CHUNK_BYTES", "KERNEL_CACHE_BYTES"]
 
 #: Largest float32 fields of one oxide chunk (all lambdas), bytes: ``oxide.chunk`` realizations a
 #: chunk, fewer where their fields would pass it; bounds the oxide stage's peak on large grids (and
 #: its estimate before work).
 CHUNK_BYTES = 64 * 2**20
+#: Bytes of coupling kernels the discrete cube's pool keeps (one per surface, 8 n^2 bytes each:
+#: 0.3 MB at the default's ~200 spots, 300 MB at the atlas's largest scene's ~6,100); beyond it a
+#: surface's kernel is made again for every oxide realization that meets it, one O(n^2) pass against
+#: the realization's point solves over every load step (a few % of them). The plan counts it.
+KERNEL_CACHE_BYTES = 2 * 2**30
 
 
 @dataclass(frozen=True)

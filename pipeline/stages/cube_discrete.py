@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import xarray as xr
 
+from pipeline import config
 from pipeline.physics import oxide_band
 from pipeline.physics.discrete_contact import interaction_kernel
 from pipeline.physics.discrete_resistance import resistances
@@ -86,12 +87,15 @@ class DiscretePool:
 
     def kernel(self, realization: int) -> np.ndarray:
         """The coupling kernel (1/m, spot x spot) of the surface oxide realization ``realization`` meets,
-        made once per surface and kept (about 0.3 MB for 200 spots)."""
+        made once per surface and kept while the kept ones fit :data:`pipeline.config.KERNEL_CACHE_BYTES`."""
         s = int(realization) % self.size
-        if s not in self._kernels:
+        kernel = self._kernels.get(s)
+        if kernel is None:
             x, y, _ = self.spots(s)
-            self._kernels[s] = interaction_kernel(x, y, self.floor)
-        return self._kernels[s]
+            kernel = interaction_kernel(x, y, self.floor)
+            if sum(k.nbytes for k in self._kernels.values()) + kernel.nbytes <= config.KERNEL_CACHE_BYTES:
+                self._kernels[s] = kernel
+        return kernel
 
     def spots(self, realization: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Positions (m) and radii (delta, spot) of the surface oxide realization ``realization`` meets."""
