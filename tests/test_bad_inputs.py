@@ -119,6 +119,8 @@ def _hand_cases() -> list[Case]:
              ("oxide.lambda holds 2", ">= 3")),
         Case("disc spot rule on grid spots", ("contact", *_SMALL, "--set", "oxide.spot_rule=disc"),
              ("oxide.spot_rule = 'disc'", "contact.model = 'discrete'")),
+        Case("segment spot rule on grid spots", ("contact", *_SMALL, "--set", "oxide.spot_rule=segment"),
+             ("oxide.spot_rule = 'segment'", "contact.model = 'discrete'")),
         Case("discrete spots with area weights", ("cube", *_SMALL, "--set", "contact.model=discrete", "--set",
                                                   "cube.weights=area"), ("cube.weights = 'area'", "'radius'")),
         Case("discrete spots with a resistive film", ("run", *_SMALL, "--set", "contact.model=discrete", "--set",

@@ -104,6 +104,22 @@ def test_centre_rule_switches_whole_spots(scene, pool):
 
 
 
+def test_segment_rule_conducts_more_than_disc_on_the_same_shares(scene, pool):
+    """The segment rule counts the same clean shares as disc and gives each cut spot a larger
+    radius (h(f) >= sqrt(f)): the same clean surface, every oxidized resistance at most disc's,
+    some strictly lower, the same open circuits."""
+    segment = resolve(load_scenario("paper", {**DISCRETE, "oxide.spot_rule": "segment"}))
+    ox = oxide.build(segment, QUIET)
+    out = cube.build(segment, pool, ox, QUIET)
+    disc = cube.build(scene, pool, ox, QUIET)
+    assert out.attrs["spot_rule"] == "segment"
+    np.testing.assert_array_equal(out["resistance_clean"].values, disc["resistance_clean"].values)
+    r, d = out["resistance"].values, disc["resistance"].values
+    np.testing.assert_array_equal(np.isfinite(r), np.isfinite(d))
+    finite = np.isfinite(d)
+    assert np.all(r[finite] <= d[finite] * (1 + 1e-12)) and np.any(r[finite] < d[finite] * (1 - 1e-3))
+
+
 def test_pool_variables_are_the_schemas(pool):
     from pipeline.stages.schema import matches
 

@@ -68,6 +68,8 @@ DEFAULT_STEPS = 20
 #: Greenwood pairs are the previous code's, whose Greenwood form did not change (not remeasured).
 DISCRETE_XI_MAP_S = {("disc", "point"): 2 * 92.05 / 188_200, ("centre", "point"): 3.0e-3 * 2 * 92.05 / 188_200 / 5.5e-3,
                      ("disc", "greenwood"): 2.8e-3, ("centre", "greenwood"): 0.75e-3}
+# the segment rule counts shares as disc does (its table lookup is a few % of a field's work)
+DISCRETE_XI_MAP_S.update({("segment", model): DISCRETE_XI_MAP_S[("disc", model)] for model in ("point", "greenwood")})
 #: The discrete cost models (:mod:`pipeline.before_work.discrete_cost`) on the default scene (its
 #: 20 steps' expected counts: at most 210 touching asperities and 754 candidates), CPU seconds of
 #: one thread: one surface of the pool, one oxide field's point solves (every xi). Another scene's

@@ -62,13 +62,13 @@ def _check_spots(s: Scenario) -> None:
 
 
 def _check_discrete(s: Scenario) -> None:
-    """The disc rule needs discrete spots; discrete spots take radius weights, no lattice term and
-    insulating films."""
-    if s.oxide.spot_rule == "disc" and s.contact.model != "discrete":
+    """The disc and segment rules need discrete spots; discrete spots take radius weights, no
+    lattice term and insulating films."""
+    if s.oxide.spot_rule != "centre" and s.contact.model != "discrete":
         raise ConfigError(
-            f"oxide.spot_rule = 'disc' is not allowed with contact.model = {s.contact.model!r}: must be "
-            "'centre' (a grid spot stands for a cell's asperities, not one contact disc; the disc rule "
-            "needs contact.model = 'discrete')"
+            f"oxide.spot_rule = {s.oxide.spot_rule!r} is not allowed with contact.model = {s.contact.model!r}: "
+            f"must be 'centre' (a grid spot stands for a cell's asperities, not one contact disc; the "
+            f"{s.oxide.spot_rule} rule needs contact.model = 'discrete')"
         )
     if s.contact.model != "discrete":
         return

@@ -32,6 +32,7 @@ from pipeline.contact_solution import fields
 from pipeline.physics import discrete_contact as dc
 from pipeline.physics import oxide_band
 from pipeline.physics.discrete_resistance import ITERATIVE, currents, resistances
+from pipeline.physics.spot_share import RULES, effective_radius
 from pipeline.scene import FieldSource
 from pipeline.stages import contact, contact_discrete, cube, cube_discrete
 
@@ -109,7 +110,7 @@ def _maps(scenario: ResolvedScenario) -> list[dict[str, Any]]:
     source = FieldSource.of(scenario)
     xi = np.arange(len(scenario.oxide.xi))
     out = []
-    for rule in ("centre", "disc"):
+    for rule in RULES:
         for model in ("point", "greenwood"):
             settings = dataclasses.replace(base, model=model, spot_rule=rule)
             for index, lam in enumerate(scenario.oxide.lambda_):
@@ -147,7 +148,7 @@ def _large_unions(scenario: ResolvedScenario) -> list[dict[str, Any]]:
         coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(source.seed, lam, 0), source.amplitudes)
         share = cube_discrete.clean_shares(modes, coeffs, x, y, radius, source.thresholds(index, np.array([0]))[:, 0],
                                            big.oxide.spot_rule, lam * source.cell_size)
-        radii = radius[None] * np.sqrt(share)  # (xi, delta, spot)
+        radii = effective_radius(radius[None], share, big.oxide.spot_rule)  # (xi, delta, spot)
         unions = (radii > 0).any(axis=0).sum(axis=-1)
         for n in LARGE_UNIONS:
             step = int(np.argmin(np.abs(unions - n)))

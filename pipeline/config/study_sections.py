@@ -97,9 +97,10 @@ class Oxide:
         "centre",
         "1",
         "which share of a spot conducts: centre (all of it where its centre is clean, the paper's "
-        "rule) or disc (its clean share f of the contact disc, at quadrature points, conducting "
-        "with radius a sqrt(f); contact.model = discrete only)",
-        choices=("centre", "disc"),
+        "rule), disc (its clean share f of the contact disc, at quadrature points, conducting "
+        "with radius a sqrt(f)) or segment (the same f, conducting as the circular segment of that "
+        "share: radius a h(f) >= a sqrt(f)); disc and segment: contact.model = discrete only",
+        choices=("centre", "disc", "segment"),
     )
 
 

@@ -32,7 +32,7 @@ __all__ = ["Case", "plan_cases", "ensemble_cases", "case_key", "load_case", "run
 #: The set's fields that shape no case (part 1's realizations and loads are the case's own; part
 #: 2's sizes choose which cases run, not what one gives).
 UNSHAPING = ("realizations", "models", "discretizations", "convergence_grid", "deltas", "ensemble_grid",
-             "max_ensemble", "model_realizations", "clean_error", "oxide_error")
+             "max_ensemble", "model_realizations", "clean_error", "oxide_error", "spot_rule")
 #: Relative force step of the two nearby loads whose dF/d(delta) checks Barber's theorem.
 BARBER_STEP = 0.01
 

@@ -4,9 +4,9 @@ On the GW surface the reference knows every asperity. The discrete model
 (:mod:`pipeline.physics.discrete_contact`) solves those very caps, coupled through the half-space,
 at g2tom's forces (the Greenwood–Tripp forces of the set's approaches, where the reference is
 solved too), and the cube's discrete chunk (:func:`pipeline.stages.cube_discrete.discrete_chunk`)
-counts oxide per spot by the ``disc`` rule on g2tom's own fields. Against the full field it
-measures the discrete model itself, surface by surface: the caps' point-load coupling, the
-resistance model and the disc rule.
+counts oxide per spot by the set's ``spot_rule`` (the validated scenario's ``disc`` or ``segment``,
+:func:`with_rule_of`) on g2tom's own fields. Against the full field it measures the discrete model
+itself, surface by surface: the caps' point-load coupling, the resistance model and the spot rule.
 """
 
 from __future__ import annotations
@@ -23,12 +23,21 @@ from pipeline.stages import contact as contact_stage
 from pipeline.stages import cube as cube_stage
 from pipeline.stages.cube_discrete import DiscretePool, clean_pool, discrete_chunk
 
-__all__ = ["DISCRETE", "SPOT_RULE", "surface_pool", "g2tom_resistances"]
+__all__ = ["DISCRETE", "RULES", "with_rule_of", "surface_pool", "g2tom_resistances"]
 
 #: The discretization's name in validate.nc.
 DISCRETE = "discrete"
-#: The oxide rule the discretization uses (the discrete model's own).
-SPOT_RULE = "disc"
+#: The oxide rules the discretization takes (a spot's share of its contact disc); the set's own
+#: is the validated scenario's where that is one of them, else ``disc``.
+RULES = ("disc", "segment")
+
+
+def with_rule_of(vset: scene.ValidationSet, config: str) -> scene.ValidationSet:
+    """``vset`` with the spot rule of the validated scenario ``config`` (``disc`` where it has none of :data:`RULES`)."""
+    from pipeline.config import load_scenario
+
+    rule = load_scenario(config).oxide.spot_rule
+    return dataclasses.replace(vset, spot_rule=rule if rule in RULES else "disc")
 
 
 def surface_pool(vset: scene.ValidationSet, realization: int, forces: np.ndarray) -> DiscretePool:
@@ -55,7 +64,7 @@ def g2tom_resistances(vset: scene.ValidationSet, model: str) -> xr.Dataset:
     contact = contact_stage.build(scenario)
     forces = contact["force"].values
     _, _, settings = cube_stage.work_settings(scenario, contact)
-    settings = dataclasses.replace(settings, spots="discrete", spot_rule=SPOT_RULE, model=model)
+    settings = dataclasses.replace(settings, spots="discrete", spot_rule=vset.spot_rule, model=model)
     source = FieldSource.of(scenario)
     xi_all = np.arange(len(vset.xi))
     clean, oxidized = [], []

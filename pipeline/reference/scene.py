@@ -64,6 +64,9 @@ class ValidationSet:
         Root seeds of the surfaces and of g2tom's oxide fields.
     models, discretizations
         g2tom's ``cube.model`` values and spot discretizations to compare.
+    spot_rule
+        The oxide rule of the ``discrete`` discretization (``disc`` or ``segment``: the validated
+        scenario's, :func:`pipeline.reference.discrete_spots.with_rule_of`).
     surface
         ``gw`` (asperities of the GW model with sigma, eta, beta) or ``random_process`` (a Gaussian
         self-affine surface, :func:`random_process_set`: sigma, eta, beta are then its summits').
@@ -100,6 +103,7 @@ class ValidationSet:
     model_realizations: int = 1024
     clean_error: float = 0.03
     oxide_error: float = 0.05
+    spot_rule: str = "disc"
 
     @property
     def pixel(self) -> float:

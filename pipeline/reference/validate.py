@@ -232,6 +232,7 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
     """
     start = time.perf_counter()
     out = Path(out)
+    vset = discrete_spots.with_rule_of(vset, config)
     everything = cases_mod.plan_cases(vset)
     workers = 1 if options.scheduler is None and (options.workers or 1) <= 1 else (options.workers or 1)
     for line in plan_lines(vset, config, workers):

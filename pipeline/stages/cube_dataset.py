@@ -92,7 +92,8 @@ def dataset(
         attrs["conducting_rule"] = (
             "realization k meets discrete surface k mod contact.surfaces; a spot conducts with radius a where the "
             "field at its centre is below the threshold (spot_rule centre), or with a sqrt(f), f its clean share of "
-            "the contact disc (spot_rule disc)")
+            "the contact disc (spot_rule disc), or with a h(f) >= a sqrt(f), the conductance of the circular segment "
+            "of share f (spot_rule segment)")
         attrs["spot_rule"] = ox.spot_rule
     if ox.film == "resistive":
         attrs["film_resistance"] = ox.film_resistance

@@ -9,7 +9,9 @@ stay possible). The field is evaluated where the spots are, exactly
 * ``centre``: all of it where the field at its centre is clean (``psi < threshold``, float32
   values compared, as on grid spots), else nothing;
 * ``disc``: its clean share ``f`` of the contact disc, from the field at an equal-area pattern of
-  points on the disc (:class:`pipeline.physics.spot_share.DiscRule`), with radius ``a sqrt(f)``.
+  points on the disc (:class:`pipeline.physics.spot_share.DiscRule`), with radius ``a sqrt(f)``;
+* ``segment``: the same ``f``, with the radius ``a h(f)`` of the circular segment of that share's
+  conductance (:func:`pipeline.physics.spot_share.effective_radius`).
   The pattern's rings follow the disc's size against the correlation length ``l_O``:
   ``min(DEFAULT_RINGS, ceil(RINGS_PER_CORRELATION a / l_O))``, at least one, so a disc of radius
   ``l_O / 2`` gets the full pattern (clean share within 0.02 of a fine image of the disc, see
@@ -33,7 +35,7 @@ from pipeline.physics import oxide_band
 from pipeline.physics.discrete_contact import interaction_kernel
 from pipeline.physics.discrete_resistance import resistances
 from pipeline.physics.oxide_points import values_at_points
-from pipeline.physics.spot_share import DEFAULT_RINGS, disc_points, disc_shares
+from pipeline.physics.spot_share import DEFAULT_RINGS, disc_points, disc_shares, effective_radius
 
 if TYPE_CHECKING:  # cube_chunks imports this module
     from pipeline.stages.cube_chunks import CubeSettings
@@ -164,7 +166,8 @@ def discrete_chunk(source: Any, index: int, realizations: np.ndarray, xi_index: 
         coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(base.seed, lam, int(k)), base.amplitudes)
         share = clean_shares(modes, coeffs, x, y, radius, thresholds[:, column], settings.spot_rule,
                              lam * base.cell_size)
-        pieces.append(_terms(pool.kernel(int(k)), radius[None] * np.sqrt(share), settings.rho, settings.model))
+        pieces.append(_terms(pool.kernel(int(k)), effective_radius(radius[None], share, settings.spot_rule),
+                             settings.rho, settings.model))
     out: dict[str, Any] = {name: np.stack([p[name] for p in pieces], axis=-1) for name in pieces[0]}
     out["n_uncropped"] = 0
     return out
