@@ -74,8 +74,10 @@ def bias_blocks(data_dir: Path) -> list[Block]:
         f"the steps with F >= {study['fits.min_force']:g} N; R: geometric mean (mOhm) at the load steps nearest "
         f"{', '.join(f'{f:.4g}' for f in loads)} N. The last row replaces expected spots by asperities drawn per "
         "realization. The discrete rows solve each surface's own coupled caps at the same forces (100 surfaces, "
-        "one per realization) and then count oxide per spot by its clean share of the contact disc (radius "
-        "a sqrt(f)) instead of on/off at its centre. The disc rule is refused with grid spots: a grid spot "
+        "one per realization) and then count oxide per spot by its clean share f of the contact disc instead "
+        "of on/off at its centre: as the disc of that area (radius a sqrt(f)), then as the circular segment of "
+        "that share (radius a h(f), the default: an oxide edge crosses a spot as a chord, and of all shapes of "
+        "one area the disc conducts least). Both are refused with grid spots: a grid spot "
         "stands for the expected sum of a cell's asperity radii at one cell centre, not for one contact disc, "
         "so it has no disc whose clean share could be counted.")))
     rows = [[r["step"], r["n_cells"], r["clean"]["alpha"], r["clean"]["gamma"],

@@ -13,7 +13,9 @@ thing, all on the same oxide fields (same seeds; realization ``k`` of a lambda i
 7. discrete asperities (each surface's own caps coupled through the half-space, at the same forces,
    in place of Greenwood–Tripp's mean; design note 11);
 8. the disc spot rule (each spot conducts with its clean share of its contact disc, not on/off
-   at its centre);
+   at its centre: radius a sqrt(f));
+9. the segment spot rule (the same share, conducting as the circular segment of that share:
+   radius a h(f) >= a sqrt(f); today's default);
 
 and beside the chain, asperity spots (drawn per realization) in place of step 5. Each run
 reports alpha and gamma (the geometric-mean fit over the steps with F >= 200 N) and the
@@ -45,7 +47,8 @@ STEPS: tuple[tuple[str, dict[str, Any]], ...] = (
     ("expected spots (Barber; paper_gt)", {"contact.spots": "expected"}),
     ("point model (Greenwood's bound)", {"cube.model": "point"}),
     ("discrete asperities (coupled caps)", {"contact.model": "discrete"}),
-    ("disc spot rule (a sqrt(f); the default)", {"oxide.spot_rule": "disc"}),
+    ("disc spot rule (a sqrt(f))", {"oxide.spot_rule": "disc"}),
+    ("segment spot rule (a h(f); the default)", {"oxide.spot_rule": "segment"}),
 )
 #: Beside the chain: asperity spots in place of expected spots (step 5).
 SIDE = ("asperity spots (instead of expected)", 4, {"contact.spots": "asperities"})

@@ -146,7 +146,7 @@ def admitted(vset: scene.ValidationSet, ratio_clean: np.ndarray, ratio: np.ndarr
 
 
 def stand_in(vset: scene.ValidationSet, realizations: range) -> tuple[np.ndarray, np.ndarray]:
-    """The discrete solve of each surface's own caps (point model, disc rule on g2tom's fields) for
+    """The discrete solve of each surface's own caps (point model, the set's spot rule on g2tom's fields) for
     ``realizations``: clean (realization, load) and oxidized (xi, lambda, realization, load), ohm."""
     out = discrete_spots.g2tom_resistances(dataclasses.replace(vset, realizations=tuple(realizations)), STAND_IN[1])
     return (out["resistance_clean"].transpose("realization", "delta").values,

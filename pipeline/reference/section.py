@@ -19,7 +19,8 @@ MEANINGS = {
                           "against the full field, what remains is Greenwood-Tripp's averaging and the "
                           "resistance model",
     "discrete": "the discrete model on the GW surface's own asperities: the caps coupled through the half-space "
-                "at g2tom's forces, oxide counted per spot (disc rule); against the full field it measures the "
+                "at g2tom's forces, oxide counted per spot (the validated scenario's rule: disc or segment); against "
+                "the full field it measures the "
                 "discrete model itself",
 }
 #: Relative deviations of the default discretization that the section's first lines flag.
