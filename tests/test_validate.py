@@ -495,3 +495,22 @@ def test_cases_on_a_local_cluster_give_the_serial_run(tiny_run, tmp_path) -> Non
     assert "estimated" in log.getvalue() and "on 2 worker(s)" in log.getvalue()
     with xr.open_dataset(out / "validate.nc") as serial, xr.open_dataset(tmp_path / "validate.nc") as cluster:
         _same(serial.load(), cluster.load())
+
+
+def test_part_one_discrete_rows_take_the_validated_scenarios_spot_rule_and_no_case_depends_on_it(tmp_path) -> None:
+    """The discrete rows count oxide by the validated scenario's rule (segment for paper; disc
+    where the scenario has none of disc and segment), and the rule shapes no full-field case: the
+    stored cases serve either rule."""
+    from pipeline.reference import discrete_spots
+    from pipeline.scene import FieldSource
+
+    assert discrete_spots.with_rule_of(scene.DEFAULT, "paper").spot_rule == "segment"
+    assert discrete_spots.with_rule_of(scene.DEFAULT, "paper_gt").spot_rule == "disc"  # centre: disc
+    toml = tmp_path / "disc.toml"
+    toml.write_text('base = "paper"\nname = "disc"\n[oxide]\nspot_rule = "disc"\n')
+    assert discrete_spots.with_rule_of(scene.DEFAULT, str(toml)).spot_rule == "disc"
+    vset = scene.QUICK
+    source = FieldSource.of(scene.g2tom_scenario(vset, vset.models[0], vset.discretizations[0]))
+    case = cases.plan_cases(vset)[0]
+    keys = {cases.case_key(dataclasses.replace(vset, spot_rule=rule), case, 1.0, source) for rule in ("disc", "segment")}
+    assert len(keys) == 1

@@ -16,6 +16,7 @@ import dataclasses
 import numpy as np
 import xarray as xr
 
+from pipeline.config import load_scenario
 from pipeline.physics import discrete_contact as dc
 from pipeline.reference import scene, surfaces
 from pipeline.scene import FieldSource
@@ -34,8 +35,6 @@ RULES = ("disc", "segment")
 
 def with_rule_of(vset: scene.ValidationSet, config: str) -> scene.ValidationSet:
     """``vset`` with the spot rule of the validated scenario ``config`` (``disc`` where it has none of :data:`RULES`)."""
-    from pipeline.config import load_scenario
-
     rule = load_scenario(config).oxide.spot_rule
     return dataclasses.replace(vset, spot_rule=rule if rule in RULES else "disc")
 
