@@ -94,3 +94,16 @@ def test_the_design_is_the_scenarios_atlas_section() -> None:
     assert max(s.Pi for s in design_scenes(design)) == pytest.approx(640.0)
     with pytest.raises(ConfigError, match=r"atlas.mu_max = 0.5 is out of range: must be > atlas.mu_min = 1.0"):
         load_scenario("paper_gt", {"atlas.mu_max": 0.5})
+
+
+def test_atlas_commands_default_to_the_atlas_scenario() -> None:
+    """Without --config, `g2tom atlas` and `g2tom plan --atlas` take the bundled `atlas` (what
+    `make atlas` passes: its 5 x 6 oxide grid and 5 % target), every other command `paper`."""
+    from pipeline.cli.arguments import build_parser, default_config
+
+    parser = build_parser()
+    assert default_config(parser.parse_args(["plan", "--atlas"])) == "atlas"
+    assert default_config(parser.parse_args(["atlas"])) == "atlas"
+    assert default_config(parser.parse_args(["plan"])) == "paper"
+    assert default_config(parser.parse_args(["run"])) == "paper"
+    assert default_config(parser.parse_args(["plan", "--atlas", "--config", "paper_gt"])) == "paper_gt"

@@ -11,15 +11,16 @@ from pipeline import __version__
 from pipeline.cli import commands
 from pipeline.config import bundled_scenarios
 
-__all__ = ["attach_negative_values", "build_parser"]
+__all__ = ["attach_negative_values", "build_parser", "default_config"]
 
 
 def _scenario_args(p: argparse.ArgumentParser) -> None:
     """Every subcommand's options: the scenario (``--config``, ``--set``) and ``--data-dir``."""
     p.add_argument(
         "--config",
-        default="paper",
-        help=f"bundled scenario name ({', '.join(bundled_scenarios())}) or a TOML file (default: paper)",
+        default=None,
+        help=f"bundled scenario name ({', '.join(bundled_scenarios())}) or a TOML file (default: paper; "
+             "atlas for `g2tom atlas` and `g2tom plan --atlas`)",
     )
     p.add_argument(
         "--set",
@@ -30,6 +31,14 @@ def _scenario_args(p: argparse.ArgumentParser) -> None:
         help="override one parameter, e.g. --set roughness.sigma=2e-5 (repeatable)",
     )
     p.add_argument("--data-dir", type=Path, default=Path("data"), help="where stage files live")
+
+
+def default_config(args: argparse.Namespace) -> str:
+    """The scenario a command runs without ``--config``: the bundled ``atlas`` for ``g2tom atlas``
+    and ``g2tom plan --atlas`` (the atlas's own base scene, as ``make atlas`` passes), else ``paper``."""
+    if args.config is not None:
+        return args.config
+    return "atlas" if args.command == "atlas" or getattr(args, "atlas", False) else "paper"
 
 
 def _compute_args(p: argparse.ArgumentParser) -> None:

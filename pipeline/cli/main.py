@@ -17,7 +17,7 @@ from typing import Sequence  # noqa: E402
 
 from pipeline.before_work.resources import prepare  # noqa: E402
 from pipeline.before_work.surrogate_grid import check_surrogate_grid  # noqa: E402
-from pipeline.cli.arguments import attach_negative_values, build_parser  # noqa: E402
+from pipeline.cli.arguments import attach_negative_values, build_parser, default_config  # noqa: E402
 from pipeline.cli.commands import compute_options  # noqa: E402
 from pipeline.config import ConfigError, Scenario, load_scenario  # noqa: E402
 from pipeline.errors import StaleInputError  # noqa: E402
@@ -90,6 +90,7 @@ def _kept(args: argparse.Namespace) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``g2tom`` console script; returns the exit status."""
     args = build_parser().parse_args(attach_negative_values(sys.argv[1:] if argv is None else argv))
+    args.config = default_config(args)
     formatwarning = warnings.formatwarning
     warnings.formatwarning = _one_line_warning
     try:
