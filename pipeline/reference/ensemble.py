@@ -15,10 +15,12 @@ would not exceed P, part 1's full field is the ensemble (no proxy). N is sized p
 :data:`MAX_ROUNDS` rounds in all, from the scatter of what was solved; at most ``max_ensemble``.
 Everything is deterministic given the stored cases, so a resumed run makes the same choices.
 
-The two ensembles are not quite independent: the model's oxide realization k is the very field
-the full field's realization k meets (its surfaces are its own). The ratio's standard error adds
-both ensembles' in squares as if they were: with the shared fields' positive correlation, the
-true one is smaller.
+The two ensembles share the oxide seed (realization k of the model and of the full field draw
+from the same stream) but not their surfaces, and the ratio's standard error adds both
+ensembles' in squares as if they were independent. Measured on the GW default set (segment
+rule, 2026-11-27): the correlation of ``ln R`` between the model's realization k and the full
+field's proxy k, per oxidized case and load, lies within -0.24 .. +0.19 wherever 45 or more pairs
+conduct (|rho| <= 0.1 in 15 of 23): the sum in squares neither hides nor adds a material term.
 """
 
 from __future__ import annotations
