@@ -385,6 +385,13 @@ def test_realizations_are_sized_by_the_scatter_and_the_targets_are_the_issues() 
     pairs = np.exp(rng.normal(0, 0.005, 4))  # the full field on the first four, close to its proxy
     assert 50 < statistics.needed_count(wide, wide[:4] * pairs, 0.03, 10_000) < 200  # more where surfaces scatter
     assert statistics.needed_count(narrow, narrow[:4] * pairs, 0.03, 10_000) == 4  # at least part 1's
+    # open circuits carry no ln R: with as many open as conducting, twice the realizations
+    conducting = statistics.needed_count(wide, wide[:4] * pairs, 0.03, 10_000)
+    with_open = statistics.needed_count(np.concatenate([wide, np.full(40, np.inf)]), wide[:4] * pairs, 0.03, 10_000)
+    assert with_open in (2 * conducting - 1, 2 * conducting)
+    # at that count (the sample repeated, half of it open) the estimate's error is the target
+    grown = np.concatenate([wide, np.full(40, np.inf)] * (with_open // 80 + 1))[:with_open]
+    assert statistics.two_phase_log_mean(grown, wide[:4] * pairs).error <= 0.03 * 1.05
     # pairs that scatter more than the error allows: no count of proxies can help, the cap
     assert statistics.needed_count(wide, np.exp(rng.normal(0, 0.3, 4)), 0.03, 77) == 77
     exact = wide[:4]

@@ -146,10 +146,12 @@ def needed_count(proxy: np.ndarray, exact: np.ndarray, error: float, cap: int,
                  prior_sd: float | None = None) -> int:
     """Realizations the proxy needs for the two-phase estimate's standard error to reach ``error``.
 
-    Solves ``var(d) / N + var(e) / P + 2 cov(d, e) / N <= error^2`` for N with the (co)variances
-    of what is there, or ``prior_sd`` (of ``ln R``, no pairs yet) when fewer than two proxies
-    conduct; at least P (``exact``'s length), at most ``cap`` (also where the pairs' own
-    ``var(e) / P`` leaves no room: more proxies cannot help there).
+    Solves ``var(d) / n + var(e) / P + 2 cov(d, e) / n <= error^2`` for the conducting count n
+    with the (co)variances of what is there, or ``prior_sd`` (of ``ln R``, no pairs yet) when
+    fewer than two proxies conduct; open circuits carry no ``ln R``, so the realizations to solve
+    are n over the share of the solved ones that conduct. At least P (``exact``'s length), at
+    most ``cap`` (also where the pairs' own ``var(e) / P`` leaves no room: more proxies cannot
+    help there).
     """
     exact = np.asarray(exact, float).ravel()
     floor = max(exact.size, 1)
@@ -165,7 +167,8 @@ def needed_count(proxy: np.ndarray, exact: np.ndarray, error: float, cap: int,
         room -= np.var(e, ddof=1) / e.size
     if room <= 0:
         return int(cap)
-    return int(min(cap, max(floor, math.ceil(spread / room))))
+    solved = int(np.sum(~np.isnan(np.asarray(proxy, float))))
+    return int(min(cap, max(floor, math.ceil(spread / room * solved / d.size))))
 
 
 def _interpolated(points: tuple[tuple[float, float], ...], force_normalized: float, log_value: bool) -> float:
