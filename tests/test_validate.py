@@ -142,6 +142,11 @@ def test_part_2_compares_the_ensembles_at_equal_force_with_combined_errors(tiny_
     np.testing.assert_allclose(ds["ensemble_ratio_standard_error"].values,
                                np.hypot(ds["ensemble_model_standard_error"].values,
                                         ds["ensemble_reference_standard_error"].values), rtol=1e-12)
+    for k in range(ds.sizes["load"]):  # the pairs' share: the stored proxies and pairs give it again
+        proxy = ds["resistance_ensemble_clean"].isel(load=k).values[:int(ds["ensemble_count_clean"][k])]
+        again = statistics.two_phase_log_mean(proxy, ds["resistance_reference_clean"].isel(load=k).values)
+        stored = float(ds["ensemble_reference_clean_pairs_standard_error"][k])
+        assert stored == pytest.approx(again.pairs_error, rel=1e-12) or np.isnan(stored) and np.isnan(again.pairs_error)
     f = ds["force_normalized"].values
     np.testing.assert_allclose(ds["ensemble_target_clean"].values, [statistics.target(x, False) for x in f])
     # part 2's full-field cases are solved at g2tom's force, as part 1's: equal force, no interpolation
@@ -369,6 +374,9 @@ def test_the_standard_error_of_a_ratio_against_a_bootstrap() -> None:
     # the pairs remove the proxy's offset: the estimate is the full field's, not the proxy's
     d, e = np.log(proxy), np.log(exact) - np.log(proxy[:P])
     assert f.mean == pytest.approx(np.mean(d) + np.mean(e), rel=1e-12)
+    # the pairs' share: sd of the paired log differences over sqrt(P); none for a plain mean
+    assert f.pairs_error == pytest.approx(np.std(e, ddof=1) / np.sqrt(P), rel=1e-12)
+    assert np.isnan(m.pairs_error)
     # with N = P it is the plain mean and standard error of the exact values
     plain = statistics.two_phase_log_mean(exact, exact)
     assert plain.mean == pytest.approx(np.mean(np.log(exact)), rel=1e-12)

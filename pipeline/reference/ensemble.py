@@ -308,6 +308,7 @@ def variables(vset: scene.ValidationSet, state: Part2, exact_clean: np.ndarray, 
     error = field(lambda f, m: statistics.ratio_error(m, f))
     ref_mean = field(lambda f, m: math.exp(f.mean))
     ref_error = field(lambda f, m: f.error)
+    ref_pairs = field(lambda f, m: f.pairs_error)
     ref_count = field(lambda f, m: f.count)
     ref_open = field(lambda f, m: f.open_fraction)
     mod_mean = field(lambda f, m: math.exp(m.mean))
@@ -335,6 +336,9 @@ def variables(vset: scene.ValidationSet, state: Part2, exact_clean: np.ndarray, 
         "ensemble_reference_clean_standard_error": variable("ensemble_reference_clean_standard_error", ref_error[0]),
         "ensemble_reference": variable("ensemble_reference", ref_mean[1]),
         "ensemble_reference_standard_error": variable("ensemble_reference_standard_error", ref_error[1]),
+        "ensemble_reference_clean_pairs_standard_error": variable("ensemble_reference_clean_pairs_standard_error",
+                                                                  ref_pairs[0]),
+        "ensemble_reference_pairs_standard_error": variable("ensemble_reference_pairs_standard_error", ref_pairs[1]),
         "ensemble_reference_open_fraction": variable("ensemble_reference_open_fraction", ref_open[1]),
         "ensemble_model_clean": variable("ensemble_model_clean", mod_mean[0]),
         "ensemble_model_clean_standard_error": variable("ensemble_model_clean_standard_error", mod_error[0]),

@@ -94,7 +94,9 @@ def _ensemble_flags(ds: xr.Dataset) -> list[str]:
                 outside.append(f"{label} {100 * (r - 1):+.1f} ± {100 * se:.1f} % at F' {f[k]:.3g} (target "
                                f"{100 * t:.0f} %)")
             if not se <= goal:
-                loose.append(f"{label} at F' {f[k]:.3g}: {se:.3f} > {goal:g}")
+                pairs = _pairs_error(ds, sel, k)
+                loose.append(f"{label} at F' {f[k]:.3g}: {se:.3f} > {goal:g}"
+                             + (f" (the pairs alone {pairs:.3f})" if np.isfinite(pairs) else ""))
     name = ds.attrs.get("validated_scenario", "the default")
     lines = []
     if outside:
@@ -106,9 +108,17 @@ def _ensemble_flags(ds: xr.Dataset) -> list[str]:
     if loose:
         lines.append(f"Part 2's standard error of ln ratio misses the set's ({ds.attrs['scene_clean_error']:g} clean, "
                      f"{ds.attrs['scene_oxide_error']:g} oxidized) in {len(loose)} (case, load) pairs (more "
-                     f"realizations than the set's max_ensemble {ds.attrs['scene_max_ensemble']} allows, or their pairs' own "
-                     "scatter): " + "; ".join(loose) + ".")
+                     f"realizations than the set's max_ensemble {ds.attrs['scene_max_ensemble']} allows, or part 1's "
+                     "pairs' own scatter, sd(ln main grid / proxy) / sqrt(P), which no count of proxies lowers): "
+                     + "; ".join(loose) + ".")
     return lines
+
+
+def _pairs_error(ds: xr.Dataset, sel: dict, k: int) -> float:
+    """The pairs' share of the full field's standard error at load ``k`` (NaN: none, or a file
+    written before it was recorded)."""
+    name = "ensemble_reference_pairs_standard_error" if sel else "ensemble_reference_clean_pairs_standard_error"
+    return float(ds[name].sel(sel).isel(load=k)) if name in ds else np.nan
 
 
 def _ensemble_table(ds: xr.Dataset) -> list[str]:

@@ -62,12 +62,16 @@ class LogMean:
         Realizations in the ensemble (conducting or not).
     open_fraction
         Fraction of them that are open circuits (R = +inf).
+    pairs_error
+        A two-phase estimate's share of ``error`` from its pairs alone, ``sd(e) / sqrt(P)`` (more
+        proxies cannot bring ``error`` below it); NaN for a plain mean.
     """
 
     mean: float
     error: float
     count: int
     open_fraction: float
+    pairs_error: float = math.nan
 
 
 def _logs(values: np.ndarray) -> np.ndarray:
@@ -124,7 +128,8 @@ def two_phase_log_mean(proxy: np.ndarray, exact: np.ndarray) -> LogMean:
     Returns
     -------
     LogMean
-        Mean of ``ln R`` and its standard error; the count and open fraction are the proxy's.
+        Mean of ``ln R``, its standard error and the pairs' share of it; the count and open
+        fraction are the proxy's.
     """
     d, d_pair, e = _two_phase_terms(proxy, exact)
     count = int(np.sum(~np.isnan(np.asarray(proxy, float))))
@@ -133,8 +138,9 @@ def two_phase_log_mean(proxy: np.ndarray, exact: np.ndarray) -> LogMean:
     mean = float(np.mean(d) + np.mean(e))
     if d.size < 2 or e.size < 2:
         return LogMean(mean, np.nan, count, _open_fraction(proxy))
-    var = np.var(d, ddof=1) / d.size + np.var(e, ddof=1) / e.size + 2.0 * np.cov(d_pair, e)[0, 1] / d.size
-    return LogMean(mean, float(math.sqrt(max(var, 0.0))), count, _open_fraction(proxy))
+    pairs = np.var(e, ddof=1) / e.size
+    var = np.var(d, ddof=1) / d.size + pairs + 2.0 * np.cov(d_pair, e)[0, 1] / d.size
+    return LogMean(mean, float(math.sqrt(max(var, 0.0))), count, _open_fraction(proxy), float(math.sqrt(pairs)))
 
 
 def ratio_error(model: LogMean, reference: LogMean) -> float:

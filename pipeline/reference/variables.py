@@ -88,6 +88,12 @@ VARIABLES: dict[str, Variable] = {
                              "realizations (two-phase)"),
     "ensemble_reference_standard_error": _v(_EX, "1", "standard error of ln of the full field's oxidized "
                                             "ensemble geometric mean"),
+    "ensemble_reference_clean_pairs_standard_error": _v("load", "1", "the pairs' share of the full field's clean "
+                                                        "standard error, sd(ln main grid / proxy) / sqrt(P) "
+                                                        "(NaN: part 1 alone, no proxy)"),
+    "ensemble_reference_pairs_standard_error": _v(_EX, "1", "the pairs' share of the full field's oxidized standard "
+                                                  "error, sd(ln main grid / proxy) / sqrt(P) (NaN: part 1 alone, "
+                                                  "no proxy)"),
     "ensemble_reference_open_fraction": _v(_EX, "1", "fraction of the full field's ensemble that is an open "
                                            "circuit"),
     "ensemble_model_clean": _v("load", "ohm", "the validated scenario's clean ensemble geometric mean of R"),
