@@ -41,6 +41,17 @@ def test_validate_refuses_scenario_options_it_would_ignore(tmp_path, capsys) -> 
     assert not (tmp_path / "validate").exists()
 
 
+def test_validate_plan_prints_the_chosen_sets_estimate_and_does_no_work(tmp_path, capsys) -> None:
+    assert main(["validate", "--plan", "--realizations", "3", "--loads", "5", "--surface", "random_process",
+                 "--workers", "2", "--data-dir", str(tmp_path / "data")]) == 0
+    out = capsys.readouterr().out
+    assert "random_process surface" in out and "realizations [0, 1, 2]" in out and "5 loads" in out
+    assert "estimated" in out and "on 2 worker(s)" in out
+    assert not (tmp_path / "data").exists()  # nothing written
+    assert main(["validate", "--plan", "--realizations", "0", "--data-dir", str(tmp_path / "data")]) == 2
+    assert "--realizations = 0 is out of range" in capsys.readouterr().err
+
+
 def _force_normalized(vset: scene.ValidationSet) -> np.ndarray:
     from pipeline.stages import contact as contact_stage
 

@@ -144,6 +144,9 @@ def build_parser() -> argparse.ArgumentParser:
                           help="part 1's surfaces (and oxide fields) 0 .. N-1 instead of the set's (>= 2)")
     validate.add_argument("--loads", type=int, default=None,
                           help="load steps evenly spaced in delta/sigma over the set's range (>= 2)")
+    validate.add_argument("--plan", action="store_true",
+                          help="print this set's cases, grids and estimate (as the run prints first), then stop: "
+                               "no work, nothing written")
     validate.add_argument("--surface", choices=("gw", "random_process"), default="gw",
                           help="gw: asperities with g2tom's own parameters (<data-dir>/validate/); random_process: a "
                                "Gaussian self-affine surface, g2tom fed its summit statistics (<data-dir>/validate_random_process/)")

@@ -276,9 +276,12 @@ def validate(args: argparse.Namespace, scenario: Scenario) -> None:
         raise ConfigError("g2tom validate runs its own validation scene (the default set or --quick): --set is "
                           "not used by it; leave it out (--config names the scenario whose model part 2 validates)")
     from pipeline.before_work.preflight import check_data_dir, check_scheduler
-    from pipeline.reference.validate import chosen_set, output_folder, run_validation
+    from pipeline.reference.validate import chosen_set, output_folder, plan_lines, run_validation
 
     vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads)
+    if args.plan:
+        print("\n".join(plan_lines(vset, args.config, max(1, args.workers or os.cpu_count() or 1))))
+        return
     check_data_dir(args.data_dir)
     if args.scheduler:
         check_scheduler(args.scheduler)
