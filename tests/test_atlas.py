@@ -210,6 +210,25 @@ def test_the_atlas_runs_on_discrete_asperities(tmp_path) -> None:
     assert doc["heldout"]["cells"] == 2 and len(rows) == doc["heldout"]["steps"]
 
 
+def test_a_scene_computes_on_one_thread_as_the_plan_assumes(monkeypatch) -> None:
+    """Each worker runs one scene single-threaded: the discrete contact pool too (two threads per scene on two
+    workers oversubscribed the cores and the plan's one-thread seconds)."""
+    from pipeline.atlas.design import Scene
+    from pipeline.stages import contact_discrete
+
+    seen = []
+    real = contact_discrete.compute
+
+    def spy(*collections, options, **kwargs):
+        seen.append(options.workers)
+        return real(*collections, options=options, **kwargs)
+
+    monkeypatch.setattr(contact_discrete, "compute", spy)
+    discrete = load_scenario("paper", {**BASE, "contact.model": "discrete", "cube.model": "point", "contact.surfaces": 4})
+    ds = atlas.scene_dataset(discrete, Scene("s", 2.0, 20.0, False))
+    assert seen == [1] and np.all(np.isfinite(ds["resistance_clean_normalized"].values))
+
+
 def test_scenes_are_submitted_longest_first_as_the_plan_assumes() -> None:
     from pipeline.atlas.design import Scene, SceneEstimate, wall_seconds
 

@@ -52,7 +52,7 @@ def scene_dataset(base: Scenario, scene: Scene, loading: Loading | None = None) 
 
     start = time.perf_counter()
     scenario = resolve(scene_scenario(base, scene, loading))
-    c = contact.build(scenario)
+    c = contact.build(scenario, _ONE)
     k = cube.build(scenario, c, oxide.build(scenario, _ONE), _ONE)
     f = fits.build(scenario, k)
     grid = ("xi", "lambda")
