@@ -200,3 +200,18 @@ def test_the_default_scene_solves_every_surface_at_coarse_steps():
     scene = resolve(load_scenario("paper", {**SMALL_OVERRIDES, "contact.surfaces": 13}))
     pool = contact.build(scene, ComputeOptions(progress=False, workers=1))
     assert np.all(pool["discrete_residual"].values <= dc.TOLERANCE)
+
+
+def test_a_solve_stalled_at_its_rounding_floor_is_accepted_a_larger_stall_is_not(monkeypatch):
+    """Thousands of coupled caps at the heaviest loads stall near a relative residual of 1e-10 (the
+    full atlas stopped on one at 10,042 N, F' 19.5: 1.15e-10); a tolerance no float reaches makes every
+    solve stall here."""
+    asp = surface(4)
+    sol = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR)
+    stalled = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR, tolerance=1e-30)
+    assert np.all(stalled.residual <= dc.ROUNDING_TOLERANCE)
+    np.testing.assert_allclose(stalled.delta, sol.delta, rtol=1e-9)
+    np.testing.assert_allclose(stalled.load, sol.load, rtol=1e-7, atol=1e-9 * FORCES[-1])
+    monkeypatch.setattr(dc, "ROUNDING_TOLERANCE", 1e-40)  # a stall above the accepted floor is not converged
+    with pytest.raises(dc.NotConverged, match="stalled"):
+        dc.solve_forces(asp, sphere, FORCES[:1], E_STAR, BETA, FLOOR, tolerance=1e-30)
