@@ -203,9 +203,8 @@ def test_the_default_scene_solves_every_surface_at_coarse_steps():
 
 
 def test_a_solve_stalled_at_its_rounding_floor_is_accepted_a_larger_stall_is_not(monkeypatch):
-    """Thousands of coupled caps at the heaviest loads stall at a relative residual of 1e-10 .. 1e-8 (the
-    full atlas stopped on 1.15e-10 at F' 19.5 and on 1.01e-8 at F' 14); a tolerance no float reaches
-    makes every solve stall here."""
+    """A solve whose line search cannot lower the residual any more returns as stalled and is accepted
+    below ROUNDING_TOLERANCE; a tolerance no float reaches makes every solve stall here."""
     asp = surface(4)
     sol = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR)
     stalled = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR, tolerance=1e-30)
