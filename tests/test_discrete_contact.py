@@ -204,13 +204,13 @@ def test_the_default_scene_solves_every_surface_at_coarse_steps():
 
 def test_a_solve_stalled_at_its_rounding_floor_is_accepted_a_larger_stall_is_not(monkeypatch):
     """A solve whose line search cannot lower the residual any more returns as stalled and is accepted
-    below ROUNDING_TOLERANCE; a tolerance no float reaches makes every solve stall here."""
+    below STALL_TOLERANCE; a tolerance no float reaches makes every solve stall here."""
     asp = surface(4)
     sol = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR)
     stalled = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR, tolerance=1e-30)
-    assert np.all(stalled.residual <= dc.ROUNDING_TOLERANCE)
+    assert np.all(stalled.residual <= dc.STALL_TOLERANCE)
     np.testing.assert_allclose(stalled.delta, sol.delta, rtol=1e-9)
     np.testing.assert_allclose(stalled.load, sol.load, rtol=1e-7, atol=1e-9 * FORCES[-1])
-    monkeypatch.setattr(dc, "ROUNDING_TOLERANCE", 1e-40)  # a stall above the accepted floor is not converged
+    monkeypatch.setattr(dc, "STALL_TOLERANCE", 1e-40)  # a stall above the accepted floor is not converged
     with pytest.raises(dc.NotConverged, match="stalled"):
         dc.solve_forces(asp, sphere, FORCES[:1], E_STAR, BETA, FLOOR, tolerance=1e-30)

@@ -67,7 +67,7 @@ MAX_ITERATIONS = 100
 #: residual is not converged. Thousands of coupled caps at F' 14-20 (the atlas's mu ~1, Pi >= 170)
 #: still stall above it: an open problem (caps at the edge of contact, where dP/ds vanishes, are
 #: the suspects; not yet shown).
-ROUNDING_TOLERANCE = 1e-6
+STALL_TOLERANCE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -297,7 +297,7 @@ def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, beta
             if (np.linalg.norm(trial[0]) / scale) ** 2 + (trial[1] / force) ** 2 < merit:
                 break
             t *= 0.5
-        else:  # no step lowers the residual: it is at its rounding floor
+        else:  # no step lowers the residual: stalled
             return _State(s, delta), stiffness, iteration, error, True
         s, delta = s + t * step, delta + t * step_delta
         res, res_f, active = trial
@@ -339,7 +339,7 @@ class _Walker:
             state, stiffness, its, error, stalled = _newton(g[:m], coupling, force, e_star, self.beta, start,
                                                             self.tolerance, self.max_iterations)
             iterations += its
-            if not (error <= self.tolerance or stalled and error <= ROUNDING_TOLERANCE):
+            if not (error <= self.tolerance or stalled and error <= STALL_TOLERANCE):
                 raise NotConverged(f"force {force:g} N: relative residual {error:.3g}"
                                    + (" (stalled)" if stalled else ""))
             delta = state.delta

@@ -80,6 +80,11 @@ def _logs(values: np.ndarray) -> np.ndarray:
     return np.log(v[np.isfinite(v) & (v > 0)])
 
 
+def _count(values: np.ndarray) -> int:
+    """Realizations among ``values`` (NaN entries are not: unsolved)."""
+    return int(np.sum(~np.isnan(np.asarray(values, float))))
+
+
 def _open_fraction(values: np.ndarray) -> float:
     v = np.asarray(values, float).ravel()
     v = v[~np.isnan(v)]
@@ -93,7 +98,7 @@ def log_mean(values: np.ndarray, deterministic: bool = False) -> LogMean:
     clean resistance): standard error 0.
     """
     logs = _logs(values)
-    count = int(np.sum(~np.isnan(np.asarray(values, float))))
+    count = _count(values)
     mean = float(np.mean(logs)) if logs.size else np.nan
     if deterministic:
         error = 0.0 if logs.size else np.nan
@@ -132,7 +137,7 @@ def two_phase_log_mean(proxy: np.ndarray, exact: np.ndarray) -> LogMean:
         fraction are the proxy's.
     """
     d, d_pair, e = _two_phase_terms(proxy, exact)
-    count = int(np.sum(~np.isnan(np.asarray(proxy, float))))
+    count = _count(proxy)
     if not d.size or not e.size:
         return LogMean(np.nan, np.nan, count, _open_fraction(proxy))
     mean = float(np.mean(d) + np.mean(e))
@@ -173,8 +178,7 @@ def needed_count(proxy: np.ndarray, exact: np.ndarray, error: float, cap: int,
         room -= np.var(e, ddof=1) / e.size
     if room <= 0:
         return int(cap)
-    solved = int(np.sum(~np.isnan(np.asarray(proxy, float))))
-    return int(min(cap, max(floor, math.ceil(spread / room * solved / d.size))))
+    return int(min(cap, max(floor, math.ceil(spread / room * _count(proxy) / d.size))))
 
 
 def _interpolated(points: tuple[tuple[float, float], ...], force_normalized: float, log_value: bool) -> float:
