@@ -214,3 +214,53 @@ def test_a_solve_stalled_at_its_rounding_floor_is_accepted_a_larger_stall_is_not
     monkeypatch.setattr(dc, "STALL_TOLERANCE", 1e-40)  # a stall above the accepted floor is not converged
     with pytest.raises(dc.NotConverged, match="stalled"):
         dc.solve_forces(asp, sphere, FORCES[:1], E_STAR, BETA, FLOOR, tolerance=1e-30)
+
+
+def test_caps_wider_than_their_spacing_pass_a_fold_of_the_load_path(monkeypatch):
+    """The atlas's scene h07 (mu 26, Pi 7.5: caps of radius 8.8 mm, 0.16 mm apart) made D^-1 + C
+    indefinite; Newton stalled at a fold of the load path and the atlas stopped. The solve now
+    passes the fold by proximal rounds (and only there) to an equilibrium that is a minimum of the
+    energy: balanced, complementary, with a positive definite Hessian."""
+    eta, beta = 3.7313379116594106e7, 8.80323154925433e-3
+    floor = dc.coupling_floor(beta, SIGMA)
+    asp = dc.draw_asperities(20240531, 9, 1.88e-3, eta, SIGMA)
+    folds = []
+    proximal = dc._proximal
+
+    def spy(*args, **kwargs):
+        folds.append(args[2])
+        return proximal(*args, **kwargs)
+
+    monkeypatch.setattr(dc, "_proximal", spy)
+    sol = dc.solve_forces(asp, sphere, FORCES, E_STAR, beta, floor)
+    assert folds == [FORCES[-1]]  # one fold, on the way to F' 20
+    assert np.all(sol.residual <= dc.TOLERANCE)
+    np.testing.assert_allclose(sol.load.sum(axis=1), FORCES, rtol=1e-9)
+    g = asp.z - sphere(np.hypot(asp.x, asp.y))
+    coupling = dc.interaction_kernel(asp.x, asp.y, floor) / E_STAR
+    for i in range(FORCES.size):
+        w = g - sol.delta[i] - coupling @ sol.load[i]  # every asperity's interference, touching or not
+        touching = sol.load[i] > 0
+        np.testing.assert_allclose(w[touching], sol.interference[i, touching], rtol=0, atol=1e-9 * SIGMA)
+        assert np.all(w[~touching] <= 1e-9 * SIGMA)
+        hessian = coupling[np.ix_(touching, touching)] + np.diag(1.0 / (2.0 * E_STAR * sol.radius(beta)[i, touching]))
+        assert np.linalg.eigvalsh(hessian).min() > 0  # a minimum of the energy, not a saddle
+    monkeypatch.setattr(dc, "_proximal", lambda *args, **kwargs: (args[5], 0.0, 0, 1.0, True))
+    with pytest.raises(dc.NotConverged):  # Newton alone, as before, does not get through
+        dc.solve_forces(asp, sphere, FORCES, E_STAR, beta, floor)
+
+
+def test_proximal_rounds_solve_a_convex_problem_like_newton():
+    """On a convex problem (the default's caps) the proximal rounds reach Newton's solution."""
+    asp = surface(4)
+    g = np.sort(asp.z - sphere(np.hypot(asp.x, asp.y)))[::-1][:300]
+    order = np.argsort(-(asp.z - sphere(np.hypot(asp.x, asp.y))), kind="stable")[:300]
+    kernel = dc.interaction_kernel(asp.x[order], asp.y[order], FLOOR)
+    force = FORCES[5]
+    start = dc._State(g - dc._rigid_delta(g, force, E_STAR, BETA), dc._rigid_delta(g, force, E_STAR, BETA))
+    newton = dc._newton(g, kernel, force, E_STAR, BETA, start, 1e-11, 100)
+    rounds = dc._proximal(g, kernel, force, E_STAR, BETA, start, 1e-11, 100)
+    assert not newton[4] and not rounds[4] and rounds[3] <= 1e-11
+    assert rounds[0].delta == pytest.approx(newton[0].delta, abs=1e-9 * SIGMA)
+    np.testing.assert_allclose(rounds[0].s, newton[0].s, rtol=0, atol=1e-9 * SIGMA)
+    assert rounds[1] == pytest.approx(newton[1], rel=1e-6)  # the stiffness of the original equations

@@ -18,11 +18,21 @@ biased when a handful do (design note 11). This model keeps one realization's as
   displacement equals the displacement ``3P / (4 a E*)`` at the centre of a Hertzian contact of
   interference ``sigma`` (radius ``a = sqrt(beta sigma)``), so no pair is coupled more stiffly
   than a cap is to its own load.
-* At a given total force ``F``: ``sum_i P_i = F`` fixes ``delta``. The solution is the unique
-  minimiser of a strictly convex energy on ``{P >= 0, sum P = F}`` (the compliance kernel is
-  positive definite), solved by a semismooth Newton method on ``(s, delta)`` with ``s`` the
-  interference of every candidate (:func:`solve_forces`), warm-started along ascending forces,
-  with a backtracking line search on the residual.
+* At a given total force ``F``: ``sum_i P_i = F`` fixes ``delta``. The solution minimises the
+  energy ``sum_i (3/5) k^(-2/3) P_i^(5/3) + P^T C P / 2 - sum_i g_i P_i`` on ``{P >= 0, sum P = F}``
+  (``k = (4/3) E* sqrt(beta)``), whose Hessian on the contacting caps is ``D^-1 + C``. It is solved
+  by a semismooth Newton method on ``(s, delta)`` with ``s`` the interference of every candidate
+  (:func:`solve_forces`), warm-started along ascending forces, with a backtracking line search on
+  the residual.
+* The energy is convex while the caps are small against the floor: ``D^-1 = 1 / (2 E* a_i)`` falls
+  below the floor's ``1 / (pi E* l)`` once ``a_i > pi l / 2``, i.e. an interference above
+  ``4 sigma / 9``, and caps that large closer than ``l`` make ``D^-1 + C`` indefinite (the atlas's
+  large ``beta sigma eta``: caps wider than their spacing). There the load path can reach a fold,
+  where no solution on its branch carries more force, and Newton stalls on an indefinite system.
+  The solve then minimises the energy by proximal rounds (:func:`_proximal`): each adds
+  ``c |P - P_k|^2 / 2`` with ``c`` large enough to make the energy convex and is solved by the same
+  Newton; their fixed point solves the original equations. The path jumps to the next branch,
+  as a loaded structure snaps through; Newton's answer is used wherever it converges.
 * Candidates: since every displacement is >= 0, an asperity can touch only where ``g_i > delta``;
   the solve starts from a candidate set ``g_i > threshold`` and grows it until the solved
   ``delta`` lies above the threshold, so the answer is the one on the whole set, exactly.
@@ -64,10 +74,11 @@ TOLERANCE = 1e-10
 MAX_ITERATIONS = 100
 #: A solve whose line search can no longer lower the residual is accepted up to this relative
 #: residual (1e-6 of a micrometre interference is 1e-12 m, of the force 1e-6); a larger stalled
-#: residual is not converged. Thousands of coupled caps at F' 14-20 (the atlas's mu ~1, Pi >= 170)
-#: still stall above it: an open problem (caps at the edge of contact, where dP/ds vanishes, are
-#: the suspects; not yet shown).
+#: residual is not converged (unless the energy is not convex there: see :func:`_proximal`).
 STALL_TOLERANCE = 1e-6
+#: Proximal rounds at most where the energy is not convex (a fold of the atlas's large caps takes
+#: 170-530).
+MAX_PROXIMAL_ROUNDS = 5000
 
 
 @dataclass(frozen=True)
@@ -205,6 +216,17 @@ def symmetric_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         return np.linalg.solve(matrix, rhs)
 
 
+def positive_definite(matrix: np.ndarray) -> bool:
+    """Whether the symmetric ``matrix`` is positive definite (it has a Cholesky factor)."""
+    from scipy.linalg import LinAlgError, cho_factor
+
+    try:
+        cho_factor(matrix, check_finite=False)
+    except LinAlgError:
+        return False
+    return True
+
+
 def _rigid_delta(g: np.ndarray, force: float, e_star: float, beta: float) -> float:
     """The approach at which the uncoupled caps carry ``force``: an upper bound on the coupled one."""
     from scipy.optimize import brentq
@@ -251,12 +273,21 @@ class _GrowingKernel:
         return self.table[:m, :m]
 
 
+def _hessian(kernel: np.ndarray, s: np.ndarray, active: np.ndarray, e_star: float, beta: float) -> tuple[
+        np.ndarray, np.ndarray]:
+    """The energy's Hessian ``D^-1 + C`` on the ``active`` caps (m/N) and their ``dP/ds`` (N/m)."""
+    slope = 1.5 * (4.0 / 3.0 * e_star * np.sqrt(beta)) * np.sqrt(s[active])  # d/ds of hertz_load
+    system = kernel[np.ix_(active, active)] / e_star
+    system[np.diag_indices_from(system)] += 1.0 / slope
+    return system, slope
+
+
 def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, beta: float, state: _State,
             tolerance: float, max_iterations: int) -> tuple[_State, float, int, float, bool]:
     """Solve ``s - g + delta + C P(s) = 0``, ``sum P(s) = F`` on a fixed candidate set (``C = kernel / E*``).
 
     The Newton system of the contacting rows ``(I + C D) ds + d delta = -r`` is solved through
-    the symmetric positive definite ``D^-1 + C`` (Cholesky), ``D = diag(dP/ds)``. Returns the
+    the symmetric ``D^-1 + C`` (:func:`symmetric_solve`), ``D = diag(dP/ds)``. Returns the
     state, the stiffness ``K = 1^T (D^-1 + C)^-1 1`` (N/m), the iterations, the final relative
     residual, and whether it stalled (no step of the line search lowered the residual).
     """
@@ -277,9 +308,7 @@ def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, beta
             continue
         scale = float(s[active].max())
         error = max(float(np.abs(res).max()) / scale, abs(res_f) / force)
-        slope = 1.5 * k * np.sqrt(s[active])
-        system = kernel[np.ix_(active, active)] / e_star
-        system[np.diag_indices_from(system)] += 1.0 / slope
+        system, slope = _hessian(kernel, s, active, e_star, beta)
         solved = symmetric_solve(system, np.column_stack([np.ones(active.size), res[active]]))
         unit, along = solved[:, 0], solved[:, 1]
         stiffness = float(unit.sum())
@@ -302,6 +331,44 @@ def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, beta
         s, delta = s + t * step, delta + t * step_delta
         res, res_f, active = trial
     raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _convex_at(kernel: np.ndarray, state: _State, e_star: float, beta: float) -> bool:
+    """Whether the energy's Hessian ``D^-1 + C`` is positive definite at ``state``."""
+    active = np.flatnonzero(state.s > 0)
+    return positive_definite(_hessian(kernel, state.s, active, e_star, beta)[0])
+
+
+def _proximal(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, beta: float, state: _State,
+              tolerance: float, max_iterations: int) -> tuple[_State, float, int, float, bool]:
+    """Minimise the energy where it is not convex by proximal rounds, from ``state``.
+
+    Round ``k`` minimises the energy plus ``c |P - P_k|^2 / 2`` (``P_k`` the previous round's
+    forces), with ``c E*`` 1.01 x the most negative eigenvalue of ``kernel`` so that every round's
+    energy is convex: its equations are :func:`_newton`'s with ``c E*`` added to the kernel's
+    diagonal and ``g`` raised by ``c P_k``. Each round lowers the energy; at their fixed point
+    ``P_k`` solves the original equations, which is when the rounds stop (the original residual
+    within ``tolerance``). Returns what :func:`_newton` returns, with the stiffness of the
+    original equations, the iterations of all rounds, and ``stalled`` True where a round did not
+    converge or the rounds ran out (:data:`MAX_PROXIMAL_ROUNDS`).
+    """
+    from scipy.linalg import eigvalsh
+
+    lowest = float(eigvalsh(kernel, subset_by_index=[0, 0], check_finite=False)[0])
+    shift = 1.01 * max(-lowest, 0.0)  # 1/m, like the kernel
+    shifted = kernel + shift * np.eye(g.size)
+    iterations = 0
+    for _ in range(MAX_PROXIMAL_ROUNDS):
+        raised = g + shift / e_star * hertz_load(state.s, e_star, beta)
+        state, _, its, error, stalled = _newton(raised, shifted, force, e_star, beta, state, tolerance,
+                                                max_iterations)
+        iterations += its
+        if stalled or error > tolerance:
+            break
+        _, stiffness, _, error, _ = _newton(g, kernel, force, e_star, beta, state, tolerance, 0)
+        if error <= tolerance:
+            return state, stiffness, iterations, error, False
+    return state, 0.0, iterations, error, True
 
 
 class NotConverged(ArithmeticError):
@@ -339,6 +406,10 @@ class _Walker:
             state, stiffness, its, error, stalled = _newton(g[:m], coupling, force, e_star, self.beta, start,
                                                             self.tolerance, self.max_iterations)
             iterations += its
+            if stalled and error > STALL_TOLERANCE and not _convex_at(coupling, state, e_star, self.beta):
+                state, stiffness, its, error, stalled = _proximal(g[:m], coupling, force, e_star, self.beta,
+                                                                  state, self.tolerance, self.max_iterations)
+                iterations += its
             if not (error <= self.tolerance or stalled and error <= STALL_TOLERANCE):
                 raise NotConverged(f"force {force:g} N: relative residual {error:.3g}"
                                    + (" (stalled)" if stalled else ""))
