@@ -87,6 +87,28 @@ def test_a_resumed_atlas_equals_an_uninterrupted_one(tmp_path, base, uninterrupt
     assert all(p.stat().st_mtime_ns == t for p, t in stamps.items())
 
 
+def test_a_scene_left_alone_computes_on_every_worker_asked_for(tmp_path, base, uninterrupted, monkeypatch) -> None:
+    """A resumed atlas with one scene left ran it single-threaded while the other workers idled
+    (d20: ~2 h on one of two cores); a scene that runs alone now computes with the options given,
+    to the same bits."""
+    import shutil
+    from pathlib import Path
+
+    scenes = Path(uninterrupted.encoding["source"]).parent / "scenes"
+    (tmp_path / "atlas").mkdir()
+    shutil.copytree(scenes, tmp_path / "atlas" / "scenes", ignore=shutil.ignore_patterns("h00.nc", "td02.nc"))
+    seen = []
+
+    def copies(base, scene, data_dir, loading, options):  # the scene's result (thread-independent, tested)
+        seen.append((scene.name, options.workers, options.scheduler))
+        shutil.copy(scenes / f"{scene.name}.nc", atlas.scene_path(data_dir, scene))
+        return scene.name, 0.0
+
+    monkeypatch.setattr(atlas, "_run_scene", copies)
+    _same(_load(atlas.run_atlas(base, DESIGN, tmp_path, ComputeOptions(workers=2, progress=False))), uninterrupted)
+    assert seen == [("h00", 2, None), ("td02", 2, None)]  # in this process, each on both workers
+
+
 def test_another_configuration_reruns_its_scenes(tmp_path, base) -> None:
     atlas.run_atlas(base, DESIGN, tmp_path)
     other = load_scenario("paper_gt", {**BASE, "oxide.seed": 3})

@@ -43,17 +43,19 @@ def scene_path(data_dir: str | Path, scene: Scene) -> Path:
     return Path(data_dir) / "atlas" / "scenes" / f"{scene.name}.nc"
 
 
-def scene_dataset(base: Scenario, scene: Scene, loading: Loading | None = None) -> xr.Dataset:
-    """Run the chain on one scene in memory, single-threaded; its slice of ``atlas.nc`` (``loading``:
-    see :func:`pipeline.atlas.design.scene_scenario`)."""
+def scene_dataset(base: Scenario, scene: Scene, loading: Loading | None = None,
+                  options: ComputeOptions = _ONE) -> xr.Dataset:
+    """Run the chain on one scene in memory, single-threaded unless ``options`` say otherwise (a
+    scene that runs alone); its slice of ``atlas.nc`` (``loading``: see
+    :func:`pipeline.atlas.design.scene_scenario`). The result does not depend on ``options``."""
     from pipeline.before_work.domains import resolve
     from pipeline.stages import contact, cube, fits, oxide
     from pipeline.stages.schema import SURROGATE_COORDINATES
 
     start = time.perf_counter()
     scenario = resolve(scene_scenario(base, scene, loading))
-    c = contact.build(scenario, _ONE)
-    k = cube.build(scenario, c, oxide.build(scenario, _ONE), _ONE)
+    c = contact.build(scenario, options)
+    k = cube.build(scenario, c, oxide.build(scenario, options), options)
     f = fits.build(scenario, k)
     grid = ("xi", "lambda")
 
@@ -108,9 +110,10 @@ def _done(base: Scenario, scene: Scene, data_dir: Path, loading: Loading | None 
         return False
 
 
-def _run_scene(base: Scenario, scene: Scene, data_dir: Path, loading: Loading | None = None) -> tuple[str, float]:
+def _run_scene(base: Scenario, scene: Scene, data_dir: Path, loading: Loading | None = None,
+               options: ComputeOptions = _ONE) -> tuple[str, float]:
     """The task: one scene, written atomically; its name and wall time."""
-    ds = scene_dataset(base, scene, loading)
+    ds = scene_dataset(base, scene, loading, options)
     with atomic_path(scene_path(data_dir, scene)) as tmp:
         ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4")
     return scene.name, float(ds["wall_seconds"])
@@ -200,8 +203,11 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
     data_dir
         The data directory (``atlas/`` is made under it).
     options
-        ``scheduler`` or ``workers`` > 1: a dask.distributed cluster, one scene per task;
-        otherwise the scenes run one after the other in this process.
+        ``scheduler`` or ``workers`` > 1: a dask.distributed cluster, one single-threaded scene per
+        task; otherwise the scenes run one after the other in this process. A scene that runs alone
+        (the one left of a resumed atlas, the invariance twin, or every scene without a cluster)
+        computes with ``options`` itself: a resumed atlas with one long scene left no longer keeps
+        all but one core idle.
 
     Raises
     ------
@@ -228,11 +234,13 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
         for line in format_atlas_plan(left, workers)[1 + len(left):]:  # the total, and the budget if over
             print(f"atlas: plan: {line}", file=sys.stderr)
     by_name = {s.name: s for s in scenes}
+    # a scene that runs alone (one left, one after another, the twin) computes on everything asked for
+    alone = ComputeOptions(scheduler=options.scheduler, workers=options.workers, progress=False)
     with ExitStack() as stack:
-        client = _client(stack, options) if pending else None
+        client = _client(stack, options) if len(pending) > 1 else None
         if client is None:
             for k, scene in enumerate(pending, 1):
-                _line(k, len(pending), *_run_scene(base, scene, data_dir), scene)
+                _line(k, len(pending), *_run_scene(base, scene, data_dir, None, alone), scene)
         else:
             from distributed import as_completed
 
@@ -243,6 +251,6 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
                 name, seconds = future.result()
                 _line(k, len(pending), name, seconds, by_name[name])
     if twin_pending:  # the invariance check: equal (mu, Pi), other dimensions
-        _line(1, 1, *_run_scene(twin_base(base), twin, data_dir, twin_loading), twin)
+        _line(1, 1, *_run_scene(twin_base(base), twin, data_dir, twin_loading, alone), twin)
     return _gather(base, scenes, data_dir)
 
