@@ -216,7 +216,7 @@ def symmetric_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         return np.linalg.solve(matrix, rhs)
 
 
-def positive_definite(matrix: np.ndarray) -> bool:
+def _positive_definite(matrix: np.ndarray) -> bool:
     """Whether the symmetric ``matrix`` is positive definite (it has a Cholesky factor)."""
     from scipy.linalg import LinAlgError, cho_factor
 
@@ -336,7 +336,7 @@ def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, beta
 def _convex_at(kernel: np.ndarray, state: _State, e_star: float, beta: float) -> bool:
     """Whether the energy's Hessian ``D^-1 + C`` is positive definite at ``state``."""
     active = np.flatnonzero(state.s > 0)
-    return positive_definite(_hessian(kernel, state.s, active, e_star, beta)[0])
+    return _positive_definite(_hessian(kernel, state.s, active, e_star, beta)[0])
 
 
 def _proximal(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, beta: float, state: _State,
@@ -356,7 +356,8 @@ def _proximal(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, be
 
     lowest = float(eigvalsh(kernel, subset_by_index=[0, 0], check_finite=False)[0])
     shift = 1.01 * max(-lowest, 0.0)  # 1/m, like the kernel
-    shifted = kernel + shift * np.eye(g.size)
+    shifted = kernel.copy()
+    shifted[np.diag_indices_from(shifted)] += shift
     iterations = 0
     for _ in range(MAX_PROXIMAL_ROUNDS):
         raised = g + shift / e_star * hertz_load(state.s, e_star, beta)
