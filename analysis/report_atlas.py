@@ -15,7 +15,7 @@ import xarray as xr
 
 from analysis.report_blocks import Block, table
 from analysis.report_chain import chain_blocks
-from pipeline.atlas.fit import verdict
+from pipeline.atlas.fit import curve_words, verdict
 from pipeline.fitting.atlas_band import region_labels
 
 __all__ = ["atlas_blocks", "read_heldout"]
@@ -43,13 +43,14 @@ def _fmt(value: Any, spec: str = ".3g") -> str:
 def _cv_table(doc: dict[str, Any]) -> Block:
     rows = []
     for r in doc.get("cross_validation", []):
-        if r["model"] == "grid" and r.get("cv_rms") is None:
+        if "cv_cells_within" in r and r.get("cv_rms") is None:
             continue  # a candidate with more terms than a fold's points
-        name = ("grid (chosen)" if r.get("chosen") else "grid") if r["model"] == "grid" else r["model"]
+        name = f"{r['model']} (chosen)" if r.get("chosen") else r["model"]
+        across = f"{r['kernel']} RBF, smoothing {r['smoothing']:g}" if "kernel" in r else str(r["degree"])
         within = f"{r['cv_cells_within']} of {r['cells']}" if "cv_cells_within" in r else "-"
-        rows.append([name, str(r["degree"]), _fmt(r.get("order"), "d") if r.get("order") is not None else "-",
+        rows.append([name, across, _fmt(r.get("order"), "d") if r.get("order") is not None else "-",
                      str(r["terms"]), _fmt(r.get("cv_rms")), _fmt(r.get("cv_max")), within])
-    return table(["model", "degree D (groups)", "order P (ln F')", "terms per node", "LOSO RMS ln R'",
+    return table(["model", "across (mu, Pi)", "order P (ln F')", "terms per node", "LOSO RMS ln R'",
                   "LOSO max", "LOSO cells within"], rows)
 
 
@@ -84,10 +85,8 @@ def atlas_blocks(data_dir: Path) -> list[Block]:
         f"Domain: mu {domain['mu'][0]:.3g}-{domain['mu'][1]:.3g}, Pi {domain['Pi'][0]:.3g}-{domain['Pi'][1]:.3g}, "
         f"F' {domain['force_normalized'][0]:.3g}-{domain['force_normalized'][1]:.3g} in every scene (its load "
         f"steps chosen in F'), xi 0 (clean)-{domain['xi'][1]:g}, lambda {domain['lambda'][0]:g}-"
-        f"{domain['lambda'][1]:g}. Curve model (the predictor's default): the grid surrogate, the clean curve "
-        f"R'_c(mu, Pi, F') times an oxide factor that is 1 at xi = 0, each node of (xi, lambda) a polynomial of "
-        f"degree {curve['degree']} in (ln mu, ln Pi) times a Chebyshev series of order {curve['order']} in ln F', "
-        f"linear between nodes; degree and order chosen by leave-one-scene-out cross-validation (table below).")))
+        f"{domain['lambda'][1]:g}. Curve model (the predictor's default): {curve_words(curve)}; chosen by "
+        f"leave-one-scene-out cross-validation (table below) for the most cells within at every step.")))
     blocks.append(Block("p", (
         f"Held out ({held['rule']}): {held['cells_within']} of {held['cells']} (scene, xi, lambda) cells "
         f"({100 * held['share_within']:.1f} %) within at every step ({held['steps_within']} of {held['steps']} "

@@ -131,7 +131,7 @@ def test_a_refused_scene_stops_the_atlas_before_work(tmp_path) -> None:
 
 
 def test_atlas_surrogate_fitted_on_design_judged_on_heldout(tmp_path, base, uninterrupted) -> None:
-    from pipeline.atlas.fit import CURVE, FLOOR, fit_atlas, grid_model
+    from pipeline.atlas.fit import CURVE, FLOOR, curve_model, fit_atlas
     from pipeline.fitting.atlas_surrogate import AtlasModel
 
     doc, rows = fit_atlas(uninterrupted)
@@ -139,7 +139,12 @@ def test_atlas_surrogate_fitted_on_design_judged_on_heldout(tmp_path, base, unin
     assert doc["heldout"]["cells"] == 2 and {r["scene"] for r in rows} == {"h00"}
     assert doc["domain"]["mu"] == pytest.approx([4.0, 16.0]) and doc["domain"]["xi"] == [0.0, 0.5]
     chosen = [r for r in doc["cross_validation"] if r.get("chosen")]
-    assert len(chosen) == 1 and chosen[0]["degree"] == doc[CURVE]["degree"] and chosen[0]["order"] == doc[CURVE]["order"]
+    assert len(chosen) == 1 and chosen[0]["model"] == doc[CURVE]["kind"] and chosen[0]["order"] == doc[CURVE]["order"]
+    # chosen for the most cells within at every step, then the lower RMS
+    best = max(r["cv_cells_within"] for r in doc["cross_validation"] if "cv_cells_within" in r)
+    assert chosen[0]["cv_cells_within"] == best
+    assert chosen[0]["cv_rms"] == min(r["cv_rms"] for r in doc["cross_validation"]
+                                      if r.get("cv_cells_within") == best and r["cv_rms"] is not None)
     # one row by hand: the grid surrogate and ln(alpha F'^-gamma) against the scene's R'
     r = rows[0]
     models = {p: AtlasModel(doc[p]["transform"], np.array(doc[p]["low"]), np.array(doc[p]["high"]),
@@ -148,7 +153,7 @@ def test_atlas_surrogate_fitted_on_design_judged_on_heldout(tmp_path, base, unin
     by_hand = abs(np.log(models["alpha"](*args)[0]) - models["gamma"](*args)[0] * np.log(r["force_normalized"])
                   - np.log(r["resistance_normalized"]))
     assert r["power_law_error"] == pytest.approx(by_hand, rel=1e-12)
-    curve = grid_model(doc[CURVE]).log_resistance(*args, np.array([r["force_normalized"]]))[0]
+    curve = curve_model(doc[CURVE]).log_resistance(*args, np.array([r["force_normalized"]]))[0]
     assert r["error"] == pytest.approx(abs(curve - np.log(r["resistance_normalized"])), rel=1e-12)
     h = int(np.flatnonzero(uninterrupted["scene"].values == "h00")[0])
     ci = uninterrupted["resistance_normalized_ci"].values[h, 0, 0, 0]  # xi 0.5, lambda 1, the lightest step
@@ -165,7 +170,7 @@ def test_atlas_surrogate_fitted_on_design_judged_on_heldout(tmp_path, base, unin
 def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     import json
 
-    from pipeline.atlas.fit import FORMAT, write_atlas_surrogate
+    from pipeline.atlas.fit import CURVE, FORMAT, write_atlas_surrogate
 
     target, doc = write_atlas_surrogate(atlas.run_atlas(base, DESIGN, tmp_path))
     def strict(name: str) -> None:
@@ -190,7 +195,9 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     assert any(f"{held['cells_within']} of {held['cells']} (scene, xi, lambda) cells" in t for t in texts)
     assert any("Invariance of the groups" in t for t in texts)
     tables = [b for b in atlas_blocks(tmp_path) if b.kind == "table"]
-    assert any(row[0] == "grid (chosen)" for row in tables[0].rows[1:])  # the cross-validation table
+    chosen = [row for row in tables[0].rows[1:] if row[0].endswith("(chosen)")]  # the cross-validation table
+    assert len(chosen) == 1 and chosen[0][0] == f"{doc[CURVE]['kind']} (chosen)"
+    assert any(row[0] == "grid" for row in tables[0].rows[1:]) and any("RBF" in row[1] for row in tables[0].rows[1:])
     assert len(tables[1].rows) == 1 + 18  # the band by region
     assert [row[0] for row in tables[2].rows[1:]] == ["h00"]
     assert tables[2].rows[1][-1] == f"{held['steps_within']} of {held['steps']}"

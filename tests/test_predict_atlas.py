@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from pipeline.atlas import run as atlas
-from pipeline.atlas.fit import CURVE, write_atlas_surrogate
+from pipeline.atlas.fit import CURVE, FORMAT_VERSION, curve_doc, write_atlas_surrogate
 from pipeline.cli.main import main
 from pipeline.config import ConfigError, load_scenario
 from pipeline.predict.atlas import NOT_IN_ATLAS, load_atlas_surrogate, predict_atlas
@@ -160,8 +160,29 @@ def test_a_format_one_surrogate_is_still_read(tmp_path) -> None:
     newer = json.loads(path.read_text())
     newer["format_version"] = 99
     (tmp_path / "new.json").write_text(json.dumps(newer))
-    with pytest.raises(ConfigError, match="format_version 99 is newer than this g2tom's 2: upgrade g2tom"):
+    with pytest.raises(ConfigError, match=f"format_version 99 is newer than this g2tom's {FORMAT_VERSION}: upgrade g2tom"):
         load_atlas_surrogate(tmp_path / "new.json")
+
+
+def test_a_format_two_surrogate_is_still_read(tmp_path, atlas_json) -> None:
+    """A format-2 file (the grid surrogate; shipped before the scene series) answers by its grid."""
+    from pipeline.fitting.atlas_grid import fit_grid_tensor, node_coordinates
+
+    doc = json.loads(atlas_json.read_text())
+    sur = load_atlas_surrogate(atlas_json)
+    z, w = node_coordinates(np.array([0.0, 0.5]), np.array([1.0, 5.0]))
+    force = np.tile(np.geomspace(0.05, 20, 6), 4)
+    mu, pi = np.repeat([4.0, 16.0, 4.0, 16.0], 6), np.repeat([20.0, 20.0, 80.0, 80.0], 6)
+    log_r = (np.log(mu) - 0.5 * np.log(force) + 0.1 * np.log(pi))[:, None, None] + z[None, :, None] + w[None, None, :]
+    grid = fit_grid_tensor(z, w, mu, pi, force, log_r, np.full(log_r.shape, 0.01), 1, 1)
+    old = {**doc, "format_version": 2, CURVE: curve_doc(grid)}
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    paper = load_scenario("paper_gt", BASE)
+    out = predict_atlas(load_atlas_surrogate(tmp_path / "old.json"), paper, _force(sur, paper), 0.5, 5.0)
+    g = scene_groups(paper)
+    f_n = _force(sur, paper) / paper.force_scale
+    assert float(out["resistance"]) == pytest.approx(
+        paper.resistance_scale * np.exp(np.log(g.mu) - 0.5 * np.log(f_n) + 0.1 * np.log(g.Pi) + z[1] + w[1]), rel=1e-9)
 
 
 def test_1e5_queries_over_10_surfaces_within_a_second(atlas_json) -> None:

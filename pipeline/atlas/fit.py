@@ -1,19 +1,24 @@
 """The atlas surrogate: R'(xi, lambda, mu, Pi, F') and alpha, gamma over (xi, lambda, mu, Pi) from
 ``atlas.nc``, chosen by leave-one-scene-out cross-validation and judged on held-out scenes.
 
-Fitted on the design scenes only. The curve model (the predictor's default) is the grid
-surrogate of :mod:`pipeline.fitting.atlas_grid`: the clean curve R'_c(mu, Pi, F') as the node
-xi = 0 and, at every oxide node (xi, lambda), a tensor product of a polynomial in (ln mu, ln Pi)
-and a Chebyshev series in ln F', interpolated linearly between nodes in (-ln(1 - xi), ln lambda);
-so R' = R'_c Phi with an oxide factor Phi that is exactly 1 at xi = 0. Its degree D and order P
-are chosen by leave-one-scene-out cross-validation over :data:`DEGREES` x :data:`ORDERS` (the
-lowest term count within 5 % of the best RMS over the scenes off the box's corners); one
-polynomial of total degree 2..6 in the five
-logs (the first atlas's model) is cross-validated beside it, for the record. The band is the
+Fitted on the design scenes only. The curve model (the predictor's default) is one of two kinds,
+both with the clean curve R'_c(mu, Pi, F') as the node xi = 0 and a Chebyshev series in ln F' at
+every oxide node (xi, lambda), interpolated linearly between nodes in (-ln(1 - xi), ln lambda), so
+R' = R'_c Phi with an oxide factor Phi that is exactly 1 at xi = 0:
+
+* the grid surrogate (:mod:`pipeline.fitting.atlas_grid`): the series' coefficients one polynomial
+  in (ln mu, ln Pi) through all design scenes (degree D over :data:`DEGREES`);
+* the scene series (:mod:`pipeline.fitting.atlas_scene_series`): each design scene's own series,
+  its coefficients interpolated across (ln mu, ln Pi) by a radial basis function (kernel over
+  :data:`~pipeline.fitting.atlas_scene_series.KERNELS`, smoothing over :data:`SMOOTHINGS`).
+
+Kind, its parameters and P (:data:`ORDERS`) are chosen by leave-one-scene-out cross-validation on
+the scenes off the box's corners by the held-out target's own measure (the most cells within at
+every step; then the RMS; then fewer terms); one polynomial of total degree 2..6 in the five logs
+(the first atlas's model) is cross-validated beside them, for the record. The band is the
 cross-validated error where the query is, raised to the held-out scenes' error in its region where
-that is larger (:mod:`pipeline.fitting.atlas_band`). ln alpha and
-gamma of Eq. 27 over (xi, lambda, mu, Pi) (:mod:`pipeline.fitting.atlas_surrogate`) stay beside
-it.
+that is larger (:mod:`pipeline.fitting.atlas_band`). ln alpha and gamma of Eq. 27 over (xi,
+lambda, mu, Pi) (:mod:`pipeline.fitting.atlas_surrogate`) stay beside it.
 
 Held-out verdict (:func:`verdict`, also what the report prints): at every fitted F' step of every
 held-out (scene, xi, lambda) cell, |ln R'_surrogate - ln R'_scene| against max(:data:`FLOOR`, the
@@ -36,16 +41,19 @@ from scipy.stats import norm
 from pipeline.fitting.atlas_band import fit_band, with_heldout
 from pipeline.fitting.atlas_grid import (GridTensorModel, cross_validate, fit_grid_tensor, group_powers,
                                          node_coordinates)
+from pipeline.fitting.atlas_scene_series import KERNELS, SceneSeriesModel, fit_scene_series
+from pipeline.fitting.atlas_scene_series import cross_validate as cross_validate_series
 from pipeline.fitting.atlas_surrogate import AtlasModel, exponents, fit_atlas_model, select_degree
 from pipeline.store import atomic_path, git_commit
 
-__all__ = ["fit_atlas", "write_atlas_surrogate", "verdict", "code_hash", "FLOOR", "WORST", "TARGET_SHARE", "FORMAT",
-           "FORMAT_VERSION", "CURVE", "DEGREES", "ORDERS"]
+__all__ = ["fit_atlas", "write_atlas_surrogate", "verdict", "code_hash", "curve_doc", "curve_model", "curve_words", "FLOOR", "WORST",
+           "TARGET_SHARE", "FORMAT", "FORMAT_VERSION", "CURVE", "DEGREES", "ORDERS", "SMOOTHINGS", "SCENE_SERIES"]
 
 FORMAT = "g2tom-atlas-surrogate"
-#: 2: the grid surrogate with its regional band (issue 31); 1 (no ``format_version``): one
-#: polynomial in five logs with one global error (issue 23), still read by the predictor.
-FORMAT_VERSION = 2
+#: 3: the curve model is the grid surrogate or the scene series (``kind``); 2: the grid surrogate with
+#: its regional band (issue 31); 1 (no ``format_version``): one polynomial in five logs with one
+#: global error (issue 23). The predictor reads all three.
+FORMAT_VERSION = 3
 #: The name of the curve model of ln R'(xi, lambda, mu, Pi, F') in the document.
 CURVE = "log_resistance"
 #: Least relative error of ln R' a held-out step is allowed (the issue's 5 %).
@@ -61,10 +69,15 @@ TRANSFORM = {"alpha": "log", "gamma": "identity"}
 #: (a, b) of degrees in ln mu and ln Pi; and orders P of its series in ln F'.
 DEGREES: tuple[int | tuple[int, int], ...] = (1, 2, 3, 4, (1, 1), (2, 2), (3, 2), (2, 3), (3, 3))
 ORDERS = (3, 5)
+#: The scene series' name, and the smoothings of its radial basis functions cross-validated (0: through
+#: every design scene).
+SCENE_SERIES = "scene series"
+SMOOTHINGS = (0.0, 0.1, 0.3, 1.0)
 #: Degrees of the one polynomial in five logs cross-validated for the record (6: the first atlas's).
 POLY_DEGREES = (2, 4, 6)
 #: Modules whose code defines the fitted surrogate (their hash is recorded in its provenance).
-_FITTING_CODE = ("atlas/fit.py", "fitting/atlas_grid.py", "fitting/atlas_band.py", "fitting/atlas_surrogate.py")
+_FITTING_CODE = ("atlas/fit.py", "fitting/atlas_grid.py", "fitting/atlas_scene_series.py", "fitting/atlas_band.py",
+                 "fitting/atlas_surrogate.py")
 
 
 def code_hash() -> str:
@@ -139,40 +152,77 @@ def box_position(mu: np.ndarray, pi: np.ndarray, box: tuple[np.ndarray, np.ndarr
     return np.sum((np.abs(u) < 1e-6) | (np.abs(u - steps) < 1e-6), axis=1)
 
 
+def _candidates() -> list[dict[str, Any]]:
+    """Every candidate curve model: the grid surrogate's (D, P) and the scene series' (kernel, smoothing, P)."""
+    grid = [{"model": "grid", "degree": list(d) if isinstance(d, tuple) else d, "order": p}
+            for d in DEGREES for p in ORDERS]
+    series = [{"model": SCENE_SERIES, "kernel": k, "smoothing": m, "order": p}
+              for k in KERNELS for m in SMOOTHINGS for p in ORDERS]
+    return grid + series
+
+
+def _fit_curve(row: dict[str, Any], points: dict[str, np.ndarray], z_nodes: np.ndarray,
+               w_nodes: np.ndarray) -> GridTensorModel | SceneSeriesModel:
+    """The candidate ``row``'s model fitted on every point."""
+    args = (z_nodes, w_nodes, points["mu"], points["Pi"], points["force_normalized"], points["log_r"], points["sigma"])
+    if row["model"] == "grid":
+        degree = row["degree"]
+        return fit_grid_tensor(*args, tuple(degree) if isinstance(degree, list) else degree, row["order"])
+    return fit_scene_series(*args, points["scene"], row["order"], row["kernel"], row["smoothing"])
+
+
+def _cross_validate(row: dict[str, Any], points: dict[str, np.ndarray], z_nodes: np.ndarray,
+                    w_nodes: np.ndarray) -> np.ndarray:
+    """The candidate ``row``'s leave-one-scene-out residuals (n, nz, nw)."""
+    args = (z_nodes, w_nodes, points["mu"], points["Pi"], points["force_normalized"], points["log_r"], points["sigma"],
+            points["scene"])
+    if row["model"] == "grid":
+        degree = row["degree"]
+        return cross_validate(*args, tuple(degree) if isinstance(degree, list) else degree, row["order"])
+    return cross_validate_series(*args, row["order"], row["kernel"], row["smoothing"])
+
+
+def _terms(row: dict[str, Any], scenes: int) -> int:
+    """Coefficients per node: the grid's polynomial times P + 1, or every scene's series."""
+    if row["model"] == "grid":
+        degree = row["degree"]
+        return int(group_powers(tuple(degree) if isinstance(degree, list) else degree).shape[0] * (row["order"] + 1))
+    return scenes * (row["order"] + 1)
+
+
 def _select(points: dict[str, np.ndarray], xi_nodes: np.ndarray, w_nodes: np.ndarray, judged: np.ndarray
-            ) -> tuple[Any, int, np.ndarray, list[dict[str, Any]]]:
-    """The groups' polynomial and P by leave-one-scene-out cross-validation, the chosen residuals
-    and every candidate's row. Candidates are judged on the points ``judged`` (the scenes off the
-    box's corners: a corner left out is extrapolated to in both groups, which no query inside the
-    box ever is); the simplest within 5 % of the best RMS wins."""
+            ) -> tuple[dict[str, Any], np.ndarray, list[dict[str, Any]]]:
+    """The curve model by leave-one-scene-out cross-validation: the chosen candidate's row, its
+    residuals and every candidate's row.
+
+    Candidates are judged on the points ``judged`` (the scenes off the box's corners: a corner
+    left out is extrapolated to in both groups, which no query inside the box ever is) by the
+    held-out target's own measure: the most (scene, node) cells within max(:data:`FLOOR`, the
+    step's half-width) at every step; then the lower RMS of ln R' over the oxide nodes; then
+    fewer terms.
+    """
     z_nodes = node_coordinates(xi_nodes, np.ones_like(xi_nodes))[0]
-    args = (z_nodes, w_nodes, points["mu"], points["Pi"], points["force_normalized"], points["log_r"],
-            points["sigma"], points["scene"])
-    rows, residuals = [], {}
-    for degree in DEGREES:
-        for order in ORDERS:
-            residual = cross_validate(*args, degree, order)
-            oxide = residual[judged][:, 1:]
-            finite = oxide[np.isfinite(oxide)]
-            rms = float(np.sqrt(np.mean(finite**2))) if finite.size and finite.size == oxide.size else np.inf
-            within, total = _cells_within(residual[judged], points["half_width"][judged], points["scene"][judged])
-            corners = residual[~judged][:, 1:]
-            rows.append({"model": "grid", "degree": list(degree) if isinstance(degree, tuple) else degree,
-                         "order": order, "terms": int(group_powers(degree).shape[0] * (order + 1)), "cv_rms": rms,
-                         "cv_max": float(np.max(np.abs(finite))) if np.isfinite(rms) else np.inf,
-                         "cv_cells_within": within, "cells": total,
-                         "corner_rms": float(np.sqrt(np.mean(corners**2))) if corners.size and np.all(
-                             np.isfinite(corners)) else np.inf})
-            residuals[len(rows) - 1] = residual
-    best = min(r["cv_rms"] for r in rows)
-    if not np.isfinite(best):
-        raise ValueError(f"no grid surrogate in {list(DEGREES)} x P {list(ORDERS)} can be cross-validated on "
-                         f"{np.unique(points['scene']).size} design scenes")
-    k = min((k for k, r in enumerate(rows) if r["cv_rms"] <= best * 1.05),
-            key=lambda k: (rows[k]["terms"], rows[k]["cv_rms"]))
+    scenes = int(np.unique(points["scene"]).size)
+    rows, residuals = [], []
+    for row in _candidates():
+        residual = _cross_validate(row, points, z_nodes, w_nodes)
+        oxide = residual[judged][:, 1:]
+        finite = oxide[np.isfinite(oxide)]
+        rms = float(np.sqrt(np.mean(finite**2))) if finite.size and finite.size == oxide.size else np.inf
+        within, total = _cells_within(residual[judged], points["half_width"][judged], points["scene"][judged])
+        corners = residual[~judged][:, 1:]
+        rows.append({**row, "terms": _terms(row, scenes), "cv_rms": rms,
+                     "cv_max": float(np.max(np.abs(finite))) if np.isfinite(rms) else np.inf,
+                     "cv_cells_within": within if np.isfinite(rms) else 0, "cells": total,
+                     "corner_rms": float(np.sqrt(np.mean(corners**2))) if corners.size and np.all(
+                         np.isfinite(corners)) else np.inf})
+        residuals.append(residual)
+    if not any(np.isfinite(r["cv_rms"]) for r in rows):
+        raise ValueError(f"no curve model can be cross-validated on {scenes} design scenes")
+    k = min((k for k, r in enumerate(rows) if np.isfinite(r["cv_rms"])),
+            key=lambda k: (-rows[k]["cv_cells_within"], rows[k]["cv_rms"], rows[k]["terms"]))
     rows[k]["chosen"] = True
-    degree = rows[k]["degree"]
-    return tuple(degree) if isinstance(degree, list) else degree, rows[k]["order"], residuals[k], rows
+    return rows[k], residuals[k], rows
 
 
 def _poly_rows(points: dict[str, np.ndarray], xi_nodes: np.ndarray, w_nodes: np.ndarray) -> list[dict[str, Any]]:
@@ -212,20 +262,57 @@ def _model_doc(model: AtlasModel, degree: int, scores: dict[int, float]) -> dict
             "cv_rms": {str(d): (s if np.isfinite(s) else None) for d, s in scores.items()}}
 
 
-def grid_doc(model: GridTensorModel) -> dict[str, Any]:
-    """The grid surrogate as plain lists (:func:`grid_model` reads it back)."""
-    return {"kind": "grid", "z_nodes": model.z_nodes.tolist(), "w_nodes": model.w_nodes.tolist(),
-            "group_low": model.group_low.tolist(), "group_high": model.group_high.tolist(),
-            "load_low": model.load_low, "load_high": model.load_high, "group_powers": model.group_powers.tolist(),
-            "coef": model.coef.tolist(), "degree": model.degree, "order": model.order}
+def curve_doc(model: GridTensorModel | SceneSeriesModel) -> dict[str, Any]:
+    """The curve model as plain lists (:func:`curve_model` reads it back)."""
+    common = {"z_nodes": model.z_nodes.tolist(), "w_nodes": model.w_nodes.tolist(), "load_low": model.load_low,
+              "load_high": model.load_high, "coef": model.coef.tolist(), "order": model.order}
+    if isinstance(model, SceneSeriesModel):
+        return {"kind": SCENE_SERIES, **common, "centers": model.centers.tolist(), "kernel": model.kernel,
+                "smoothing": model.smoothing}
+    return {"kind": "grid", **common, "group_low": model.group_low.tolist(), "group_high": model.group_high.tolist(),
+            "group_powers": model.group_powers.tolist(), "degree": model.degree}
 
 
-def grid_model(doc: dict[str, Any]) -> GridTensorModel:
-    """The inverse of :func:`grid_doc`."""
-    return GridTensorModel(np.array(doc["z_nodes"], float), np.array(doc["w_nodes"], float),
-                           np.array(doc["group_low"], float), np.array(doc["group_high"], float),
-                           float(doc["load_low"]), float(doc["load_high"]), np.array(doc["group_powers"], int),
-                           np.array(doc["coef"], float))
+def curve_model(doc: dict[str, Any]) -> GridTensorModel | SceneSeriesModel:
+    """The inverse of :func:`curve_doc` (a format-2 document's ``grid`` included).
+
+    Raises
+    ------
+    ValueError
+        If the kind is unknown.
+    """
+    nodes = (np.array(doc["z_nodes"], float), np.array(doc["w_nodes"], float))
+    if doc["kind"] == SCENE_SERIES:
+        return SceneSeriesModel(*nodes, np.array(doc["centers"], float), np.array(doc["coef"], float),
+                                float(doc["load_low"]), float(doc["load_high"]), str(doc["kernel"]),
+                                float(doc["smoothing"]))
+    if doc["kind"] == "grid":
+        return GridTensorModel(*nodes, np.array(doc["group_low"], float), np.array(doc["group_high"], float),
+                               float(doc["load_low"]), float(doc["load_high"]), np.array(doc["group_powers"], int),
+                               np.array(doc["coef"], float))
+    raise ValueError(f"unknown curve model kind {doc['kind']!r}")
+
+
+def curve_words(doc: dict[str, Any]) -> str:
+    """The curve model of a :func:`curve_doc` in a sentence (the report's and the command line's)."""
+    common = ("the clean curve R'_c(mu, Pi, F') times an oxide factor that is 1 at xi = 0, each node of (xi, lambda) "
+              f"a Chebyshev series of order {doc['order']} in ln F', linear between nodes")
+    if doc.get("kind") == "grid":
+        return f"the grid surrogate, {common}, its coefficients a polynomial of degree {doc['degree']} in (ln mu, ln Pi)"
+    return (f"the scene series, {common}, each design scene's own coefficients interpolated across (ln mu, ln Pi) by a "
+            f"{doc['kernel']} radial basis function (smoothing {doc['smoothing']:g})")
+
+
+_DESCRIPTION = {
+    "grid": "at each node of (z = -ln(1 - xi), ln lambda), the clean surface as the node xi = 0, ln R' = "
+            "sum_{i+j<=D} sum_{q<=P} c_ijq m^i p^j T_q(L) with m, p, L the logs of mu, Pi, F' mapped to [-1, 1] "
+            "(group_low/high, load_low/high) and T_q Chebyshev polynomials; linear between nodes",
+    SCENE_SERIES: "at each node of (z = -ln(1 - xi), ln lambda), the clean surface as the node xi = 0, each design "
+                  "scene's ln R' = sum_{q<=P} c_q T_q(L) (L: ln F' mapped to [-1, 1] by load_low/high, T_q "
+                  "Chebyshev polynomials; coef[scene][z][lambda][q]), each c_q interpolated over (ln mu, ln Pi) "
+                  "from the scenes' centers by scipy's RBFInterpolator (kernel, smoothing, degree 1); linear "
+                  "between nodes",
+}
 
 
 def _box(atlas: xr.Dataset, design: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -255,11 +342,9 @@ def fit_atlas(atlas: xr.Dataset) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     judged = box_position(points["mu"], points["Pi"], box) < 2
     if not judged.any():  # a 2 x 2 design is all corners
         judged = np.ones_like(judged)
-    degree, order, residual, cv_rows = _select(points, xi_nodes, w_nodes, judged)
+    chosen, residual, cv_rows = _select(points, xi_nodes, w_nodes, judged)
     cv_rows += _poly_rows(points, xi_nodes, w_nodes)
-    z_nodes = node_coordinates(xi_nodes, np.ones_like(xi_nodes))[0]
-    curve = fit_grid_tensor(z_nodes, w_nodes, points["mu"], points["Pi"], points["force_normalized"],
-                            points["log_r"], points["sigma"], degree, order)
+    curve = _fit_curve(chosen, points, node_coordinates(xi_nodes, np.ones_like(xi_nodes))[0], w_nodes)
     band = fit_band(residual[judged], points["log_r"][judged], xi_nodes, w_nodes, points["mu"][judged],
                     points["Pi"][judged], points["force_normalized"][judged], box)
     doc: dict[str, Any] = {}
@@ -276,12 +361,10 @@ def fit_atlas(atlas: xr.Dataset) -> tuple[dict[str, Any], list[dict[str, Any]]]:
         "xi", "mu", "Pi", "force_normalized", "error")))
     doc.update({
         "format": FORMAT, "format_version": FORMAT_VERSION,
-        CURVE: grid_doc(curve),
-        "model": f"{CURVE} (the predictor's default): at each node of (z = -ln(1 - xi), ln lambda), the clean "
-                 "surface as the node xi = 0, ln R' = sum_{i+j<=D} sum_{q<=P} c_ijq m^i p^j T_q(L) with m, p, L "
-                 "the logs of mu, Pi, F' mapped to [-1, 1] (group_low/high, load_low/high) and T_q Chebyshev "
-                 "polynomials; linear between nodes. ln alpha and gamma (Eq. 27): one polynomial of total degree "
-                 "D in the mapped (-ln(1 - xi), ln lambda, ln mu, ln Pi); term k is prod_i u_i^powers[k][i]",
+        CURVE: curve_doc(curve),
+        "model": f"{CURVE} (the predictor's default; {chosen['model']}): {_DESCRIPTION[chosen['model']]}. ln alpha "
+                 "and gamma (Eq. 27): one polynomial of total degree D in the mapped (-ln(1 - xi), ln lambda, ln mu, "
+                 "ln Pi); term k is prod_i u_i^powers[k][i]",
         "cross_validation": cv_rows,
         "band": {**band.to_dict(), "cross_validated": cv_band.regional.tolist(), "heldout": held_rms.tolist(),
                  "heldout_counts": held_counts.tolist()},

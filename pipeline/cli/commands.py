@@ -249,13 +249,12 @@ def atlas(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
         args.workers = os.cpu_count() or 1  # a local cluster, one single-threaded scene per core
     path = run_atlas(scenario, AtlasDesign.of(scenario), args.data_dir, compute_options(args))
     print(f"atlas: wrote {path}", file=sys.stderr)
-    from pipeline.atlas.fit import write_atlas_surrogate
+    from pipeline.atlas.fit import CURVE, curve_words, write_atlas_surrogate
 
     target, doc = write_atlas_surrogate(path)
     held, worst = doc["heldout"], doc["heldout"]["worst"]
-    curve = doc["log_resistance"]
-    print(f"atlas: wrote {target}: curve model the grid surrogate (degree {curve['degree']} in the groups, order "
-          f"{curve['order']} in ln F', by leave-one-scene-out cross-validation); held out: {held['cells_within']} of "
+    print(f"atlas: wrote {target}: curve model {curve_words(doc[CURVE])} (by leave-one-scene-out cross-validation); "
+          f"held out: {held['cells_within']} of "
           f"{held['cells']} cells within max(5 %, interval) at every step; worst {worst['scene']} (xi {worst['xi']:g}, "
           f"lambda {worst['lambda']:g}, F' {worst['force_normalized']:.3g}): {worst['error']:.3g} in ln R' vs "
           f"{worst['allowed']:.3g} allowed; targets {'met' if held['met'] else 'not met'}", file=sys.stderr)

@@ -24,6 +24,7 @@ scene predicted by the model fitted without it. Pure numpy; no I/O.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 from numpy.polynomial import chebyshev
@@ -31,7 +32,7 @@ from numpy.polynomial import chebyshev
 from pipeline.fitting.atlas_surrogate import exponents
 
 __all__ = ["GridTensorModel", "node_coordinates", "group_powers", "fit_grid_tensor", "cross_validate",
-           "interpolation_weights"]
+           "interpolation_weights", "load_basis", "weighted_fit", "node_series_value", "leave_one_scene_out"]
 
 
 def node_coordinates(xi: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -49,8 +50,8 @@ def _group_basis(mu: np.ndarray, pi: np.ndarray, low: np.ndarray, high: np.ndarr
     return np.prod(u[:, None, :] ** powers[None, :, :], axis=-1)
 
 
-def _load_basis(force_n: np.ndarray, low: float, high: float, order: int) -> np.ndarray:
-    """(n, order + 1) Chebyshev polynomials T_q of the mapped ln F'."""
+def load_basis(force_n: np.ndarray, low: float, high: float, order: int) -> np.ndarray:
+    """(n, order + 1) Chebyshev polynomials T_q of ln F' mapped from [low, high] to [-1, 1]."""
     return chebyshev.chebvander(_mapped(np.log(force_n), low, high), order)
 
 
@@ -113,19 +114,49 @@ class GridTensorModel:
         inverse = inverse.ravel()
         phi = _group_basis(pairs[:, 0], pairs[:, 1], self.group_low, self.group_high, self.group_powers)
         per_surface = np.einsum("ut,zwtq->uzwq", phi, self.coef)  # (surfaces, nz, nw, P + 1)
-        z, w = node_coordinates(xi, lam)
-        iz, tz = interpolation_weights(z, self.z_nodes)
-        iw, tw = interpolation_weights(w, self.w_nodes)
-        series = np.zeros((xi.size, self.coef.shape[-1]))
-        for dz, fz in ((0, 1.0 - tz), (1, tz)):
-            for dw, fw in ((0, 1.0 - tw), (1, tw)):
-                series += (fz * fw)[:, None] * per_surface[inverse, iz + dz, iw + dw]
-        load = _load_basis(force_n, self.load_low, self.load_high, self.order)
-        return np.einsum("nq,nq->n", series, load)
+        return node_series_value(per_surface, inverse, xi, lam, force_n, self.z_nodes, self.w_nodes,
+                                 (self.load_low, self.load_high))
 
 
-def _fit_node(design: np.ndarray, values: np.ndarray, sigma: np.ndarray) -> np.ndarray:
-    """Weighted least-squares coefficients of one node (points not finite left out)."""
+def node_series_value(per_surface: np.ndarray, inverse: np.ndarray, xi: np.ndarray, lam: np.ndarray,
+                      force_n: np.ndarray, z_nodes: np.ndarray, w_nodes: np.ndarray,
+                      load: tuple[float, float]) -> np.ndarray:
+    """ln R' at points from the Chebyshev series in ln F' of each surface's nodes.
+
+    Parameters
+    ----------
+    per_surface
+        (surfaces, nz, nw, P + 1) coefficients of the series at every node of every distinct surface.
+    inverse
+        (n,) the surface of each point.
+    xi, lam, force_n
+        (n,) the points (xi = 0: the clean surface), interpolated linearly between nodes in
+        (z, ln lambda).
+    z_nodes, w_nodes
+        The nodes' z = -ln(1 - xi) and ln lambda, increasing.
+    load
+        (low, high) of ln F' mapped to -1 and 1.
+    """
+    z, w = node_coordinates(xi, lam)
+    iz, tz = interpolation_weights(z, z_nodes)
+    iw, tw = interpolation_weights(w, w_nodes)
+    series = np.zeros((xi.size, per_surface.shape[-1]))
+    for dz, fz in ((0, 1.0 - tz), (1, tz)):
+        for dw, fw in ((0, 1.0 - tw), (1, tw)):
+            series += (fz * fw)[:, None] * per_surface[inverse, iz + dz, iw + dw]
+    basis = load_basis(force_n, load[0], load[1], per_surface.shape[-1] - 1)
+    return np.einsum("nq,nq->n", series, basis)
+
+
+def weighted_fit(design: np.ndarray, values: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """Weighted least-squares coefficients (weights 1 / sigma^2) of ``design`` (n, terms) to ``values``
+    (n,); points not finite left out.
+
+    Raises
+    ------
+    ValueError
+        If no more points are finite than there are terms.
+    """
     keep = np.isfinite(values) & np.isfinite(sigma) & (sigma > 0)
     if keep.sum() <= design.shape[1]:
         raise ValueError(f"{int(keep.sum())} finite points cannot fit {design.shape[1]} terms")
@@ -174,11 +205,11 @@ def fit_grid_tensor(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi
     group_high = np.where(group_high > group_low, group_high, group_low + 1.0)  # a group held fixed
     powers = group_powers(degree)
     design = (_group_basis(mu, pi, group_low, group_high, powers)[:, :, None]
-              * _load_basis(force_n, load_low, load_high, order)[:, None, :]).reshape(len(mu), -1)
+              * load_basis(force_n, load_low, load_high, order)[:, None, :]).reshape(len(mu), -1)
     coef = np.empty((z_nodes.size, w_nodes.size, powers.shape[0], order + 1))
     for k in range(z_nodes.size):
         for l in range(w_nodes.size):
-            coef[k, l] = _fit_node(design, log_r[:, k, l], sigma[:, k, l]).reshape(powers.shape[0], order + 1)
+            coef[k, l] = weighted_fit(design, log_r[:, k, l], sigma[:, k, l]).reshape(powers.shape[0], order + 1)
     return GridTensorModel(np.asarray(z_nodes, float), np.asarray(w_nodes, float), np.asarray(group_low, float),
                            np.asarray(group_high, float), float(load_low), float(load_high), powers, coef)
 
@@ -194,20 +225,29 @@ def cross_validate(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi:
     """
     x = np.column_stack([np.log(mu), np.log(pi)])
     bounds = (x.min(axis=0), x.max(axis=0), float(np.log(force_n).min()), float(np.log(force_n).max()))
+    return leave_one_scene_out(
+        lambda keep: fit_grid_tensor(z_nodes, w_nodes, mu[keep], pi[keep], force_n[keep], log_r[keep], sigma[keep],
+                                     degree, order, bounds),
+        z_nodes, w_nodes, mu, pi, force_n, log_r, scenes)
+
+
+def leave_one_scene_out(fit: Callable[[np.ndarray], Any], z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray,
+                        pi: np.ndarray, force_n: np.ndarray, log_r: np.ndarray, scenes: np.ndarray) -> np.ndarray:
+    """Residuals ln R'_predicted - ln R' (n, nz, nw) of each scene's points, predicted at every node by
+    ``fit(keep)`` (a model with ``log_resistance``, fitted on the points ``keep``: every other scene's).
+    A fold whose fit raises ValueError (too few points, a singular system) leaves its residuals inf."""
     residual = np.full(log_r.shape, np.inf)
     nz, nw = z_nodes.size, w_nodes.size
     xi_nodes = -np.expm1(-z_nodes)
     for s in np.unique(scenes):
         out = scenes == s
         try:
-            model = fit_grid_tensor(z_nodes, w_nodes, mu[~out], pi[~out], force_n[~out], log_r[~out], sigma[~out],
-                                    degree, order, bounds)
+            model = fit(~out)
         except ValueError:
             continue
         n = int(out.sum())
         xi = np.broadcast_to(xi_nodes[None, :, None], (n, nz, nw)).ravel()
         lam = np.broadcast_to(np.exp(w_nodes)[None, None, :], (n, nz, nw)).ravel()
         rep = [np.broadcast_to(a[out][:, None, None], (n, nz, nw)).ravel() for a in (mu, pi, force_n)]
-        predicted = model.log_resistance(xi, lam, *rep).reshape(n, nz, nw)
-        residual[out] = predicted - log_r[out]
+        residual[out] = model.log_resistance(xi, lam, *rep).reshape(n, nz, nw) - log_r[out]
     return residual

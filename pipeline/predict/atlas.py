@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.atlas.fit import CURVE, FORMAT, FORMAT_VERSION, grid_model
+from pipeline.atlas.fit import CURVE, FORMAT, FORMAT_VERSION, curve_model
 from pipeline.config import ConfigError, Scenario
 from pipeline.fitting.atlas_band import RegionalBand
 from pipeline.fitting.atlas_surrogate import AtlasModel
@@ -57,8 +57,9 @@ class AtlasSurrogate:
     ----------
     models
         ``alpha``, ``gamma`` (Eq. 27) and :data:`CURVE` (ln R'): the grid surrogate
-        (:class:`~pipeline.fitting.atlas_grid.GridTensorModel`, format 2) or one polynomial in five
-        logs (format 1, the first atlas's).
+        (:class:`~pipeline.fitting.atlas_grid.GridTensorModel`, formats 2 and 3), the scene series
+        (:class:`~pipeline.fitting.atlas_scene_series.SceneSeriesModel`, format 3) or one polynomial
+        in five logs (format 1, the first atlas's).
     domain
         (low, high) of mu, Pi, xi, lambda and F'.
     error
@@ -86,7 +87,7 @@ class AtlasSurrogate:
             if version > FORMAT_VERSION:
                 raise ValueError(f"format_version {version} is newer than this g2tom's {FORMAT_VERSION}: upgrade g2tom")
             models: dict[str, Any] = {p: _polynomial(doc[p]) for p in ("alpha", "gamma")}
-            models[CURVE] = grid_model(doc[CURVE]) if version >= 2 else _polynomial(doc[CURVE])
+            models[CURVE] = curve_model(doc[CURVE]) if version >= 2 else _polynomial(doc[CURVE])
             band = RegionalBand.from_dict(doc["band"]) if version >= 2 else None
             domain = {k: (float(doc["domain"][k][0]), float(doc["domain"][k][1])) for k in _DOMAIN}
             return cls(models, domain, float(doc["heldout"]["rms_ln_error"]), source, band)

@@ -1,0 +1,151 @@
+"""The atlas's scene-series surrogate: each design scene's own curves, interpolated across (mu, Pi).
+
+The grid surrogate (:mod:`pipeline.fitting.atlas_grid`) fits one polynomial in (ln mu, ln Pi) through
+all design scenes at once; where the response bends more than that polynomial can, it misses the
+scenes between. This model keeps what each scene measured and interpolates only between scenes:
+
+* per design scene and oxide node (z = -ln(1 - xi), ln lambda; the clean surface as the node
+  z = 0), a Chebyshev series of order P in the mapped ln F', fitted by weighted least squares to
+  the scene's steps (weights 1 / sigma^2; points that are not finite left out);
+* across scenes, each coefficient of each node interpolated over (ln mu, ln Pi) by a radial basis
+  function (polyharmonic ``cubic`` r^3 or ``thin_plate_spline`` r^2 ln r, with a linear polynomial
+  tail, so a response linear in ln mu and ln Pi is reproduced exactly) with a ``smoothing`` that
+  lets it pass off a scene's own noise (0: through every scene's series);
+* between oxide nodes, linear in (z, ln lambda), as the grid surrogate is.
+
+Kernel, smoothing and P are chosen by leave-one-scene-out cross-validation beside the grid
+surrogate's candidates (:func:`cross_validate`). Pure numpy/scipy; no I/O.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from scipy.interpolate import RBFInterpolator
+
+from pipeline.fitting.atlas_grid import leave_one_scene_out, load_basis, node_series_value, weighted_fit
+
+__all__ = ["KERNELS", "SceneSeriesModel", "fit_scene_series", "cross_validate"]
+
+#: Radial basis functions offered (polyharmonic: no length scale to choose).
+KERNELS = ("cubic", "thin_plate_spline")
+
+
+@dataclass(frozen=True)
+class SceneSeriesModel:
+    """The fitted scene-series surrogate of ln R'.
+
+    Attributes
+    ----------
+    z_nodes, w_nodes
+        (nz,) -ln(1 - xi) of the nodes (0 first: the clean surface) and (nw,) ln lambda.
+    centers
+        (scenes, 2) ln mu and ln Pi of the design scenes.
+    coef
+        (scenes, nz, nw, P + 1) each scene's Chebyshev coefficients of ln R' in the mapped ln F'.
+    load_low, load_high
+        Ends of ln F' mapped to -1 and 1.
+    kernel
+        The radial basis function (:data:`KERNELS`).
+    smoothing
+        Its smoothing parameter (0: interpolation through every scene), in (ln R')^2 per unit of
+        the kernel.
+    """
+
+    z_nodes: np.ndarray
+    w_nodes: np.ndarray
+    centers: np.ndarray
+    coef: np.ndarray
+    load_low: float
+    load_high: float
+    kernel: str
+    smoothing: float
+
+    @property
+    def order(self) -> int:
+        """Order P of the Chebyshev series in ln F'."""
+        return int(self.coef.shape[-1] - 1)
+
+    @property
+    def degree(self) -> str:
+        """The interpolation across scenes, in words (the report's "degree" column)."""
+        return f"{self.kernel} RBF, smoothing {self.smoothing:g}"
+
+    @cached_property
+    def _interpolator(self) -> RBFInterpolator:
+        return RBFInterpolator(self.centers, self.coef.reshape(self.coef.shape[0], -1), kernel=self.kernel,
+                               smoothing=self.smoothing, degree=1)
+
+    def log_resistance(self, xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray,
+                       force_n: np.ndarray) -> np.ndarray:
+        """ln R' at the points (arrays of equal size; xi = 0: the clean surface).
+
+        The interpolation across scenes runs once per distinct (mu, Pi), so many queries on a few
+        surfaces cost little more than their load basis.
+        """
+        xi, lam, mu, pi, force_n = (np.asarray(a, float).ravel() for a in (xi, lam, mu, pi, force_n))
+        pairs, inverse = np.unique(np.column_stack([mu, pi]), axis=0, return_inverse=True)
+        per_surface = self._interpolator(np.log(pairs)).reshape((pairs.shape[0],) + self.coef.shape[1:])
+        return node_series_value(per_surface, inverse.ravel(), xi, lam, force_n, self.z_nodes, self.w_nodes,
+                                 (self.load_low, self.load_high))
+
+
+def fit_scene_series(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi: np.ndarray, force_n: np.ndarray,
+                     log_r: np.ndarray, sigma: np.ndarray, scenes: np.ndarray, order: int, kernel: str,
+                     smoothing: float, load: tuple[float, float] | None = None) -> SceneSeriesModel:
+    """Fit the scene-series surrogate.
+
+    Parameters
+    ----------
+    z_nodes, w_nodes
+        (nz,), (nw,) node coordinates, increasing.
+    mu, pi, force_n, scenes
+        (n,) groups, F' and scene of every point (a design scene's load step).
+    log_r, sigma
+        (n, nz, nw) ln R' at every point and node, and one standard deviation of it (> 0).
+    order, kernel, smoothing
+        P of the series in ln F'; the radial basis function and its smoothing.
+    load
+        (low, high) of ln F' mapped to [-1, 1] (default: the points' own).
+
+    Raises
+    ------
+    ValueError
+        If a scene's node has no more finite points than P + 1, fewer than three scenes are
+        given, or they lie on one line in (ln mu, ln Pi) (the linear tail is then undetermined).
+    """
+    if load is None:
+        load = (float(np.log(force_n).min()), float(np.log(force_n).max()))
+    labels = np.unique(scenes)
+    centers = np.empty((labels.size, 2))
+    coef = np.empty((labels.size, z_nodes.size, w_nodes.size, order + 1))
+    for k, s in enumerate(labels):
+        own = scenes == s
+        centers[k] = np.log([mu[own][0], pi[own][0]])
+        basis = load_basis(force_n[own], load[0], load[1], order)
+        for i in range(z_nodes.size):
+            for j in range(w_nodes.size):
+                coef[k, i, j] = weighted_fit(basis, log_r[own, i, j], sigma[own, i, j])
+    if labels.size < 3 or np.linalg.matrix_rank(centers - centers.mean(axis=0)) < 2:
+        raise ValueError(f"{labels.size} scenes on one line in (ln mu, ln Pi) cannot fix a linear tail")
+    if kernel not in KERNELS:
+        raise ValueError(f"kernel {kernel!r} is not one of {KERNELS}")
+    return SceneSeriesModel(np.asarray(z_nodes, float), np.asarray(w_nodes, float), centers, coef, float(load[0]),
+                            float(load[1]), kernel, float(smoothing))
+
+
+def cross_validate(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi: np.ndarray, force_n: np.ndarray,
+                   log_r: np.ndarray, sigma: np.ndarray, scenes: np.ndarray, order: int, kernel: str,
+                   smoothing: float) -> np.ndarray:
+    """Leave-one-scene-out residuals ln R'_predicted - ln R' (n, nz, nw) of the scene-series surrogate.
+
+    Each scene's points are predicted by the model fitted on the other scenes (the load mapping
+    fixed to all points' ends). A fold that cannot be fitted leaves its residuals inf.
+    """
+    load = (float(np.log(force_n).min()), float(np.log(force_n).max()))
+    return leave_one_scene_out(
+        lambda keep: fit_scene_series(z_nodes, w_nodes, mu[keep], pi[keep], force_n[keep], log_r[keep], sigma[keep],
+                                      scenes[keep], order, kernel, smoothing, load),
+        z_nodes, w_nodes, mu, pi, force_n, log_r, scenes)
