@@ -118,6 +118,22 @@ def test_fields_of_an_adaptive_discrete_scene() -> None:
     assert cost.discrete_fields(s, n * 8) < cost.discrete_fields(s, n) == cost.discrete_fields(s, n / 8)
     tight = dataclasses.replace(s, oxide=dataclasses.replace(s.oxide, target_half_width=0.025))
     assert cost.discrete_fields(tight, n) > 3 * cost.discrete_fields(s, n)
+    # the cube's work: each xi its own realizations (later rounds compute only the open xi), the
+    # slowest (largest) xi all of them, the others their share, none below the minimum
+    assert list(s.oxide.xi) == list(cost.XI_SHARE_AT)
+    by_hand = sum(max(max(f, 100) * share, 100) for f in cost.REFERENCE_FIELDS for share in cost.XI_SHARE) / 5
+    assert cost.discrete_xi_fields(s, n) == pytest.approx(by_hand, rel=1e-12)
+    assert cost.discrete_xi_fields(s, n) < 0.5 * cost.discrete_fields(s, n)
+    light = dataclasses.replace(s, oxide=dataclasses.replace(s.oxide, xi=(0.1, 0.5)))  # shares relative to its largest xi
+    assert cost.discrete_xi_fields(light, n) == pytest.approx(
+        sum(max(max(f, 100) * share, 100) for f in cost.REFERENCE_FIELDS for share in (0.14 / 0.17, 1.0)) / 2, rel=1e-12)
+    fixed = dataclasses.replace(s, oxide=dataclasses.replace(s.oxide, ensemble="fixed", n_realizations=64))
+    assert cost.discrete_xi_fields(fixed, n) == cost.discrete_fields(fixed, n) == 64 * 6
+    from pipeline.before_work.discrete_cost import expected_counts, field_seconds
+
+    touching, candidates = expected_counts(s)
+    assert cost.scene_cost(s).cube == pytest.approx(
+        field_seconds(touching, candidates) * cost.discrete_xi_fields(s, touching), rel=1e-12)
 
 
 def test_wall_time_and_the_budget_line() -> None:

@@ -9,7 +9,13 @@ counts of touching asperities N_s and candidates C_s per load step, and the fiel
   paper_discrete-like scene (:data:`REFERENCE_FIELDS`, 5 % target) scaled by
   min(1, (:data:`REFERENCE_TOUCHING` / N_mid)^:data:`FIELDS_EXPONENT`) (more spots average more:
   fewer realizations reach the target; fewer spots were not measured to need more) and by
-  (0.05 / target)^2, between ``oxide.min_realizations`` and ``oxide.max_realizations``.
+  (0.05 / target)^2, between ``oxide.min_realizations`` and ``oxide.max_realizations``;
+* the cube: a field computes every xi in the first round, but later rounds only the xi whose
+  interval is still open, so each xi costs its own realizations: the slowest xi's count times
+  its share :data:`XI_SHARE` (relative to the scenario's largest xi), between the same bounds,
+  each a 1 / (number of xi) part of :func:`~pipeline.before_work.discrete_cost.field_seconds`.
+  Without the shares the plan over-predicted the full atlas's 33 scenes 1.7x (median of
+  measured / planned 0.59, 0.47-1.37); with them 0.96 (0.67-1.75; interquartile 0.86-1.14).
 
 The constants are one thread's CPU seconds or counts measured on this 2-core machine (2026-11-27,
 small fixed ensembles of design scenes d02, d12, d22, d24: mu 7.07 at Pi 5, 40, 320, and mu 50 at
@@ -24,7 +30,7 @@ import numpy as np
 
 from pipeline.config import Scenario
 
-__all__ = ["SceneCost", "scene_cost", "discrete_fields"]
+__all__ = ["SceneCost", "scene_cost", "discrete_fields", "discrete_xi_fields"]
 
 #: Fields per lambda of the reference scene (the adaptive discrete d12, mu 7.07, Pi 40, target
 #: 5 %, min 400 realizations): the realizations of the slowest xi at lambda 1, 3, 7, 11, 17, 23.
@@ -36,6 +42,12 @@ REFERENCE_FIELDS = (400, 506, 431, 630, 1225, 2016)
 REFERENCE_TOUCHING = 87.0
 FIELDS_EXPONENT = 0.8
 REFERENCE_TARGET = 0.05
+#: Realizations of each xi over those of the slowest (the largest) xi, at xi 0.1, 0.3, 0.5, 0.7, 0.9
+#: (:data:`XI_SHARE_AT`): the medians over the full atlas's 33 scenes (2026-11-27, adaptive, 5 %)
+#: and lambda where the slowest xi took 400 realizations or more (at fewer, every xi sits at the
+#: minimum); interpolated between, in xi.
+XI_SHARE_AT = (0.1, 0.3, 0.5, 0.7, 0.9)
+XI_SHARE = (0.14, 0.14, 0.17, 0.28, 1.0)
 #: Seconds of the fits stage per realization and cell (the bootstrap), and the fixed cost of a
 #: scene (resolving its loads and domains, the Greenwood–Tripp solve, writing the file).
 FITS_S = 2.0e-6
@@ -53,7 +65,7 @@ class SceneCost:
     surfaces
         Discrete pool size (0 on grid spots).
     fields
-        Oxide fields computed (all lambda; each serves every xi).
+        Oxide fields of the slowest xi (all lambda; the other xi stop earlier).
     contact, cube, other
         Seconds of the contact stage, of the cube and of the rest (oxide, fits, fixed costs).
     """
@@ -71,17 +83,37 @@ class SceneCost:
         return self.contact + self.cube + self.other
 
 
-def discrete_fields(scenario: Scenario, touching: np.ndarray) -> float:
-    """Typical oxide fields of an adaptive discrete scene (see the module), or the fixed count."""
+def _slowest_fields(scenario: Scenario, touching: np.ndarray) -> np.ndarray:
+    """Realizations of the slowest xi per lambda of an adaptive discrete scene (see the module)."""
     ox = scenario.oxide
-    if ox.ensemble != "adaptive":
-        return float(ox.n_realizations * len(ox.lambda_))
     mid = max(float(touching[touching.size // 2]), 1.0)
     # fewer touching asperities than the reference do not ask for more: at Pi 5 (N_mid 11) the
     # rule asked for 334 and 743 fields at lambda 1 and 23, below the reference's counts
     scale = min(1.0, (REFERENCE_TOUCHING / mid) ** FIELDS_EXPONENT) * (REFERENCE_TARGET / ox.target_half_width) ** 2
     reference = np.interp(np.log(ox.lambda_), np.log([1.0, 3.0, 7.0, 11.0, 17.0, 23.0]), REFERENCE_FIELDS)
-    return float(np.sum(np.clip(reference * scale, ox.min_realizations, ox.max_realizations)))
+    return np.clip(reference * scale, ox.min_realizations, ox.max_realizations)
+
+
+def discrete_fields(scenario: Scenario, touching: np.ndarray) -> float:
+    """Typical oxide fields of an adaptive discrete scene (the slowest xi's, all lambda; see the
+    module), or the fixed count."""
+    ox = scenario.oxide
+    if ox.ensemble != "adaptive":
+        return float(ox.n_realizations * len(ox.lambda_))
+    return float(np.sum(_slowest_fields(scenario, touching)))
+
+
+def discrete_xi_fields(scenario: Scenario, touching: np.ndarray) -> float:
+    """Fields' worth of cube work of a discrete scene: every xi's realizations summed over xi and
+    lambda, over the number of xi (:data:`XI_SHARE`; a fixed ensemble computes every xi of every field)."""
+    ox = scenario.oxide
+    if ox.ensemble != "adaptive":
+        return discrete_fields(scenario, touching)
+    xi = np.asarray(ox.xi, float)
+    share = np.interp(xi, XI_SHARE_AT, XI_SHARE) / np.interp(xi.max(), XI_SHARE_AT, XI_SHARE)
+    per_xi = np.clip(_slowest_fields(scenario, touching)[None, :] * share[:, None], ox.min_realizations,
+                     ox.max_realizations)
+    return float(per_xi.sum() / xi.size)
 
 
 def scene_cost(scenario: Scenario) -> SceneCost:
@@ -99,6 +131,7 @@ def scene_cost(scenario: Scenario) -> SceneCost:
     contact = scenario.contact.surfaces * surface_seconds(n, c)
     per_field = field_seconds(n, c)
     fields = discrete_fields(scenario, n)
+    work = discrete_xi_fields(scenario, n)
     cells = len(scenario.oxide.xi) * len(scenario.oxide.lambda_)
     other = SCENE_S + FITS_S * fields / len(scenario.oxide.lambda_) * cells * scenario.fits.n_bootstrap / 100
-    return SceneCost(n, scenario.contact.surfaces, fields, contact, per_field * fields, other)
+    return SceneCost(n, scenario.contact.surfaces, fields, contact, per_field * work, other)
