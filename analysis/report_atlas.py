@@ -21,7 +21,7 @@ from pipeline.fitting.atlas_band import region_labels
 __all__ = ["atlas_blocks", "read_heldout"]
 
 _FLOATS = ("mu", "Pi", "xi", "lambda", "force_normalized", "resistance_normalized", "error", "power_law_error",
-           "half_width", "allowed")
+           "half_width", "noise_sigma", "allowed")
 
 
 def read_heldout(path: Path) -> list[dict[str, Any]]:
@@ -52,6 +52,16 @@ def _cv_table(doc: dict[str, Any]) -> Block:
                      str(r["terms"]), _fmt(r.get("cv_rms")), _fmt(r.get("cv_max")), within])
     return table(["model", "across (mu, Pi)", "order P (ln F')", "terms per node", "LOSO RMS ln R'",
                   "LOSO max", "LOSO cells within"], rows)
+
+
+def _ceiling_words(held: dict[str, Any]) -> str:
+    """What a perfect surrogate would pass through the held-out scenes' own noise, if known."""
+    low, high = held.get("perfect_share_independent"), held.get("perfect_share_correlated")
+    if low is None or not np.isfinite(low):
+        return ""
+    return (f" A perfect surrogate, erring only by the held-out scenes' own noise, would pass {100 * low:.0f} % of the "
+            f"cells if that noise were independent from step to step and {100 * high:.0f} % if fully correlated "
+            f"along the load.")
 
 
 def _band_table(doc: dict[str, Any]) -> Block:
@@ -94,7 +104,8 @@ def atlas_blocks(data_dir: Path) -> list[Block]:
         f"{worst['Pi']:.3g}, xi {worst['xi']:g}, lambda {worst['lambda']:g}, F' {worst['force_normalized']:.3g}): "
         f"{worst['error']:.3g} against {worst['allowed']:.3g} allowed. Targets "
         f"{'met' if held['met'] else 'NOT met'}. Eq. 25's power law, for the record: "
-        f"{held['power_law_cells_within']} of {held['cells']} cells (RMS {held['power_law_rms_ln_error']:.3g}).")))
+        f"{held['power_law_cells_within']} of {held['cells']} cells (RMS {held['power_law_rms_ln_error']:.3g})."
+        + _ceiling_words(held))))
     blocks.append(Block("p", "Leave-one-scene-out cross-validation on the design scenes (each predicted by the model "
                              "fitted without it; scenes at the box's edge are extrapolated to):"))
     blocks.append(_cv_table(doc))

@@ -193,6 +193,8 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     assert again["max_ln_error"] == pytest.approx(held["max_ln_error"], rel=1e-12)
     texts = [b.text for b in atlas_blocks(tmp_path) if b.kind == "p"]
     assert any(f"{held['cells_within']} of {held['cells']} (scene, xi, lambda) cells" in t for t in texts)
+    assert again["perfect_share_independent"] == pytest.approx(held["perfect_share_independent"], rel=1e-12)
+    assert any(f"would pass {100 * held['perfect_share_independent']:.0f} % of the cells" in t for t in texts)
     assert any("Invariance of the groups" in t for t in texts)
     tables = [b for b in atlas_blocks(tmp_path) if b.kind == "table"]
     chosen = [row for row in tables[0].rows[1:] if row[0].endswith("(chosen)")]  # the cross-validation table
@@ -271,3 +273,25 @@ def test_scenes_are_submitted_longest_first_as_the_plan_assumes() -> None:
     for s in ordered:
         loads[loads.index(min(loads))] += seconds[scenes.index(s)]
     assert max(loads) == wall_seconds(seconds, 2) == 320.0
+
+
+def test_the_verdict_says_what_a_perfect_surrogate_would_pass() -> None:
+    """Two steps whose intervals (95 %) are wider than 5 %: a perfect surrogate passes each with chance
+    0.95, both with 0.9025 if their noise is independent and 0.95 if it is one; a cell of narrow
+    intervals (5 % is ~10 sigma) is passed for sure."""
+    from scipy.stats import norm
+
+    from pipeline.atlas.fit import FLOOR, verdict
+
+    z = norm.ppf(0.975)
+
+    def row(scene: str, half: float) -> dict:
+        return {"scene": scene, "xi": 0.5, "lambda": 1.0, "mu": 2.0, "Pi": 10.0, "force_normalized": 1.0,
+                "error": 0.01, "power_law_error": 0.2, "half_width": half, "noise_sigma": half / z,
+                "allowed": max(FLOOR, half), "within": True}
+
+    held = verdict([row("h0", 0.10), row("h0", 0.12), row("h1", 0.01), row("h1", 0.01)])
+    assert held["perfect_share_independent"] == pytest.approx((0.95**2 + 1.0) / 2, rel=1e-9)
+    assert held["perfect_share_correlated"] == pytest.approx((0.95 + 1.0) / 2, rel=1e-9)
+    old = [{k: v for k, v in row("h0", 0.1).items() if k != "noise_sigma"}]  # an older heldout.csv
+    assert np.isnan(verdict(old)["perfect_share_independent"])

@@ -391,7 +391,8 @@ def _force_range(atlas: xr.Dataset) -> list[float]:
 
 def verdict(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """The held-out verdict of :func:`heldout_rows`: cells within at every step, the worst step, the
-    power law's count beside it (what ``surrogate.json`` records and the report prints)."""
+    power law's count beside it, and the share a perfect surrogate would pass through the held-out
+    scenes' own noise (what ``surrogate.json`` records and the report prints)."""
     cells: dict[tuple, list[dict[str, Any]]] = {}
     for r in rows:
         cells.setdefault((r["scene"], r["xi"], r["lambda"]), []).append(r)
@@ -399,6 +400,7 @@ def verdict(rows: list[dict[str, Any]]) -> dict[str, Any]:
     worst = max(finite, key=lambda r: r["error"]) if finite else None
     within = sum(all(bool(r["within"]) for r in c) for c in cells.values())
     power = sum(all(float(r["power_law_error"]) <= float(r["allowed"]) for r in c) for c in cells.values())
+    independent, correlated = _perfect_shares(cells)
     return {"rule": f"|ln R'_surrogate - ln R'_scene| <= max({FLOOR:g}, the step's relative half-width of the "
                     f"scene's R') at every fitted F' step; targets: {TARGET_SHARE:.0%} of the cells, no step beyond "
                     f"{WORST:g}",
@@ -410,14 +412,33 @@ def verdict(rows: list[dict[str, Any]]) -> dict[str, Any]:
             "power_law_cells_within": int(power),
             "rms_ln_error": float(np.sqrt(np.mean([r["error"] ** 2 for r in finite]))) if finite else float("nan"),
             "power_law_rms_ln_error": float(np.sqrt(np.mean([r["power_law_error"] ** 2 for r in finite])))
-            if finite else float("nan")}
+            if finite else float("nan"),
+            "perfect_share_independent": independent, "perfect_share_correlated": correlated}
+
+
+def _perfect_shares(cells: dict[tuple, list[dict[str, Any]]]) -> tuple[float, float]:
+    """The share of cells a perfect surrogate would be expected to pass, its error at each step the
+    held-out scene's own noise (normal, one sigma ``noise_sigma``): if the steps' noise is
+    independent (the product of the steps' chances) and if fully correlated along the load (the
+    least of them). NaN for rows without ``noise_sigma`` (a ``heldout.csv`` of an older g2tom)."""
+    if not cells or any("noise_sigma" not in r for c in cells.values() for r in c):
+        return float("nan"), float("nan")
+    independent, correlated = [], []
+    for c in cells.values():
+        chance = [2.0 * norm.cdf(float(r["allowed"]) / float(r["noise_sigma"])) - 1.0
+                  if np.isfinite(float(r["noise_sigma"])) and float(r["noise_sigma"]) > 0 else 1.0 for r in c]
+        independent.append(float(np.prod(chance)))
+        correlated.append(min(chance))
+    return float(np.mean(independent)), float(np.mean(correlated))
 
 
 def heldout_rows(atlas: xr.Dataset, scenes: np.ndarray, models: dict[str, Any]) -> list[dict[str, Any]]:
     """One row per held-out (scene, xi, lambda) cell and fitted step: the curve model's error (``error``),
-    the power law's (``power_law_error``) in ln R', the step's relative half-width and what is allowed."""
+    the power law's (``power_law_error``) in ln R', the step's relative half-width, one sigma of the
+    scene's noise there (``noise_sigma``: the half-width over the interval's z) and what is allowed."""
     points = grid_points(atlas, scenes)
     xi_nodes, w_nodes = _nodes(atlas)
+    z_c = _z_c(atlas)
     n, nz, nw = points["log_r"].shape
     grid = lambda a: np.broadcast_to(a, (n, nz - 1, nw)).ravel()  # noqa: E731
     xi, lam = grid(xi_nodes[None, 1:, None]), grid(np.exp(w_nodes)[None, None, :])
@@ -435,7 +456,7 @@ def heldout_rows(atlas: xr.Dataset, scenes: np.ndarray, models: dict[str, Any]) 
                      "lambda": float(lam[k]), "force_normalized": float(force[k]),
                      "resistance_normalized": float(np.exp(target[k])), "error": error,
                      "power_law_error": abs(float(power[k] - target[k])), "half_width": float(half[k]),
-                     "allowed": allowed, "within": bool(error <= allowed) if np.isfinite(target[k]) else True})
+                     "noise_sigma": float(half[k]) / z_c, "allowed": allowed, "within": bool(error <= allowed) if np.isfinite(target[k]) else True})
     return rows
 
 
