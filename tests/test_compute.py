@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -77,3 +79,37 @@ def test_multi_process_cluster_gives_identical_cube(tmp_path, small) -> None:
         for name in ("resistance", "resistance_self", "resistance_interaction", "n_conducting"):
             np.testing.assert_array_equal(ds[name].values, expected[name].values)
         assert ds.attrs["contact.window"] == small.contact.window  # the resolved value, recorded
+
+
+#: What the tasks of the next test did, in order (a thread cluster: they run in this process).
+_LOG: list[tuple[str, str]] = []
+
+
+def _held(name: str, seconds: dict[str, float]) -> str:
+    """A task that records when it starts and ends."""
+    _LOG.append(("start", name))
+    time.sleep(seconds[name])
+    _LOG.append(("end", name))
+    return name
+
+
+def test_tasks_start_in_the_given_order_one_per_thread() -> None:
+    """The atlas's scenes longest first: each starts only when a thread is free, in the list's order
+    (submitted at once, the scheduler would queue them on the workers in turn, and a long one could
+    wait behind another long one while the other worker runs short ones)."""
+    from pipeline.compute import in_turn
+
+    seconds = {"long": 0.6, "long2": 0.5, "mid": 0.3, "short": 0.05, "short2": 0.05, "short3": 0.05}
+    _LOG.clear()
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        done = list(in_turn(client, _held, list(seconds), lambda name: f"held-{name}", seconds))
+    starts = [name for event, name in _LOG if event == "start"]
+    assert starts == list(seconds) and sorted(done) == sorted(seconds)
+    running = peak = 0
+    for event, _ in _LOG:
+        running += 1 if event == "start" else -1
+        peak = max(peak, running)
+    assert peak == 2  # both threads busy, never more
+    # "mid" starts when "long2" ends (the first thread free), not before
+    assert _LOG.index(("start", "mid")) > _LOG.index(("end", "long2"))

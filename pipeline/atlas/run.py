@@ -18,6 +18,7 @@ reduction ``resistance_normalized`` (R'); per (scene, step): ``force_normalized`
 
 from __future__ import annotations
 
+import functools
 import sys
 import time
 from contextlib import ExitStack
@@ -28,7 +29,7 @@ import xarray as xr
 from pipeline.atlas.design import (AtlasDesign, Scene, SceneEstimate, design_scenes, format_atlas_plan, plan_atlas,
                                    scene_scenario)
 from pipeline.atlas.schema import ATLAS, SCALARS
-from pipeline.compute import ComputeOptions
+from pipeline.compute import ComputeOptions, in_turn
 from pipeline.config import ConfigError, Loading, Scenario
 from pipeline.store import atomic_path, provenance
 
@@ -242,13 +243,9 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
             for k, scene in enumerate(pending, 1):
                 _line(k, len(pending), *_run_scene(base, scene, data_dir, None, alone), scene)
         else:
-            from distributed import as_completed
-
-            ordered = longest_first(pending, estimates)
-            futures = [client.submit(_run_scene, base, s, data_dir, key=f"atlas-{s.name}", pure=False,
-                                     priority=len(ordered) - k) for k, s in enumerate(ordered)]
-            for k, future in enumerate(as_completed(futures), 1):
-                name, seconds = future.result()
+            done = in_turn(client, functools.partial(_run_scene, base), longest_first(pending, estimates),
+                           lambda s: f"atlas-{s.name}", data_dir)
+            for k, (name, seconds) in enumerate(done, 1):
                 _line(k, len(pending), name, seconds, by_name[name])
     if twin_pending:  # the invariance check: equal (mu, Pi), other dimensions
         _line(1, 1, *_run_scene(twin_base(base), twin, data_dir, twin_loading, alone), twin)
