@@ -161,13 +161,19 @@ def _candidates() -> list[dict[str, Any]]:
     return grid + series
 
 
+def _degree(row: dict[str, Any]) -> int | tuple[int, int]:
+    """A grid candidate's degree as :func:`~pipeline.fitting.atlas_grid.group_powers` takes it (a
+    tensor product's pair is a list in the row, for JSON)."""
+    degree = row["degree"]
+    return tuple(degree) if isinstance(degree, list) else degree
+
+
 def _fit_curve(row: dict[str, Any], points: dict[str, np.ndarray], z_nodes: np.ndarray,
                w_nodes: np.ndarray) -> GridTensorModel | SceneSeriesModel:
     """The candidate ``row``'s model fitted on every point."""
     args = (z_nodes, w_nodes, points["mu"], points["Pi"], points["force_normalized"], points["log_r"], points["sigma"])
     if row["model"] == "grid":
-        degree = row["degree"]
-        return fit_grid_tensor(*args, tuple(degree) if isinstance(degree, list) else degree, row["order"])
+        return fit_grid_tensor(*args, _degree(row), row["order"])
     return fit_scene_series(*args, points["scene"], row["order"], row["kernel"], row["smoothing"])
 
 
@@ -177,16 +183,14 @@ def _cross_validate(row: dict[str, Any], points: dict[str, np.ndarray], z_nodes:
     args = (z_nodes, w_nodes, points["mu"], points["Pi"], points["force_normalized"], points["log_r"], points["sigma"],
             points["scene"])
     if row["model"] == "grid":
-        degree = row["degree"]
-        return cross_validate(*args, tuple(degree) if isinstance(degree, list) else degree, row["order"])
+        return cross_validate(*args, _degree(row), row["order"])
     return cross_validate_series(*args, row["order"], row["kernel"], row["smoothing"])
 
 
 def _terms(row: dict[str, Any], scenes: int) -> int:
     """Coefficients per node: the grid's polynomial times P + 1, or every scene's series."""
     if row["model"] == "grid":
-        degree = row["degree"]
-        return int(group_powers(tuple(degree) if isinstance(degree, list) else degree).shape[0] * (row["order"] + 1))
+        return int(group_powers(_degree(row)).shape[0] * (row["order"] + 1))
     return scenes * (row["order"] + 1)
 
 
