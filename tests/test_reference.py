@@ -76,6 +76,19 @@ def test_oxide_field_on_the_grid_is_g2toms_field_at_the_cell_centres(small, lam)
     assert 0.3 < masks[1].mean() < 0.7  # xi = 0.5: about half the grid is oxide
 
 
+@pytest.mark.parametrize("side", [0.3e-3, 1e-3])  # a window inside the surface, and the surface itself
+def test_gw_heights_are_the_highest_tip_over_every_asperity(side) -> None:
+    """Against the brute-force maximum over all asperities (the same expression, so equal bit for bit)."""
+    asperities = surfaces.gw_asperities(1e-3, 2e8, 20e-6, 60e-6, np.random.default_rng(7))
+    n, floor = 48, -3 * 20e-6
+    pixel = side / n
+    x, y = surfaces.coordinates(n, pixel)
+    tips = asperities.z[:, None, None] - ((x[None] - asperities.x[:, None, None]) ** 2
+                                          + (y[None] - asperities.y[:, None, None]) ** 2) / (2.0 * asperities.beta)
+    expected = np.maximum(tips.max(axis=0), floor)
+    np.testing.assert_array_equal(surfaces.gw_heights(asperities, n, pixel, floor), expected)
+
+
 def test_gw_surface_has_the_asked_density_heights_and_tip_radius() -> None:
     eta, sigma, beta, side = 2e8, 20e-6, 60e-6, 6e-3  # 7200 asperities expected
     rng = np.random.default_rng(11)

@@ -66,13 +66,19 @@ def gw_asperities(side: float, eta: float, sigma: float, beta: float, rng: np.ra
 
 
 def gw_heights(asperities: Asperities, n: int, pixel: float, floor: float) -> np.ndarray:
-    """Heights (m, (n, n)) of the asperities: the highest tip ``z - d^2 / (2 beta)`` above each pixel, at least ``floor``."""
+    """Heights (m, (n, n)) of the asperities: the highest tip ``z - d^2 / (2 beta)`` above each pixel, at least ``floor``.
+
+    Only asperities above the floor whose reach (where the tip meets the floor) comes within a
+    pixel of the grid are visited: a small window of a large surface skips the rest at once.
+    """
     c = cell_centres(n, pixel)
     heights = np.full((n, n), float(floor))
     beta = asperities.beta
-    for x0, y0, z0 in zip(asperities.x, asperities.y, asperities.z):
-        if z0 <= floor:
-            continue
+    above = asperities.z > floor
+    reaches = np.sqrt(2.0 * beta * np.where(above, asperities.z - floor, 0.0))
+    edge = float(np.abs(c).max()) + pixel
+    near = above & (np.abs(asperities.x) - reaches <= edge) & (np.abs(asperities.y) - reaches <= edge)
+    for x0, y0, z0 in zip(asperities.x[near], asperities.y[near], asperities.z[near]):
         reach = np.sqrt(2.0 * beta * (z0 - floor))  # beyond it the tip lies below the floor
         ix = np.flatnonzero(np.abs(c - x0) <= reach)
         iy = np.flatnonzero(np.abs(c - y0) <= reach)
