@@ -16,7 +16,7 @@ SOURCES  := $(shell find pipeline -name '*.py' -o -name '*.toml')
 ANALYSIS := $(shell find analysis -name '*.py')
 STAMPS   := $(DATA)/.stamps
 
-.PHONY: all run test stress bench compare figures report contact oxide cube fits surrogate params validate atlas atlas-plan run-check clean FORCE
+.PHONY: all run test stress test-gpu bench compare figures report contact oxide cube fits surrogate params validate atlas atlas-plan run-check clean FORCE
 all: run
 
 $(VENV)/.installed: pyproject.toml
@@ -110,6 +110,12 @@ params: | $(VENV)/.installed
 # modules' tests build on their module's earlier ones). `.venv/bin/python -m pytest` runs serially.
 test: | $(VENV)/.installed
 	$(VENV)/bin/python -m pytest -n auto --dist loadfile
+
+# The reference's GPU path (pytest marker `gpu`) and its benchmark: CuPy and a GPU needed
+# (`pip install -e '.[gpu]'`, never by make); elsewhere the tests skip and the bench says why.
+test-gpu: | $(VENV)/.installed
+	$(VENV)/bin/python -m pytest -m gpu -rs tests/test_reference_fft.py
+	$(G2TOM) bench --only gpu --verbose
 
 # Long numerical-stability sweeps (pytest marker `stress`; a fast subset runs in `make test`).
 stress: | $(VENV)/.installed

@@ -147,6 +147,10 @@ def build_parser() -> argparse.ArgumentParser:
     validate.add_argument("--plan", action="store_true",
                           help="print this set's cases, grids and estimate (as the run prints first), then stop: "
                                "no work, nothing written")
+    validate.add_argument("--device", default="cpu",
+                          help="where the reference's cases compute: cpu (tamaas, the reference; default), gpu "
+                               "(g2tom's own solver on CuPy, the optional extra 'gpu'; one case at a time unless "
+                               "--workers) or auto (gpu when CuPy sees one, else cpu)")
     validate.add_argument("--surface", choices=("gw", "random_process"), default="gw",
                           help="gw: asperities with g2tom's own parameters (<data-dir>/validate/); random_process: a "
                                "Gaussian self-affine surface, g2tom fed its summit statistics (<data-dir>/validate_random_process/)")

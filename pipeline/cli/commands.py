@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib
 import json
 import os
@@ -277,18 +278,25 @@ def validate(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.before_work.preflight import check_data_dir, check_scheduler
     from pipeline.reference.validate import chosen_set, output_folder, plan_lines, run_validation
 
+    from pipeline.reference.devices import resolve
+
     vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads)
+    try:
+        vset = dataclasses.replace(vset, device=resolve(args.device))
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
     if args.plan:
         print("\n".join(plan_lines(vset, args.config, max(1, args.workers or os.cpu_count() or 1))))
         return
     check_data_dir(args.data_dir)
     if args.scheduler:
         check_scheduler(args.scheduler)
-    problem = missing_extra()
+    problem = missing_extra() if vset.device == "cpu" else None
     if problem:
         raise ConfigError(problem)
     if args.workers is None and args.scheduler is None:
-        args.workers = os.cpu_count() or 1  # a local cluster, one single-threaded case per core (as the atlas)
+        # on the CPU a local cluster, one single-threaded case per core (as the atlas); on the GPU one case at a time
+        args.workers = (os.cpu_count() or 1) if vset.device == "cpu" else 1
     from analysis.figures_validate import figure
 
     run_validation(vset, output_folder(args.data_dir, args.surface), progress=not args.no_progress, draw=figure,

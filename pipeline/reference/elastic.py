@@ -3,8 +3,10 @@
 Everything in :mod:`pipeline.reference` that needs elasticity calls :func:`free_surface` (the
 Boussinesq operator: surface pressure on square pixels -> normal surface displacement of an
 unbounded half-space, zero at infinity) or :func:`solve_pressure` (the library's constrained
-contact solver on the same operator). Both use ``tamaas`` today; an array backend (e.g. CuPy)
-would replace this module only.
+contact solver on the same operator). On the CPU both are ``tamaas``' (the reference); on a GPU
+(``device="gpu"``, :mod:`pipeline.reference.devices`) they are g2tom's own operator and
+Polonsky-Keer solver on CuPy (:mod:`pipeline.reference.fft_surface`,
+:mod:`pipeline.reference.polonsky_keer`), tested against tamaas' with NumPy as the namespace.
 
 The half-space has the contact modulus ``E*`` (``tamaas``' Young modulus ``E*`` with Poisson
 ratio 0, so its ``E / (1 - nu^2)`` is ``E*``). Tamaas' trap: the modulus and the Poisson ratio
@@ -18,7 +20,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["FreeSurface", "free_surface", "solve_pressure", "SolverFailure"]
+from pipeline.reference import devices
+from pipeline.reference.fft_surface import FftSurface, fft_surface
+from pipeline.reference.polonsky_keer import solve_at_mean_pressure
+
+__all__ = ["FreeSurface", "free_surface", "solve_pressure", "SolverFailure", "MAX_ITERATIONS"]
+
+#: The contact solver's iteration limit (either device).
+MAX_ITERATIONS = 10000
 
 _OPERATOR = "boussinesq_non_periodic"
 
@@ -55,8 +64,11 @@ class FreeSurface:
         return out
 
 
-def free_surface(n: int, pixel: float, e_star: float) -> FreeSurface:
-    """The free-surface operator of an ``n x n`` grid of pitch ``pixel`` (m) with modulus ``e_star`` (Pa)."""
+def free_surface(n: int, pixel: float, e_star: float, device: str = "cpu") -> FreeSurface | FftSurface:
+    """The free-surface operator of an ``n x n`` grid of pitch ``pixel`` (m) with modulus ``e_star`` (Pa),
+    tamaas' on the ``cpu``, g2tom's on CuPy on the ``gpu`` (a resolved device, :func:`devices.resolve`)."""
+    if device == "gpu":
+        return fft_surface(n, pixel, e_star, devices.namespace(device))
     import tamaas as tm
 
     tm.set_log_level(tm.LogLevel.error)
@@ -68,20 +80,31 @@ def free_surface(n: int, pixel: float, e_star: float) -> FreeSurface:
     return FreeSurface(n=n, pixel=pixel, e_star=float(e_star), model=model)
 
 
-def solve_pressure(operator: FreeSurface, heights: np.ndarray, force: float, tolerance: float) -> np.ndarray:
+def solve_pressure(operator: FreeSurface | FftSurface, heights: np.ndarray, force: float,
+                   tolerance: float) -> np.ndarray:
     """Contact pressure (Pa, (n, n)) of a rigid surface of ``heights`` (m) pressed by ``force`` (N).
 
     Frictionless, non-adhesive: ``p >= 0``, and where ``p > 0`` the displacement equals the
     heights plus one rigid approach. Polonsky and Keer's constrained conjugate gradients on the
-    free-surface operator, to the relative ``tolerance`` of the library's error measure.
+    free-surface operator, to the relative ``tolerance`` of the solver's error measure (tamaas',
+    or :mod:`pipeline.reference.polonsky_keer`'s on an :class:`FftSurface`).
     """
+    mean_pressure = force / (operator.n * operator.pixel) ** 2
+    if isinstance(operator, FftSurface):
+        result = solve_at_mean_pressure(operator, operator.xp.asarray(heights, dtype=float), mean_pressure,
+                                        tolerance, MAX_ITERATIONS, start=operator.last_pressure)
+        if not result.error <= tolerance:
+            raise SolverFailure(f"contact solver stopped at error {result.error:.3g} > tolerance {tolerance:.3g} "
+                                f"after {result.iterations} iterations")
+        operator.last_pressure = result.pressure
+        return operator.to_host(result.pressure)
     import tamaas as tm
 
     solver = tm.PolonskyKeerRey(operator.model, np.ascontiguousarray(heights, dtype=float), tolerance)
     solver.setIntegralOperator(_OPERATOR)
-    solver.max_iter = 10000
+    solver.max_iter = MAX_ITERATIONS
     try:
-        error = solver.solve(force / (operator.n * operator.pixel) ** 2)  # the mean pressure over the grid
+        error = solver.solve(mean_pressure)
     except (tm.FloatingPointError, FloatingPointError) as exc:
         raise SolverFailure(f"contact solver failed at F = {force:.4g} N: {str(exc).splitlines()[0]}") from None
     if not error <= tolerance:

@@ -73,6 +73,10 @@ class ValidationSet:
     hurst, rms, short_wavelength, bandwidth_ratio
         The random process: Hurst exponent, height std (m), shortest wavelength (m) and the ratio
         of the longest to the shortest.
+    device
+        Where the reference's cases compute: ``cpu`` (tamaas) or ``gpu`` (g2tom's solver on CuPy,
+        :mod:`pipeline.reference.devices`); it does not shape a case's result beyond the solvers'
+        tolerances, so it is not in the cases' keys.
     """
 
     sigma: float = 20e-6
@@ -104,6 +108,7 @@ class ValidationSet:
     clean_error: float = 0.03
     oxide_error: float = 0.05
     spot_rule: str = "disc"
+    device: str = "cpu"
 
     @property
     def pixel(self) -> float:

@@ -21,7 +21,14 @@ from pipeline.reference import scene
 from pipeline.reference.variables import variable
 from pipeline.store import git_commit
 
-__all__ = ["dataset", "ratios", "reference_arrays", "part1_ratios"]
+__all__ = ["dataset", "ratios", "reference_arrays", "part1_ratios", "REFERENCE"]
+
+#: The reference's solvers by device (validate.nc's ``reference`` attribute).
+REFERENCE = {
+    "cpu": "tamaas non-periodic Boussinesq operator; Polonsky-Keer contact; punch conductance by CG",
+    "gpu": "g2tom's non-periodic Boussinesq operator (Love's coefficients, zero-padded FFT) and Polonsky-Keer "
+           "contact on CuPy; punch conductance by CG on the GPU",
+}
 
 
 def reference_arrays(vset: scene.ValidationSet, everything: list, done: dict) -> dict[str, Any]:
@@ -122,7 +129,7 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "g2tom_version": __version__, "git_commit": git_commit() or "unknown",
         "default_discretization": default["discretization"], "default_model": default["resistance_model"],
         "validated_scenario": default["name"], "validated_model": default["model"],
-        "reference": "tamaas non-periodic Boussinesq operator; Polonsky-Keer contact; punch conductance by CG",
+        "reference": REFERENCE[vset.device],
         "resistance_scale": scale_r, "force_scale": scale_f, "mu": vset.mu,
         "failed_cases": "; ".join(ref["failed"]) or "none",
         "skipped_g2tom": "; ".join(g2tom["skipped"]) or "none",

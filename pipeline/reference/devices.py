@@ -1,0 +1,65 @@
+"""Where the full-field reference computes: on the CPU (tamaas) or on a GPU (CuPy).
+
+``cpu`` is tamaas' operator and solver, the reference itself. ``gpu`` is g2tom's own operator and
+Polonsky-Keer solver (:mod:`pipeline.reference.fft_surface`, :mod:`pipeline.reference.polonsky_keer`)
+written against an array namespace, run on CuPy: tested against tamaas on the CPU with NumPy as
+the namespace, and against that on the GPU. ``auto`` is ``gpu`` when CuPy imports and sees a
+device, else ``cpu``.
+"""
+
+from __future__ import annotations
+
+from types import ModuleType
+
+from pipeline.errors import install_hint
+
+__all__ = ["DEVICES", "GPU_HINT", "gpu_missing", "resolve", "namespace"]
+
+#: ``--device`` values.
+DEVICES = ("cpu", "gpu", "auto")
+#: The command that installs CuPy (the optional extra ``gpu``: CuPy's wheel for CUDA 12).
+GPU_HINT = install_hint("gpu", "cupy-cuda12x")
+
+
+def gpu_missing() -> str | None:
+    """Why the GPU cannot be used (CuPy missing, or no device it can see), or None when it can."""
+    try:
+        import cupy
+    except ImportError as exc:
+        return f"the GPU path needs CuPy, which is not installed ({exc}): install it with {GPU_HINT}"
+    try:
+        count = cupy.cuda.runtime.getDeviceCount()
+    except Exception as exc:  # CuPy raises its own CUDARuntimeError without a driver  # noqa: BLE001
+        return f"CuPy sees no GPU ({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})"
+    return None if count > 0 else "CuPy sees no GPU (0 devices)"
+
+
+def resolve(device: str) -> str:
+    """``cpu`` or ``gpu`` for a ``--device`` value (``auto``: ``gpu`` where :func:`gpu_missing` is None).
+
+    Raises
+    ------
+    ValueError
+        On a value outside :data:`DEVICES`, or ``gpu`` where the GPU cannot be used (the reason).
+    """
+    if device not in DEVICES:
+        raise ValueError(f"--device {device!r} is not allowed: must be one of {', '.join(DEVICES)}")
+    if device == "cpu":
+        return "cpu"
+    why = gpu_missing()
+    if why is None:
+        return "gpu"
+    if device == "auto":
+        return "cpu"
+    raise ValueError(f"--device gpu cannot be used: {why}")
+
+
+def namespace(device: str) -> ModuleType:
+    """The array module of a resolved device: NumPy for ``cpu``, CuPy for ``gpu``."""
+    if device == "gpu":
+        import cupy
+
+        return cupy
+    import numpy
+
+    return numpy
