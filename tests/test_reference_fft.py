@@ -16,9 +16,9 @@ from scipy.integrate import dblquad
 from scipy.sparse.linalg import cg
 
 from pipeline.physics.boussinesq import influence_coefficients, rectangle_integral
-from pipeline.reference import cases, devices, elastic, scene, surfaces
+from pipeline.reference import cases, cost, devices, elastic, scene, surfaces
 from pipeline.reference.contact import contact_at_force
-from pipeline.reference.fft_surface import fft_surface
+from pipeline.reference.fft_surface import FftSurface, fft_surface
 from pipeline.reference.polonsky_keer import solve_at_mean_pressure
 from pipeline.reference.punch import conjugate_gradients, punch_conductance
 from pipeline.scene import FieldSource
@@ -168,11 +168,45 @@ def test_device_choice(monkeypatch) -> None:
     assert devices.resolve("auto") == devices.resolve("gpu") == "gpu"
 
 
-def test_the_device_shapes_no_case_key() -> None:
+def test_solver_choice() -> None:
+    assert devices.solver_for(None, "cpu") == "tamaas" and devices.solver_for(None, "gpu") == "g2tom"
+    assert devices.solver_for("g2tom", "cpu") == "g2tom"
+    with pytest.raises(ValueError, match=r"--solver 'fenics' is not allowed: must be one of tamaas, g2tom"):
+        devices.solver_for("fenics", "cpu")
+    with pytest.raises(ValueError, match=r"--solver tamaas is not allowed with --device gpu"):
+        devices.solver_for("tamaas", "gpu")
+    assert isinstance(elastic.free_surface(8, 1e-6, E_STAR, "cpu", "g2tom"), FftSurface)
+    assert isinstance(elastic.free_surface(8, 1e-6, E_STAR), elastic.FreeSurface)
+
+
+def test_the_device_and_solver_shape_no_case_key() -> None:
     source = FieldSource.of(scene.g2tom_scenario(scene.QUICK, scene.QUICK.models[0], scene.QUICK.discretizations[0]))
     case = cases.plan_cases(scene.QUICK)[0]
-    keys = {cases.case_key(dataclasses.replace(scene.QUICK, device=d), case, 1.0, source) for d in ("cpu", "gpu")}
+    keys = {cases.case_key(dataclasses.replace(scene.QUICK, device=d, solver=s), case, 1.0, source)
+            for d, s in (("cpu", "tamaas"), ("cpu", "g2tom"), ("gpu", "g2tom"))}
     assert len(keys) == 1
+
+
+def _one_case_on(settings: list[tuple[str, str]], tmp_path) -> list[dict]:
+    """One whole validation case (probe, fitted window, contact, clean and oxidized punches) of the
+    quick set at F' 4.85, on each (device, solver)."""
+    vset = scene.QUICK
+    source = FieldSource.of(scene.g2tom_scenario(vset, vset.models[0], vset.discretizations[0]))
+    case = next(c for c in cases.plan_cases(vset) if c.oxide)
+    return [cases.run_case(dataclasses.replace(vset, device=d, solver=s), case, 4.85 * vset.force_scale, source, "k",
+                           tmp_path / f"{d}-{s}.json") for d, s in settings]
+
+
+def _assert_same_case(ours: dict, theirs: dict) -> None:
+    for name in ("force", "delta", "contact_area", "side", "resistance_clean"):
+        assert ours[name] == pytest.approx(theirs[name], rel=1e-6), name
+    np.testing.assert_allclose(ours["resistance"], theirs["resistance"], rtol=1e-6)
+
+
+def test_our_solver_case_equals_the_tamaas_case(tmp_path) -> None:
+    ours, theirs = _one_case_on([("cpu", "g2tom"), ("cpu", "tamaas")], tmp_path)
+    assert (ours["solver"], theirs["solver"]) == ("g2tom", "tamaas")
+    _assert_same_case(ours, theirs)
 
 
 # --- on a GPU: the same code on CuPy against NumPy and tamaas -------------------------------------------------
@@ -209,15 +243,22 @@ def test_gpu_contact_and_punch_equal_tamaas(force) -> None:
 @pytest.mark.gpu
 @gpu
 def test_gpu_case_equals_the_cpu_case(tmp_path) -> None:
-    """One whole validation case (probe, fitted window, contact, clean and oxidized punches) on both devices."""
-    vset = scene.QUICK
-    source = FieldSource.of(scene.g2tom_scenario(vset, vset.models[0], vset.discretizations[0]))
-    case = next(c for c in cases.plan_cases(vset) if c.oxide)
-    force = 4.85 * vset.force_scale
-    records = {d: cases.run_case(dataclasses.replace(vset, device=d), case, force, source, "k", tmp_path / f"{d}.json")
-               for d in ("cpu", "gpu")}
-    cpu, gpu_record = records["cpu"], records["gpu"]
-    assert gpu_record["device"] == "gpu" and cpu["device"] == "cpu"
-    for name in ("force", "delta", "contact_area", "side", "resistance_clean"):
-        assert gpu_record[name] == pytest.approx(cpu[name], rel=1e-6), name
-    np.testing.assert_allclose(gpu_record["resistance"], cpu["resistance"], rtol=1e-6)
+    on_gpu, on_cpu = _one_case_on([("gpu", "g2tom"), ("cpu", "tamaas")], tmp_path)
+    assert on_gpu["device"] == "gpu" and on_cpu["device"] == "cpu"
+    _assert_same_case(on_gpu, on_cpu)
+
+
+@pytest.mark.parametrize("grid, ensemble, oxide, load, measured", [
+    (256, True, True, 0.0752, 0.29), (1024, False, True, 4.85, 0.47), (512, False, False, 4.85, 0.60)])
+def test_the_plan_of_a_gpu_case_is_within_one_and_a_half_of_the_h200s(grid, ensemble, oxide, load, measured) -> None:
+    """The medians of the default GW validation on an H200 (2026-11-27) by kind of case."""
+    vset = dataclasses.replace(scene.DEFAULT, device="gpu", solver="g2tom")
+    case = cases.Case(0, 0, grid, oxide, ensemble=ensemble)
+    assert 1 / 1.5 < cost.case_seconds(vset, case, load) / measured < 1.5
+
+
+def test_the_plan_of_our_solver_on_the_cpu_is_tamaas_over_the_measured_speedup() -> None:
+    case = cases.plan_cases(scene.DEFAULT)[0]
+    tamaas = cost.case_seconds(scene.DEFAULT, case, 4.85)
+    ours = cost.case_seconds(dataclasses.replace(scene.DEFAULT, solver="g2tom"), case, 4.85)
+    assert ours == pytest.approx(tamaas / cost.G2TOM_CPU_SPEEDUP, rel=1e-12)

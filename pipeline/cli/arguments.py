@@ -151,6 +151,9 @@ def build_parser() -> argparse.ArgumentParser:
                           help="where the reference's cases compute: cpu (tamaas, the reference; default), gpu "
                                "(g2tom's own solver on CuPy, the optional extra 'gpu'; one case at a time unless "
                                "--workers) or auto (gpu when CuPy sees one, else cpu)")
+    validate.add_argument("--solver", default=None,
+                          help="the reference's contact and punch solver: tamaas (the CPU's default) or g2tom "
+                               "(our own, equal to tamaas within 1e-7; the GPU's, and on the CPU about twice as fast)")
     validate.add_argument("--surface", choices=("gw", "random_process"), default="gw",
                           help="gw: asperities with g2tom's own parameters (<data-dir>/validate/); random_process: a "
                                "Gaussian self-affine surface, g2tom fed its summit statistics (<data-dir>/validate_random_process/)")

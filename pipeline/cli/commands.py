@@ -278,11 +278,12 @@ def validate(args: argparse.Namespace, scenario: Scenario) -> None:
     from pipeline.before_work.preflight import check_data_dir, check_scheduler
     from pipeline.reference.validate import chosen_set, output_folder, plan_lines, run_validation
 
-    from pipeline.reference.devices import resolve
+    from pipeline.reference.devices import resolve, solver_for
 
     vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads)
     try:
-        vset = dataclasses.replace(vset, device=resolve(args.device))
+        device = resolve(args.device)
+        vset = dataclasses.replace(vset, device=device, solver=solver_for(args.solver, device))
     except ValueError as exc:
         raise ConfigError(str(exc)) from None
     if args.plan:
@@ -291,7 +292,7 @@ def validate(args: argparse.Namespace, scenario: Scenario) -> None:
     check_data_dir(args.data_dir)
     if args.scheduler:
         check_scheduler(args.scheduler)
-    problem = missing_extra() if vset.device == "cpu" else None
+    problem = missing_extra() if vset.solver == "tamaas" else None
     if problem:
         raise ConfigError(problem)
     if args.workers is None and args.scheduler is None:

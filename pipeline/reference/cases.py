@@ -30,10 +30,11 @@ from pipeline.store import atomic_path
 __all__ = ["Case", "plan_cases", "ensemble_cases", "case_key", "load_case", "run_case"]
 
 #: The set's fields that shape no case (part 1's realizations and loads are the case's own; part
-#: 2's sizes choose which cases run, not what one gives; the device changes a result only within
-#: the solvers' tolerances, and each record names its own).
+#: 2's sizes choose which cases run, not what one gives; the device and solver change a result only
+#: within the solvers' tolerances, and each record names its own).
 UNSHAPING = ("realizations", "models", "discretizations", "convergence_grid", "deltas", "ensemble_grid",
-             "max_ensemble", "model_realizations", "clean_error", "oxide_error", "spot_rule", "device")
+             "max_ensemble", "model_realizations", "clean_error", "oxide_error", "spot_rule", "device",
+             "solver")
 #: Relative force step of the two nearby loads whose dF/d(delta) checks Barber's theorem.
 BARBER_STEP = 0.01
 
@@ -107,7 +108,8 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
         side, reach = window.fitted_side(vset, case.realization, force, case.ensemble)
         operator, heights, state, side = window.solve_in_window(vset, case.realization, case.n, force, side)
     except (elastic.SolverFailure, ContactReachesEdge) as exc:  # recorded (NaN results, the reason), not fatal
-        return _store(path, {"key": key, **dataclasses.asdict(case), "device": vset.device, "error": str(exc), "force": np.nan,
+        return _store(path, {"key": key, **dataclasses.asdict(case), "device": vset.device, "solver": vset.solver,
+                             "error": str(exc), "force": np.nan,
                              "delta": np.nan, "contact_area": np.nan, "gap_spread": np.nan,
                              "barber_ratio": np.nan, "resistance_clean": np.nan,
                              "resistance": np.full((len(vset.xi), len(vset.lambdas)), np.nan).tolist(),
@@ -133,7 +135,7 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
                 kappa = punch_conductance(operator, state.contact & ~masks[z], vset.rho).conductance
                 oxidized[z, a] = 1.0 / kappa if kappa > 0 else np.inf
     record = {
-        "key": key, **dataclasses.asdict(case), "device": vset.device,
+        "key": key, **dataclasses.asdict(case), "device": vset.device, "solver": vset.solver,
         "force": state.force, "delta": state.delta, "contact_area": float(state.contact.sum()) * pixel**2,
         "side": side, "reach": reach,
         "gap_spread": state.gap_spread, "barber_ratio": barber,

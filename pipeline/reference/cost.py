@@ -13,6 +13,12 @@ round's (from the prior), and ``wall_cap`` the bound with every load at ``max_en
 discretizations (:data:`G2TOM_SECONDS` each), part 2's validated scenario (the project's own plan,
 :func:`pipeline.before_work.plan.estimate`, for its contact, oxide and cube stages) and, on the GW
 surface, the stand-in (:data:`STAND_IN_SECONDS` per realization and load).
+
+The tables are tamaas'. g2tom's own solver on the CPU (``--solver g2tom``) takes them divided by
+:data:`G2TOM_CPU_SPEEDUP`; on a GPU (``--device gpu``) a solve costs about the same at every grid
+up to 1024^2 (its iterations' kernel launches, not its FFTs, set the time there):
+:data:`GPU_CONTACT_SECONDS` and :data:`GPU_PUNCH_SECONDS`, scaled by (n / 1024)^2 above, plus
+:data:`GPU_CASE_SECONDS` of the CPU's work per case (heights, oxide masks).
 """
 
 from __future__ import annotations
@@ -26,7 +32,8 @@ from pipeline.reference import cases as cases_mod
 from pipeline.reference import ensemble, scene, window
 
 __all__ = ["CONTACT_SECONDS", "PUNCH_SECONDS", "G2TOM_SECONDS", "STAND_IN_SECONDS", "LIGHT_HEAVY", "Estimate",
-           "case_seconds", "estimate"]
+           "G2TOM_CPU_SPEEDUP", "GPU_CONTACT_SECONDS", "GPU_PUNCH_SECONDS", "GPU_CASE_SECONDS", "case_seconds",
+           "estimate"]
 
 #: The F' of the tables' light and heavy columns (the default sets' lightest and heaviest loads).
 LIGHT_HEAVY = (0.07, 18.8)
@@ -54,6 +61,16 @@ G2TOM_SECONDS = 2.0
 #: The stand-in (the discrete solve of one surface's own caps and its resistances, the contact stage
 #: included), s per realization and load: 5.0 s for 64 realizations at 8 loads on the loaded machine.
 STAND_IN_SECONDS = 1e-2
+#: tamaas' CPU time of a case over g2tom's own solver's on NumPy: 1.88-2.10 over the default GW
+#: set's first 12 part-1 cases on 1024^2 (the same cases, 2026-11-27, the 2-core machine).
+G2TOM_CPU_SPEEDUP = 2.0
+#: On a GPU: one contact step from rest up to 1024^2 and one punch, s (0.09-0.12 s and 0.019-0.025
+#: s on an H200, `g2tom bench --only gpu`, 2026-11-27), and the CPU's work of a case besides
+#: (medians of that run's validation: 0.29 s a 256^2 case, 0.47 s a 1024^2 one, 0.60 s a 512^2
+#: convergence case with its three contact solves).
+GPU_CONTACT_SECONDS = 0.1
+GPU_PUNCH_SECONDS = 0.02
+GPU_CASE_SECONDS = 0.05
 
 
 def _table(table: dict[int, tuple[float, float]], n: int, force_normalized: float) -> float:
@@ -64,15 +81,24 @@ def _table(table: dict[int, tuple[float, float]], n: int, force_normalized: floa
     return math.exp((1 - t) * math.log(light) + t * math.log(heavy)) * (n / ref) ** 3
 
 
+def _solves(vset: scene.ValidationSet, n: int, force_normalized: float) -> tuple[float, float]:
+    """One contact solve's and one punch's time on an n x n grid, s, on the set's device and solver."""
+    if vset.device == "gpu":
+        scale = max(1.0, (n / 1024) ** 2)
+        return GPU_CONTACT_SECONDS * scale, GPU_PUNCH_SECONDS * scale
+    speed = G2TOM_CPU_SPEEDUP if vset.solver == "g2tom" else 1.0
+    return (_table(CONTACT_SECONDS[vset.surface], n, force_normalized) / speed,
+            _table(PUNCH_SECONDS[vset.surface], n, force_normalized) / speed)
+
+
 def case_seconds(vset: scene.ValidationSet, case: cases_mod.Case, force_normalized: float) -> float:
     """The estimated time of one case, s (see the module docstring)."""
-    contacts, punches = CONTACT_SECONDS[vset.surface], PUNCH_SECONDS[vset.surface]
-    probe = _table(contacts, window.probe_grid(vset, case.ensemble), force_normalized)
-    contact = _table(contacts, case.n, force_normalized)
-    punch = _table(punches, case.n, force_normalized)
+    probe, _ = _solves(vset, window.probe_grid(vset, case.ensemble), force_normalized)
+    contact, punch = _solves(vset, case.n, force_normalized)
+    base = GPU_CASE_SECONDS if vset.device == "gpu" else 0.0
     if not case.oxide:
-        return probe + 3 * contact + punch
-    return probe + contact + (1 + len(vset.xi) * len(vset.lambdas)) * punch
+        return base + probe + 3 * contact + punch
+    return base + probe + contact + (1 + len(vset.xi) * len(vset.lambdas)) * punch
 
 
 @dataclass(frozen=True)

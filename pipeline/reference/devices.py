@@ -1,10 +1,11 @@
-"""Where the full-field reference computes: on the CPU (tamaas) or on a GPU (CuPy).
+"""Where the full-field reference computes (``cpu`` or ``gpu``) and with which solver (``tamaas`` or ``g2tom``).
 
-``cpu`` is tamaas' operator and solver, the reference itself. ``gpu`` is g2tom's own operator and
-Polonsky-Keer solver (:mod:`pipeline.reference.fft_surface`, :mod:`pipeline.reference.polonsky_keer`)
-written against an array namespace, run on CuPy: tested against tamaas on the CPU with NumPy as
-the namespace, and against that on the GPU. ``auto`` is ``gpu`` when CuPy imports and sees a
-device, else ``cpu``.
+``tamaas`` is tamaas' operator and solver, the reference itself, on the CPU. ``g2tom`` is g2tom's
+own operator and Polonsky-Keer solver (:mod:`pipeline.reference.fft_surface`,
+:mod:`pipeline.reference.polonsky_keer`) written against an array namespace: NumPy on the CPU
+(tested against tamaas), CuPy on a GPU (tested against both). Device ``auto`` is ``gpu`` when
+CuPy imports and sees a device, else ``cpu``; the solver defaults to tamaas on the CPU and is
+g2tom's on the GPU.
 """
 
 from __future__ import annotations
@@ -13,10 +14,12 @@ from types import ModuleType
 
 from pipeline.errors import install_hint
 
-__all__ = ["DEVICES", "GPU_HINT", "gpu_missing", "resolve", "namespace"]
+__all__ = ["DEVICES", "SOLVERS", "GPU_HINT", "gpu_missing", "resolve", "solver_for", "namespace"]
 
 #: ``--device`` values.
 DEVICES = ("cpu", "gpu", "auto")
+#: ``--solver`` values.
+SOLVERS = ("tamaas", "g2tom")
 #: The command that installs CuPy (the optional extra ``gpu``: CuPy's wheel for CUDA 12).
 GPU_HINT = install_hint("gpu", "cupy-cuda12x")
 
@@ -52,6 +55,24 @@ def resolve(device: str) -> str:
     if device == "auto":
         return "cpu"
     raise ValueError(f"--device gpu cannot be used: {why}")
+
+
+def solver_for(solver: str | None, device: str) -> str:
+    """The solver for a ``--solver`` value (None: tamaas on the ``cpu``, g2tom on the ``gpu``) on a resolved device.
+
+    Raises
+    ------
+    ValueError
+        On a value outside :data:`SOLVERS`, or tamaas on the GPU.
+    """
+    if solver is None:
+        return "tamaas" if device == "cpu" else "g2tom"
+    if solver not in SOLVERS:
+        raise ValueError(f"--solver {solver!r} is not allowed: must be one of {', '.join(SOLVERS)}")
+    if solver == "tamaas" and device == "gpu":
+        raise ValueError("--solver tamaas is not allowed with --device gpu: tamaas runs on the CPU; "
+                         "g2tom's solver runs on either")
+    return solver
 
 
 def namespace(device: str) -> ModuleType:

@@ -3,10 +3,10 @@
 Everything in :mod:`pipeline.reference` that needs elasticity calls :func:`free_surface` (the
 Boussinesq operator: surface pressure on square pixels -> normal surface displacement of an
 unbounded half-space, zero at infinity) or :func:`solve_pressure` (the library's constrained
-contact solver on the same operator). On the CPU both are ``tamaas``' (the reference); on a GPU
-(``device="gpu"``, :mod:`pipeline.reference.devices`) they are g2tom's own operator and
-Polonsky-Keer solver on CuPy (:mod:`pipeline.reference.fft_surface`,
-:mod:`pipeline.reference.polonsky_keer`), tested against tamaas' with NumPy as the namespace.
+contact solver on the same operator): ``tamaas``' (the reference, on the CPU) or g2tom's own
+operator and Polonsky-Keer solver on NumPy or CuPy (:mod:`pipeline.reference.devices`,
+:mod:`pipeline.reference.fft_surface`, :mod:`pipeline.reference.polonsky_keer`), tested against
+tamaas'.
 
 The half-space has the contact modulus ``E*`` (``tamaas``' Young modulus ``E*`` with Poisson
 ratio 0, so its ``E / (1 - nu^2)`` is ``E*``). Tamaas' trap: the modulus and the Poisson ratio
@@ -64,10 +64,12 @@ class FreeSurface:
         return out
 
 
-def free_surface(n: int, pixel: float, e_star: float, device: str = "cpu") -> FreeSurface | FftSurface:
-    """The free-surface operator of an ``n x n`` grid of pitch ``pixel`` (m) with modulus ``e_star`` (Pa),
-    tamaas' on the ``cpu``, g2tom's on CuPy on the ``gpu`` (a resolved device, :func:`devices.resolve`)."""
-    if device == "gpu":
+def free_surface(n: int, pixel: float, e_star: float, device: str = "cpu",
+                 solver: str = "tamaas") -> FreeSurface | FftSurface:
+    """The free-surface operator of an ``n x n`` grid of pitch ``pixel`` (m) with modulus ``e_star`` (Pa):
+    tamaas' (``solver`` tamaas, the CPU), or g2tom's on NumPy (``cpu``) or CuPy (``gpu``) (a resolved
+    device and solver, :mod:`pipeline.reference.devices`)."""
+    if solver == "g2tom" or device == "gpu":
         return fft_surface(n, pixel, e_star, devices.namespace(device))
     import tamaas as tm
 

@@ -73,10 +73,10 @@ class ValidationSet:
     hurst, rms, short_wavelength, bandwidth_ratio
         The random process: Hurst exponent, height std (m), shortest wavelength (m) and the ratio
         of the longest to the shortest.
-    device
-        Where the reference's cases compute: ``cpu`` (tamaas) or ``gpu`` (g2tom's solver on CuPy,
-        :mod:`pipeline.reference.devices`); it does not shape a case's result beyond the solvers'
-        tolerances, so it is not in the cases' keys.
+    device, solver
+        Where the reference's cases compute (``cpu`` or ``gpu``) and with which solver (``tamaas``,
+        CPU only, or ``g2tom``'s own: :mod:`pipeline.reference.devices`); they do not shape a
+        case's result beyond the solvers' tolerances, so they are not in the cases' keys.
     """
 
     sigma: float = 20e-6
@@ -109,6 +109,7 @@ class ValidationSet:
     oxide_error: float = 0.05
     spot_rule: str = "disc"
     device: str = "cpu"
+    solver: str = "tamaas"
 
     @property
     def pixel(self) -> float:

@@ -23,11 +23,11 @@ from pipeline.store import git_commit
 
 __all__ = ["dataset", "ratios", "reference_arrays", "part1_ratios", "REFERENCE"]
 
-#: The reference's solvers by device (validate.nc's ``reference`` attribute).
+#: The reference's solvers by solver (validate.nc's ``reference`` attribute, with the device).
 REFERENCE = {
-    "cpu": "tamaas non-periodic Boussinesq operator; Polonsky-Keer contact; punch conductance by CG",
-    "gpu": "g2tom's non-periodic Boussinesq operator (Love's coefficients, zero-padded FFT) and Polonsky-Keer "
-           "contact on CuPy; punch conductance by CG on the GPU",
+    "tamaas": "tamaas non-periodic Boussinesq operator; Polonsky-Keer contact; punch conductance by CG",
+    "g2tom": "g2tom's non-periodic Boussinesq operator (Love's coefficients, zero-padded FFT), Polonsky-Keer "
+             "contact and punch conductance by CG",
 }
 
 
@@ -129,7 +129,7 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "g2tom_version": __version__, "git_commit": git_commit() or "unknown",
         "default_discretization": default["discretization"], "default_model": default["resistance_model"],
         "validated_scenario": default["name"], "validated_model": default["model"],
-        "reference": REFERENCE[vset.device],
+        "reference": f"{REFERENCE[vset.solver]}; on the {vset.device}",
         "resistance_scale": scale_r, "force_scale": scale_f, "mu": vset.mu,
         "failed_cases": "; ".join(ref["failed"]) or "none",
         "skipped_g2tom": "; ".join(g2tom["skipped"]) or "none",

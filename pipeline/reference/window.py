@@ -58,7 +58,7 @@ def fitted_side(vset: scene.ValidationSet, realization: int, force: float,
     """
     n = probe_grid(vset, ensemble)
     pixel = vset.side / n
-    operator = elastic.free_surface(n, pixel, vset.e_star, vset.device)
+    operator = elastic.free_surface(n, pixel, vset.e_star, vset.device, vset.solver)
     state = contact_at_force(operator, scene.rough_sphere(vset, realization, n), force)
     c = cell_centres(n, pixel)
     iy, ix = np.nonzero(state.contact)
@@ -81,7 +81,7 @@ def solve_in_window(vset: scene.ValidationSet, realization: int, n: int, force: 
         If the contact solve fails.
     """
     while True:
-        operator = elastic.free_surface(n, side / n, vset.e_star, vset.device)
+        operator = elastic.free_surface(n, side / n, vset.e_star, vset.device, vset.solver)
         heights = scene.rough_sphere(vset, realization, n, side)
         try:
             return operator, heights, contact_at_force(operator, heights, force), side
