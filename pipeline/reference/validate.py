@@ -105,7 +105,7 @@ def plan_lines(vset: scene.ValidationSet, config: str = "paper", workers: int = 
         f"validate: estimated {format_duration(est.wall)} on {workers} worker(s) (cases: part 1 "
         f"{format_duration(est.seconds_part1)}, part 2 {format_duration(est.seconds_part2)} of one process; "
         f"g2tom {format_duration(est.seconds_g2tom)}); at most {format_duration(est.wall_cap)} should every load need "
-        f"{vset.max_ensemble} realizations ({vset.solver}'s solver on the {vset.device}; constants: seconds per "
+        f"{vset.max_ensemble} realizations (solver {vset.solver} on the {vset.device}; constants: seconds per "
         f"solve in pipeline/reference/cost.py)",
     ]
 
