@@ -35,12 +35,8 @@ class FftSurface:
 
     Attributes
     ----------
-    n
-        Pixels along one side.
-    pixel
-        Pixel side, m.
-    e_star
-        Contact modulus E*, Pa.
+    n, pixel, e_star
+        Pixels along one side, pixel side (m) and contact modulus E* (Pa), as tamaas' operator's.
     xp
         The array namespace (``numpy`` or ``cupy``).
     spectrum
