@@ -262,3 +262,17 @@ def test_the_plan_of_our_solver_on_the_cpu_is_tamaas_over_the_measured_speedup()
     tamaas = cost.case_seconds(scene.DEFAULT, case, 4.85)
     ours = cost.case_seconds(dataclasses.replace(scene.DEFAULT, solver="g2tom"), case, 4.85)
     assert ours == pytest.approx(tamaas / cost.G2TOM_CPU_SPEEDUP, rel=1e-12)
+
+
+def test_the_reference_benchmarks_compare_our_solver_with_tamaas_and_say_when_there_is_no_gpu(monkeypatch) -> None:
+    from pipeline.bench import gpu as gpu_bench
+    from pipeline.bench.reference_step import largest_differences, row
+
+    result = row(96, ("cpu", "g2tom", "g2tom"), ("cpu", "tamaas", "tamaas"), 1, 1, warm=False)
+    assert result["contact_pixels"] > 0 and result["contact_pixels_differing"] == 0
+    assert result["delta_difference"] < 1e-7 and result["conductance_difference"] < 1e-6
+    assert result["contact_ratio"] == result["tamaas_contact_seconds"] / result["g2tom_contact_seconds"]
+    assert largest_differences([result, {"n": 1}])["delta_difference"] == result["delta_difference"]
+    assert largest_differences([{"n": 1}]) == {}
+    monkeypatch.setattr(devices, "gpu_missing", lambda: "CuPy sees no GPU (0 devices)")
+    assert gpu_bench.run(None) == {"skipped": "no GPU: CuPy sees no GPU (0 devices)"}
