@@ -95,7 +95,8 @@ atlas: atlas-plan | $(VENV)/.installed
 bench: | $(VENV)/.installed
 	$(G2TOM) bench $(ARGS) --verbose
 
-# The full-field reference (tamaas, the `reference` extra) against g2tom; not part of `make run`.
+# The full-field reference against g2tom (g2tom's own solver; VALIDATE="--solver tamaas" for
+# tamaas', the `reference` extra installed here); not part of `make run`.
 # VALIDATE="--quick" for the 256^2 check (a few minutes at most).
 VALIDATE ?=
 validate: | $(VENV)/.installed

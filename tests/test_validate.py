@@ -28,7 +28,7 @@ TIMES = ("seconds_contact", "seconds_case", "seconds_convergence", "seconds_cpu_
 
 def test_without_the_extra_validate_names_the_install_command_and_exits_2(tmp_path, monkeypatch, capsys) -> None:
     monkeypatch.setitem(sys.modules, "tamaas", None)  # import tamaas raises ImportError
-    assert main(["validate", "--quick", "--data-dir", str(tmp_path)]) == 2
+    assert main(["validate", "--quick", "--solver", "tamaas", "--data-dir", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert f"{sys.executable} -m pip install tamaas (g2tom's optional extra 'reference')" in err
     assert "Traceback" not in err and "-e '.[reference]'" not in err  # no path that exists only in the repository

@@ -148,12 +148,13 @@ def build_parser() -> argparse.ArgumentParser:
                           help="print this set's cases, grids and estimate (as the run prints first), then stop: "
                                "no work, nothing written")
     validate.add_argument("--device", default="cpu",
-                          help="where the reference's cases compute: cpu (tamaas, the reference; default), gpu "
-                               "(g2tom's own solver on CuPy, the optional extra 'gpu'; one case at a time unless "
-                               "--workers) or auto (gpu when CuPy sees one, else cpu)")
+                          help="where the reference's cases compute: cpu (default), gpu (CuPy, the optional "
+                               "extra 'gpu'; one case at a time unless --workers) or auto (gpu when CuPy sees one, "
+                               "else cpu)")
     validate.add_argument("--solver", default=None,
-                          help="the reference's contact and punch solver: tamaas (the CPU's default) or g2tom "
-                               "(our own, equal to tamaas within 1e-7; the GPU's, and on the CPU about twice as fast)")
+                          help="the reference's contact and punch solver: g2tom (our own, the default: equal to "
+                               "tamaas within 1e-7 and on the CPU about twice as fast; the GPU's) or tamaas "
+                               "(the CPU only; the optional extra 'reference')")
     validate.add_argument("--surface", choices=("gw", "random_process"), default="gw",
                           help="gw: asperities with g2tom's own parameters (<data-dir>/validate/); random_process: a "
                                "Gaussian self-affine surface, g2tom fed its summit statistics (<data-dir>/validate_random_process/)")

@@ -89,7 +89,7 @@ class ValidationSet:
     deltas: tuple[float, ...] = DEFAULT_LOADS
     xi: tuple[float, ...] = (0.5, 0.7)
     lambdas: tuple[float, ...] = (1.0, 5.0)
-    realizations: tuple[int, ...] = (0, 1, 2, 3)
+    realizations: tuple[int, ...] = tuple(range(8))
     n_grid: int = 1024
     pixels_per_cell: float = 16.0
     convergence_grid: int = 512
@@ -109,7 +109,7 @@ class ValidationSet:
     oxide_error: float = 0.05
     spot_rule: str = "disc"
     device: str = "cpu"
-    solver: str = "tamaas"
+    solver: str = "g2tom"
 
     @property
     def pixel(self) -> float:
