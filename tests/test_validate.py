@@ -35,6 +35,22 @@ def test_without_the_extra_validate_names_the_install_command_and_exits_2(tmp_pa
     assert not (tmp_path / "validate").exists()  # refused before any work
 
 
+@pytest.mark.parametrize("options, message", [
+    (["--device", "tpu"], "g2tom: error: --device 'tpu' is not allowed: must be one of cpu, gpu, auto"),
+    (["--solver", "fenics"], "g2tom: error: --solver 'fenics' is not allowed: must be one of tamaas, g2tom"),
+    (["--device", "gpu"], "g2tom: error: --device gpu cannot be used: CuPy sees no GPU (0 devices)"),
+])
+def test_bad_device_or_solver_exits_2_with_one_line_before_work(tmp_path, monkeypatch, capsys, options,
+                                                                 message) -> None:
+    from pipeline.reference import devices
+
+    monkeypatch.setattr(devices, "gpu_missing", lambda: "CuPy sees no GPU (0 devices)")
+    assert main(["validate", "--quick", "--data-dir", str(tmp_path), *options]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == message
+    assert not (tmp_path / "validate").exists()
+
+
 def test_validate_refuses_scenario_options_it_would_ignore(tmp_path, capsys) -> None:
     assert main(["validate", "--quick", "--data-dir", str(tmp_path), "--set", "roughness.sigma=1e-5"]) == 2
     assert "--set is not used" in capsys.readouterr().err
