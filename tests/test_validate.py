@@ -169,9 +169,14 @@ def test_part_2_compares_the_ensembles_at_equal_force_with_combined_errors(tiny_
     np.testing.assert_allclose(ds["ensemble_ratio_standard_error"].values,
                                np.hypot(ds["ensemble_model_standard_error"].values,
                                         ds["ensemble_reference_standard_error"].values), rtol=1e-12)
+    pairs = ds["ensemble_pairs"].values  # part 1's realizations, then part 2's added ones (at most max_pairs)
+    assert np.all(pairs >= P) and np.all(pairs <= TINY.max_pairs)
+    np.testing.assert_array_equal(ds["resistance_pairs_clean"].values[:P], ds["resistance_reference_clean"].values)
     for k in range(ds.sizes["load"]):  # the pairs' share: the stored proxies and pairs give it again
         proxy = ds["resistance_ensemble_clean"].isel(load=k).values[:int(ds["ensemble_count_clean"][k])]
-        again = statistics.two_phase_log_mean(proxy, ds["resistance_reference_clean"].isel(load=k).values)
+        exact = ds["resistance_pairs_clean"].isel(load=k).values[:pairs[k]]
+        assert np.all(np.isfinite(exact) | np.isposinf(exact))
+        again = statistics.two_phase_log_mean(proxy, exact)
         stored = float(ds["ensemble_reference_clean_pairs_standard_error"][k])
         assert stored == pytest.approx(again.pairs_error, rel=1e-12) or np.isnan(stored) and np.isnan(again.pairs_error)
     f = ds["force_normalized"].values
@@ -183,7 +188,7 @@ def test_part_2_compares_the_ensembles_at_equal_force_with_combined_errors(tiny_
         assert rec["ensemble"] and rec["n"] == TINY.ensemble_grid
         assert rec["force"] == pytest.approx(float(ds["force"].values[rec["load"]]), rel=1e-9)
     text = (out / "validate.md").read_text()
-    assert "### Part 2: the default's ensemble" in text and "| F (N) | F' | N full field |" in text
+    assert "### Part 2: the default's ensemble" in text and "| F (N) | F' | N full field (P pairs) |" in text
     first = text.split("\n\n")[1]  # the first lines, before the first blank one: both parts' flags
     assert "Part 2: the ensemble of" in first
 
@@ -418,20 +423,55 @@ def test_realizations_are_sized_by_the_scatter_and_the_targets_are_the_issues() 
     rng = np.random.default_rng(2)
     wide, narrow = np.exp(rng.normal(0, 0.3, 40)), np.exp(rng.normal(0, 0.03, 40))
     pairs = np.exp(rng.normal(0, 0.005, 4))  # the full field on the first four, close to its proxy
-    assert 50 < statistics.needed_count(wide, wide[:4] * pairs, 0.03, 10_000) < 200  # more where surfaces scatter
-    assert statistics.needed_count(narrow, narrow[:4] * pairs, 0.03, 10_000) == 4  # at least part 1's
+
+    def count(proxy, exact, error, cap, pairs_cap=4, pair_cost=25.0, prior_sd=None):
+        return statistics.allocation(proxy, exact, error, cap, pairs_cap, pair_cost, prior_sd)
+
+    assert 50 < count(wide, wide[:4] * pairs, 0.03, 10_000)[0] < 200  # more where surfaces scatter
+    assert count(narrow, narrow[:4] * pairs, 0.03, 10_000) == (4, 4)  # at least part 1's
     # open circuits carry no ln R: with as many open as conducting, twice the realizations
-    conducting = statistics.needed_count(wide, wide[:4] * pairs, 0.03, 10_000)
-    with_open = statistics.needed_count(np.concatenate([wide, np.full(40, np.inf)]), wide[:4] * pairs, 0.03, 10_000)
+    conducting = count(wide, wide[:4] * pairs, 0.03, 10_000)[0]
+    with_open = count(np.concatenate([wide, np.full(40, np.inf)]), wide[:4] * pairs, 0.03, 10_000)[0]
     assert with_open in (2 * conducting - 1, 2 * conducting)
     # at that count (the sample repeated, half of it open) the estimate's error is the target
     grown = np.concatenate([wide, np.full(40, np.inf)] * (with_open // 80 + 1))[:with_open]
     assert statistics.two_phase_log_mean(grown, wide[:4] * pairs).error <= 0.03 * 1.05
-    # pairs that scatter more than the error allows: no count of proxies can help, the cap
-    assert statistics.needed_count(wide, np.exp(rng.normal(0, 0.3, 4)), 0.03, 77) == 77
+    # pairs that scatter more than the error allows, and no more pairs allowed: no count of proxies can help, the cap
+    noisy = np.exp(rng.normal(0, 0.3, 4))
+    assert count(wide, noisy, 0.03, 77) == (77, 4)
     exact = wide[:4]
-    assert statistics.needed_count(exact, exact, 0.03, 64) <= 64  # at most the cap
-    assert statistics.needed_count(np.array([]), np.array([]), 0.03, 1000, prior_sd=0.3) == 100  # no scatter yet: the prior's
+    assert count(exact, exact, 0.03, 64)[0] <= 64  # at most the cap
+    assert count(np.array([]), np.array([]), 0.03, 1000, prior_sd=0.3) == (100, 1)  # no scatter yet: the prior's
+
+
+def test_proxies_and_pairs_are_allocated_at_least_cost() -> None:
+    """Where the proxy and the full field disagree, pairs are added (on the main grid, ``pair_cost``
+    times a proxy's cost); the allocation reaches the error and costs no more than the cheapest
+    integer (N, P) that does, by brute force."""
+    rng = np.random.default_rng(7)
+    proxy = np.exp(rng.normal(0, 0.4, 60))
+    exact = proxy[:8] * np.exp(rng.normal(0, 0.15, 8))  # the pairs disagree by 0.15 in ln R
+
+    def variance(n: int, p: int) -> float:  # the estimate's variance with n proxies and p pairs, from the same moments
+        d, e = np.log(proxy), np.log(exact) - np.log(proxy[:8])
+        return (np.var(d, ddof=1) + 2 * np.cov(np.log(proxy[:8]), e)[0, 1]) / n + np.var(e, ddof=1) / p
+
+    for error, pair_cost in ((0.03, 25.0), (0.03, 4.0), (0.05, 25.0), (0.02, 100.0)):
+        n, p = statistics.allocation(proxy, exact, error, 10_000, 200, pair_cost)
+        assert 8 <= p <= n and variance(n, p) <= error**2 * (1 + 1e-9)
+        best = min(a + pair_cost * b for b in range(8, 201) for a in range(b, 4000) if variance(a, b) <= error**2)
+        assert n + pair_cost * p <= best * 1.02 + pair_cost  # the continuous optimum rounded up: within a pair
+    cheap, dear = (statistics.allocation(proxy, exact, 0.03, 10_000, 200, c) for c in (4.0, 100.0))
+    assert cheap[1] > dear[1] > 8 and cheap[0] < dear[0]  # cheaper pairs: more pairs, fewer proxies
+    capped = statistics.allocation(proxy, exact, 0.03, 10_000, 30, 4.0)
+    assert capped[1] == 30 and variance(*capped) <= 0.03**2 * (1 + 1e-9)  # the pairs' cap, more proxies instead
+    capped = statistics.allocation(proxy, exact, 0.03, 300, 200, 25.0)
+    assert capped[0] == 300 and variance(*capped) <= 0.03**2 * (1 + 1e-9)  # the proxies' cap, more pairs instead
+    assert statistics.allocation(proxy, exact, 0.03, 10_000, 12, 4.0) == (10_000, 12)  # no count can: both caps
+    same = proxy[:8].copy()  # the full field equal to its proxy: no pair beyond part 1's
+    assert statistics.allocation(proxy, same, 0.03, 10_000, 200, 25.0)[1] == 8
+
+
     assert statistics.prior_log_sd(0.075, False) == pytest.approx(0.32)
     assert statistics.prior_log_sd(2.0, True) == pytest.approx(2 * 0.08)
     for f, clean, oxide in ((0.075, 0.15, np.nan), (0.5, 0.08, np.nan), (1.0, 0.05, 0.10), (2.0, 0.05, 0.10),
@@ -556,3 +596,38 @@ def test_part_one_discrete_rows_take_the_validated_scenarios_spot_rule_and_no_ca
     case = cases.plan_cases(vset)[0]
     keys = {cases.case_key(dataclasses.replace(vset, spot_rule=rule), case, 1.0, source) for rule in ("disc", "segment")}
     assert len(keys) == 1
+
+
+def test_a_round_adds_main_grid_pairs_where_the_proxy_and_the_full_field_disagree() -> None:
+    """Round 2 on a state whose 256^2-like proxies scatter against the main grid: pairs on the main grid
+    (part 1's cases of realizations P ..), proxies covering every pair; none where they agree."""
+    vset = dataclasses.replace(scene.DEFAULT, deltas=(2.0, 0.0), xi=(0.7,), lambdas=(5.0,), realizations=tuple(range(4)),
+                               max_ensemble=64, max_pairs=16)
+    rng = np.random.default_rng(3)
+    P, loads = 4, 2
+    exact_clean = np.exp(rng.normal(0, 0.3, (P, loads)))
+    exact = np.exp(rng.normal(0, 0.3, (1, 1, P, loads)))
+    state = ensemble.Part2.empty(vset, exact_clean, exact)
+    state.grid_count[:] = 24
+    state.grid_clean[:24] = np.exp(rng.normal(0, 0.3, (24, loads)))
+    state.grid_clean[:P] = exact_clean  # clean: the proxy equals the full field
+    state.grid[0, 0, :24] = np.exp(rng.normal(0, 0.3, (24, loads)))
+    state.grid[0, 0, :P, 0] = exact[0, 0, :, 0] * np.exp(rng.normal(0, 0.2, P))  # load 0 oxidized: they disagree
+    state.grid[0, 0, :P, 1] = exact[0, 0, :, 1]
+    model = ([statistics.LogMean(0.0, 0.005, 100, 0.0)] * loads, [[[statistics.LogMean(0.0, 0.01, 100, 0.0)] * loads]])
+    costs = ensemble.CaseCosts(pair=np.full(loads, 25.0), grid=np.ones(loads), stand_in=0.01)
+    none = np.zeros(loads, bool), np.zeros((1, 1, loads), bool)
+    todo, stand_goal = ensemble.plan_round(vset, state, False, np.array([0.075, 3.5]), model, *none, costs)
+    pairs = [c for c in todo if not c.ensemble]
+    assert pairs and all(c.load == 0 and c.n == vset.n_grid and c.oxide for c in pairs), [(c.load, c.realization, c.n) for c in pairs]
+    assert sorted(c.realization for c in pairs) == list(range(P, P + len(pairs))) and P + len(pairs) <= 16
+    top = max(c.realization for c in todo if c.ensemble and c.load == 0)
+    assert top + 1 >= P + len(pairs)  # every pair has its proxy
+    assert stand_goal == 0
+    # the same state with the stand-in at load 0: the stand-in covers the pairs instead
+    stand = np.zeros(loads, bool), np.ones((1, 1, loads), bool)
+    state.stand_clean[:30], state.stand[:, :, :30] = state.grid_clean[:30], np.nan_to_num(state.grid[:, :, :30], nan=1.0)
+    state.stand_in_count = 24
+    todo, stand_goal = ensemble.plan_round(vset, state, False, np.array([0.075, 3.5]), model, *stand, costs)
+    added = max([c.realization + 1 for c in todo if not c.ensemble and c.load == 0], default=P)
+    assert stand_goal >= added

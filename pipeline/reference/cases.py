@@ -27,13 +27,13 @@ from pipeline.reference.punch import punch_conductance
 from pipeline.scene import FieldSource
 from pipeline.store import atomic_path
 
-__all__ = ["Case", "plan_cases", "ensemble_cases", "case_key", "load_case", "run_case"]
+__all__ = ["Case", "plan_cases", "ensemble_cases", "pair_cases", "case_key", "load_case", "run_case"]
 
 #: The set's fields that shape no case (part 1's realizations and loads are the case's own; part
 #: 2's sizes choose which cases run, not what one gives; the device and solver change a result only
 #: within the solvers' tolerances, and each record names its own).
 UNSHAPING = ("realizations", "models", "discretizations", "convergence_grid", "deltas", "ensemble_grid",
-             "max_ensemble", "model_realizations", "clean_error", "oxide_error", "spot_rule", "device",
+             "max_ensemble", "max_pairs", "model_realizations", "clean_error", "oxide_error", "spot_rule", "device",
              "solver")
 #: Relative force step of the two nearby loads whose dF/d(delta) checks Barber's theorem.
 BARBER_STEP = 0.01
@@ -68,6 +68,12 @@ def plan_cases(vset: scene.ValidationSet) -> list[Case]:
 def ensemble_cases(vset: scene.ValidationSet, load: int, realizations: range) -> list[Case]:
     """Part 2's cases of ``realizations`` at load step ``load`` on the ensemble grid (clean and oxidized)."""
     return [Case(r, load, vset.ensemble_grid, True, ensemble=True) for r in realizations]
+
+
+def pair_cases(vset: scene.ValidationSet, load: int, realizations: range) -> list[Case]:
+    """Part 2's added pairs: ``realizations`` at load step ``load`` on the main grid (clean and
+    oxidized), the very cases part 1 would solve had the set those realizations."""
+    return [Case(r, load, vset.n_grid, True) for r in realizations]
 
 
 def case_key(vset: scene.ValidationSet, case: Case, force: float, source: FieldSource) -> str:

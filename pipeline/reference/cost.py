@@ -9,7 +9,8 @@ lightest and heaviest default load, scaled by (n / n_table)^3 from the nearest m
 and Polonsky-Keer iterations grow about as n, each costs ~n^2 log n). Cases run on ``workers``
 processes: the wall time is their summed time over the workers (at least the longest case).
 Part 2's later rounds size the ensembles from the measured scatter: the estimate is the first
-round's (from the prior), and ``wall_cap`` the bound with every load at ``max_ensemble``. g2tom's side runs in the driver before the cases: part 1's
+round's (from the prior: part 1's pairs alone), and ``wall_cap`` the bound with every load at
+``max_ensemble`` proxies and ``max_pairs`` pairs (:func:`case_costs`: what a pair and a proxy cost). g2tom's side runs in the driver before the cases: part 1's
 discretizations (:data:`G2TOM_SECONDS` each), part 2's validated scenario (the project's own plan,
 :func:`pipeline.before_work.plan.estimate`, for its contact, oxide and cube stages) and, on the GW
 surface, the stand-in (:data:`STAND_IN_SECONDS` per realization and load).
@@ -31,7 +32,7 @@ import numpy as np
 from pipeline.reference import cases as cases_mod
 from pipeline.reference import ensemble, scene, window
 
-__all__ = ["CONTACT_SECONDS", "PUNCH_SECONDS", "G2TOM_SECONDS", "STAND_IN_SECONDS", "LIGHT_HEAVY", "Estimate",
+__all__ = ["CONTACT_SECONDS", "PUNCH_SECONDS", "G2TOM_SECONDS", "STAND_IN_SECONDS", "LIGHT_HEAVY", "Estimate", "case_costs",
            "G2TOM_CPU_SPEEDUP", "GPU_CONTACT_SECONDS", "GPU_PUNCH_SECONDS", "GPU_CASE_SECONDS", "case_seconds",
            "estimate"]
 
@@ -101,6 +102,17 @@ def case_seconds(vset: scene.ValidationSet, case: cases_mod.Case, force_normaliz
     return base + probe + contact + (1 + len(vset.xi) * len(vset.lambdas)) * punch
 
 
+def case_costs(vset: scene.ValidationSet, force_normalized: np.ndarray) -> ensemble.CaseCosts:
+    """One realization's cost at each load, s: a pair (a main-grid case), a proxy (an ensemble-grid
+    case) and the stand-in (:data:`STAND_IN_SECONDS`): what part 2 weighs its pairs against its proxies by."""
+    def per_load(n: int, proxy: bool) -> np.ndarray:
+        return np.array([case_seconds(vset, cases_mod.Case(0, k, n, True, ensemble=proxy), float(f))
+                         for k, f in enumerate(force_normalized)])
+
+    return ensemble.CaseCosts(pair=per_load(vset.n_grid, False), grid=per_load(vset.ensemble_grid, True),
+                              stand_in=STAND_IN_SECONDS)
+
+
 @dataclass(frozen=True)
 class Estimate:
     """The plan of one validation, before work.
@@ -119,7 +131,8 @@ class Estimate:
     wall
         Estimated wall time on ``workers`` processes, s.
     wall_cap
-        The same with every load's ensemble at ``max_ensemble`` (part 2's bound), s.
+        The same with every load's ensemble at ``max_ensemble`` and its pairs at ``max_pairs``
+        (part 2's bound), s.
     """
 
     part1: int
@@ -150,7 +163,8 @@ def estimate(vset: scene.ValidationSet, force_normalized: np.ndarray, workers: i
     first = seconds(part1)
     s1 = sum(first)
     second = seconds(extra(counts))
-    capped = seconds(extra(np.full(len(force_normalized), vset.max_ensemble)))
+    capped = seconds(extra(np.full(len(force_normalized), vset.max_ensemble))
+                     + [c for k in range(len(force_normalized)) for c in cases_mod.pair_cases(vset, k, range(P, vset.max_pairs))])
     stand = STAND_IN_SECONDS * len(force_normalized) * int(counts.max()) if vset.surface == "gw" else 0.0
     g2tom = G2TOM_SECONDS * len(vset.discretizations) * len(vset.models) + model_seconds + stand
 

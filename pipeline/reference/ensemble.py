@@ -5,14 +5,16 @@ and each case (clean, every xi x lambda), the validated scenario's ensemble geom
 (:func:`model_ensemble`: its own contact model, spot rule and resistance model, read from the
 scenario, over ``model_realizations`` realizations) is divided by the full field's ensemble
 geometric mean (:mod:`pipeline.reference.statistics`: two-phase, a proxy on N realizations
-corrected by part 1's paired full field on the first P). The proxy is the full field on the
+corrected by the paired full field on the main grid on the first P). The proxy is the full field on the
 ensemble grid (part 2's ``ensemble`` cases), or on the GW surface, where part 1 shows the discrete
 solve of every surface's own caps (``discrete``, ``point``) within :data:`STAND_IN_TOLERANCE` of the
 full field at that load and case, that solve (:func:`stand_in`, milliseconds a surface). Where N
-would not exceed P, part 1's full field is the ensemble (no proxy). N is sized per load and case
+would not exceed P, the pairs' full field is the ensemble (no proxy). N, and the pairs P
+(part 1's realizations, then part 2's added main-grid cases), are sized per load and case
 (:func:`plan_round`) for the ratio's standard error to reach the set's ``clean_error`` /
-``oxide_error``: first from the prior scatter (:func:`statistics.prior_log_sd`), then, for at most
-:data:`MAX_ROUNDS` rounds in all, from the scatter of what was solved; at most ``max_ensemble``.
+``oxide_error``: first N from the prior scatter (:func:`statistics.prior_log_sd`), then, for at
+most :data:`MAX_ROUNDS` rounds in all, N and P together from the scatter of what was solved, at
+least cost (:func:`statistics.allocation`); at most ``max_ensemble`` and ``max_pairs``.
 Everything is deterministic given the stored cases, so a resumed run makes the same choices.
 
 The two ensembles share the oxide seed (realization k of the model and of the full field draw
@@ -34,7 +36,7 @@ import numpy as np
 
 from pipeline.config import ResolvedScenario, Scenario, load_scenario
 from pipeline.reference import discrete_spots, scene, statistics
-from pipeline.reference.cases import Case, ensemble_cases
+from pipeline.reference.cases import Case, ensemble_cases, pair_cases
 from pipeline.reference.statistics import LogMean
 from pipeline.reference.variables import variable
 from pipeline.stages import contact as contact_stage
@@ -43,7 +45,7 @@ from pipeline.stages import oxide as oxide_stage
 from pipeline.stages.cube_discrete import DiscretePool, clean_pool
 
 __all__ = ["STAND_IN_TOLERANCE", "STAND_IN", "MAX_ROUNDS", "ModelEnsemble", "validated_scenario", "model_ensemble",
-           "model_means", "describe", "admitted", "stand_in", "Part2", "plan_round", "prior_counts", "run_part2",
+           "model_means", "describe", "admitted", "stand_in", "Part2", "CaseCosts", "plan_round", "prior_counts", "run_part2",
            "variables"]
 
 #: Part 1's largest |discrete / full field - 1| over every realization at a load and case that lets
@@ -51,8 +53,10 @@ __all__ = ["STAND_IN_TOLERANCE", "STAND_IN", "MAX_ROUNDS", "ModelEnsemble", "val
 STAND_IN_TOLERANCE = 0.02
 #: Part 1's discretization and resistance model whose solve stands in.
 STAND_IN = (discrete_spots.DISCRETE, "point")
-#: Rounds of sizing and solving at most (the first from the prior scatter).
-MAX_ROUNDS = 3
+#: Rounds of sizing and solving at most (the first from the prior scatter, then each from the
+#: scatter solved so far until it says the goal is met; on the default GW set a third round still
+#: added cases and left one standard error at 0.051 > 0.05 for want of a fourth).
+MAX_ROUNDS = 5
 
 
 @dataclass(frozen=True)
@@ -157,9 +161,11 @@ def stand_in(vset: scene.ValidationSet, realizations: range) -> tuple[np.ndarray
 
 @dataclass
 class Part2:
-    """Part 2's full-field proxies as solved so far (NaN: not solved), (realization, load) and
-    (xi, lambda, realization, load), ohm: on the ensemble grid (``grid_count`` per load; their
-    summed wall and CPU ``seconds``) and by the stand-in (``stand_in_count``, every load)."""
+    """Part 2's full field as solved so far (NaN: not solved), (realization, load) and (xi, lambda,
+    realization, load), ohm: the proxies on the ensemble grid (``grid_count`` per load; their summed
+    wall and CPU ``seconds``) and by the stand-in (``stand_in_count``, every load), and the pairs,
+    the full field on the main grid (part 1's realizations, then part 2's added ones: ``pair_count``
+    per load)."""
 
     grid_clean: np.ndarray
     grid: np.ndarray
@@ -168,22 +174,36 @@ class Part2:
     stand: np.ndarray
     seconds: np.ndarray
     seconds_cpu: np.ndarray
+    pair_clean: np.ndarray
+    pair: np.ndarray
+    pair_count: np.ndarray
     stand_in_count: int = 0
 
     @classmethod
-    def empty(cls, vset: scene.ValidationSet) -> "Part2":
+    def empty(cls, vset: scene.ValidationSet, exact_clean: np.ndarray, exact: np.ndarray) -> "Part2":
+        """No proxy yet; the pairs are part 1's full field, ``exact_clean`` (P, load) and ``exact``
+        (xi, lambda, P, load)."""
         n, loads, ox = vset.max_ensemble, len(vset.deltas), (len(vset.xi), len(vset.lambdas))
+        P, pairs = exact_clean.shape[0], max(vset.max_pairs, exact_clean.shape[0])
+        pair_clean, pair = np.full((pairs, loads), np.nan), np.full(ox + (pairs, loads), np.nan)
+        pair_clean[:P], pair[:, :, :P] = exact_clean, exact
         return cls(np.full((n, loads), np.nan), np.full(ox + (n, loads), np.nan), np.zeros(loads, int),
-                   np.full((n, loads), np.nan), np.full(ox + (n, loads), np.nan), np.zeros(loads), np.zeros(loads))
+                   np.full((n, loads), np.nan), np.full(ox + (n, loads), np.nan), np.zeros(loads), np.zeros(loads),
+                   pair_clean, pair, np.full(loads, P, int))
 
-    def proxy(self, exact: np.ndarray, load: int, cell: tuple[int, int] | None, stand: bool) -> np.ndarray:
-        """The proxy of one (load, cell) (cell None: clean; else (xi, lambda) index): the stand-in's,
-        the ensemble grid's, or part 1's ``exact`` itself where the load has no ensemble case."""
+    def exact(self, load: int, cell: tuple[int, int] | None) -> np.ndarray:
+        """The full field on the main grid at one (load, cell) (cell None: clean), realizations 0 .. P-1."""
+        values = self.pair_clean if cell is None else self.pair[cell]
+        return values[:self.pair_count[load], load]
+
+    def proxy(self, load: int, cell: tuple[int, int] | None, stand: bool) -> np.ndarray:
+        """The proxy of one (load, cell): the stand-in's, the ensemble grid's, or the pairs' full
+        field itself where the load has no ensemble case."""
         if stand:
             values = self.stand_clean if cell is None else self.stand[cell]
             return values[:self.stand_in_count, load]
         if self.grid_count[load] == 0:
-            return exact
+            return self.exact(load, cell)
         values = self.grid_clean if cell is None else self.grid[cell]
         return values[:self.grid_count[load], load]
 
@@ -215,49 +235,71 @@ def prior_counts(vset: scene.ValidationSet, force_normalized: np.ndarray,
     return out
 
 
-def plan_round(vset: scene.ValidationSet, state: Part2, first: bool, force_normalized: np.ndarray,
-               exact_clean: np.ndarray, exact: np.ndarray, model: tuple[list[LogMean], list], stand_clean: np.ndarray,
-               stand: np.ndarray) -> tuple[list[Case], int]:
-    """The next round's work: ensemble cases to solve, and the stand-in count to reach.
+@dataclass(frozen=True)
+class CaseCosts:
+    """What one realization costs at each load, s: a pair (the full field on the main grid), a proxy
+    on the ensemble grid, and the stand-in's (:func:`pipeline.reference.cost.case_costs`)."""
 
-    ``exact_clean`` (P, load) and ``exact`` (xi, lambda, P, load): part 1's full field; ``model``:
-    :func:`model_means`; ``stand_clean`` (load) and ``stand`` (xi, lambda, load): :func:`admitted`.
+    pair: np.ndarray
+    grid: np.ndarray
+    stand_in: float
+
+
+def plan_round(vset: scene.ValidationSet, state: Part2, first: bool, force_normalized: np.ndarray,
+               model: tuple[list[LogMean], list], stand_clean: np.ndarray, stand: np.ndarray,
+               costs: CaseCosts) -> tuple[list[Case], int]:
+    """The next round's work: full-field cases to solve (proxies on the ensemble grid, pairs on the
+    main grid), and the stand-in count to reach.
+
+    ``model``: :func:`model_means`; ``stand_clean`` (load) and ``stand`` (xi, lambda, load):
+    :func:`admitted`. Round 1 sizes the proxies from the prior scatter; later rounds size proxies
+    and pairs together from the measured (co)variances at least cost
+    (:func:`pipeline.reference.statistics.allocation`, the pair's cost over the proxy's from ``costs``).
     """
     model_clean, model_ox = model
-    P = exact_clean.shape[0]
     first_counts = prior_counts(vset, force_normalized, lambda cell, k: (
         model_clean[k] if cell is None else model_ox[cell[0]][cell[1]][k]).error) if first else None
     todo: list[Case] = []
     stand_goal = state.stand_in_count
     for k in range(len(force_normalized)):
-        grid_goal = 0
+        grid_need, pair_goal, any_grid = 0, int(state.pair_count[k]), False
         for c, cell in enumerate(_cells(vset)):
             use_stand = bool(stand_clean[k] if cell is None else stand[cell][k])
-            ref = exact_clean[:, k] if cell is None else exact[cell][:, k]
             if first:
-                need = int(first_counts[c, k])
+                need, pairs = int(first_counts[c, k]), pair_goal
             else:
                 m = model_clean[k] if cell is None else model_ox[cell[0]][cell[1]][k]
-                need = statistics.needed_count(state.proxy(ref, k, cell, use_stand), ref,
-                                               _full_field_error(vset, cell, m.error), vset.max_ensemble)
+                proxy_cost = costs.stand_in if use_stand else costs.grid[k]
+                need, pairs = statistics.allocation(state.proxy(k, cell, use_stand), state.exact(k, cell),
+                                                    _full_field_error(vset, cell, m.error), vset.max_ensemble,
+                                                    min(vset.max_pairs, vset.max_ensemble),
+                                                    costs.pair[k] / proxy_cost)
+            pair_goal = max(pair_goal, pairs)
             if use_stand:
                 stand_goal = max(stand_goal, need)
-            elif need > max(P, state.grid_count[k]):
-                grid_goal = max(grid_goal, need)
+            else:
+                any_grid = True
+                grid_need = max(grid_need, need)
+        grid_goal = 0
+        if any_grid and (state.grid_count[k] > 0 or grid_need > pair_goal):
+            grid_goal = max(grid_need, pair_goal)  # every pair has its proxy
+        if any(stand_clean[k] if cell is None else stand[cell][k] for cell in _cells(vset)):
+            stand_goal = max(stand_goal, pair_goal)
         if grid_goal > state.grid_count[k]:
             todo += ensemble_cases(vset, k, range(state.grid_count[k], grid_goal))
+        todo += pair_cases(vset, k, range(state.pair_count[k], pair_goal))
     return todo, stand_goal
 
 
 def run_part2(vset: scene.ValidationSet, force_normalized: np.ndarray, exact_clean: np.ndarray, exact: np.ndarray,
-              model: ModelEnsemble, stand_clean: np.ndarray, stand: np.ndarray,
+              model: ModelEnsemble, stand_clean: np.ndarray, stand: np.ndarray, costs: CaseCosts,
               solve: Callable[[list[Case]], dict[Case, dict]], log: Callable[[str], None] = lambda _: None) -> Part2:
-    """Size and solve part 2's full-field ensembles (``solve`` runs cases, returns their records)."""
-    state = Part2.empty(vset)
+    """Size and solve part 2's full-field ensembles (``solve`` runs cases, returns their records);
+    ``exact_clean`` (P, load) and ``exact`` (xi, lambda, P, load): part 1's full field."""
+    state = Part2.empty(vset, exact_clean, exact)
     means = model_means(model)
     for r in range(MAX_ROUNDS):
-        todo, stand_goal = plan_round(vset, state, r == 0, force_normalized, exact_clean, exact, means,
-                                      stand_clean, stand)
+        todo, stand_goal = plan_round(vset, state, r == 0, force_normalized, means, stand_clean, stand, costs)
         if not todo and stand_goal <= state.stand_in_count:
             break
         if stand_goal > state.stand_in_count:
@@ -269,22 +311,26 @@ def run_part2(vset: scene.ValidationSet, force_normalized: np.ndarray, exact_cle
             log(f"part 2 round {r + 1}: stand-in (each surface's own caps, discrete) on realizations 0 .. "
                 f"{stand_goal - 1}")
         if todo:
-            loads = sorted({c.load for c in todo})
-            log(f"part 2 round {r + 1}: {len(todo)} full-field cases on {vset.ensemble_grid}^2 at load(s) "
-                + ", ".join(f"{k} (to {max(c.realization for c in todo if c.load == k) + 1})" for k in loads))
+            for kind, grid in (("ensemble", vset.ensemble_grid), ("pair", vset.n_grid)):
+                these = [c for c in todo if c.ensemble == (kind == "ensemble")]
+                if these:
+                    log(f"part 2 round {r + 1}: {len(these)} full-field {kind} cases on {grid}^2 at load(s) "
+                        + ", ".join(f"{k} (to {max(c.realization for c in these if c.load == k) + 1})"
+                                    for k in sorted({c.load for c in these})))
             for case, record in solve(todo).items():
-                state.grid_clean[case.realization, case.load] = record["resistance_clean"]
-                state.grid[:, :, case.realization, case.load] = np.asarray(record["resistance"], float)
+                rows = (state.grid_clean, state.grid) if case.ensemble else (state.pair_clean, state.pair)
+                rows[0][case.realization, case.load] = record["resistance_clean"]
+                rows[1][:, :, case.realization, case.load] = np.asarray(record["resistance"], float)
                 state.seconds[case.load] += record["seconds_total"]
                 state.seconds_cpu[case.load] += record.get("seconds_cpu", np.nan)
-            for k in loads:
-                state.grid_count[k] = max(c.realization for c in todo if c.load == k) + 1
+            for case in todo:
+                counts = state.grid_count if case.ensemble else state.pair_count
+                counts[case.load] = max(counts[case.load], case.realization + 1)
     return state
 
 
-def variables(vset: scene.ValidationSet, state: Part2, exact_clean: np.ndarray, exact: np.ndarray,
-              model: ModelEnsemble, stand_clean: np.ndarray, stand: np.ndarray,
-              force_normalized: np.ndarray) -> dict[str, tuple]:
+def variables(vset: scene.ValidationSet, state: Part2, model: ModelEnsemble, stand_clean: np.ndarray,
+              stand: np.ndarray, force_normalized: np.ndarray) -> dict[str, tuple]:
     """validate.nc's part 2 variables (:data:`pipeline.reference.variables.VARIABLES`, ``ensemble_*``)."""
     model_clean, model_ox = model_means(model)
     loads = len(force_normalized)
@@ -292,8 +338,7 @@ def variables(vset: scene.ValidationSet, state: Part2, exact_clean: np.ndarray, 
 
     def estimate(cell: tuple[int, int] | None, k: int) -> tuple[LogMean, LogMean]:
         use_stand = bool(stand_clean[k] if cell is None else stand[cell][k])
-        ref = exact_clean[:, k] if cell is None else exact[cell][:, k]
-        ff = statistics.two_phase_log_mean(state.proxy(ref, k, cell, use_stand), ref)
+        ff = statistics.two_phase_log_mean(state.proxy(k, cell, use_stand), state.exact(k, cell))
         return ff, (model_clean[k] if cell is None else model_ox[cell[0]][cell[1]][k])
 
     clean = [estimate(None, k) for k in range(loads)]
@@ -316,17 +361,28 @@ def variables(vset: scene.ValidationSet, state: Part2, exact_clean: np.ndarray, 
     mod_open = field(lambda f, m: m.open_fraction)
     target_clean = np.array([statistics.target(float(f), False) for f in force_normalized])
     target_ox = np.broadcast_to([statistics.target(float(f), True) for f in force_normalized], (X, A, loads))
-    n = max(int(state.grid_count.max()), state.stand_in_count, 1)
-    proxy_clean = np.where(stand_clean[None], state.stand_clean[:n], state.grid_clean[:n])
-    proxy = np.where(stand[:, :, None], state.stand[:, :, :n], state.grid[:, :, :n])
-    P = exact_clean.shape[0]
-    check = np.full(loads, np.nan)  # the ensemble grid against the main grid on part 1's realizations
+    n = max(int(state.grid_count.max()), state.stand_in_count, int(state.pair_count.max()), 1)
+
+    def rows(values: np.ndarray) -> np.ndarray:  # the realization axis (second last) cut or padded to n
+        out = np.full(values.shape[:-2] + (n, loads), np.nan)
+        m = min(n, values.shape[-2])
+        out[..., :m, :] = values[..., :m, :]
+        return out
+
+    proxy_clean = np.where(stand_clean[None], rows(state.stand_clean), rows(state.grid_clean))
+    proxy = np.where(stand[:, :, None], rows(state.stand), rows(state.grid))
+    check = np.full(loads, np.nan)  # the ensemble grid against the main grid on the pairs' realizations
     for k in np.flatnonzero(state.grid_count > 0):
-        check[k] = math.exp(statistics.log_mean(state.grid_clean[:P, k] / exact_clean[:, k]).mean)
+        P = min(state.grid_count[k], state.pair_count[k])
+        check[k] = math.exp(statistics.log_mean(state.grid_clean[:P, k] / state.pair_clean[:P, k]).mean)
     return {
         "ensemble_count_clean": variable("ensemble_count_clean", ref_count[0].astype(int)),
         "ensemble_count": variable("ensemble_count", ref_count[1].astype(int)),
         "ensemble_grid_cases": variable("ensemble_grid_cases", state.grid_count.copy()),
+        "ensemble_pairs": variable("ensemble_pairs", state.pair_count.copy()),
+        "resistance_pairs_clean": variable("resistance_pairs_clean", rows(state.pair_clean),
+                                           comment="+inf: open circuit; NaN: not solved"),
+        "resistance_pairs": variable("resistance_pairs", rows(state.pair), comment="+inf: open circuit; NaN: not solved"),
         "ensemble_stand_in_clean": variable("ensemble_stand_in_clean", stand_clean.astype(np.int8)),
         "ensemble_stand_in": variable("ensemble_stand_in", stand.astype(np.int8)),
         "resistance_ensemble_clean": variable("resistance_ensemble_clean", proxy_clean,

@@ -73,6 +73,12 @@ class ValidationSet:
     hurst, rms, short_wavelength, bandwidth_ratio
         The random process: Hurst exponent, height std (m), shortest wavelength (m) and the ratio
         of the longest to the shortest.
+    ensemble_grid, max_ensemble, max_pairs, model_realizations
+        Part 2: the grid of the full field's proxies (pixels), the most realizations of a load's
+        full-field ensemble and of its pairs (the full field on the main grid beside its proxy:
+        part 1's realizations, then added ones), and the validated scenario's oxide realizations.
+    clean_error, oxide_error
+        Part 2's goal for the standard error of ln ratio, clean and oxidized.
     device, solver
         Where the reference's cases compute (``cpu`` or ``gpu``) and with which solver (``tamaas``,
         CPU only, or ``g2tom``'s own: :mod:`pipeline.reference.devices`); they do not shape a
@@ -103,7 +109,8 @@ class ValidationSet:
     short_wavelength: float = 0.0
     bandwidth_ratio: float = 8.0
     ensemble_grid: int = 256
-    max_ensemble: int = 256
+    max_ensemble: int = 512
+    max_pairs: int = 32
     model_realizations: int = 1024
     clean_error: float = 0.03
     oxide_error: float = 0.05
@@ -158,10 +165,10 @@ def random_process_set(base: ValidationSet, rms: float, hurst: float = 0.8, band
 DEFAULT = ValidationSet()
 #: ``--quick``: 256^2 at 8 pixels per asperity spacing (a window of 2.3 mm, which holds the
 #: contact of both loads), two realizations, two loads, clean plus one oxidized case; part 2 on
-#: 128^2 with at most 6 full-field realizations per load and 64 of g2tom's.
+#: 128^2 with at most 6 full-field realizations per load (3 of them pairs) and 64 of g2tom's.
 QUICK = dataclasses.replace(DEFAULT, deltas=(1.0, -0.5), xi=(0.5,), lambdas=(5.0,), realizations=(0, 1),
                             n_grid=256, pixels_per_cell=8.0, convergence_grid=128, ensemble_grid=128,
-                            max_ensemble=6, model_realizations=64)
+                            max_ensemble=6, max_pairs=3, model_realizations=64)
 #: The random-process surface's approaches: 8 evenly spaced from 1.75 to -3.5 sigma (its summits'),
 #: the GW set's span of F' (0.067 .. 18.7; the GW set's approaches give F' 0.033 .. 15.4 there).
 RANDOM_LOADS = tuple(float(d) for d in np.linspace(1.75, -3.5, 8))

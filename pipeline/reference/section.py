@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from pipeline.reference.ensemble import STAND_IN_TOLERANCE
+from pipeline.reference.ensemble import MAX_ROUNDS, STAND_IN_TOLERANCE
 from pipeline.reference.summary import ratios
 
 __all__ = ["markdown", "CLEAN_LIMIT", "OXIDE_LIMIT", "MEANINGS"]
@@ -108,8 +108,10 @@ def _ensemble_flags(ds: xr.Dataset) -> list[str]:
     if loose:
         lines.append(f"Part 2's standard error of ln ratio misses the set's ({ds.attrs['scene_clean_error']:g} clean, "
                      f"{ds.attrs['scene_oxide_error']:g} oxidized) in {len(loose)} (case, load) pairs (more "
-                     f"realizations than the set's max_ensemble {ds.attrs['scene_max_ensemble']} allows, or part 1's "
-                     "pairs' own scatter, sd(ln main grid / proxy) / sqrt(P), which no count of proxies lowers): "
+                     f"realizations than the set's max_ensemble {ds.attrs['scene_max_ensemble']} allows, or the "
+                     "pairs' own scatter, sd(ln main grid / proxy) / sqrt(P), which no count of proxies lowers, at "
+                     f"the set's max_pairs {ds.attrs.get('scene_max_pairs', 'P')}, or the sizing's estimate of the "
+                     f"scatter after {MAX_ROUNDS} rounds): "
                      + "; ".join(loose) + ".")
     return lines
 
@@ -132,9 +134,10 @@ def _ensemble_table(ds: xr.Dataset) -> list[str]:
              + f"; oxidized: {int(ds['ensemble_model_count'])} realizations) against the full field's, each as the geometric mean of R over its conducting realizations at equal force; ratio ± the "
              "standard error of its log (both ensembles', in squares); ✓ within the accuracy target at that F', ✗ outside, "
              "no mark where the issue sets none (oxidized below F' 1). The full field's ensemble: N realizations, a "
-             "proxy on all N corrected by part 1's paired main-grid solves (two-phase; N = part 1's realizations: "
-             "those alone). Open circuits (R = +inf) are counted, full field / model, where any.", "",
-             "| F (N) | F' | N full field | " + " | ".join(label for label, _ in cells) + " |",
+             "proxy on all N corrected by P paired main-grid solves (two-phase: part 1's realizations, then more "
+             "where the proxy and the full field disagree, sized with the proxies at least cost; N = P: the pairs "
+             "alone). Open circuits (R = +inf) are counted, full field / model, where any.", "",
+             "| F (N) | F' | N full field (P pairs) | " + " | ".join(label for label, _ in cells) + " |",
              "|---|---|---|" + "---|" * len(cells)]
     for k in range(ds.sizes["load"]):
         row = []
@@ -150,8 +153,9 @@ def _ensemble_table(ds: xr.Dataset) -> list[str]:
                     text += f" (open {100 * ref_open:.0f} / {100 * mod_open:.0f} %)"
             row.append(text)
         counts = sorted({int(_at(ds, "ensemble_count", sel, k)) for _, sel in cells})
+        pairs = f" ({int(ds['ensemble_pairs'].values[k])})" if "ensemble_pairs" in ds else ""
         lines.append(f"| {ds['force'].values[k]:.4g} | {ds['force_normalized'].values[k]:.3g} | "
-                     f"{'/'.join(map(str, counts))} | " + " | ".join(row) + " |")
+                     f"{'/'.join(map(str, counts))}{pairs} | " + " | ".join(row) + " |")
     lines.append("")
     lines += _stand_in_notes(ds) + _grid_notes(ds)
     return lines
@@ -176,18 +180,18 @@ def _stand_in_notes(ds: xr.Dataset) -> list[str]:
                 "or the surface's asperities are not known.", ""]
     return [f"Stand-in: where part 1 shows the discrete solve of each surface's own caps (point model) within "
             f"{100 * STAND_IN_TOLERANCE:g} % of the full field at every realization, that solve is the full field's "
-            "proxy for the extra realizations (corrected by part 1's pairs): " + "; ".join(used) + ".", ""]
+            "proxy for the extra realizations (corrected by the pairs): " + "; ".join(used) + ".", ""]
 
 
 def _grid_notes(ds: xr.Dataset) -> list[str]:
-    """The ensemble grid against the main grid on part 1's realizations (clean), where it was used."""
+    """The ensemble grid against the main grid on the pairs' realizations (clean), where it was used."""
     check = ds["ensemble_grid_check_clean"].values
     f = ds["force_normalized"].values
     used = np.flatnonzero(np.isfinite(check))
     if not used.size:
         return []
     return [f"Ensemble grid ({ds.attrs['scene_ensemble_grid']}^2) against the main grid ({ds.attrs['scene_n_grid']}^2), "
-            "clean, geometric mean over part 1's realizations (the two-phase estimate removes this offset): "
+            "clean, geometric mean over the pairs' realizations (the two-phase estimate removes this offset): "
             + ", ".join(f"{check[k]:.4f} at F' {f[k]:.3g}" for k in used) + ".", ""]
 
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LogMean", "log_mean", "two_phase_log_mean", "ratio_error", "needed_count", "prior_log_sd",
+__all__ = ["LogMean", "log_mean", "two_phase_log_mean", "ratio_error", "allocation", "prior_log_sd",
            "target", "PRIOR_CLEAN_SD", "PRIOR_OXIDE_FACTOR", "CLEAN_TARGETS", "OXIDE_TARGETS"]
 
 #: Surface-to-surface scatter of the full field's clean ``ln R`` before any is measured: (F', sd)
@@ -153,32 +153,64 @@ def ratio_error(model: LogMean, reference: LogMean) -> float:
     return float(math.hypot(model.error, reference.error))
 
 
-def needed_count(proxy: np.ndarray, exact: np.ndarray, error: float, cap: int,
-                 prior_sd: float | None = None) -> int:
-    """Realizations the proxy needs for the two-phase estimate's standard error to reach ``error``.
+def allocation(proxy: np.ndarray, exact: np.ndarray, error: float, cap: int, pairs_cap: int, pair_cost: float,
+               prior_sd: float | None = None) -> tuple[int, int]:
+    """Realizations of the proxy (N) and pairs (P) for the two-phase standard error to reach ``error`` at least cost.
 
-    Solves ``var(d) / n + var(e) / P + 2 cov(d, e) / n <= error^2`` for the conducting count n
-    with the (co)variances of what is there, or ``prior_sd`` (of ``ln R``, no pairs yet) when
-    fewer than two proxies conduct; open circuits carry no ``ln R``, so the realizations to solve
-    are n over the share of the solved ones that conduct. At least P (``exact``'s length), at
-    most ``cap`` (also where the pairs' own ``var(e) / P`` leaves no room: more proxies cannot
-    help there).
+    With the (co)variances of what is there, per realization (open circuits carry no ``ln R``, so a
+    term is divided by the share of its values that conduct), the variance is ``A / N + B / P`` with
+    ``A = var(d) + 2 cov(d, e)`` (the proxy's share) and ``B = var(e)`` (the pairs'). A proxy costs 1,
+    a pair ``pair_cost`` more (the full field on the main grid beside its proxy). Minimizing
+    ``N + pair_cost P`` subject to ``A / N + B / P = error^2`` gives (Lagrange)
+    ``N = s sqrt(A) / error^2`` and ``P = s sqrt(B / pair_cost) / error^2`` with
+    ``s = sqrt(A) + sqrt(B pair_cost)``: more pairs where the proxy and the full field disagree, more
+    proxies where surfaces scatter. Then P is held within [``exact``'s length, ``pairs_cap``] and N
+    within [P, ``cap``], the other re-solved from the variance where one is held (N at its cap where
+    the pairs leave no room; P unchanged where the capped proxies leave none: no pair can help).
+    Fewer than two conducting proxies: N from ``prior_sd`` (of ``ln R``; the cap without one), P as
+    is; fewer than two conducting pairs: their scatter is unknown, P as is.
+
+    Returns
+    -------
+    tuple of int
+        (N, P): the proxy's realizations, the pairs' (N >= P >= ``exact``'s length).
     """
     exact = np.asarray(exact, float).ravel()
     floor = max(exact.size, 1)
+    pairs_cap = max(pairs_cap, floor)
     d, d_pair, e = _two_phase_terms(proxy, exact)
     if d.size < 2:
-        if prior_sd is None:
-            return int(cap)
-        return int(min(cap, max(floor, math.ceil((prior_sd / error) ** 2))))
+        n = cap if prior_sd is None else math.ceil((prior_sd / error) ** 2)
+        return int(min(cap, max(floor, n))), floor
+    V = error**2
     spread = np.var(d, ddof=1)
-    room = error**2
+    B = 0.0
     if e.size >= 2:
         spread += 2.0 * np.cov(d_pair, e)[0, 1]
-        room -= np.var(e, ddof=1) / e.size
-    if room <= 0:
-        return int(cap)
-    return int(min(cap, max(floor, math.ceil(spread / room * _count(proxy) / d.size))))
+        B = float(np.var(e, ddof=1)) * exact.size / e.size
+    A = max(float(spread), 0.0) * _count(proxy) / d.size
+
+    def proxies_for(pairs: float) -> float:  # N that reaches V with P pairs (inf: no N can)
+        room = V - B / pairs
+        return A / room if room > 0 else math.inf
+
+    def pairs_for(proxies: float) -> float:  # P that reaches V with N proxies
+        room = V - A / proxies
+        return B / room if room > 0 else math.inf
+
+    s = math.sqrt(A) + math.sqrt(B * pair_cost)
+    P = s * math.sqrt(B / pair_cost) / V
+    if P < floor or P > pairs_cap:
+        P = min(max(P, floor), pairs_cap)
+        N = proxies_for(P)
+    else:
+        N = s * math.sqrt(A) / V
+    if N > cap:
+        N, need = cap, pairs_for(cap)
+        if math.isfinite(need):  # else no count of pairs reaches it beside the capped proxies: P as it was
+            P = min(max(need, floor), pairs_cap)
+    P = int(min(pairs_cap, max(floor, math.ceil(P - 1e-9))))
+    return int(min(cap, max(P, math.ceil(N - 1e-9)))), P
 
 
 def _interpolated(points: tuple[tuple[float, float], ...], force_normalized: float, log_value: bool) -> float:

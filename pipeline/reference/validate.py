@@ -101,11 +101,13 @@ def plan_lines(vset: scene.ValidationSet, config: str = "paper", workers: int = 
         f"against the full field on {vset.ensemble_grid}^2 (probe {window.probe_grid(vset, True)}^2), "
         f"standard error of ln R <= {vset.clean_error:g} clean, {vset.oxide_error:g} oxidized; full-field "
         f"realizations per load from the prior scatter {est.ensemble_counts.tolist()} (at most {vset.max_ensemble}; "
-        f"resized from the measured scatter, {ensemble.MAX_ROUNDS} rounds at most): {est.ensemble} cases; {stand}",
+        f"corrected by part 1's {len(vset.realizations)} main-grid pairs, and up to {vset.max_pairs} where proxy and "
+        f"full field disagree; proxies and pairs resized from the measured scatter at least cost, "
+        f"{ensemble.MAX_ROUNDS} rounds at most): {est.ensemble} cases; {stand}",
         f"validate: estimated {format_duration(est.wall)} on {workers} worker(s) (cases: part 1 "
         f"{format_duration(est.seconds_part1)}, part 2 {format_duration(est.seconds_part2)} of one process; "
         f"g2tom {format_duration(est.seconds_g2tom)}); at most {format_duration(est.wall_cap)} should every load need "
-        f"{vset.max_ensemble} realizations (solver {vset.solver} on the {vset.device}; constants: seconds per "
+        f"{vset.max_ensemble} realizations and {vset.max_pairs} pairs (solver {vset.solver} on the {vset.device}; constants: seconds per "
         f"solve in pipeline/reference/cost.py)",
     ]
 
@@ -252,9 +254,10 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
         ratio_clean, ratio = summary.part1_ratios(g2tom, ref)
         stand_clean, stand = ensemble.admitted(vset, ratio_clean, ratio)
         state = ensemble.run_part2(vset, f, ref["resistance_clean"], ref["resistance"], model, stand_clean, stand,
+                                   cost.case_costs(vset, f),
                                    lambda todo: runner.solve(todo, "part 2"),
                                    lambda text: print(f"validate: {text}", file=stream, flush=True))
-    part2 = ensemble.variables(vset, state, ref["resistance_clean"], ref["resistance"], model, stand_clean, stand, f)
+    part2 = ensemble.variables(vset, state, model, stand_clean, stand, f)
     ds = summary.dataset(vset, everything, done, g2tom, default_of(config, model), part2)
     paths = [out / "validate.nc", out / "validate.md"]
     with atomic_path(paths[0]) as tmp:

@@ -76,6 +76,12 @@ VARIABLES: dict[str, Variable] = {
                                   "0: the full field on the ensemble grid, or part 1's alone"),
     "ensemble_stand_in": _v(_EX, "1", "1: the discrete solve of each surface's own caps stands in for the full "
                             "field beyond part 1's realizations; 0: the full field"),
+    "ensemble_pairs": _v("load", "1", "realizations of the full field on the main grid paired with their proxy at "
+                         "the load (part 1's, then part 2's added ones: realizations 0 .. P-1)"),
+    "resistance_pairs_clean": _v("ensemble_realization load", "ohm", "the full field's clean resistance on the "
+                                 "main grid per paired realization (part 1's and part 2's; NaN: not solved)"),
+    "resistance_pairs": _v("xi lambda ensemble_realization load", "ohm", "the full field's oxidized resistance on "
+                           "the main grid per paired realization (part 1's and part 2's; NaN: not solved)"),
     "resistance_ensemble_clean": _v("ensemble_realization load", "ohm", "part 2's proxy of the full field's clean "
                                     "resistance per realization (ensemble grid or stand-in; NaN: not solved)"),
     "resistance_ensemble": _v("xi lambda ensemble_realization load", "ohm", "part 2's proxy of the full field's "
@@ -118,7 +124,7 @@ VARIABLES: dict[str, Variable] = {
                                         "ensembles' in squares)"),
     "ensemble_target_clean": _v("load", "1", "allowed |clean ratio - 1| at the load's F' (accuracy target)"),
     "ensemble_target": _v(_EX, "1", "allowed |oxidized ratio - 1| at the load's F' (accuracy target; NaN: none)"),
-    "ensemble_grid_check_clean": _v("load", "1", "geometric mean over part 1's realizations of the ensemble "
+    "ensemble_grid_check_clean": _v("load", "1", "geometric mean over the pairs' realizations of the ensemble "
                                     "grid's clean R over the main grid's (NaN: no ensemble case)"),
 }
 
