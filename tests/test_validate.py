@@ -84,8 +84,11 @@ def test_default_and_quick_sets_meet_the_issue(surface) -> None:
     assert len(default.deltas) >= 8 and round(f[0], 3) <= 0.075 and f[-1] >= 18.0 and np.all(np.diff(f) > 0)
     assert set(default.xi) == {0.5, 0.7} and set(default.lambdas) == {1.0, 5.0} and len(default.realizations) >= 4
     assert (default.clean_error, default.oxide_error) == (0.03, 0.05)
-    counts = ensemble.prior_counts(default, f).max(axis=0)  # more realizations at light loads, fewer at heavy ones
+    N, P = ensemble.prior_allocation(default, f, cost.case_costs(default, f))
+    counts, pairs = N.max(axis=0), P.max(axis=0)  # more realizations at light loads, fewer at heavy ones
     assert counts[0] > 100 and np.all(np.diff(counts) <= 0) and counts[-1] == len(default.realizations)
+    assert pairs[0] > pairs[-1] == len(default.realizations)  # more pairs where the proxy is coarse against the spots
+    assert np.all(pairs <= default.max_pairs) and np.all(counts >= pairs)
     assert cost.estimate(default, f, 2, 60.0).wall <= 45 * 60
     assert quick.n_grid == 256 and len(quick.realizations) == 2 and len(quick.deltas) == 2
     assert len(quick.xi) * len(quick.lambdas) == 1
@@ -442,6 +445,15 @@ def test_realizations_are_sized_by_the_scatter_and_the_targets_are_the_issues() 
     exact = wide[:4]
     assert count(exact, exact, 0.03, 64)[0] <= 64  # at most the cap
     assert count(np.array([]), np.array([]), 0.03, 1000, prior_sd=0.3) == (100, 1)  # no scatter yet: the prior's
+    assert statistics.prior_log_sd(0.075, False) == pytest.approx(0.32)
+    assert statistics.prior_log_sd(1.5, True) == pytest.approx(0.42)
+    assert statistics.prior_log_sd(100.0, True) == pytest.approx(0.083)  # constant beyond the last point
+    assert statistics.prior_pairs_sd(0.01, True) == pytest.approx(0.17)
+    assert statistics.prior_pairs_sd(3.0, False) == pytest.approx(0.01)
+    for f, clean, oxide in ((0.075, 0.15, np.nan), (0.5, 0.08, np.nan), (1.0, 0.05, 0.10), (2.0, 0.05, 0.10),
+                            (5.0, 0.05, 0.07), (18.8, 0.05, 0.07)):
+        assert statistics.target(f, False) == pytest.approx(clean)
+        assert np.isnan(oxide) and np.isnan(statistics.target(f, True)) or statistics.target(f, True) == pytest.approx(oxide)
 
 
 def test_proxies_and_pairs_are_allocated_at_least_cost() -> None:
@@ -470,14 +482,6 @@ def test_proxies_and_pairs_are_allocated_at_least_cost() -> None:
     assert statistics.allocation(proxy, exact, 0.03, 10_000, 12, 4.0) == (10_000, 12)  # no count can: both caps
     same = proxy[:8].copy()  # the full field equal to its proxy: no pair beyond part 1's
     assert statistics.allocation(proxy, same, 0.03, 10_000, 200, 25.0)[1] == 8
-
-
-    assert statistics.prior_log_sd(0.075, False) == pytest.approx(0.32)
-    assert statistics.prior_log_sd(2.0, True) == pytest.approx(2 * 0.08)
-    for f, clean, oxide in ((0.075, 0.15, np.nan), (0.5, 0.08, np.nan), (1.0, 0.05, 0.10), (2.0, 0.05, 0.10),
-                            (5.0, 0.05, 0.07), (18.8, 0.05, 0.07)):
-        assert statistics.target(f, False) == pytest.approx(clean)
-        assert np.isnan(oxide) and np.isnan(statistics.target(f, True)) or statistics.target(f, True) == pytest.approx(oxide)
 
 
 def _bundled_with(model: str) -> str:

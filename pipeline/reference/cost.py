@@ -9,7 +9,8 @@ lightest and heaviest default load, scaled by (n / n_table)^3 from the nearest m
 and Polonsky-Keer iterations grow about as n, each costs ~n^2 log n). Cases run on ``workers``
 processes: the wall time is their summed time over the workers (at least the longest case).
 Part 2's later rounds size the ensembles from the measured scatter: the estimate is the first
-round's (from the prior: part 1's pairs alone), and ``wall_cap`` the bound with every load at
+round's (from the prior scatter of the realizations and of the pairs,
+:func:`pipeline.reference.ensemble.prior_allocation`), and ``wall_cap`` the bound with every load at
 ``max_ensemble`` proxies and ``max_pairs`` pairs (:func:`case_costs`: what a pair and a proxy cost). g2tom's side runs in the driver before the cases: part 1's
 discretizations (:data:`G2TOM_SECONDS` each), part 2's validated scenario (the project's own plan,
 :func:`pipeline.before_work.plan.estimate`, for its contact, oxide and cube stages) and, on the GW
@@ -62,9 +63,14 @@ G2TOM_SECONDS = 2.0
 #: The stand-in (the discrete solve of one surface's own caps and its resistances, the contact stage
 #: included), s per realization and load: 5.0 s for 64 realizations at 8 loads on the loaded machine.
 STAND_IN_SECONDS = 1e-2
-#: tamaas' CPU time of a case over g2tom's own solver's on NumPy: 1.88-2.10 over the default GW
-#: set's first 12 part-1 cases on 1024^2 (the same cases, 2026-11-27, the 2-core machine).
-G2TOM_CPU_SPEEDUP = 2.0
+#: The tables' (tamaas') time of a case over g2tom's own solver's CPU time on NumPy. Measured twice
+#: on the 2-core machine, 2026-11-27: 1.88-2.10 over the default GW set's first 12 part-1 cases on
+#: 1024^2 (tamaas and ours on the same cases, a loaded machine); then the tables over the CPU
+#: medians of the eight-surface default sets' cases (a quiet machine): 2.41-2.61 (GW) and 2.49-2.76
+#: (random process) per load on 1024^2, which carry most of the time; 1.7-1.9 (GW) and 2.8-2.9
+#: (random process, its 249^2 probe) on the 256^2 ensemble grid. 2.5 puts the plan within ~10 % of
+#: both default sets' measured totals.
+G2TOM_CPU_SPEEDUP = 2.5
 #: On a GPU: one contact step from rest up to 1024^2 and one punch, s (0.09-0.12 s and 0.019-0.025
 #: s on an H200, `g2tom bench --only gpu`, 2026-11-27), and the CPU's work of a case besides
 #: (medians of that run's validation: 0.29 s a 256^2 case, 0.47 s a 1024^2 one, 0.60 s a 512^2
@@ -121,9 +127,10 @@ class Estimate:
     ----------
     part1, convergence
         Part 1's cases on the main grid and on the convergence grid.
-    ensemble_counts
-        Part 2's first-round full-field realizations per load from the prior scatter (those beyond
-        part 1's solve ensemble cases; on the GW surface the stand-in can only lower them).
+    ensemble_counts, ensemble_pairs
+        Part 2's first-round full-field realizations and pairs per load from the prior scatter
+        (realizations beyond the pairs solve ensemble cases, pairs beyond part 1's main-grid cases;
+        on the GW surface the stand-in can only lower them).
     ensemble
         Part 2's first-round ensemble cases.
     seconds_part1, seconds_part2, seconds_g2tom
@@ -138,6 +145,7 @@ class Estimate:
     part1: int
     convergence: int
     ensemble_counts: np.ndarray
+    ensemble_pairs: np.ndarray
     ensemble: int
     seconds_part1: float
     seconds_part2: float
@@ -151,20 +159,25 @@ def estimate(vset: scene.ValidationSet, force_normalized: np.ndarray, workers: i
     """The plan's estimate (no case stored yet) at the loads' F' on ``workers`` processes;
     ``model_seconds``: the validated scenario's stages on the validation scene (s)."""
     part1 = cases_mod.plan_cases(vset)
-    counts = ensemble.prior_counts(vset, force_normalized).max(axis=0)
-    P = len(vset.realizations)
+    N, P = ensemble.prior_allocation(vset, force_normalized, case_costs(vset, force_normalized))
+    counts, pairs = N.max(axis=0), P.max(axis=0)
+    P0 = len(vset.realizations)
 
     def seconds(cases: list[cases_mod.Case]) -> list[float]:
         return [case_seconds(vset, c, float(force_normalized[c.load])) for c in cases]
 
-    def extra(per_load: np.ndarray) -> list[cases_mod.Case]:
-        return [c for k, n in enumerate(per_load) if n > P for c in cases_mod.ensemble_cases(vset, k, range(n))]
+    def extra(proxies: np.ndarray, paired: np.ndarray) -> list[cases_mod.Case]:
+        """Part 2's cases: proxies on the ensemble grid where they exceed the pairs, the added pairs."""
+        return [c for k, (n, p) in enumerate(zip(proxies, paired))
+                for c in (cases_mod.ensemble_cases(vset, k, range(n)) if n > p else [])
+                + cases_mod.pair_cases(vset, k, range(P0, p))]
 
     first = seconds(part1)
     s1 = sum(first)
-    second = seconds(extra(counts))
-    capped = seconds(extra(np.full(len(force_normalized), vset.max_ensemble))
-                     + [c for k in range(len(force_normalized)) for c in cases_mod.pair_cases(vset, k, range(P, vset.max_pairs))])
+    second = seconds(extra(counts, pairs))
+    loads = len(force_normalized)
+    most_pairs = max(P0, min(vset.max_pairs, vset.max_ensemble))
+    capped = seconds(extra(np.full(loads, vset.max_ensemble), np.full(loads, most_pairs)))
     stand = STAND_IN_SECONDS * len(force_normalized) * int(counts.max()) if vset.surface == "gw" else 0.0
     g2tom = G2TOM_SECONDS * len(vset.discretizations) * len(vset.models) + model_seconds + stand
 
@@ -172,5 +185,6 @@ def estimate(vset: scene.ValidationSet, force_normalized: np.ndarray, workers: i
         return g2tom + max((s1 + sum(part2)) / max(workers, 1), max(first + part2, default=0.0))
 
     return Estimate(part1=sum(c.oxide for c in part1), convergence=sum(not c.oxide for c in part1),
-                    ensemble_counts=counts, ensemble=len(second), seconds_part1=s1, seconds_part2=sum(second),
+                    ensemble_counts=counts, ensemble_pairs=pairs,
+                    ensemble=len(second), seconds_part1=s1, seconds_part2=sum(second),
                     seconds_g2tom=g2tom, wall=wall(second), wall_cap=wall(capped))

@@ -12,9 +12,9 @@ full field at that load and case, that solve (:func:`stand_in`, milliseconds a s
 would not exceed P, the pairs' full field is the ensemble (no proxy). N, and the pairs P
 (part 1's realizations, then part 2's added main-grid cases), are sized per load and case
 (:func:`plan_round`) for the ratio's standard error to reach the set's ``clean_error`` /
-``oxide_error``: first N from the prior scatter (:func:`statistics.prior_log_sd`), then, for at
-most :data:`MAX_ROUNDS` rounds in all, N and P together from the scatter of what was solved, at
-least cost (:func:`statistics.allocation`); at most ``max_ensemble`` and ``max_pairs``.
+``oxide_error`` at least cost: first from the prior scatter (:func:`prior_allocation`), then, for
+at most :data:`MAX_ROUNDS` rounds in all, from the scatter of what was solved
+(:func:`statistics.allocation`); at most ``max_ensemble`` and ``max_pairs``.
 Everything is deterministic given the stored cases, so a resumed run makes the same choices.
 
 The two ensembles share the oxide seed (realization k of the model and of the full field draw
@@ -45,7 +45,7 @@ from pipeline.stages import oxide as oxide_stage
 from pipeline.stages.cube_discrete import DiscretePool, clean_pool
 
 __all__ = ["STAND_IN_TOLERANCE", "STAND_IN", "MAX_ROUNDS", "ModelEnsemble", "validated_scenario", "model_ensemble",
-           "model_means", "describe", "admitted", "stand_in", "Part2", "CaseCosts", "plan_round", "prior_counts", "run_part2",
+           "model_means", "describe", "admitted", "stand_in", "Part2", "CaseCosts", "plan_round", "prior_allocation", "run_part2",
            "variables"]
 
 #: Part 1's largest |discrete / full field - 1| over every realization at a load and case that lets
@@ -220,21 +220,6 @@ def _full_field_error(vset: scene.ValidationSet, cell: tuple[int, int] | None, m
     return math.sqrt(max(share, (goal / 2.0) ** 2))
 
 
-def prior_counts(vset: scene.ValidationSet, force_normalized: np.ndarray,
-                 model_errors: Callable[[tuple[int, int] | None, int], float] | None = None) -> np.ndarray:
-    """Round 1's full-field realizations per load and cell (cell axis: clean, then xi x lambda),
-    from the prior scatter: ceil((prior sd / the full field's error share)^2) within [P, max_ensemble].
-    ``model_errors(cell, load)`` gives the model's standard error (default: half the target, as the plan assumes)."""
-    out = np.zeros((len(_cells(vset)), len(force_normalized)), int)
-    for c, cell in enumerate(_cells(vset)):
-        goal = vset.clean_error if cell is None else vset.oxide_error
-        for k, f in enumerate(force_normalized):
-            error = _full_field_error(vset, cell, model_errors(cell, k) if model_errors else goal / 2.0)
-            sd = statistics.prior_log_sd(float(f), oxidized=cell is not None)
-            out[c, k] = min(vset.max_ensemble, max(len(vset.realizations), math.ceil((sd / error) ** 2)))
-    return out
-
-
 @dataclass(frozen=True)
 class CaseCosts:
     """What one realization costs at each load, s: a pair (the full field on the main grid), a proxy
@@ -243,6 +228,28 @@ class CaseCosts:
     pair: np.ndarray
     grid: np.ndarray
     stand_in: float
+
+
+def prior_allocation(vset: scene.ValidationSet, force_normalized: np.ndarray, costs: CaseCosts,
+                     model_errors: Callable[[tuple[int, int] | None, int], float] | None = None
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Round 1's full-field realizations N and pairs P per cell and load (cell axis: clean, then xi x
+    lambda), from the prior scatter (:func:`statistics.prior_log_sd`, :func:`statistics.prior_pairs_sd`)
+    at least cost (:func:`statistics.cheapest`, a pair's cost over an ensemble-grid proxy's), within
+    [P, max_ensemble] and [part 1's realizations, max_pairs]. ``model_errors(cell, load)`` gives the
+    model's standard error (default: half the target, as the plan assumes)."""
+    N = np.zeros((len(_cells(vset)), len(force_normalized)), int)
+    P = np.zeros_like(N)
+    for c, cell in enumerate(_cells(vset)):
+        goal = vset.clean_error if cell is None else vset.oxide_error
+        for k, f in enumerate(force_normalized):
+            error = _full_field_error(vset, cell, model_errors(cell, k) if model_errors else goal / 2.0)
+            oxidized = cell is not None
+            N[c, k], P[c, k] = statistics.cheapest(
+                statistics.prior_log_sd(float(f), oxidized) ** 2, statistics.prior_pairs_sd(float(f), oxidized) ** 2,
+                error, vset.max_ensemble, min(vset.max_pairs, vset.max_ensemble), costs.pair[k] / costs.grid[k],
+                len(vset.realizations))
+    return N, P
 
 
 def plan_round(vset: scene.ValidationSet, state: Part2, first: bool, force_normalized: np.ndarray,
@@ -257,8 +264,9 @@ def plan_round(vset: scene.ValidationSet, state: Part2, first: bool, force_norma
     (:func:`pipeline.reference.statistics.allocation`, the pair's cost over the proxy's from ``costs``).
     """
     model_clean, model_ox = model
-    first_counts = prior_counts(vset, force_normalized, lambda cell, k: (
-        model_clean[k] if cell is None else model_ox[cell[0]][cell[1]][k]).error) if first else None
+    if first:
+        first_counts, first_pairs = prior_allocation(vset, force_normalized, costs, lambda cell, k: (
+            model_clean[k] if cell is None else model_ox[cell[0]][cell[1]][k]).error)
     todo: list[Case] = []
     stand_goal = state.stand_in_count
     for k in range(len(force_normalized)):
@@ -266,7 +274,7 @@ def plan_round(vset: scene.ValidationSet, state: Part2, first: bool, force_norma
         for c, cell in enumerate(_cells(vset)):
             use_stand = bool(stand_clean[k] if cell is None else stand[cell][k])
             if first:
-                need, pairs = int(first_counts[c, k]), pair_goal
+                need, pairs = int(first_counts[c, k]), (pair_goal if use_stand else int(first_pairs[c, k]))
             else:
                 m = model_clean[k] if cell is None else model_ox[cell[0]][cell[1]][k]
                 proxy_cost = costs.stand_in if use_stand else costs.grid[k]

@@ -110,7 +110,7 @@ class ValidationSet:
     bandwidth_ratio: float = 8.0
     ensemble_grid: int = 256
     max_ensemble: int = 512
-    max_pairs: int = 32
+    max_pairs: int = 24
     model_realizations: int = 1024
     clean_error: float = 0.03
     oxide_error: float = 0.05

@@ -28,16 +28,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LogMean", "log_mean", "two_phase_log_mean", "ratio_error", "allocation", "prior_log_sd",
-           "target", "PRIOR_CLEAN_SD", "PRIOR_OXIDE_FACTOR", "CLEAN_TARGETS", "OXIDE_TARGETS"]
+__all__ = ["LogMean", "log_mean", "two_phase_log_mean", "ratio_error", "allocation", "cheapest", "prior_log_sd",
+           "prior_pairs_sd", "target", "PRIOR_CLEAN_SD", "PRIOR_OXIDE_SD", "PRIOR_PAIRS_CLEAN_SD",
+           "PRIOR_PAIRS_OXIDE_SD", "CLEAN_TARGETS", "OXIDE_TARGETS"]
 
 #: Surface-to-surface scatter of the full field's clean ``ln R`` before any is measured: (F', sd)
 #: measured outside the project on 16 GW-cap surfaces (issue 30): 0.32 at F' 0.075, 0.15 at 0.5,
 #: 0.08 at 2, ~0.03 from 5. Interpolated in (ln F', ln sd), constant outside.
 PRIOR_CLEAN_SD = ((0.075, 0.32), (0.5, 0.15), (2.0, 0.08), (5.0, 0.03))
-#: The oxidized scatter before any is measured, in units of the clean one (an assumption, not a
-#: measurement: the run replaces every prior by the scatter of what it solved after its first round).
-PRIOR_OXIDE_FACTOR = 2.0
+#: The oxidized scatter before any is measured: (F', sd of ln R per realization, the proxy's share
+#: A of :func:`allocation`, the largest of the four oxide cases), the larger of the two default
+#: sets' (GW and random process, 8 + 32 or 26 pairs and 40-512 proxies a load, 2026-11-27): oxide
+#: switching whole spots on and off scatters more than the surfaces do, ~0.6 up to F' 0.5 where the
+#: clean is 0.15-0.3. Interpolated in (ln F', ln sd), constant outside.
+PRIOR_OXIDE_SD = ((0.075, 0.75), (0.5, 0.6), (1.5, 0.42), (3.5, 0.30), (6.0, 0.14), (18.8, 0.083))
+#: The pairs' scatter before any is measured: (F', sd of ln(full field / proxy) per realization, the
+#: pairs' share B of :func:`allocation`), clean and the largest oxidized, measured with
+#: :data:`PRIOR_OXIDE_SD` (the 256^2 proxy against the 1024^2 full field: spots a few pixels wide,
+#: cut by oxide, at light loads).
+PRIOR_PAIRS_CLEAN_SD = ((0.075, 0.042), (0.5, 0.01))
+PRIOR_PAIRS_OXIDE_SD = ((0.075, 0.17), (0.45, 0.12), (1.5, 0.032), (3.5, 0.025), (6.0, 0.01))
 #: Issue 29's targets on the default's ensemble against the full field, |ratio - 1| at F': clean
 #: 15 % at F' 0.075, 8 % at 0.5, 5 % from F' 1; oxidized 10 % at F' 1-2 and 7 % from F' 5 (none
 #: below F' 1). Between two stated points the target is interpolated in ln F'; outside, the
@@ -159,16 +169,10 @@ def allocation(proxy: np.ndarray, exact: np.ndarray, error: float, cap: int, pai
 
     With the (co)variances of what is there, per realization (open circuits carry no ``ln R``, so a
     term is divided by the share of its values that conduct), the variance is ``A / N + B / P`` with
-    ``A = var(d) + 2 cov(d, e)`` (the proxy's share) and ``B = var(e)`` (the pairs'). A proxy costs 1,
-    a pair ``pair_cost`` more (the full field on the main grid beside its proxy). Minimizing
-    ``N + pair_cost P`` subject to ``A / N + B / P = error^2`` gives (Lagrange)
-    ``N = s sqrt(A) / error^2`` and ``P = s sqrt(B / pair_cost) / error^2`` with
-    ``s = sqrt(A) + sqrt(B pair_cost)``: more pairs where the proxy and the full field disagree, more
-    proxies where surfaces scatter. Then P is held within [``exact``'s length, ``pairs_cap``] and N
-    within [P, ``cap``], the other re-solved from the variance where one is held (N at its cap where
-    the pairs leave no room; P unchanged where the capped proxies leave none: no pair can help).
-    Fewer than two conducting proxies: N from ``prior_sd`` (of ``ln R``; the cap without one), P as
-    is; fewer than two conducting pairs: their scatter is unknown, P as is.
+    ``A = var(d) + 2 cov(d, e)`` (the proxy's share) and ``B = var(e)`` (the pairs'):
+    :func:`cheapest` then sizes both. Fewer than two conducting proxies: N from ``prior_sd`` (of
+    ``ln R``; the cap without one), P as is; fewer than two conducting pairs: their scatter is
+    unknown, taken as 0 (P as is).
 
     Returns
     -------
@@ -177,18 +181,33 @@ def allocation(proxy: np.ndarray, exact: np.ndarray, error: float, cap: int, pai
     """
     exact = np.asarray(exact, float).ravel()
     floor = max(exact.size, 1)
-    pairs_cap = max(pairs_cap, floor)
     d, d_pair, e = _two_phase_terms(proxy, exact)
     if d.size < 2:
         n = cap if prior_sd is None else math.ceil((prior_sd / error) ** 2)
         return int(min(cap, max(floor, n))), floor
-    V = error**2
     spread = np.var(d, ddof=1)
     B = 0.0
     if e.size >= 2:
         spread += 2.0 * np.cov(d_pair, e)[0, 1]
         B = float(np.var(e, ddof=1)) * exact.size / e.size
     A = max(float(spread), 0.0) * _count(proxy) / d.size
+    return cheapest(A, B, error, cap, pairs_cap, pair_cost, floor)
+
+
+def cheapest(A: float, B: float, error: float, cap: int, pairs_cap: int, pair_cost: float,
+             floor: int) -> tuple[int, int]:
+    """The cheapest (N, P) with ``A / N + B / P <= error^2``: N proxies at cost 1, P pairs at ``pair_cost``.
+
+    Minimizing ``N + pair_cost P`` subject to ``A / N + B / P = error^2`` gives (Lagrange)
+    ``N = s sqrt(A) / error^2`` and ``P = s sqrt(B / pair_cost) / error^2`` with
+    ``s = sqrt(A) + sqrt(B pair_cost)``: more pairs where the proxy and the full field disagree, more
+    proxies where realizations scatter. Then P is held within [``floor``, ``pairs_cap``] and N
+    within [P, ``cap``], the other re-solved from the variance where one is held (N at its cap where
+    the pairs leave no room; P unchanged where the capped proxies leave none: no pair can help).
+    ``A``, ``B``: variances of ``ln R`` per realization (>= 0); ``floor``: the pairs there are.
+    """
+    pairs_cap = max(pairs_cap, floor)
+    V = error**2
 
     def proxies_for(pairs: float) -> float:  # N that reaches V with P pairs (inf: no N can)
         room = V - B / pairs
@@ -222,10 +241,16 @@ def _interpolated(points: tuple[tuple[float, float], ...], force_normalized: flo
 
 
 def prior_log_sd(force_normalized: float, oxidized: bool) -> float:
-    """The assumed surface-to-surface sd of ``ln R`` at F' before any is measured
-    (:data:`PRIOR_CLEAN_SD`, times :data:`PRIOR_OXIDE_FACTOR` oxidized)."""
-    sd = _interpolated(PRIOR_CLEAN_SD, force_normalized, log_value=True)
-    return sd * (PRIOR_OXIDE_FACTOR if oxidized else 1.0)
+    """The assumed realization-to-realization sd of ``ln R`` at F' before any is measured
+    (:data:`PRIOR_CLEAN_SD`, :data:`PRIOR_OXIDE_SD` oxidized)."""
+    return _interpolated(PRIOR_OXIDE_SD if oxidized else PRIOR_CLEAN_SD, force_normalized, log_value=True)
+
+
+def prior_pairs_sd(force_normalized: float, oxidized: bool) -> float:
+    """The assumed sd of ``ln(full field / proxy)`` at F' before any pair is measured
+    (:data:`PRIOR_PAIRS_CLEAN_SD`, :data:`PRIOR_PAIRS_OXIDE_SD`)."""
+    return _interpolated(PRIOR_PAIRS_OXIDE_SD if oxidized else PRIOR_PAIRS_CLEAN_SD, force_normalized,
+                         log_value=True)
 
 
 def target(force_normalized: float, oxidized: bool) -> float:

@@ -100,9 +100,10 @@ def plan_lines(vset: scene.ValidationSet, config: str = "paper", workers: int = 
         f"validate: part 2 (the default's ensemble, unpaired): {ensemble.describe(ensemble.validated_scenario(vset, config))} "
         f"against the full field on {vset.ensemble_grid}^2 (probe {window.probe_grid(vset, True)}^2), "
         f"standard error of ln R <= {vset.clean_error:g} clean, {vset.oxide_error:g} oxidized; full-field "
-        f"realizations per load from the prior scatter {est.ensemble_counts.tolist()} (at most {vset.max_ensemble}; "
-        f"corrected by part 1's {len(vset.realizations)} main-grid pairs, and up to {vset.max_pairs} where proxy and "
-        f"full field disagree; proxies and pairs resized from the measured scatter at least cost, "
+        f"realizations per load from the prior scatter {est.ensemble_counts.tolist()} (at most {vset.max_ensemble}), "
+        f"corrected by main-grid pairs {est.ensemble_pairs.tolist()} (part 1's {len(vset.realizations)}, then more where "
+        f"proxy and full field disagree, at most {vset.max_pairs}; proxies and pairs sized together at least cost, "
+        f"resized from the measured scatter, "
         f"{ensemble.MAX_ROUNDS} rounds at most): {est.ensemble} cases; {stand}",
         f"validate: estimated {format_duration(est.wall)} on {workers} worker(s) (cases: part 1 "
         f"{format_duration(est.seconds_part1)}, part 2 {format_duration(est.seconds_part2)} of one process; "
