@@ -87,7 +87,7 @@ VARIABLES: dict[str, Variable] = {
     "resistance_ensemble": _v("xi lambda ensemble_realization load", "ohm", "part 2's proxy of the full field's "
                               "oxidized resistance per realization (ensemble grid or stand-in; NaN: not solved)"),
     "ensemble_reference_clean": _v("load", "ohm", "the full field's clean ensemble geometric mean of R "
-                                   "(two-phase: proxy mean plus part 1's paired correction)"),
+                                   "(two-phase: proxy mean plus the main-grid pairs' correction)"),
     "ensemble_reference_clean_standard_error": _v("load", "1", "standard error of ln of the full field's clean "
                                                   "ensemble geometric mean"),
     "ensemble_reference": _v(_EX, "ohm", "the full field's oxidized ensemble geometric mean of R over conducting "
