@@ -176,7 +176,7 @@ def estimate(vset: scene.ValidationSet, force_normalized: np.ndarray, workers: i
     s1 = sum(first)
     second = seconds(extra(counts, pairs))
     loads = len(force_normalized)
-    most_pairs = max(P0, min(vset.max_pairs, vset.max_ensemble))
+    most_pairs = max(P0, vset.pairs_cap)
     capped = seconds(extra(np.full(loads, vset.max_ensemble), np.full(loads, most_pairs)))
     stand = STAND_IN_SECONDS * len(force_normalized) * int(counts.max()) if vset.surface == "gw" else 0.0
     g2tom = G2TOM_SECONDS * len(vset.discretizations) * len(vset.models) + model_seconds + stand

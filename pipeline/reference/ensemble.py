@@ -247,7 +247,7 @@ def prior_allocation(vset: scene.ValidationSet, force_normalized: np.ndarray, co
             oxidized = cell is not None
             N[c, k], P[c, k] = statistics.cheapest(
                 statistics.prior_log_sd(float(f), oxidized) ** 2, statistics.prior_pairs_sd(float(f), oxidized) ** 2,
-                error, vset.max_ensemble, min(vset.max_pairs, vset.max_ensemble), costs.pair[k] / costs.grid[k],
+                error, vset.max_ensemble, vset.pairs_cap, costs.pair[k] / costs.grid[k],
                 len(vset.realizations))
     return N, P
 
@@ -270,7 +270,7 @@ def plan_round(vset: scene.ValidationSet, state: Part2, first: bool, force_norma
     todo: list[Case] = []
     stand_goal = state.stand_in_count
     for k in range(len(force_normalized)):
-        grid_need, pair_goal, any_grid = 0, int(state.pair_count[k]), False
+        grid_need, pair_goal, any_grid, any_stand = 0, int(state.pair_count[k]), False, False
         for c, cell in enumerate(_cells(vset)):
             use_stand = bool(stand_clean[k] if cell is None else stand[cell][k])
             if first:
@@ -280,18 +280,17 @@ def plan_round(vset: scene.ValidationSet, state: Part2, first: bool, force_norma
                 proxy_cost = costs.stand_in if use_stand else costs.grid[k]
                 need, pairs = statistics.allocation(state.proxy(k, cell, use_stand), state.exact(k, cell),
                                                     _full_field_error(vset, cell, m.error), vset.max_ensemble,
-                                                    min(vset.max_pairs, vset.max_ensemble),
+                                                    vset.pairs_cap,
                                                     costs.pair[k] / proxy_cost)
             pair_goal = max(pair_goal, pairs)
             if use_stand:
-                stand_goal = max(stand_goal, need)
+                any_stand, stand_goal = True, max(stand_goal, need)
             else:
-                any_grid = True
-                grid_need = max(grid_need, need)
+                any_grid, grid_need = True, max(grid_need, need)
         grid_goal = 0
         if any_grid and (state.grid_count[k] > 0 or grid_need > pair_goal):
             grid_goal = max(grid_need, pair_goal)  # every pair has its proxy
-        if any(stand_clean[k] if cell is None else stand[cell][k] for cell in _cells(vset)):
+        if any_stand:  # every pair has its stand-in
             stand_goal = max(stand_goal, pair_goal)
         if grid_goal > state.grid_count[k]:
             todo += ensemble_cases(vset, k, range(state.grid_count[k], grid_goal))

@@ -119,6 +119,11 @@ class ValidationSet:
     solver: str = "g2tom"
 
     @property
+    def pairs_cap(self) -> int:
+        """Part 2's most pairs a load: ``max_pairs``, at most ``max_ensemble`` (each pair has its proxy)."""
+        return min(self.max_pairs, self.max_ensemble)
+
+    @property
     def pixel(self) -> float:
         """Pixel side of the main grid, m."""
         return 1.0 / math.sqrt(self.eta) / self.pixels_per_cell
