@@ -264,3 +264,36 @@ def test_proximal_rounds_solve_a_convex_problem_like_newton():
     assert rounds[0].delta == pytest.approx(newton[0].delta, abs=1e-9 * SIGMA)
     np.testing.assert_allclose(rounds[0].s, newton[0].s, rtol=0, atol=1e-9 * SIGMA)
     assert rounds[1] == pytest.approx(newton[1], rel=1e-6)  # the stiffness of the original equations
+
+
+def test_a_cap_under_a_sphere_touches_where_the_two_paraboloids_meet() -> None:
+    """The cap's first contact against a brute-force minimum of the gap along its radial line, and
+    its Hertz radius against the gap's curvature there (both within 1e-6)."""
+    radius, beta = 5e-3, 60e-6
+    profile_radius, cap = dc.sphere_cap_geometry(radius, beta)
+    for r in (0.0, 2e-4, 6.3e-4, 1.5e-3):
+        t = np.linspace(-2e-3, 3e-3, 2_000_001)
+        gap = (t - r) ** 2 / (2 * beta) + t**2 / (2 * radius)
+        least = int(np.argmin(gap))
+        assert gap[least] == pytest.approx(r * r / (2 * profile_radius), rel=1e-6, abs=1e-15)
+        h = t[1] - t[0]
+        curvature = (gap[least + 1] - 2 * gap[least] + gap[least - 1]) / h**2
+        assert 1.0 / curvature == pytest.approx(cap, rel=1e-6)
+    # the tip-evaluated sphere understates the interference by r^2 beta / (2 R (R + beta))
+    r = 6.3e-4
+    assert r * r / (2 * radius) - r * r / (2 * profile_radius) == pytest.approx(4.7e-7, rel=0.01)
+
+
+def test_one_cap_under_a_sphere_is_hertz_of_the_two_curvatures() -> None:
+    """One cap off the axis, solved by the stage's geometry: force and radius are Hertz's with
+    radius beta R / (beta + R) at the interference z - r^2 / (2 (R + beta)) - delta."""
+    radius, beta, e_star = 5e-3, 60e-6, 1.154e11
+    profile_radius, cap = dc.sphere_cap_geometry(radius, beta)
+    x, z = 6.3e-4, 30e-6
+    sol = dc.solve_forces(dc.Asperities(np.array([x]), np.array([0.0]), np.array([z])),
+                          lambda r: r * r / (2 * profile_radius), np.array([10.0, 100.0]), e_star, cap,
+                          dc.coupling_floor(beta, 20e-6))
+    w = (np.array([10.0, 100.0]) / (4 / 3 * e_star * np.sqrt(cap))) ** (2 / 3)
+    np.testing.assert_allclose(sol.interference[:, 0], w, rtol=1e-8)
+    np.testing.assert_allclose(sol.delta, z - x * x / (2 * profile_radius) - w, rtol=1e-8)
+    np.testing.assert_allclose(sol.radius(cap)[:, 0], np.sqrt(cap * w), rtol=1e-8)

@@ -66,8 +66,9 @@ def _contact(scenario: Scenario) -> tuple[dict[str, Any], np.ndarray]:
     forces = fields(scenario, r, sols)["force"]
     radius, served = contact_discrete.domain(scenario, min(scenario.deltas))
     rough = scenario.roughness
+    cap_profile, cap_radius = contact_discrete.cap_contact(scenario)
     settings = {"seed": scenario.oxide.seed, "radius": radius, "eta": rough.eta, "sigma": rough.sigma,
-                "beta": rough.beta, "e_star": scenario.material.E_star, "profile": contact_discrete.indenter(scenario),
+                "beta": cap_radius, "e_star": scenario.material.E_star, "profile": cap_profile,
                 "forces": forces, "floor": dc.coupling_floor(rough.beta, rough.sigma)}
     per_load, iterations, candidates, touching = [], [], [], []
     for k in range(SURFACES):
@@ -82,8 +83,8 @@ def _contact(scenario: Scenario) -> tuple[dict[str, Any], np.ndarray]:
         slow_seconds, slow, _ = _solve(settings, k, all_candidates=True)
         kernel = dc.interaction_kernel(asp.x, asp.y, settings["floor"])
         rho = scenario.material.rho
-        r_fast = resistances(kernel, fast.radius(rough.beta), rho)
-        r_slow = resistances(kernel, slow.radius(rough.beta), rho)
+        r_fast = resistances(kernel, fast.radius(cap_radius), rho)
+        r_slow = resistances(kernel, slow.radius(cap_radius), rho)
         reference.append({"surface": k, "asperities": asp.size, "seconds": round(fast_seconds, 4),
                           "all_candidates_seconds": round(slow_seconds, 4),
                           "speedup": round(slow_seconds / fast_seconds, 2),

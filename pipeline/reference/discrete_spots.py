@@ -45,10 +45,11 @@ def surface_pool(vset: scene.ValidationSet, realization: int, forces: np.ndarray
         raise ValueError(f"{DISCRETE} needs the GW surface, whose asperities are known (not {vset.surface!r})")
     tips = surfaces.gw_asperities(vset.side, vset.eta, vset.sigma, vset.beta, scene.surface_stream(vset, realization))
     floor = dc.coupling_floor(vset.beta, vset.sigma)
-    sol = dc.solve_forces(dc.Asperities(tips.x, tips.y, tips.z), lambda r: r * r / (2.0 * vset.radius),
-                          np.asarray(forces, float), vset.e_star, vset.beta, floor)
+    radius, cap = dc.sphere_cap_geometry(vset.radius, vset.beta)
+    sol = dc.solve_forces(dc.Asperities(tips.x, tips.y, tips.z), lambda r: r * r / (2.0 * radius),
+                          np.asarray(forces, float), vset.e_star, cap, floor)
     touching = np.flatnonzero((sol.interference > 0).any(axis=0))
-    return DiscretePool(tips.x[None, touching], tips.y[None, touching], sol.radius(vset.beta)[None][..., touching],
+    return DiscretePool(tips.x[None, touching], tips.y[None, touching], sol.radius(cap)[None][..., touching],
                         np.array([touching.size]), floor)
 
 

@@ -27,7 +27,7 @@ from pipeline.physics import discrete_contact as dc
 from pipeline.physics.indenter import profile
 from pipeline.stages.schema import SCHEMA
 
-__all__ = ["CHUNK", "DOMAIN_MARGIN", "indenter", "domain", "surface_spots", "solve_pool", "variables"]
+__all__ = ["CHUNK", "DOMAIN_MARGIN", "indenter", "cap_contact", "domain", "surface_spots", "solve_pool", "variables"]
 
 #: Surfaces per dask task.
 CHUNK = 16
@@ -45,11 +45,22 @@ def indenter(scenario: Scenario) -> Callable[[np.ndarray], np.ndarray]:
                              punch_radius=ind.punch_radius, edge_radius=ind.edge_radius)
 
 
+def cap_contact(scenario: Scenario) -> tuple[Callable[[np.ndarray], np.ndarray], float]:
+    """The profile to evaluate at each cap's tip and the caps' Hertz radius (m): under a sphere the
+    two paraboloids' exact first contact (:func:`pipeline.physics.discrete_contact.sphere_cap_geometry`);
+    under a cone or a flat punch the indenter's own profile and the caps' radius beta."""
+    ind, beta = scenario.indenter, scenario.roughness.beta
+    if ind.shape != "sphere":
+        return indenter(scenario), beta
+    radius, cap = dc.sphere_cap_geometry(ind.radius, beta)
+    return functools.partial(profile, shape="sphere", radius=radius), cap
+
+
 def domain(scenario: Scenario, lowest_delta: float) -> tuple[float, float]:
     """The asperity disc's radius (m) and the lowest approach (m) it serves."""
     rough = scenario.roughness
     served = lowest_delta - DOMAIN_MARGIN * rough.sigma
-    return dc.domain_radius(indenter(scenario), served, rough.sigma, rough.eta, DOMAIN_OUTSIDE), served
+    return dc.domain_radius(cap_contact(scenario)[0], served, rough.sigma, rough.eta, DOMAIN_OUTSIDE), served
 
 
 def surface_spots(settings: dict[str, Any], k: int) -> dict[str, np.ndarray]:
@@ -81,9 +92,10 @@ def solve_pool(scenario: Scenario, forces: np.ndarray, lowest_delta: float,
     """Every surface of the pool at ``forces`` (N); returns the per-surface results and the disc radius (m)."""
     rough = scenario.roughness
     radius, served = domain(scenario, lowest_delta)
+    cap_profile, cap_radius = cap_contact(scenario)
     settings = {"seed": scenario.oxide.seed, "radius": radius, "served": served, "eta": rough.eta,
-                "sigma": rough.sigma, "beta": rough.beta, "e_star": scenario.material.E_star,
-                "profile": indenter(scenario), "forces": np.asarray(forces, float),
+                "sigma": rough.sigma, "beta": cap_radius, "e_star": scenario.material.E_star,
+                "profile": cap_profile, "forces": np.asarray(forces, float),
                 "floor": dc.coupling_floor(rough.beta, rough.sigma)}
     shared = dask.delayed(settings)
     n = scenario.contact.surfaces
