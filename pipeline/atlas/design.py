@@ -32,7 +32,7 @@ from pipeline.config import AUTO, ConfigError, Loading, Scenario
 from pipeline.physics.groups import surface_from_groups
 
 __all__ = ["AtlasDesign", "Scene", "SceneEstimate", "design_scenes", "scene_scenario", "plan_atlas",
-           "format_atlas_plan", "wall_seconds", "BUDGET_SECONDS", "POOL_TOUCHING", "MIN_POOL"]
+           "format_atlas_plan", "wall_seconds", "schedule", "ALONE_EFFICIENCY", "BUDGET_SECONDS", "POOL_TOUCHING", "MIN_POOL"]
 
 #: Smallest distance of a held-out scene from a design node, in grid steps of each log coordinate.
 MIN_HELDOUT_GAP = 0.25
@@ -211,6 +211,11 @@ def plan_atlas(base: Scenario, design: AtlasDesign, workers: int | None = 1) -> 
 BUDGET_SECONDS = 3 * 3600.0
 
 
+#: A scene's speed-up per worker when it runs alone on every worker (its surfaces and fields spread
+#: over them) against one thread: d20 of the full atlas, ~7,955 s on one thread, ~4,160 s on two.
+ALONE_EFFICIENCY = 0.95
+
+
 def wall_seconds(seconds: list[float], parallel: int) -> float:
     """Wall time of scenes of these CPU times, one per task on ``parallel`` workers, longest first
     (each worker takes the next scene when free)."""
@@ -220,9 +225,31 @@ def wall_seconds(seconds: list[float], parallel: int) -> float:
     return max(loads)
 
 
+def schedule(seconds: list[float], parallel: int) -> tuple[int, float]:
+    """How many of the longest scenes run alone first, each on all ``parallel`` workers, and the
+    wall time (s) of that schedule: the count that gives the least wall time, the rest then one
+    per task, longest first (:func:`wall_seconds`).
+
+    One scene longer than the others' share keeps one worker busy while the rest idle (the full
+    atlas's d20 ran ~2 h on one core, the other 32 scenes ~70 min on the other); alone on every
+    worker it takes ``seconds / (parallel * ALONE_EFFICIENCY)``. On one worker none runs alone.
+    """
+    order = sorted(seconds, reverse=True)
+    best = (0, wall_seconds(order, parallel))
+    if parallel <= 1:
+        return best
+    first = 0.0
+    for k in range(1, len(order)):
+        first += order[k - 1] / (parallel * ALONE_EFFICIENCY)
+        wall = first + wall_seconds(order[k:], parallel)
+        if wall < best[1]:
+            best = (k, wall)
+    return best
+
+
 def format_atlas_plan(estimates: list[SceneEstimate], parallel: int = 1) -> list[str]:
-    """One line per scene, the total and the wall time on ``parallel`` concurrent scenes against
-    :data:`BUDGET_SECONDS`."""
+    """One line per scene, the total and the wall time on ``parallel`` concurrent scenes
+    (:func:`schedule`) against :data:`BUDGET_SECONDS`."""
     lines = [f"{'scene':6s} {'mu':>8s} {'Pi':>8s} {'cells':>6s} {'touching':>9s} {'pool':>5s} {'fields':>7s} "
              f"{'memory':>10s} {'time':>10s}"]
     for e in estimates:
@@ -238,10 +265,11 @@ def format_atlas_plan(estimates: list[SceneEstimate], parallel: int = 1) -> list
                      f"{e.seconds:8.3g} s")
     runnable = [e for e in estimates if not e.problem]
     total = sum(e.seconds for e in runnable)
-    wall = wall_seconds([e.seconds for e in runnable], parallel)
+    alone, wall = schedule([e.seconds for e in runnable], parallel)
+    first = f", the longest {alone} alone on all of them first" if alone else ""
     lines.append(f"{len(runnable)} of {len(estimates)} scenes runnable, {total:.3g} s of one thread in all, about "
-                 f"{wall / 3600:.3g} h on {parallel} concurrent scene(s) (touching: expected asperities in contact at "
-                 f"the heaviest step; fields: oxide realizations x lambda)")
+                 f"{wall / 3600:.3g} h on {parallel} concurrent scene(s){first} (touching: expected asperities in "
+                 f"contact at the heaviest step; fields: oxide realizations x lambda)")
     if wall > BUDGET_SECONDS:
         worst = sorted(runnable, key=lambda e: -e.seconds)[:3]
         lines.append(f"over the {BUDGET_SECONDS / 3600:g} h budget by {wall / BUDGET_SECONDS:.3g} x; the costliest scenes: "

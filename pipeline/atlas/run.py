@@ -27,7 +27,7 @@ from pathlib import Path
 import xarray as xr
 
 from pipeline.atlas.design import (AtlasDesign, Scene, SceneEstimate, design_scenes, format_atlas_plan, plan_atlas,
-                                   scene_scenario)
+                                   scene_scenario, schedule)
 from pipeline.atlas.schema import ATLAS, SCALARS
 from pipeline.compute import ComputeOptions, in_turn
 from pipeline.config import ConfigError, Loading, Scenario
@@ -206,9 +206,9 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
     options
         ``scheduler`` or ``workers`` > 1: a dask.distributed cluster, one single-threaded scene per
         task; otherwise the scenes run one after the other in this process. A scene that runs alone
-        (the one left of a resumed atlas, the invariance twin, or every scene without a cluster)
-        computes with ``options`` itself: a resumed atlas with one long scene left no longer keeps
-        all but one core idle.
+        (the one left of a resumed atlas, the invariance twin, every scene without a cluster, or
+        one of the longest that :func:`pipeline.atlas.design.schedule` runs alone first because it
+        would outlast the others' share) computes with ``options`` itself, on every worker.
 
     Raises
     ------
@@ -228,24 +228,30 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
     if refused:
         e = refused[0]
         raise ConfigError(f"atlas scene {e.scene.name} (mu {e.scene.mu:.4g}, Pi {e.scene.Pi:.4g}): {e.problem}")
+    workers = 1 if options.scheduler is None and not (options.workers and options.workers > 1) else (
+        options.workers or 1)
+    left = [e for e in estimates if e.scene in pending]
     if pending:  # the plan's total for what is left (the whole table: `g2tom plan --atlas`)
-        workers = 1 if options.scheduler is None and not (options.workers and options.workers > 1) else (
-            options.workers or 1)
-        left = [e for e in estimates if e.scene in pending]
         for line in format_atlas_plan(left, workers)[1 + len(left):]:  # the total, and the budget if over
             print(f"atlas: plan: {line}", file=sys.stderr)
     by_name = {s.name: s for s in scenes}
-    # a scene that runs alone (one left, one after another, the twin) computes on everything asked for
+    # a scene that runs alone (one left, one after another, the twin, or one that would outlast the
+    # others' share: `schedule`) computes on everything asked for
     alone = ComputeOptions(scheduler=options.scheduler, workers=options.workers, progress=False)
+    ordered = longest_first(pending, estimates)
+    first = schedule([e.seconds for e in left], workers)[0] if len(pending) > 1 else 0
+    for k, scene in enumerate(ordered[:first], 1):
+        _line(k, len(pending), *_run_scene(base, scene, data_dir, None, alone), scene)
+    rest = [s for s in pending if s not in ordered[:first]]
     with ExitStack() as stack:
-        client = _client(stack, options) if len(pending) > 1 else None
+        client = _client(stack, options) if len(rest) > 1 else None
         if client is None:
-            for k, scene in enumerate(pending, 1):
+            for k, scene in enumerate(rest, first + 1):
                 _line(k, len(pending), *_run_scene(base, scene, data_dir, None, alone), scene)
         else:
-            done = in_turn(client, functools.partial(_run_scene, base), longest_first(pending, estimates),
-                           lambda s: f"atlas-{s.name}", data_dir)
-            for k, (name, seconds) in enumerate(done, 1):
+            done = in_turn(client, functools.partial(_run_scene, base), ordered[first:], lambda s: f"atlas-{s.name}",
+                           data_dir)
+            for k, (name, seconds) in enumerate(done, first + 1):
                 _line(k, len(pending), name, seconds, by_name[name])
     if twin_pending:  # the invariance check: equal (mu, Pi), other dimensions
         _line(1, 1, *_run_scene(twin_base(base), twin, data_dir, twin_loading, alone), twin)
