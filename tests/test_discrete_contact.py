@@ -297,3 +297,43 @@ def test_one_cap_under_a_sphere_is_hertz_of_the_two_curvatures() -> None:
     np.testing.assert_allclose(sol.interference[:, 0], w, rtol=1e-8)
     np.testing.assert_allclose(sol.delta, z - x * x / (2 * profile_radius) - w, rtol=1e-8)
     np.testing.assert_allclose(sol.radius(cap)[:, 0], np.sqrt(cap * w), rtol=1e-8)
+
+
+@pytest.mark.parametrize("shape, params", [
+    ("sphere", {"radius": 5e-3}),
+    ("cone", {"cone_angle": 0.3}),
+    ("cone", {"cone_angle": 0.01}),
+    ("flat_punch", {"punch_radius": 1e-3, "edge_radius": 2e-3}),
+])
+def test_a_caps_gap_is_the_least_over_the_line_through_both_axes(shape, params) -> None:
+    """`cap_gap` against a brute-force minimum of (t - r)^2 / (2 beta) + z(|t|) over t, the indenter's
+    own profile, at caps on the apex or face, near it and far out (within 1e-9 of the largest gap)."""
+    from pipeline.physics.indenter import profile
+
+    beta = 60e-6
+    t = np.linspace(-4e-3, 4e-3, 4_000_001)
+    z = profile(np.abs(t), shape, **params)
+    for r in (0.0, 5e-6, 2e-5, 3e-4, 1.2e-3, 2.5e-3):
+        brute = float(np.min((t - r) ** 2 / (2 * beta) + z))
+        assert float(dc.cap_gap(np.array([r]), shape, beta, **params)[0]) == pytest.approx(brute, rel=1e-6, abs=1e-13)
+    # never above the tip-evaluated profile; equal to it only where the indenter is flat under the cap
+    r = np.linspace(0.0, 2.5e-3, 11)
+    assert np.all(dc.cap_gap(r, shape, beta, **params) <= profile(r, shape, **params) + 1e-18)
+
+
+def test_the_stage_places_caps_by_their_first_contact_with_every_indenter() -> None:
+    """The stage's gap and Hertz radius are the physics' closed forms for the scenario's indenter:
+    a cone of slope s lowers every flank cap's gap by s^2 beta / 2, a sphere's radius is beta R / (beta + R)."""
+    from pipeline.config import load_scenario
+    from pipeline.stages.contact_discrete import cap_contact
+
+    cone = load_scenario("paper", {"indenter.shape": "cone", "indenter.cone_angle": 0.2})
+    gap, radius = cap_contact(cone)
+    s, beta = np.tan(0.2), cone.roughness.beta
+    assert radius == beta
+    assert gap(np.array([1e-3]))[0] == pytest.approx(s * 1e-3 - s * s * beta / 2, rel=1e-12)
+    sphere = load_scenario("paper")
+    gap, radius = cap_contact(sphere)
+    big_r = sphere.indenter.radius
+    assert radius == pytest.approx(beta * big_r / (beta + big_r), rel=1e-12)
+    assert gap(np.array([6e-4]))[0] == pytest.approx(6e-4**2 / (2 * (big_r + beta)), rel=1e-12)

@@ -56,6 +56,8 @@ __all__ = [
     "DiscreteContact",
     "coupling_floor",
     "sphere_cap_geometry",
+    "cap_gap",
+    "cap_radius",
     "interaction_kernel",
     "domain_radius",
     "draw_asperities",
@@ -147,6 +149,39 @@ def sphere_cap_geometry(radius: float, beta: float) -> tuple[float, float]:
     interference by ``r^2 beta / (2 R (R + beta))`` (0.47 um at r = 0.63 mm for beta 60 um, R 5 mm).
     """
     return radius + beta, beta * radius / (beta + radius)
+
+
+def cap_gap(r: np.ndarray, shape: str, beta: float, *, radius: float = 10e-3, cone_angle: float = 0.01,
+            punch_radius: float = 1e-3, edge_radius: float = 10e-3) -> np.ndarray:
+    """The least gap between a paraboloidal cap (tip radius ``beta``, m) whose tip lies at distance
+    ``r`` (m) from the axis and the indenter (shapes and parameters of
+    :func:`pipeline.physics.indenter.profile`), above the cap's tip height: ``min_t (t - r)^2 / (2 beta)
+    + z(|t|)`` along the line through both axes, m. A cap's rigid interference is its tip height
+    minus this minus the approach.
+
+    Closed forms: a sphere ``r^2 / (2 (R + beta))`` (:func:`sphere_cap_geometry`); a cone of slope
+    ``s = tan(angle)`` ``s r - s^2 beta / 2`` where the cap touches its flank (``r >= s beta``), else
+    ``r^2 / (2 beta)`` (on the apex); a flat punch ``(r - b)^2 / (2 (R_e + beta))`` beyond its face
+    (``r > b``), 0 on it.
+    """
+    r = np.asarray(r, dtype=float)
+    if shape == "sphere":
+        return r * r / (2.0 * sphere_cap_geometry(radius, beta)[0])
+    if shape == "cone":
+        s = np.tan(cone_angle)
+        return np.where(r >= s * beta, s * r - 0.5 * s * s * beta, r * r / (2.0 * beta))
+    if shape == "flat_punch":
+        excess = np.maximum(r - punch_radius, 0.0)
+        return excess * excess / (2.0 * (edge_radius + beta))
+    raise ValueError(f"shape = {shape!r} is not allowed: must be sphere, cone or flat_punch")
+
+
+def cap_radius(shape: str, beta: float, *, radius: float = 10e-3) -> float:
+    """The caps' Hertz radius, m: ``beta R / (beta + R)`` under a sphere (both curvatures add); ``beta``
+    under a cone or a flat punch, whose faces are flat (the punch's rounded edge curves only
+    radially, a non-axisymmetric contact left at ``beta``: its radial curvature is ``1 / R_e``,
+    ``R_e`` the edge radius, against the cap's ``1 / beta``)."""
+    return sphere_cap_geometry(radius, beta)[1] if shape == "sphere" else beta
 
 
 def coupling_floor(beta: float, sigma: float) -> float:

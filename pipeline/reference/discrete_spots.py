@@ -12,6 +12,7 @@ itself, surface by surface: the caps' point-load coupling, the resistance model 
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 import xarray as xr
@@ -45,9 +46,10 @@ def surface_pool(vset: scene.ValidationSet, realization: int, forces: np.ndarray
         raise ValueError(f"{DISCRETE} needs the GW surface, whose asperities are known (not {vset.surface!r})")
     tips = surfaces.gw_asperities(vset.side, vset.eta, vset.sigma, vset.beta, scene.surface_stream(vset, realization))
     floor = dc.coupling_floor(vset.beta, vset.sigma)
-    radius, cap = dc.sphere_cap_geometry(vset.radius, vset.beta)
-    sol = dc.solve_forces(dc.Asperities(tips.x, tips.y, tips.z), lambda r: r * r / (2.0 * radius),
-                          np.asarray(forces, float), vset.e_star, cap, floor)
+    cap = dc.cap_radius("sphere", vset.beta, radius=vset.radius)
+    gap = functools.partial(dc.cap_gap, shape="sphere", beta=vset.beta, radius=vset.radius)
+    sol = dc.solve_forces(dc.Asperities(tips.x, tips.y, tips.z), gap, np.asarray(forces, float), vset.e_star, cap,
+                          floor)
     touching = np.flatnonzero((sol.interference > 0).any(axis=0))
     return DiscretePool(tips.x[None, touching], tips.y[None, touching], sol.radius(cap)[None][..., touching],
                         np.array([touching.size]), floor)

@@ -24,10 +24,9 @@ import xarray as xr
 from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
 from pipeline.physics import discrete_contact as dc
-from pipeline.physics.indenter import profile
 from pipeline.stages.schema import SCHEMA
 
-__all__ = ["CHUNK", "DOMAIN_MARGIN", "indenter", "cap_contact", "domain", "surface_spots", "solve_pool", "variables"]
+__all__ = ["CHUNK", "DOMAIN_MARGIN", "cap_contact", "domain", "surface_spots", "solve_pool", "variables"]
 
 #: Surfaces per dask task.
 CHUNK = 16
@@ -38,22 +37,14 @@ DOMAIN_MARGIN = 1.0
 DOMAIN_OUTSIDE = 1e-6
 
 
-def indenter(scenario: Scenario) -> Callable[[np.ndarray], np.ndarray]:
-    """The indenter profile z(r) (m) of ``scenario`` as a picklable function."""
-    ind = scenario.indenter
-    return functools.partial(profile, shape=ind.shape, radius=ind.radius, cone_angle=ind.cone_angle,
-                             punch_radius=ind.punch_radius, edge_radius=ind.edge_radius)
-
-
 def cap_contact(scenario: Scenario) -> tuple[Callable[[np.ndarray], np.ndarray], float]:
-    """The profile to evaluate at each cap's tip and the caps' Hertz radius (m): under a sphere the
-    two paraboloids' exact first contact (:func:`pipeline.physics.discrete_contact.sphere_cap_geometry`);
-    under a cone or a flat punch the indenter's own profile and the caps' radius beta."""
+    """The least gap (m) above each cap's tip as a function of its distance from the axis, and the
+    caps' Hertz radius (m): the cap's exact first contact with the indenter
+    (:func:`pipeline.physics.discrete_contact.cap_gap`, :func:`~pipeline.physics.discrete_contact.cap_radius`)."""
     ind, beta = scenario.indenter, scenario.roughness.beta
-    if ind.shape != "sphere":
-        return indenter(scenario), beta
-    radius, cap = dc.sphere_cap_geometry(ind.radius, beta)
-    return functools.partial(profile, shape="sphere", radius=radius), cap
+    gap = functools.partial(dc.cap_gap, shape=ind.shape, beta=beta, radius=ind.radius, cone_angle=ind.cone_angle,
+                            punch_radius=ind.punch_radius, edge_radius=ind.edge_radius)
+    return gap, dc.cap_radius(ind.shape, beta, radius=ind.radius)
 
 
 def domain(scenario: Scenario, lowest_delta: float) -> tuple[float, float]:
