@@ -49,6 +49,8 @@ from typing import Callable
 
 import numpy as np
 
+from pipeline.physics import indenter
+
 __all__ = [
     "ASPERITIES_TAG",
     "Asperities",
@@ -151,29 +153,27 @@ def sphere_cap_geometry(radius: float, beta: float) -> tuple[float, float]:
     return radius + beta, beta * radius / (beta + radius)
 
 
-def cap_gap(r: np.ndarray, shape: str, beta: float, *, radius: float = 10e-3, cone_angle: float = 0.01,
-            punch_radius: float = 1e-3, edge_radius: float = 10e-3) -> np.ndarray:
+def cap_gap(r: np.ndarray, shape: str, beta: float, **dimensions: float) -> np.ndarray:
     """The least gap between a paraboloidal cap (tip radius ``beta``, m) whose tip lies at distance
-    ``r`` (m) from the axis and the indenter (shapes and parameters of
-    :func:`pipeline.physics.indenter.profile`), above the cap's tip height: ``min_t (t - r)^2 / (2 beta)
-    + z(|t|)`` along the line through both axes, m. A cap's rigid interference is its tip height
-    minus this minus the approach.
+    ``r`` (m) from the axis and the indenter (``shape`` and its ``dimensions`` as
+    :func:`pipeline.physics.indenter.profile` takes them), above the cap's tip height:
+    ``min_t (t - r)^2 / (2 beta) + z(|t|)`` along the line through both axes, m. A cap's rigid
+    interference is its tip height minus this minus the approach.
 
-    Closed forms: a sphere ``r^2 / (2 (R + beta))`` (:func:`sphere_cap_geometry`); a cone of slope
-    ``s = tan(angle)`` ``s r - s^2 beta / 2`` where the cap touches its flank (``r >= s beta``), else
-    ``r^2 / (2 beta)`` (on the apex); a flat punch ``(r - b)^2 / (2 (R_e + beta))`` beyond its face
-    (``r > b``), 0 on it.
+    Closed forms, each the indenter's own profile with other dimensions: a sphere of radius
+    ``R + beta`` (:func:`sphere_cap_geometry`); a flat punch whose edge radius is ``R_e + beta``; a
+    cone of slope ``s = tan(angle)`` lowered by ``s^2 beta / 2`` where the cap touches its flank
+    (``r >= s beta``), ``r^2 / (2 beta)`` on the apex.
     """
     r = np.asarray(r, dtype=float)
     if shape == "sphere":
-        return r * r / (2.0 * sphere_cap_geometry(radius, beta)[0])
-    if shape == "cone":
-        s = np.tan(cone_angle)
-        return np.where(r >= s * beta, s * r - 0.5 * s * s * beta, r * r / (2.0 * beta))
+        return indenter.profile(r, shape, radius=sphere_cap_geometry(dimensions["radius"], beta)[0])
     if shape == "flat_punch":
-        excess = np.maximum(r - punch_radius, 0.0)
-        return excess * excess / (2.0 * (edge_radius + beta))
-    raise ValueError(f"shape = {shape!r} is not allowed: must be sphere, cone or flat_punch")
+        return indenter.profile(r, shape, punch_radius=dimensions["punch_radius"],
+                                edge_radius=dimensions["edge_radius"] + beta)
+    z = indenter.profile(r, shape, **dimensions)  # the cone (an unknown shape is refused there)
+    s = np.tan(dimensions["cone_angle"])
+    return np.where(r >= s * beta, z - 0.5 * s * s * beta, r * r / (2.0 * beta))
 
 
 def cap_radius(shape: str, beta: float, *, radius: float = 10e-3) -> float:
