@@ -95,6 +95,8 @@ def figure(ds: xr.Dataset, path: Path) -> Path:
                               marker=".", label=f"g2tom: {str(d).replace('_', ' ')}, {m}")
             _ensembles(ax, ds, sel, f, scale)
             ax.set(title=title, xlabel=LABELS["force_normalized"])
+            if np.ptp(f) == 0:  # one load step (--steps): a factor of 2 either side, not an empty axis
+                ax.set_xlim(f[0] / 2.0, f[0] * 2.0)
             plain_log_ticks(ax.xaxis)
             plain_log_ticks(ax.yaxis)
             ax.grid(True, which="major", alpha=0.3)

@@ -15,7 +15,7 @@ from pipeline.cli.main import main
 from pipeline.config import ConfigError
 from pipeline.reference import cases, cost, ensemble, scene, statistics
 from analysis.figures_validate import figure
-from pipeline.reference.validate import chosen_set, run_validation
+from pipeline.reference.validate import Part2Precision, chosen_set, run_validation
 
 TINY = dataclasses.replace(scene.QUICK, radius=1e-3, deltas=(1.0, 0.0), realizations=(0, 1), n_grid=96,
                            pixels_per_cell=4.0, convergence_grid=48, ensemble_grid=48, max_ensemble=4,
@@ -347,6 +347,53 @@ def test_realizations_and_loads_override_the_set_and_bad_values_exit_2(tmp_path,
     monkeypatch.setattr(validate, "run_validation", record)
     assert main(["validate", "--quick", "--no-progress", "--realizations", "2", "--data-dir", str(tmp_path)]) == 0
     assert seen["progress"] is False and seen["vset"].realizations == (0, 1) and seen["vset"].n_grid == 256
+
+
+def test_steps_and_part2_precision_reach_the_set_and_bad_values_exit_2(tmp_path, monkeypatch, capsys) -> None:
+    full = chosen_set(False, "random_process")
+    vset = chosen_set(False, "random_process", steps=(5, 4),
+                      precision=Part2Precision(standard_error=(0.01, 0.02), max_ensemble=1024, max_pairs=64,
+                                               model_realizations=4096))
+    assert vset.deltas == full.deltas[3:5]  # the set's 4th and 5th steps, lightest first, whatever the order given
+    assert (vset.clean_error, vset.oxide_error, vset.max_ensemble, vset.max_pairs, vset.model_realizations) == (
+        0.01, 0.02, 1024, 64, 4096)
+    assert dataclasses.replace(vset, deltas=full.deltas, clean_error=0.03, oxide_error=0.05, max_ensemble=512,
+                               max_pairs=24, model_realizations=1024) == full  # nothing else changed
+    assert chosen_set(False, loads=3, steps=(3,)).deltas == (-3.0,)  # steps of the --loads set
+    bad = ((["--steps", "9"], "--steps = 9 is out of range: must be distinct load steps 1 .. 8"),
+           (["--steps", "1,1"], "--steps = 1,1 is out of range"),
+           (["--steps", "2.5"], "--steps = '2.5' is not allowed: must be whole load-step numbers"),
+           (["--steps", "two"], "--steps = 'two' is not a number"),
+           (["--standard-error", "0"], "--standard-error = 0.0 is out of range: must be in (0, 0.5]"),
+           (["--standard-error", "nan"], "--standard-error = nan is out of range"),
+           (["--standard-error", "0.01,0.6"], "--standard-error = 0.6 is out of range"),
+           (["--standard-error", "0.1,0.1,0.1"], "must be CLEAN or CLEAN,OXIDIZED"),
+           (["--max-realizations", "1"], "--max-realizations = 1 is out of range: must be >= 2"),
+           (["--max-pairs", "1"], "--max-pairs = 1 is out of range: must be >= 2"),
+           (["--model-realizations", "8"], "--model-realizations = 8 is out of range: must be >= 16"))
+    for argv, expect in bad:
+        assert main(["validate", "--data-dir", str(tmp_path), *argv]) == 2
+        err = capsys.readouterr().err
+        assert expect in err and err.count("\n") == 1 and "Traceback" not in err, argv
+    assert not (tmp_path / "validate").exists()
+    assert main(["validate", "--plan", "--surface", "random_process", "--steps", "4,5", "--standard-error", "0.01",
+                 "--max-realizations", "1024", "--max-pairs", "64", "--model-realizations", "4096",
+                 "--data-dir", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "2 loads delta/sigma [-0.5, -1.25], F' 3.32, 6.1" in out and "contact.surfaces 4096" in out
+    assert "standard error of ln R <= 0.01 clean, 0.01 oxidized" in out and "(at most 1024)" in out
+    assert "at most 64;" in out and not (tmp_path / "validate").exists()
+
+
+def test_a_run_of_one_load_step_draws_its_figure_without_warnings(tmp_path) -> None:
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # one F' gave a singular log axis: divide by zero in matplotlib
+        paths = run_validation(dataclasses.replace(TINY, deltas=TINY.deltas[1:]), tmp_path, stream=io.StringIO(),
+                               draw=figure)
+    assert paths[-1].name == "validate.png" and paths[-1].stat().st_size > 0
+    assert xr.open_dataset(paths[0]).sizes["load"] == 1
 
 
 def _same(a: xr.Dataset, b: xr.Dataset) -> None:

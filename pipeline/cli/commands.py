@@ -17,6 +17,7 @@ from pipeline.errors import StaleInputError
 
 if TYPE_CHECKING:
     from pipeline.compute import ComputeOptions
+    from pipeline.reference.validate import Part2Precision
 
 __all__ = ["STAGES", "compute_options", "stage", "run", "figures", "report", "bench", "stamp", "params", "plan",
            "predict", "atlas", "roughness", "validate"]
@@ -268,6 +269,34 @@ def roughness(args: argparse.Namespace, scenario: Scenario) -> None:
     roughness_cli(args)
 
 
+def _steps(text: str | None) -> tuple[int, ...] | None:
+    """``--steps`` as load-step numbers (ConfigError naming a value that is not a whole number)."""
+    if text is None:
+        return None
+    from pipeline.cli.parsing import number_list
+
+    values = number_list("--steps", text)
+    if not all(v.is_integer() for v in values):
+        raise ConfigError(f"--steps = {text!r} is not allowed: must be whole load-step numbers, 1 = the lightest")
+    return tuple(int(v) for v in values)
+
+
+def _precision(args: argparse.Namespace) -> "Part2Precision":
+    """Part 2's precision from ``--standard-error`` (CLEAN[,OXIDIZED]) and the realization caps."""
+    from pipeline.cli.parsing import number_list
+    from pipeline.reference.validate import Part2Precision
+
+    error = None
+    if args.standard_error is not None:
+        values = number_list("--standard-error", args.standard_error)
+        if values.size > 2:
+            raise ConfigError(f"--standard-error = {args.standard_error!r} is not allowed: must be CLEAN or "
+                              "CLEAN,OXIDIZED")
+        error = (float(values[0]), float(values[-1]))
+    return Part2Precision(standard_error=error, max_ensemble=args.max_realizations, max_pairs=args.max_pairs,
+                          model_realizations=args.model_realizations)
+
+
 def validate(args: argparse.Namespace, scenario: Scenario) -> None:
     """The full-field reference against g2tom (pipeline.reference); the extra is checked first."""
     from pipeline.reference import missing_extra
@@ -280,7 +309,8 @@ def validate(args: argparse.Namespace, scenario: Scenario) -> None:
 
     from pipeline.reference.devices import resolve, solver_for
 
-    vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads)
+    vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads,
+                      steps=_steps(args.steps), precision=_precision(args))
     try:
         device = resolve(args.device)
         vset = dataclasses.replace(vset, device=device, solver=solver_for(args.solver, device))

@@ -17,6 +17,7 @@ import xarray as xr
 
 from pipeline.before_work.preflight import check_output_file
 from pipeline.config import ConfigError, Scenario, read_input_text
+from pipeline.cli.parsing import number_list
 from pipeline.predict.answer import choose_surrogate, predict_with
 from pipeline.predict.atlas import NOT_IN_ATLAS
 from pipeline.predict.domain import with_measured_roughness
@@ -24,14 +25,6 @@ from pipeline.predict.queries import OUTPUT_COLUMNS, check_values
 from pipeline.stages.surrogate_file import SurrogateTables
 
 __all__ = ["predict_cli", "to_csv", "to_json", "to_table", "INPUT_ALIASES", "TABLE_COLUMNS"]
-
-
-def _parse_list(option: str, text: str) -> np.ndarray:
-    items = [t.strip() for t in text.split(",")]
-    try:
-        return np.array([float(t) for t in items])
-    except ValueError:
-        raise ConfigError(f"{option} = {text!r} is not a number or a comma-separated list of numbers") from None
 
 
 def _cli_queries(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -44,7 +37,7 @@ def _cli_queries(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, np.n
     missing = [k for k, v in options.items() if v is None]
     if missing:
         raise ConfigError(f"{', '.join(missing)} missing: give --force, --xi and --lambda (comma-separated lists) or --csv FILE")
-    values = [_parse_list(k, v) for k, v in options.items()]
+    values = [number_list(k, v) for k, v in options.items()]
     sizes = {v.size for v in values} - {1}
     if len(sizes) > 1:
         counts = ", ".join(f"{k} {v.size}" for k, v in zip(options, values))

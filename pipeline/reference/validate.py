@@ -42,7 +42,7 @@ FORCE_AGREEMENT = 1e-4
 SERIAL = ComputeOptions(workers=1, progress=False)
 
 __all__ = ["available_discretizations", "default_of", "plan_lines", "format_validate_plan", "run_validation",
-           "chosen_set", "output_folder", "SURFACES", "CaseRunner", "SERIAL"]
+           "chosen_set", "Part2Precision", "output_folder", "SURFACES", "CaseRunner", "SERIAL"]
 
 
 def available_discretizations(surface: str = "gw") -> tuple[str, ...]:
@@ -276,17 +276,61 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
 SURFACES = ("gw", "random_process")
 
 
+@dataclasses.dataclass(frozen=True)
+class Part2Precision:
+    """Part 2's precision, where the set's defaults are not enough (``--standard-error``,
+    ``--max-realizations``, ``--max-pairs``, ``--model-realizations``): None keeps the set's.
+
+    Attributes
+    ----------
+    standard_error
+        Goal of the standard error of ln ratio, (clean, oxidized), each in (0, 0.5].
+    max_ensemble, max_pairs
+        Most full-field realizations (proxies) and most main-grid pairs a load, >= 2.
+    model_realizations
+        The validated scenario's surfaces and oxide realizations, >= 16.
+    """
+
+    standard_error: tuple[float, float] | None = None
+    max_ensemble: int | None = None
+    max_pairs: int | None = None
+    model_realizations: int | None = None
+
+    def changes(self) -> dict[str, Any]:
+        """The set's fields this precision replaces, each checked (ConfigError naming option, value, range)."""
+        out: dict[str, Any] = {}
+        if self.standard_error is not None:
+            for value in self.standard_error:
+                if not (isinstance(value, float) and 0.0 < value <= 0.5):
+                    raise ConfigError(f"--standard-error = {value!r} is out of range: must be in (0, 0.5] "
+                                      "(the standard error of ln R, clean[,oxidized])")
+            out["clean_error"], out["oxide_error"] = self.standard_error
+        for option, field, value, least in (("--max-realizations", "max_ensemble", self.max_ensemble, 2),
+                                            ("--max-pairs", "max_pairs", self.max_pairs, 2),
+                                            ("--model-realizations", "model_realizations", self.model_realizations, 16)):
+            if value is None:
+                continue
+            if value < least:
+                raise ConfigError(f"{option} = {value} is out of range: must be >= {least}")
+            out[field] = value
+        return out
+
+
 def chosen_set(quick: bool, surface: str = "gw", realizations: int | None = None,
-               loads: int | None = None) -> scene.ValidationSet:
+               loads: int | None = None, steps: tuple[int, ...] | None = None,
+               precision: Part2Precision = Part2Precision()) -> scene.ValidationSet:
     """The default or the quick set on the chosen surface, with every discretization this g2tom offers;
     ``realizations`` (surfaces 0 .. N-1) and ``loads`` (steps evenly spaced in delta/sigma over the
-    set's range, lightest first) override the set's.
+    set's range, lightest first) override the set's; ``steps`` keeps only those of its load steps
+    (1 = the lightest; like ``realizations`` and ``loads``, another set in the same output folder
+    replaces the stored one); ``precision`` tightens or loosens part 2.
 
     Raises
     ------
     ConfigError
         On an unknown surface, fewer than two realizations (part 2 corrects its ensembles by part
-        1's pairs, whose scatter needs two) or two loads.
+        1's pairs, whose scatter needs two) or two loads, a step outside the set's, or a precision
+        out of range.
     """
     if surface not in SURFACES:
         raise ConfigError(f"--surface {surface!r} is not allowed: must be one of {', '.join(SURFACES)}")
@@ -300,11 +344,19 @@ def chosen_set(quick: bool, surface: str = "gw", realizations: int | None = None
         base = scene.random_process_set(base, rms=scene.RANDOM.rms)
         if not quick:
             base = dataclasses.replace(base, deltas=scene.RANDOM.deltas)
-    changes: dict = {"discretizations": available_discretizations(surface)}
+    changes: dict = {"discretizations": available_discretizations(surface), **precision.changes()}
     if realizations is not None:
         changes["realizations"] = tuple(range(realizations))
+    deltas = base.deltas
     if loads is not None:
-        changes["deltas"] = tuple(float(d) for d in np.linspace(max(base.deltas), min(base.deltas), loads))
+        deltas = tuple(float(d) for d in np.linspace(max(base.deltas), min(base.deltas), loads))
+    if steps is not None:
+        bad = [k for k in steps if not 1 <= k <= len(deltas)]
+        if bad or not steps or len(set(steps)) != len(steps):
+            raise ConfigError(f"--steps = {','.join(map(str, steps))} is out of range: must be distinct load "
+                              f"steps 1 .. {len(deltas)} (1 = the lightest)")
+        deltas = tuple(deltas[k - 1] for k in sorted(steps))
+    changes["deltas"] = deltas
     return dataclasses.replace(base, **changes)
 
 
