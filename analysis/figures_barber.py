@@ -1,7 +1,8 @@
 """Barber's check of every spot discretization: kappa / kappa_Barber against F.
 
 Reads ``<data_dir>/bench/spots.json`` (``g2tom bench --only spots``, part of ``make run``) and
-draws, for mean_area, expected and asperities spots, the clean conductance of Greenwood's form,
+draws, for mean_area, expected and asperities spots of Greenwood-Tripp's contact (whatever the
+scenario's contact model), the clean conductance of Greenwood's form,
 the point model and the point model with the lattice term over Barber's K / (E* rho*). Writes
 nothing when the benchmark has not run.
 """

@@ -45,8 +45,8 @@ CAPTIONS = {
     "fig10_realizations": "Fig. 10 (beside): realizations used per (xi, lambda) and alpha's reached 95 % half-width; x marks flagged cells",
     "fig11_barber": "Fig. 11: G2TOM against the p-average of the oxide-extended Barber bounds (Eq. 10)",
     "point_alpha_gamma": "Point-interaction model against Greenwood's closed form: alpha ratio and gamma shift",
-    "barber_spots": "Barber's check: clean conductance over K / (E* rho*) against F for every spot discretization "
-                    "(colours) and model (lines), from `g2tom bench --only spots`",
+    "barber_spots": "Barber's check: clean conductance over K / (E* rho*) against F for every grid spot discretization "
+                    "of Greenwood-Tripp's contact (colours) and model (lines), from `g2tom bench --only spots`",
     "point_film": "Resistance against the oxide film's specific resistance r_f: clean to insulating",
 }
 
