@@ -37,6 +37,20 @@ def test_values_at_points_equal_direct_sum(lam: float, spectral: bool) -> None:
         np.testing.assert_allclose(values[b], of.field_at_points(modes, coeffs[b], x, y), rtol=1e-10, atol=1e-12)
 
 
+@pytest.mark.parametrize("periods", [0.3, 1.4, 7.0])
+def test_values_at_points_beyond_three_pi_are_wrapped_into_the_period(periods: float) -> None:
+    """Phases within [-3 pi, 3 pi) go to FINUFFT as they are, others are wrapped first: both equal
+    the direct sum, and a point a whole number of periods away gives the same value."""
+    modes = ob.band(N_CELLS, CELL, 1.0, 3.0, 0.5)  # period = the window: 40 cells out is past 3 pi at 1.4
+    coeffs = _coeffs(modes, 1.0, 1)[0]
+    x = np.linspace(-periods, periods, 701) * modes.period
+    y = 0.3 * x
+    values = values_at_points(modes, coeffs, x, y)
+    np.testing.assert_allclose(values, of.field_at_points(modes, coeffs, x, y), rtol=1e-10, atol=1e-11)
+    shifted = values_at_points(modes, coeffs, x + 3 * modes.period, y - 2 * modes.period)
+    np.testing.assert_allclose(shifted, values, rtol=0, atol=1e-10)
+
+
 def test_values_at_points_of_many_fields_and_one_field() -> None:
     modes = _paper_band(5.0)
     coeffs = _coeffs(modes, 5.0, 40)

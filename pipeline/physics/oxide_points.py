@@ -55,9 +55,7 @@ def values_at_points(modes: Band, coeffs: np.ndarray, x: np.ndarray, y: np.ndarr
         top = int(max(np.abs(modes.i).max(), modes.j.max()))
         size = 2 * top + 2  # FINUFFT's modes run over -size/2 .. size/2 - 1 along each axis
         scale = 2.0 * np.pi / modes.period
-        # points wrapped into [-pi, pi): the field is periodic with the period L
-        px = np.remainder(scale * x.ravel() + np.pi, 2.0 * np.pi) - np.pi
-        py = np.remainder(scale * y.ravel() + np.pi, 2.0 * np.pi) - np.pi
+        px, py = _phases(scale, x.ravel()), _phases(scale, y.ravel())
         table = np.zeros((size, size), dtype=complex)  # [j + size/2, i + size/2]
         plan = _plan(size, tolerance)
         plan.setpts(py, px)
@@ -65,6 +63,21 @@ def values_at_points(modes: Band, coeffs: np.ndarray, x: np.ndarray, y: np.ndarr
             table[modes.j + size // 2, modes.i + size // 2] = c
             out[b] = plan.execute(table).real
     return out.reshape(lead + shape)
+
+
+#: FINUFFT takes point phases in [-3 pi, 3 pi) and folds them itself (the field has the period L).
+PHASE_LIMIT = 3.0 * np.pi
+
+
+def _phases(scale: float, x: np.ndarray) -> np.ndarray:
+    """``scale * x`` (rad), wrapped into [-pi, pi) only where some phase lies outside
+    [-:data:`PHASE_LIMIT`, :data:`PHASE_LIMIT`): the points of a window inside one period never do,
+    and wrapping them all cost ~15 % of a field's evaluation on the paper's pool (2 ms of 13 at
+    lambda 1, 123k points)."""
+    phase = scale * x
+    if phase.size and (phase.min() < -PHASE_LIMIT or phase.max() >= PHASE_LIMIT):
+        phase = np.remainder(phase + np.pi, 2.0 * np.pi) - np.pi
+    return phase
 
 
 _PLANS = threading.local()
