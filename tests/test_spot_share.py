@@ -51,6 +51,27 @@ def test_values_at_points_beyond_three_pi_are_wrapped_into_the_period(periods: f
     np.testing.assert_allclose(shifted, values, rtol=0, atol=1e-10)
 
 
+def test_unsorted_points_give_the_sorted_transforms_values_bit_for_bit() -> None:
+    import finufft
+
+    from pipeline.physics import oxide_points
+
+    modes = _paper_band(1.0)
+    coeffs = _coeffs(modes, 1.0, 3)
+    rng = np.random.default_rng(5)
+    x, y = rng.uniform(-25 * CELL, 25 * CELL, (2, 400))
+    px, py = disc_points(x, y, rng.uniform(0.0, 0.2 * CELL, (3, 400)), np.full((3, 400), DEFAULT_RINGS))
+    values = values_at_points(modes, coeffs, px, py, 1e-7)
+    size = 2 * int(max(np.abs(modes.i).max(), modes.j.max())) + 2
+    plan = finufft.Plan(2, (size, size), eps=1e-7, isign=1, nthreads=1)  # FINUFFT's default: points sorted
+    scale = 2.0 * np.pi / modes.period
+    plan.setpts(oxide_points._phases(scale, py), oxide_points._phases(scale, px))
+    for b in range(3):
+        table = np.zeros((size, size), dtype=complex)
+        table[modes.j + size // 2, modes.i + size // 2] = coeffs[b]
+        np.testing.assert_array_equal(values[b], plan.execute(table).real)
+
+
 def test_values_at_points_of_many_fields_and_one_field() -> None:
     modes = _paper_band(5.0)
     coeffs = _coeffs(modes, 5.0, 40)

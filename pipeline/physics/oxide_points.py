@@ -85,8 +85,13 @@ _PLANS = threading.local()
 
 def _plan(size: int, tolerance: float) -> finufft.Plan:
     """This thread's type-2 plan for a ``size`` x ``size`` table (kept: making one costs about
-    as much as a transform of ten thousand points, and plans are not shared between threads)."""
+    as much as a transform of ten thousand points, and plans are not shared between threads).
+
+    The points are not sorted (``spread_sort = 0``): the cube's come disc by disc, already close
+    together, and a type-2 transform interpolates each point by itself, so the values are the
+    same bit for bit; measured on the paper's pool in one process, the cube's time per map x0.94
+    at lambda 1, x0.97 at 5 and 23."""
     plans = _PLANS.__dict__.setdefault("plans", {})
     if (size, tolerance) not in plans:
-        plans[size, tolerance] = finufft.Plan(2, (size, size), eps=tolerance, isign=1, nthreads=1)
+        plans[size, tolerance] = finufft.Plan(2, (size, size), eps=tolerance, isign=1, nthreads=1, spread_sort=0)
     return plans[size, tolerance]
