@@ -169,6 +169,52 @@ def test_rigid_approach_when_only_the_highest_cap_touches():
         assert hertz_load(g - d, e_star, beta).sum() == pytest.approx(force, rel=1e-12)
 
 
+@pytest.mark.parametrize("forces", [FORCES[[0, -1]], FORCES[[1, 4, 7]], FORCES[-1:]])
+def test_far_apart_forces_are_climbed_to_the_same_solution(forces):
+    """Forces more than MAX_STEP_RATIO apart are reached through intermediate forces: the solution
+    at each given force is the fine ladder's (a cold heavy start too), and no step takes far more
+    candidates than the ladder (the linear extrapolation over a 400x jump took every asperity of
+    the domain, ~35x the time)."""
+    asp = surface(5)
+    ladder = np.unique(np.concatenate([np.geomspace(FORCES[0] / 8, forces[-1], 40), forces]))
+    fine = dc.solve_forces(asp, sphere, ladder, E_STAR, BETA, FLOOR)
+    at = np.searchsorted(ladder, forces)
+    got = dc.solve_forces(asp, sphere, forces, E_STAR, BETA, FLOOR)
+    np.testing.assert_allclose(got.delta, fine.delta[at], rtol=1e-9)
+    np.testing.assert_allclose(got.load, fine.load[at], rtol=1e-7, atol=1e-9 * forces[-1])
+    np.testing.assert_allclose(got.load.sum(axis=1), forces, rtol=1e-9)
+    assert np.all(got.candidates <= 2 * fine.candidates[at] + 10)
+
+
+def _top_level_forces(monkeypatch) -> list[float]:
+    """The forces the walk is asked for from :meth:`_Walker.climb` (refinements of a failing step excluded)."""
+    asked: list[float] = []
+    reach = dc._Walker.reach
+
+    def spy(self, force, depth=0):
+        if depth == 0:
+            asked.append(force)
+        return reach(self, force, depth)
+
+    monkeypatch.setattr(dc._Walker, "reach", spy)
+    return asked
+
+
+def test_close_forces_are_not_climbed_far_ones_are(monkeypatch):
+    """Steps within MAX_STEP_RATIO go straight to Newton, as before the ladder (the paper's 20 steps and the atlas's scenes keep their solves bit for bit); a far step
+    is split into steps of at most MAX_STEP_RATIO."""
+    asp = surface(6)
+    forces = np.geomspace(0.05, 20.0, 20) * FORCE_SCALE  # 1.37x a step
+    asked = _top_level_forces(monkeypatch)
+    dc.solve_forces(asp, sphere, forces, E_STAR, BETA, FLOOR)
+    assert asked == list(forces)
+    asked.clear()
+    dc.solve_forces(asp, sphere, forces[[0, -1]], E_STAR, BETA, FLOOR)
+    ratios = np.diff(np.log(asked))
+    assert asked[0] == forces[0] and asked[-1] == forces[-1] and len(asked) > 2
+    assert np.all(ratios > 0) and np.all(ratios <= np.log(dc.MAX_STEP_RATIO) + 1e-12)
+
+
 def test_continuation_halves_a_failing_step_however_short(monkeypatch):
     """Where Newton fails on a step shorter than sqrt(2), the walk must still refine it (before,
     a step of 1.4x was retried unchanged until the depth limit)."""
