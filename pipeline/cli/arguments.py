@@ -149,12 +149,11 @@ def build_parser() -> argparse.ArgumentParser:
     validate.add_argument("--standard-error", default=None,
                           help="part 2's goal for the standard error of ln R: CLEAN[,OXIDIZED] in (0, 0.5] "
                                "(default 0.03,0.05)")
-    validate.add_argument("--max-realizations", type=int, default=None,
-                          help="part 2's most full-field realizations a load (default 512, >= 2)")
-    validate.add_argument("--max-pairs", type=int, default=None,
-                          help="part 2's most main-grid pairs a load (default 24, >= 2)")
-    validate.add_argument("--model-realizations", type=int, default=None,
-                          help="part 2's surfaces and oxide realizations of the validated scenario (default 1024, >= 16)")
+    for flag, text in (("--max-realizations", "part 2's most full-field realizations a load (default 512, >= 2)"),
+                       ("--max-pairs", "part 2's most main-grid pairs a load (default 24, >= 2)"),
+                       ("--model-realizations", "part 2's surfaces and oxide realizations of the validated "
+                                                "scenario (default 1024, >= 16)")):
+        validate.add_argument(flag, type=int, default=None, help=text)
     validate.add_argument("--plan", action="store_true",
                           help="print this set's cases, grids and estimate (as the run prints first), then stop: "
                                "no work, nothing written")
