@@ -17,6 +17,7 @@ from analysis.report_blocks import Block, table
 from analysis.report_chain import chain_blocks
 from pipeline.atlas.fit import curve_words, verdict
 from pipeline.fitting.atlas_band import region_labels
+from pipeline.fitting.atlas_grid import FRAME_COORDINATES
 
 __all__ = ["atlas_blocks", "read_heldout"]
 
@@ -47,10 +48,12 @@ def _cv_table(doc: dict[str, Any]) -> Block:
             continue  # a candidate with more terms than a fold's points
         name = f"{r['model']} (chosen)" if r.get("chosen") else r["model"]
         across = f"{r['kernel']} RBF, smoothing {r['smoothing']:g}" if "kernel" in r else str(r["degree"])
+        if "frame" in r:
+            across = f"{across} in {FRAME_COORDINATES[r['frame']]}"
         within = f"{r['cv_cells_within']} of {r['cells']}" if "cv_cells_within" in r else "-"
         rows.append([name, across, _fmt(r.get("order"), "d") if r.get("order") is not None else "-",
                      str(r["terms"]), _fmt(r.get("cv_rms")), _fmt(r.get("cv_max")), within])
-    return table(["model", "across (mu, Pi)", "order P (ln F')", "terms per node", "LOSO RMS ln R'",
+    return table(["model", "across the groups", "order P (ln F')", "terms per node", "LOSO RMS ln R'",
                   "LOSO max", "LOSO cells within"], rows)
 
 

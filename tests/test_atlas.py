@@ -225,6 +225,7 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     assert lines[0].startswith("scene,mu,Pi,xi,lambda,force_normalized") and len(lines) == 1 + doc["heldout"]["steps"]
     from analysis.report_atlas import atlas_blocks, read_heldout
     from pipeline.atlas.fit import verdict
+    from pipeline.fitting.atlas_grid import FRAME_COORDINATES
 
     with xr.open_dataset(tmp_path / "atlas" / atlas.ATLAS_FILE) as ds:  # the twin: equal groups, other sizes
         assert ds.attrs["invariance_pair"].startswith("d") and ds.attrs["invariance_max_ln_error"] <= 2e-6
@@ -244,6 +245,8 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     chosen = [row for row in tables[0].rows[1:] if row[0].endswith("(chosen)")]  # the cross-validation table
     assert len(chosen) == 1 and chosen[0][0] == f"{doc[CURVE]['kind']} (chosen)"
     assert any(row[0] == "grid" for row in tables[0].rows[1:]) and any("RBF" in row[1] for row in tables[0].rows[1:])
+    in_frame = [sum(f"in {words}" in row[1] for row in tables[0].rows[1:]) for words in FRAME_COORDINATES.values()]
+    assert in_frame[0] == in_frame[1] > 0  # every candidate in both frames of the groups
     assert len(tables[1].rows) == 1 + 18  # the band by region
     assert [row[0] for row in tables[2].rows[1:]] == ["h00"]
     assert tables[2].rows[1][-1] == f"{held['steps_within']} of {held['steps']}"

@@ -5,6 +5,7 @@ and the leave-one-scene-out residuals against a fold fitted by hand."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -12,7 +13,10 @@ import pytest
 from numpy.polynomial import chebyshev
 
 from pipeline.atlas.fit import FORMAT, FORMAT_VERSION, curve_doc, curve_model
-from pipeline.fitting.atlas_grid import fit_grid_tensor, node_coordinates
+from scipy.interpolate import RBFInterpolator
+
+from pipeline.fitting.atlas_grid import FRAMES, fit_grid_tensor, group_coordinates, node_coordinates
+from pipeline.fitting import atlas_grid
 from pipeline.fitting.atlas_scene_series import KERNELS, cross_validate, fit_scene_series
 
 XI = np.array([0.0, 0.3, 0.7])
@@ -135,10 +139,62 @@ def test_both_kinds_survive_their_document() -> None:
     grid = fit_grid_tensor(Z, W, pts["mu"], pts["Pi"], pts["force"], pts["log_r"], pts["sigma"], (2, 2), 3)
     query = (np.full(4, 0.5), np.full(4, 3.0), np.array([1.5, 9.0, 20.0, 40.0]), np.array([8.0, 60.0, 100.0, 300.0]),
              np.array([0.07, 0.9, 4.0, 15.0]))
-    for model in (series, grid):
+    sheared = [_fit(pts, order=5, smoothing=0.3, frame="sheared"),
+               fit_grid_tensor(Z, W, pts["mu"], pts["Pi"], pts["force"], pts["log_r"], pts["sigma"], (2, 2), 3,
+                               frame="sheared")]
+    for model in [series, grid] + sheared:
         again = curve_model(json.loads(json.dumps(curve_doc(model))))
-        assert type(again) is type(model)
+        assert type(again) is type(model) and again.frame == model.frame
         assert np.array_equal(again.log_resistance(*query), model.log_resistance(*query))
+    for model in sheared:  # the frame is what makes them answer otherwise
+        assert np.max(np.abs(model.log_resistance(*query) - dataclasses.replace(model, frame="log").log_resistance(
+            *query))) > 0.01
+    # a document of format 2 or 3 has no frame: it was built in (ln mu, ln Pi)
+    older = {k: v for k, v in curve_doc(grid).items() if k != "frame"}
+    assert np.array_equal(curve_model(older).log_resistance(*query), grid.log_resistance(*query))
     with pytest.raises(ValueError, match="unknown curve model kind 'spline'"):
         curve_model({**curve_doc(grid), "kind": "spline"})
-    assert FORMAT == "g2tom-atlas-surrogate" and FORMAT_VERSION == 3
+    with pytest.raises(ValueError, match="unknown frame 'polar'"):
+        curve_model({**curve_doc(grid), "frame": "polar"})
+    assert FORMAT == "g2tom-atlas-surrogate" and FORMAT_VERSION == 4
+
+
+def _along_the_diagonal(m, p, f, z, w):
+    """A cubic in ln(mu / Pi) alone (the sheared frame's first coordinate), other at every node."""
+    u = m - p
+    return 0.4 + 0.3 * u - 0.05 * u**2 + 0.004 * u**3 - (0.6 + 0.05 * w) * f + z * (1 + 0.1 * u)
+
+
+def test_the_sheared_frame_holds_a_response_along_mu_over_pi() -> None:
+    """In (ln(mu / Pi), ln Pi) the grid's degree (3, 0) is every cubic in ln(mu / Pi): such a response is
+    reproduced anywhere; in (ln mu, ln Pi) the same degree is cubic in ln mu alone and misses it."""
+    pts = _scenes(_along_the_diagonal, n=12)
+    force = np.geomspace(0.06, 18.0, 7)
+    errors = {}
+    for frame in FRAMES:
+        model = fit_grid_tensor(Z, W, pts["mu"], pts["Pi"], pts["force"], pts["log_r"], pts["sigma"], (3, 0), 3,
+                                frame=frame)
+        errors[frame] = max(np.max(np.abs(_at(model, mu, pi, force) - _along_the_diagonal(
+            np.log(mu), np.log(pi), np.log(force)[:, None, None], Z[None, :, None], W[None, None, :])))
+            for mu, pi in ((2.0, 40.0), (33.0, 9.0), (7.0, 250.0)))
+    assert errors["sheared"] < 1e-9 and errors["log"] > 0.05
+    np.testing.assert_array_equal(group_coordinates(np.array([2.0, 6.0]), np.array([8.0, 3.0]), "sheared"),
+                                  [[np.log(2.0) - np.log(8.0), np.log(8.0)], [np.log(6.0) - np.log(3.0), np.log(3.0)]])
+    with pytest.raises(ValueError, match="frame 'polar'"):
+        atlas_grid.group_coordinates(np.ones(2), np.ones(2), "polar")
+
+
+def test_the_scene_series_interpolates_in_its_frame() -> None:
+    """The sheared series equals scipy's RBF through the scenes' series at (ln mu - ln Pi, ln Pi)."""
+    pts = _scenes(_bent)
+    model = _fit(pts, order=3, smoothing=0.3, frame="sheared")
+    centers = np.array([[np.log(pts["mu"][pts["scene"] == s][0] / pts["Pi"][pts["scene"] == s][0]),
+                         np.log(pts["Pi"][pts["scene"] == s][0])] for s in range(9)])
+    np.testing.assert_allclose(model.centers, centers, rtol=0, atol=1e-14)
+    by_hand = RBFInterpolator(centers, model.coef.reshape(9, -1), kernel="cubic", smoothing=0.3, degree=1)
+    mu, pi = 13.0, 21.0
+    coef = by_hand(np.array([[np.log(mu / pi), np.log(pi)]])).reshape(model.coef.shape[1:])
+    force = np.array([0.2, 3.0])
+    basis = chebyshev.chebvander(2 * (np.log(force) - model.load_low) / (model.load_high - model.load_low) - 1, 3)
+    expected = np.einsum("zwq,fq->fzw", coef, basis)
+    assert np.max(np.abs(_at(model, mu, pi, force) - expected)) < 1e-12

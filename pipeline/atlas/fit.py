@@ -7,12 +7,15 @@ every oxide node (xi, lambda), interpolated linearly between nodes in (-ln(1 - x
 R' = R'_c Phi with an oxide factor Phi that is exactly 1 at xi = 0:
 
 * the grid surrogate (:mod:`pipeline.fitting.atlas_grid`): the series' coefficients one polynomial
-  in (ln mu, ln Pi) through all design scenes (degree D over :data:`DEGREES`);
+  in the groups' coordinates through all design scenes (degree D over :data:`DEGREES`);
 * the scene series (:mod:`pipeline.fitting.atlas_scene_series`): each design scene's own series,
-  its coefficients interpolated across (ln mu, ln Pi) by a radial basis function (kernel over
-  :data:`~pipeline.fitting.atlas_scene_series.KERNELS`, smoothing over :data:`SMOOTHINGS`).
+  its coefficients interpolated across the groups' coordinates by a radial basis function (kernel
+  over :data:`~pipeline.fitting.atlas_scene_series.KERNELS`, smoothing over :data:`SMOOTHINGS`).
 
-Kind, its parameters and P (:data:`ORDERS`) are chosen by leave-one-scene-out cross-validation on
+Both are built in either frame of the groups (:data:`~pipeline.fitting.atlas_grid.FRAMES`): (ln mu,
+ln Pi), or (ln(mu / Pi), ln Pi), in which the light loads' strong dependence on the asperities'
+curvature against the sphere's (mu / Pi) runs along one coordinate. Kind, frame, their parameters
+and P (:data:`ORDERS`) are chosen by leave-one-scene-out cross-validation on
 the scenes off the box's corners by the held-out target's own measure (the most cells within at
 every step; then the RMS; then fewer terms); one polynomial of total degree 2..6 in the five logs
 (the first atlas's model) is cross-validated beside them, for the record. The band is the
@@ -39,8 +42,8 @@ import xarray as xr
 from scipy.stats import norm
 
 from pipeline.fitting.atlas_band import fit_band, with_heldout
-from pipeline.fitting.atlas_grid import (GridTensorModel, cross_validate, fit_grid_tensor, group_powers,
-                                         node_coordinates)
+from pipeline.fitting.atlas_grid import (FRAME_COORDINATES, FRAMES, GridTensorModel, cross_validate, fit_grid_tensor,
+                                         group_powers, node_coordinates)
 from pipeline.fitting.atlas_scene_series import KERNELS, SceneSeriesModel, fit_scene_series
 from pipeline.fitting.atlas_scene_series import cross_validate as cross_validate_series
 from pipeline.fitting.atlas_surrogate import AtlasModel, exponents, fit_atlas_model, select_degree
@@ -50,10 +53,11 @@ __all__ = ["fit_atlas", "write_atlas_surrogate", "verdict", "code_hash", "curve_
            "TARGET_SHARE", "FORMAT", "FORMAT_VERSION", "CURVE", "DEGREES", "ORDERS", "SMOOTHINGS", "SCENE_SERIES"]
 
 FORMAT = "g2tom-atlas-surrogate"
-#: 3: the curve model is the grid surrogate or the scene series (``kind``); 2: the grid surrogate with
+#: 4: the curve model names the frame of the groups it is built in (``frame``); 3: the curve model
+#: is the grid surrogate or the scene series (``kind``), in (ln mu, ln Pi); 2: the grid surrogate with
 #: its regional band (issue 31); 1 (no ``format_version``): one polynomial in five logs with one
-#: global error (issue 23). The predictor reads all three.
-FORMAT_VERSION = 3
+#: global error (issue 23). The predictor reads all four.
+FORMAT_VERSION = 4
 #: The name of the curve model of ln R'(xi, lambda, mu, Pi, F') in the document.
 CURVE = "log_resistance"
 #: Least relative error of ln R' a held-out step is allowed (the issue's 5 %).
@@ -153,11 +157,12 @@ def box_position(mu: np.ndarray, pi: np.ndarray, box: tuple[np.ndarray, np.ndarr
 
 
 def _candidates() -> list[dict[str, Any]]:
-    """Every candidate curve model: the grid surrogate's (D, P) and the scene series' (kernel, smoothing, P)."""
-    grid = [{"model": "grid", "degree": list(d) if isinstance(d, tuple) else d, "order": p}
-            for d in DEGREES for p in ORDERS]
-    series = [{"model": SCENE_SERIES, "kernel": k, "smoothing": m, "order": p}
-              for k in KERNELS for m in SMOOTHINGS for p in ORDERS]
+    """Every candidate curve model: in each frame, the grid surrogate's (D, P) and the scene series'
+    (kernel, smoothing, P)."""
+    grid = [{"model": "grid", "frame": f, "degree": list(d) if isinstance(d, tuple) else d, "order": p}
+            for f in FRAMES for d in DEGREES for p in ORDERS]
+    series = [{"model": SCENE_SERIES, "frame": f, "kernel": k, "smoothing": m, "order": p}
+              for f in FRAMES for k in KERNELS for m in SMOOTHINGS for p in ORDERS]
     return grid + series
 
 
@@ -173,8 +178,8 @@ def _fit_curve(row: dict[str, Any], points: dict[str, np.ndarray], z_nodes: np.n
     """The candidate ``row``'s model fitted on every point."""
     args = (z_nodes, w_nodes, points["mu"], points["Pi"], points["force_normalized"], points["log_r"], points["sigma"])
     if row["model"] == "grid":
-        return fit_grid_tensor(*args, _degree(row), row["order"])
-    return fit_scene_series(*args, points["scene"], row["order"], row["kernel"], row["smoothing"])
+        return fit_grid_tensor(*args, _degree(row), row["order"], frame=row["frame"])
+    return fit_scene_series(*args, points["scene"], row["order"], row["kernel"], row["smoothing"], frame=row["frame"])
 
 
 def _cross_validate(row: dict[str, Any], points: dict[str, np.ndarray], z_nodes: np.ndarray,
@@ -183,8 +188,8 @@ def _cross_validate(row: dict[str, Any], points: dict[str, np.ndarray], z_nodes:
     args = (z_nodes, w_nodes, points["mu"], points["Pi"], points["force_normalized"], points["log_r"], points["sigma"],
             points["scene"])
     if row["model"] == "grid":
-        return cross_validate(*args, _degree(row), row["order"])
-    return cross_validate_series(*args, row["order"], row["kernel"], row["smoothing"])
+        return cross_validate(*args, _degree(row), row["order"], row["frame"])
+    return cross_validate_series(*args, row["order"], row["kernel"], row["smoothing"], row["frame"])
 
 
 def _terms(row: dict[str, Any], scenes: int) -> int:
@@ -269,7 +274,7 @@ def _model_doc(model: AtlasModel, degree: int, scores: dict[int, float]) -> dict
 def curve_doc(model: GridTensorModel | SceneSeriesModel) -> dict[str, Any]:
     """The curve model as plain lists (:func:`curve_model` reads it back)."""
     common = {"z_nodes": model.z_nodes.tolist(), "w_nodes": model.w_nodes.tolist(), "load_low": model.load_low,
-              "load_high": model.load_high, "coef": model.coef.tolist(), "order": model.order}
+              "load_high": model.load_high, "coef": model.coef.tolist(), "order": model.order, "frame": model.frame}
     if isinstance(model, SceneSeriesModel):
         return {"kind": SCENE_SERIES, **common, "centers": model.centers.tolist(), "kernel": model.kernel,
                 "smoothing": model.smoothing}
@@ -278,22 +283,26 @@ def curve_doc(model: GridTensorModel | SceneSeriesModel) -> dict[str, Any]:
 
 
 def curve_model(doc: dict[str, Any]) -> GridTensorModel | SceneSeriesModel:
-    """The inverse of :func:`curve_doc` (a format-2 document's ``grid`` included).
+    """The inverse of :func:`curve_doc` (a format-2 document's ``grid`` included; a document without a
+    ``frame``, of format 2 or 3, is in (ln mu, ln Pi)).
 
     Raises
     ------
     ValueError
-        If the kind is unknown.
+        If the kind or the frame is unknown.
     """
     nodes = (np.array(doc["z_nodes"], float), np.array(doc["w_nodes"], float))
+    frame = str(doc.get("frame", "log"))
+    if frame not in FRAMES:
+        raise ValueError(f"unknown frame {frame!r} of the groups (one of {', '.join(FRAMES)})")
     if doc["kind"] == SCENE_SERIES:
         return SceneSeriesModel(*nodes, np.array(doc["centers"], float), np.array(doc["coef"], float),
                                 float(doc["load_low"]), float(doc["load_high"]), str(doc["kernel"]),
-                                float(doc["smoothing"]))
+                                float(doc["smoothing"]), frame)
     if doc["kind"] == "grid":
         return GridTensorModel(*nodes, np.array(doc["group_low"], float), np.array(doc["group_high"], float),
                                float(doc["load_low"]), float(doc["load_high"]), np.array(doc["group_powers"], int),
-                               np.array(doc["coef"], float))
+                               np.array(doc["coef"], float), frame)
     raise ValueError(f"unknown curve model kind {doc['kind']!r}")
 
 
@@ -301,21 +310,23 @@ def curve_words(doc: dict[str, Any]) -> str:
     """The curve model of a :func:`curve_doc` in a sentence (the report's and the command line's)."""
     common = ("the clean curve R'_c(mu, Pi, F') times an oxide factor that is 1 at xi = 0, each node of (xi, lambda) "
               f"a Chebyshev series of order {doc['order']} in ln F', linear between nodes")
+    across = FRAME_COORDINATES[doc.get("frame", "log")]
     if doc.get("kind") == "grid":
-        return f"the grid surrogate, {common}, its coefficients a polynomial of degree {doc['degree']} in (ln mu, ln Pi)"
-    return (f"the scene series, {common}, each design scene's own coefficients interpolated across (ln mu, ln Pi) by a "
+        return f"the grid surrogate, {common}, its coefficients a polynomial of degree {doc['degree']} in {across}"
+    return (f"the scene series, {common}, each design scene's own coefficients interpolated across {across} by a "
             f"{doc['kernel']} radial basis function (smoothing {doc['smoothing']:g})")
 
 
 _DESCRIPTION = {
     "grid": "at each node of (z = -ln(1 - xi), ln lambda), the clean surface as the node xi = 0, ln R' = "
-            "sum_{i+j<=D} sum_{q<=P} c_ijq m^i p^j T_q(L) with m, p, L the logs of mu, Pi, F' mapped to [-1, 1] "
-            "(group_low/high, load_low/high) and T_q Chebyshev polynomials; linear between nodes",
+            "sum_{i+j<=D} sum_{q<=P} c_ijq m^i p^j T_q(L) with m, p the groups' coordinates in the frame "
+            "(log: ln mu, ln Pi; sheared: ln(mu / Pi), ln Pi) and L = ln F', mapped to [-1, 1] (group_low/high, "
+            "load_low/high), and T_q Chebyshev polynomials; linear between nodes",
     SCENE_SERIES: "at each node of (z = -ln(1 - xi), ln lambda), the clean surface as the node xi = 0, each design "
                   "scene's ln R' = sum_{q<=P} c_q T_q(L) (L: ln F' mapped to [-1, 1] by load_low/high, T_q "
-                  "Chebyshev polynomials; coef[scene][z][lambda][q]), each c_q interpolated over (ln mu, ln Pi) "
-                  "from the scenes' centers by scipy's RBFInterpolator (kernel, smoothing, degree 1); linear "
-                  "between nodes",
+                  "Chebyshev polynomials; coef[scene][z][lambda][q]), each c_q interpolated over the groups' "
+                  "coordinates in the frame (log: ln mu, ln Pi; sheared: ln(mu / Pi), ln Pi) from the scenes' "
+                  "centers by scipy's RBFInterpolator (kernel, smoothing, degree 1); linear between nodes",
 }
 
 

@@ -6,9 +6,10 @@ oxide grid, and the clean curve. The model follows that layout:
 * nodes: z_k = -ln(1 - xi_k) with the clean surface as the node z = 0, times w_l = ln lambda_l
   (the clean node's curve repeated over lambda, so the oxide factor Phi = R'/R'_c is exactly 1 at
   xi = 0);
-* at each node, a tensor product of a polynomial in the mapped logs of the groups (ln mu, ln Pi
-  on [-1, 1]: total degree i + j <= D, or a tensor product i <= a, j <= b) and a Chebyshev series
-  of order P in the mapped ln F':
+* at each node, a tensor product of a polynomial in the groups' coordinates (:data:`FRAMES`: the
+  logs (ln mu, ln Pi) or the sheared (ln(mu / Pi), ln Pi)) mapped to [-1, 1] (total degree
+  i + j <= D, or a tensor product i <= a, j <= b) and a Chebyshev series of order P in the mapped
+  ln F':
 
       ln R'_node(mu, Pi, F') = sum_{(i, j)} sum_{q <= P} c_ijq m^i p^j T_q(L),
 
@@ -17,7 +18,7 @@ oxide grid, and the clean curve. The model follows that layout:
   realizations open, are left out);
 * between nodes, ln R' is interpolated linearly in (z, w), as the single-scene curve model is.
 
-(D, P) are chosen by leave-one-scene-out cross-validation (:func:`cross_validate`): each design
+(frame, D, P) are chosen by leave-one-scene-out cross-validation (:func:`cross_validate`): each design
 scene predicted by the model fitted without it. Pure numpy; no I/O.
 """
 
@@ -31,8 +32,34 @@ from numpy.polynomial import chebyshev
 
 from pipeline.fitting.atlas_surrogate import exponents
 
-__all__ = ["GridTensorModel", "node_coordinates", "group_powers", "fit_grid_tensor", "cross_validate",
-           "interpolation_weights", "load_basis", "weighted_fit", "node_series_value", "leave_one_scene_out"]
+__all__ = ["FRAMES", "FRAME_COORDINATES", "GridTensorModel", "group_coordinates", "node_coordinates", "group_powers",
+           "fit_grid_tensor", "cross_validate", "interpolation_weights", "load_basis", "weighted_fit", "node_series_value",
+           "leave_one_scene_out"]
+
+
+#: Coordinates of the groups the curve models are built in: ``log``, (ln mu, ln Pi); ``sheared``,
+#: (ln(mu / Pi), ln Pi). mu / Pi = (8/3) sqrt(2 beta / R*) (:mod:`pipeline.physics.groups`): the
+#: asperities' curvature against the sphere's, which alone sets most of ln R' at light loads
+#: (the atlas's clean ln R' at F' 0.06 spans 2.0 along it, at most 0.2 across it), so a response
+#: that bends along the diagonal of (ln mu, ln Pi) is straight along one coordinate here.
+FRAME_COORDINATES = {"log": "(ln mu, ln Pi)", "sheared": "(ln(mu / Pi), ln Pi)"}
+FRAMES = tuple(FRAME_COORDINATES)
+
+
+def group_coordinates(mu: np.ndarray, pi: np.ndarray, frame: str = "log") -> np.ndarray:
+    """(n, 2) coordinates of the groups in ``frame`` (:data:`FRAMES`).
+
+    Raises
+    ------
+    ValueError
+        If the frame is unknown.
+    """
+    logs = np.column_stack([np.log(np.asarray(mu, float)).ravel(), np.log(np.asarray(pi, float)).ravel()])
+    if frame == "log":
+        return logs
+    if frame == "sheared":
+        return np.column_stack([logs[:, 0] - logs[:, 1], logs[:, 1]])
+    raise ValueError(f"frame {frame!r} is not one of {FRAMES}")
 
 
 def node_coordinates(xi: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -44,9 +71,10 @@ def _mapped(x: np.ndarray, low: np.ndarray | float, high: np.ndarray | float) ->
     return 2.0 * (np.asarray(x, float) - low) / (np.asarray(high) - low) - 1.0
 
 
-def _group_basis(mu: np.ndarray, pi: np.ndarray, low: np.ndarray, high: np.ndarray, powers: np.ndarray) -> np.ndarray:
-    """(n, terms) monomials m^i p^j of the mapped ln mu, ln Pi."""
-    u = _mapped(np.column_stack([np.log(mu), np.log(pi)]), low, high)
+def _group_basis(mu: np.ndarray, pi: np.ndarray, low: np.ndarray, high: np.ndarray, powers: np.ndarray,
+                 frame: str) -> np.ndarray:
+    """(n, terms) monomials m^i p^j of the groups' coordinates in ``frame``, mapped."""
+    u = _mapped(group_coordinates(mu, pi, frame), low, high)
     return np.prod(u[:, None, :] ** powers[None, :, :], axis=-1)
 
 
@@ -71,13 +99,15 @@ class GridTensorModel:
     z_nodes, w_nodes
         (nz,) -ln(1 - xi) of the nodes (0 first: the clean surface) and (nw,) ln lambda.
     group_low, group_high
-        (2,) ends of ln mu and ln Pi mapped to -1 and 1.
+        (2,) ends of the groups' two coordinates (in ``frame``) mapped to -1 and 1.
     load_low, load_high
         Ends of ln F' mapped to -1 and 1.
     group_powers
         (terms, 2) exponents (i, j) of m^i p^j.
     coef
         (nz, nw, terms, P + 1) coefficients c_ijq per node.
+    frame
+        The groups' coordinates (:data:`FRAMES`).
     """
 
     z_nodes: np.ndarray
@@ -88,6 +118,7 @@ class GridTensorModel:
     load_high: float
     group_powers: np.ndarray
     coef: np.ndarray
+    frame: str = "log"
 
     @property
     def degree(self) -> int | list[int]:
@@ -112,7 +143,7 @@ class GridTensorModel:
         xi, lam, mu, pi, force_n = (np.asarray(a, float).ravel() for a in (xi, lam, mu, pi, force_n))
         pairs, inverse = np.unique(np.column_stack([mu, pi]), axis=0, return_inverse=True)
         inverse = inverse.ravel()
-        phi = _group_basis(pairs[:, 0], pairs[:, 1], self.group_low, self.group_high, self.group_powers)
+        phi = _group_basis(pairs[:, 0], pairs[:, 1], self.group_low, self.group_high, self.group_powers, self.frame)
         per_surface = np.einsum("ut,zwtq->uzwq", phi, self.coef)  # (surfaces, nz, nw, P + 1)
         return node_series_value(per_surface, inverse, xi, lam, force_n, self.z_nodes, self.w_nodes,
                                  (self.load_low, self.load_high))
@@ -175,7 +206,8 @@ def group_powers(degree: int | tuple[int, int]) -> np.ndarray:
 
 def fit_grid_tensor(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi: np.ndarray, force_n: np.ndarray,
                     log_r: np.ndarray, sigma: np.ndarray, degree: int | tuple[int, int], order: int,
-                    bounds: tuple[np.ndarray, np.ndarray, float, float] | None = None) -> GridTensorModel:
+                    bounds: tuple[np.ndarray, np.ndarray, float, float] | None = None,
+                    frame: str = "log") -> GridTensorModel:
     """Fit the grid surrogate.
 
     Parameters
@@ -189,45 +221,47 @@ def fit_grid_tensor(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi
         NaN or inf values are left out of that node's fit.
     degree, order
         The groups' polynomial (:func:`group_powers`: a total degree D, or a pair of degrees in
-        ln mu and ln Pi for a tensor product) and the Chebyshev order P in ln F'.
+        the frame's two coordinates for a tensor product) and the Chebyshev order P in ln F'.
     bounds
         (group_low, group_high, load_low, load_high) of the mapping (default: the points' own).
+    frame
+        The groups' coordinates (:data:`FRAMES`).
 
     Raises
     ------
     ValueError
-        If a node has no more finite points than terms.
+        If a node has no more finite points than terms, or the frame is unknown.
     """
-    x = np.column_stack([np.log(mu), np.log(pi)])
+    x = group_coordinates(mu, pi, frame)
     if bounds is None:
         bounds = (x.min(axis=0), x.max(axis=0), float(np.log(force_n).min()), float(np.log(force_n).max()))
     group_low, group_high, load_low, load_high = bounds
     group_high = np.where(group_high > group_low, group_high, group_low + 1.0)  # a group held fixed
     powers = group_powers(degree)
-    design = (_group_basis(mu, pi, group_low, group_high, powers)[:, :, None]
+    design = (_group_basis(mu, pi, group_low, group_high, powers, frame)[:, :, None]
               * load_basis(force_n, load_low, load_high, order)[:, None, :]).reshape(len(mu), -1)
     coef = np.empty((z_nodes.size, w_nodes.size, powers.shape[0], order + 1))
     for k in range(z_nodes.size):
         for l in range(w_nodes.size):
             coef[k, l] = weighted_fit(design, log_r[:, k, l], sigma[:, k, l]).reshape(powers.shape[0], order + 1)
     return GridTensorModel(np.asarray(z_nodes, float), np.asarray(w_nodes, float), np.asarray(group_low, float),
-                           np.asarray(group_high, float), float(load_low), float(load_high), powers, coef)
+                           np.asarray(group_high, float), float(load_low), float(load_high), powers, coef, frame)
 
 
 def cross_validate(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi: np.ndarray, force_n: np.ndarray,
                    log_r: np.ndarray, sigma: np.ndarray, scenes: np.ndarray, degree: int | tuple[int, int],
-                   order: int) -> np.ndarray:
-    """Leave-one-scene-out residuals ln R'_predicted - ln R' (n, nz, nw) of the grid surrogate (D, P).
+                   order: int, frame: str = "log") -> np.ndarray:
+    """Leave-one-scene-out residuals ln R'_predicted - ln R' (n, nz, nw) of the grid surrogate (frame, D, P).
 
     Each scene's points are predicted by the model fitted on the other scenes (the mapping fixed
     to all points' bounds, so a scene at the box's edge is extrapolated to, as a query there
     would be from a design without it). A fold that cannot be fitted leaves its residuals inf.
     """
-    x = np.column_stack([np.log(mu), np.log(pi)])
+    x = group_coordinates(mu, pi, frame)
     bounds = (x.min(axis=0), x.max(axis=0), float(np.log(force_n).min()), float(np.log(force_n).max()))
     return leave_one_scene_out(
         lambda keep: fit_grid_tensor(z_nodes, w_nodes, mu[keep], pi[keep], force_n[keep], log_r[keep], sigma[keep],
-                                     degree, order, bounds),
+                                     degree, order, bounds, frame),
         z_nodes, w_nodes, mu, pi, force_n, log_r, scenes)
 
 

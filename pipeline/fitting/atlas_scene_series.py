@@ -7,13 +7,14 @@ scenes between. This model keeps what each scene measured and interpolates only 
 * per design scene and oxide node (z = -ln(1 - xi), ln lambda; the clean surface as the node
   z = 0), a Chebyshev series of order P in the mapped ln F', fitted by weighted least squares to
   the scene's steps (weights 1 / sigma^2; points that are not finite left out);
-* across scenes, each coefficient of each node interpolated over (ln mu, ln Pi) by a radial basis
+* across scenes, each coefficient of each node interpolated over the groups' coordinates
+  (:data:`~pipeline.fitting.atlas_grid.FRAMES`: (ln mu, ln Pi) or (ln(mu / Pi), ln Pi)) by a radial basis
   function (polyharmonic ``cubic`` r^3 or ``thin_plate_spline`` r^2 ln r, with a linear polynomial
   tail, so a response linear in ln mu and ln Pi is reproduced exactly) with a ``smoothing`` that
   lets it pass off a scene's own noise (0: through every scene's series);
 * between oxide nodes, linear in (z, ln lambda), as the grid surrogate is.
 
-Kernel, smoothing and P are chosen by leave-one-scene-out cross-validation beside the grid
+Frame, kernel, smoothing and P are chosen by leave-one-scene-out cross-validation beside the grid
 surrogate's candidates (:func:`cross_validate`). Pure numpy/scipy; no I/O.
 """
 
@@ -25,7 +26,8 @@ from functools import cached_property
 import numpy as np
 from scipy.interpolate import RBFInterpolator
 
-from pipeline.fitting.atlas_grid import leave_one_scene_out, load_basis, node_series_value, weighted_fit
+from pipeline.fitting.atlas_grid import (group_coordinates, leave_one_scene_out, load_basis, node_series_value,
+                                         weighted_fit)
 
 __all__ = ["KERNELS", "SceneSeriesModel", "fit_scene_series", "cross_validate"]
 
@@ -42,7 +44,7 @@ class SceneSeriesModel:
     z_nodes, w_nodes
         (nz,) -ln(1 - xi) of the nodes (0 first: the clean surface) and (nw,) ln lambda.
     centers
-        (scenes, 2) ln mu and ln Pi of the design scenes.
+        (scenes, 2) the design scenes' coordinates in ``frame``.
     coef
         (scenes, nz, nw, P + 1) each scene's Chebyshev coefficients of ln R' in the mapped ln F'.
     load_low, load_high
@@ -52,6 +54,8 @@ class SceneSeriesModel:
     smoothing
         Its smoothing parameter (0: interpolation through every scene), in (ln R')^2 per unit of
         the kernel.
+    frame
+        The groups' coordinates (:data:`~pipeline.fitting.atlas_grid.FRAMES`).
     """
 
     z_nodes: np.ndarray
@@ -62,6 +66,7 @@ class SceneSeriesModel:
     load_high: float
     kernel: str
     smoothing: float
+    frame: str = "log"
 
     @property
     def order(self) -> int:
@@ -87,14 +92,15 @@ class SceneSeriesModel:
         """
         xi, lam, mu, pi, force_n = (np.asarray(a, float).ravel() for a in (xi, lam, mu, pi, force_n))
         pairs, inverse = np.unique(np.column_stack([mu, pi]), axis=0, return_inverse=True)
-        per_surface = self._interpolator(np.log(pairs)).reshape((pairs.shape[0],) + self.coef.shape[1:])
+        at = group_coordinates(pairs[:, 0], pairs[:, 1], self.frame)
+        per_surface = self._interpolator(at).reshape((pairs.shape[0],) + self.coef.shape[1:])
         return node_series_value(per_surface, inverse.ravel(), xi, lam, force_n, self.z_nodes, self.w_nodes,
                                  (self.load_low, self.load_high))
 
 
 def fit_scene_series(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi: np.ndarray, force_n: np.ndarray,
                      log_r: np.ndarray, sigma: np.ndarray, scenes: np.ndarray, order: int, kernel: str,
-                     smoothing: float, load: tuple[float, float] | None = None) -> SceneSeriesModel:
+                     smoothing: float, load: tuple[float, float] | None = None, frame: str = "log") -> SceneSeriesModel:
     """Fit the scene-series surrogate.
 
     Parameters
@@ -109,12 +115,15 @@ def fit_scene_series(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, p
         P of the series in ln F'; the radial basis function and its smoothing.
     load
         (low, high) of ln F' mapped to [-1, 1] (default: the points' own).
+    frame
+        The groups' coordinates the interpolation works in (:data:`~pipeline.fitting.atlas_grid.FRAMES`).
 
     Raises
     ------
     ValueError
         If a scene's node has no more finite points than P + 1, fewer than three scenes are
-        given, or they lie on one line in (ln mu, ln Pi) (the linear tail is then undetermined).
+        given, they lie on one line in (ln mu, ln Pi) (the linear tail is then undetermined),
+        or the kernel or frame is unknown.
     """
     if load is None:
         load = (float(np.log(force_n).min()), float(np.log(force_n).max()))
@@ -123,7 +132,7 @@ def fit_scene_series(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, p
     coef = np.empty((labels.size, z_nodes.size, w_nodes.size, order + 1))
     for k, s in enumerate(labels):
         own = scenes == s
-        centers[k] = np.log([mu[own][0], pi[own][0]])
+        centers[k] = group_coordinates(mu[own][:1], pi[own][:1], frame)[0]
         basis = load_basis(force_n[own], load[0], load[1], order)
         for i in range(z_nodes.size):
             for j in range(w_nodes.size):
@@ -133,12 +142,12 @@ def fit_scene_series(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, p
     if kernel not in KERNELS:
         raise ValueError(f"kernel {kernel!r} is not one of {KERNELS}")
     return SceneSeriesModel(np.asarray(z_nodes, float), np.asarray(w_nodes, float), centers, coef, float(load[0]),
-                            float(load[1]), kernel, float(smoothing))
+                            float(load[1]), kernel, float(smoothing), frame)
 
 
 def cross_validate(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi: np.ndarray, force_n: np.ndarray,
                    log_r: np.ndarray, sigma: np.ndarray, scenes: np.ndarray, order: int, kernel: str,
-                   smoothing: float) -> np.ndarray:
+                   smoothing: float, frame: str = "log") -> np.ndarray:
     """Leave-one-scene-out residuals ln R'_predicted - ln R' (n, nz, nw) of the scene-series surrogate.
 
     Each scene's points are predicted by the model fitted on the other scenes (the load mapping
@@ -147,5 +156,5 @@ def cross_validate(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi:
     load = (float(np.log(force_n).min()), float(np.log(force_n).max()))
     return leave_one_scene_out(
         lambda keep: fit_scene_series(z_nodes, w_nodes, mu[keep], pi[keep], force_n[keep], log_r[keep], sigma[keep],
-                                      scenes[keep], order, kernel, smoothing, load),
+                                      scenes[keep], order, kernel, smoothing, load, frame),
         z_nodes, w_nodes, mu, pi, force_n, log_r, scenes)
