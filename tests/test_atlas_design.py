@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -61,6 +62,20 @@ def test_scene_scenario_has_the_scene_groups() -> None:
         assert (g.mu, g.Pi) == pytest.approx((scene.mu, scene.Pi), rel=1e-12)
         assert s.roughness.sigma == base.roughness.sigma and s.indenter.radius == base.indenter.radius
         assert s.contact.window == AUTO and s.material == base.material
+
+
+def test_heldout_scenes_are_measured_to_the_tighter_target() -> None:
+    """A held-out scene's ensemble stops at atlas.heldout_half_width where that is tighter than the
+    base's target; a design scene keeps the base's (and so its configuration hash)."""
+    base = load_scenario("atlas")
+    assert (base.oxide.target_half_width, base.atlas.heldout_half_width) == (0.05, 0.025)
+    scenes = design_scenes(AtlasDesign.of(base))
+    design, held = scenes[0], next(s for s in scenes if s.heldout)
+    assert scene_scenario(base, design).oxide == base.oxide
+    tight = scene_scenario(base, held).oxide
+    assert tight.target_half_width == 0.025 and tight == dataclasses.replace(base.oxide, target_half_width=0.025)
+    looser = load_scenario("atlas", {"atlas.heldout_half_width": 0.1})
+    assert scene_scenario(looser, held).oxide.target_half_width == 0.05  # never looser than the design
 
 
 def test_plan_grows_with_pi_and_reports_refusals() -> None:

@@ -132,7 +132,8 @@ def design_scenes(design: AtlasDesign) -> list[Scene]:
 
 
 def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None) -> Scenario:
-    """``base`` with the scene's eta and beta (at the base's sigma and R*), approaches whose forces
+    """``base`` with the scene's eta and beta (at the base's sigma and R*), a held-out scene's
+    ensemble to ``atlas.heldout_half_width`` where that is tighter than the base's, approaches whose forces
     span :data:`pipeline.atlas.loads.FORCE_RANGE` in F' (:func:`pipeline.atlas.loads.loading_for_range`,
     ``loading.n_delta`` kept), every step fitted, and ``auto`` domains.
 
@@ -146,12 +147,16 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
 
     surface = surface_from_groups(scene.mu, scene.Pi, base.roughness.sigma, base.indenter.radius)
     roughness = dataclasses.replace(base.roughness, eta=surface.eta, beta=surface.beta)
+    oxide = base.oxide
+    if scene.heldout:  # measured closer than the design, so the verdict judges the surrogate
+        oxide = dataclasses.replace(oxide, target_half_width=min(oxide.target_half_width,
+                                                                 base.atlas.heldout_half_width))
     contact = dataclasses.replace(base.contact, window=AUTO, r_max=AUTO)
     # every step is fitted: the lightest lies at FORCE_RANGE[0] / (1 + END_MARGIN)
     fits = dataclasses.replace(base.fits, fit_range="force_normalized",
                                min_force_normalized=round(FORCE_RANGE[0] / (1.0 + 2.0 * END_MARGIN), 6))
     scenario = Scenario.of(base, name=f"{base.name}/{scene.name}", roughness=roughness, contact=contact,
-                           fits=fits)
+                           oxide=oxide, fits=fits)
     try:
         scenario = loading_for_range(scenario) if loading is None else dataclasses.replace(scenario, loading=loading)
         if scenario.contact.model == "discrete":  # as many touching caps in the pool as the paper's

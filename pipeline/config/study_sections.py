@@ -246,3 +246,7 @@ class Atlas:
     n_pi: int = param(5, "1", "design values of Pi (log-spaced, ends included)", ge=2)
     n_heldout: int = param(6, "1", "held-out scenes drawn inside the box, never fitted", ge=1)
     seed: int = param(20261124, "1", "root seed of the held-out scenes' draws", ge=0)
+    heldout_half_width: float = param(
+        0.025, "1", "target relative 95 % half-width of alpha in the held-out scenes (the smaller of this and "
+        "oxide.target_half_width): their own noise should not decide the held-out verdict", gt=0, lt=1
+    )
