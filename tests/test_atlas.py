@@ -342,3 +342,22 @@ def test_the_verdict_says_what_a_perfect_surrogate_would_pass() -> None:
     assert held["perfect_share_correlated"] == pytest.approx((0.95 + 1.0) / 2, rel=1e-9)
     old = [{k: v for k, v in row("h0", 0.1).items() if k != "noise_sigma"}]  # an older heldout.csv
     assert np.isnan(verdict(old)["perfect_share_independent"])
+
+
+def test_the_twin_is_measured_as_its_original() -> None:
+    """The invariance twin has its original's groups, role and ensemble: on the bundled atlas (held-out
+    scenes to 2.5 %, design to 5 %) its scenario differs only in sigma and R*, so the check measures
+    the invariance, not two ensembles' noise."""
+    import dataclasses
+
+    from pipeline.atlas.design import scene_scenario
+
+    base = load_scenario("atlas")
+    scenes = design_scenes(AtlasDesign.of(base))
+    original, twin = atlas._twin(scenes)
+    assert (twin.name, twin.mu, twin.Pi, twin.heldout) == (f"t{original.name}", original.mu, original.Pi, False)
+    loading = scene_scenario(base, original).loading
+    a, b = scene_scenario(base, original), scene_scenario(atlas.twin_base(base), twin, loading)
+    assert b.oxide == a.oxide and b.oxide.target_half_width == base.oxide.target_half_width == 0.05
+    assert b.roughness.sigma == 2 * a.roughness.sigma and b.indenter.radius == a.indenter.radius / 2
+    assert dataclasses.replace(b, name=a.name, roughness=a.roughness, indenter=a.indenter) == a

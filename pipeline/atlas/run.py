@@ -18,6 +18,7 @@ reduction ``resistance_normalized`` (R'); per (scene, step): ``force_normalized`
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import sys
 import time
@@ -128,18 +129,18 @@ TWIN_SCALE = 2.0
 def twin_base(base: Scenario) -> Scenario:
     """``base`` with sigma x :data:`TWIN_SCALE` and R* / :data:`TWIN_SCALE`: a scene of it has the
     same (mu, Pi) as the scene of ``base`` but other dimensions."""
-    import dataclasses
-
     return dataclasses.replace(
         base, roughness=dataclasses.replace(base.roughness, sigma=base.roughness.sigma * TWIN_SCALE),
         indenter=dataclasses.replace(base.indenter, radius=base.indenter.radius / TWIN_SCALE))
 
 
 def _twin(scenes: list[Scene]) -> tuple[Scene, Scene]:
-    """The design scene checked for invariance (the middle one) and its twin's name."""
+    """The design scene checked for invariance (the middle one) and its twin: the same groups and
+    role, so measured alike (a held-out scene's tighter ensemble would make the check the two
+    ensembles' noise); never among the scenes fitted or judged."""
     design = [s for s in scenes if not s.heldout]
     scene = design[len(design) // 2]
-    return scene, Scene(f"t{scene.name}", scene.mu, scene.Pi, True)
+    return scene, dataclasses.replace(scene, name=f"t{scene.name}")
 
 
 def _invariance(scene_ds: xr.Dataset, twin_ds: xr.Dataset) -> float:
