@@ -57,9 +57,10 @@ class AtlasSurrogate:
     ----------
     models
         ``alpha``, ``gamma`` (Eq. 27) and :data:`CURVE` (ln R'): the grid surrogate
-        (:class:`~pipeline.fitting.atlas_grid.GridTensorModel`, formats 2 and 3), the scene series
-        (:class:`~pipeline.fitting.atlas_scene_series.SceneSeriesModel`, format 3) or one polynomial
-        in five logs (format 1, the first atlas's).
+        (:class:`~pipeline.fitting.atlas_grid.GridTensorModel`, formats 2-4), the scene series
+        (:class:`~pipeline.fitting.atlas_scene_series.SceneSeriesModel`, formats 3 and 4; format 4 names
+        the frame of the groups either is built in) or one polynomial in five logs (format 1, the
+        first atlas's).
     domain
         (low, high) of mu, Pi, xi, lambda and F'.
     error
