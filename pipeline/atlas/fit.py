@@ -317,15 +317,17 @@ def curve_words(doc: dict[str, Any]) -> str:
             f"{doc['kernel']} radial basis function (smoothing {doc['smoothing']:g})")
 
 
+#: The frames of the groups in words, as the document's descriptions name them.
+_FRAMES_IN_WORDS = "; ".join(f"{name}: {words.strip('()')}" for name, words in FRAME_COORDINATES.items())
 _DESCRIPTION = {
     "grid": "at each node of (z = -ln(1 - xi), ln lambda), the clean surface as the node xi = 0, ln R' = "
             "sum_{i+j<=D} sum_{q<=P} c_ijq m^i p^j T_q(L) with m, p the groups' coordinates in the frame "
-            "(log: ln mu, ln Pi; sheared: ln(mu / Pi), ln Pi) and L = ln F', mapped to [-1, 1] (group_low/high, "
+            f"({_FRAMES_IN_WORDS}) and L = ln F', mapped to [-1, 1] (group_low/high, "
             "load_low/high), and T_q Chebyshev polynomials; linear between nodes",
     SCENE_SERIES: "at each node of (z = -ln(1 - xi), ln lambda), the clean surface as the node xi = 0, each design "
                   "scene's ln R' = sum_{q<=P} c_q T_q(L) (L: ln F' mapped to [-1, 1] by load_low/high, T_q "
                   "Chebyshev polynomials; coef[scene][z][lambda][q]), each c_q interpolated over the groups' "
-                  "coordinates in the frame (log: ln mu, ln Pi; sheared: ln(mu / Pi), ln Pi) from the scenes' "
+                  f"coordinates in the frame ({_FRAMES_IN_WORDS}) from the scenes' "
                   "centers by scipy's RBFInterpolator (kernel, smoothing, degree 1); linear between nodes",
 }
 
