@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from pipeline.atlas.design import AtlasDesign, design_scenes, format_atlas_plan, plan_atlas, scene_scenario
+from pipeline.atlas.design import AtlasDesign, design_scenes, format_atlas_plan, plan_atlas, scene_scenario, scene_seed
 from pipeline.config import AUTO, ConfigError, load_scenario
 from pipeline.physics.groups import groups
 from tests.conftest import SMALL_OVERRIDES
@@ -64,6 +64,25 @@ def test_scene_scenario_has_the_scene_groups() -> None:
         assert s.contact.window == AUTO and s.material == base.material
 
 
+def test_every_scene_draws_its_own_streams() -> None:
+    """Scenes of other groups get other root seeds (independent fields and asperity pools, so the
+    design's sampling errors average out across scenes instead of being one shared error); the same
+    groups the same seed, whatever the scene's name or role; the base's seed moves them all."""
+    base = load_scenario("atlas")
+    scenes = design_scenes(AtlasDesign.of(base))
+    seeds = [scene_scenario(base, s).oxide.seed for s in scenes]
+    assert len(set(seeds)) == len(scenes) and all(0 <= s < 2**32 for s in seeds)
+    assert seeds == [scene_seed(base.oxide.seed, s) for s in scenes]  # deterministic
+    first = scenes[0]
+    assert scene_seed(base.oxide.seed, dataclasses.replace(first, name="other", heldout=True)) == seeds[0]
+    assert scene_seed(base.oxide.seed + 1, first) != seeds[0]
+    assert scene_seed(base.oxide.seed, dataclasses.replace(first, mu=first.mu * (1 + 1e-5))) != seeds[0]
+    # the streams themselves differ: the first field of two scenes at lambda 23
+    from pipeline.physics.oxide_band import field_stream
+    draws = [field_stream(s, 23.0, 0).random(4) for s in seeds[:2]]
+    assert not np.allclose(*draws)
+
+
 def test_heldout_scenes_are_measured_to_the_tighter_target() -> None:
     """A held-out scene's ensemble stops at atlas.heldout_half_width where that is tighter than the
     base's target; a design scene keeps the base's (and so its configuration hash)."""
@@ -71,9 +90,10 @@ def test_heldout_scenes_are_measured_to_the_tighter_target() -> None:
     assert (base.oxide.target_half_width, base.atlas.heldout_half_width) == (0.05, 0.025)
     scenes = design_scenes(AtlasDesign.of(base))
     design, held = scenes[0], next(s for s in scenes if s.heldout)
-    assert scene_scenario(base, design).oxide == base.oxide
+    own = lambda scene: dataclasses.replace(base.oxide, seed=scene_seed(base.oxide.seed, scene))  # noqa: E731
+    assert scene_scenario(base, design).oxide == own(design)
     tight = scene_scenario(base, held).oxide
-    assert tight.target_half_width == 0.025 and tight == dataclasses.replace(base.oxide, target_half_width=0.025)
+    assert tight.target_half_width == 0.025 and tight == dataclasses.replace(own(held), target_half_width=0.025)
     looser = load_scenario("atlas", {"atlas.heldout_half_width": 0.1})
     assert scene_scenario(looser, held).oxide.target_half_width == 0.05  # never looser than the design
 

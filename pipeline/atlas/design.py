@@ -10,9 +10,9 @@ R*, only scales F and R. This module holds what is known before any scene runs:
   from one seed (numpy SeedSequence), each at least a quarter grid step from every design node
   in both coordinates, so none duplicates a design scene;
 * :func:`scene_scenario`: the scenario of one scene: the base scenario with eta and beta from
-  (mu, Pi) at the base's sigma and R*, load steps spanning F' 0.05-20 (:mod:`pipeline.atlas.loads`),
-  every step fitted, on discrete asperities a pool sized by its touching count, and the domains
-  back to ``auto``;
+  (mu, Pi) at the base's sigma and R*, its own random streams (:func:`scene_seed`), load steps
+  spanning F' 0.05-20 (:mod:`pipeline.atlas.loads`), every step fitted, on discrete asperities a
+  pool sized by its touching count, and the domains back to ``auto``;
 * :func:`plan_atlas`: each scene's window, memory and time (:mod:`pipeline.atlas.cost`: on
   discrete asperities the time grows with the touching asperities), or why it cannot run (a
   refusal of the plan or the preflight), before any work; :func:`format_atlas_plan` adds the wall
@@ -31,8 +31,8 @@ from pipeline.atlas.cost import SceneCost
 from pipeline.config import AUTO, ConfigError, Loading, Scenario
 from pipeline.physics.groups import surface_from_groups
 
-__all__ = ["AtlasDesign", "Scene", "SceneEstimate", "design_scenes", "scene_scenario", "plan_atlas",
-           "format_atlas_plan", "wall_seconds", "schedule", "ALONE_EFFICIENCY", "BUDGET_SECONDS", "POOL_TOUCHING", "MIN_POOL"]
+__all__ = ["AtlasDesign", "Scene", "SceneEstimate", "design_scenes", "scene_seed", "scene_scenario", "plan_atlas",
+           "format_atlas_plan", "SCENE_TAG", "GROUP_KEY_SCALE", "wall_seconds", "schedule", "ALONE_EFFICIENCY", "BUDGET_SECONDS", "POOL_TOUCHING", "MIN_POOL"]
 
 #: Smallest distance of a held-out scene from a design node, in grid steps of each log coordinate.
 MIN_HELDOUT_GAP = 0.25
@@ -44,6 +44,11 @@ POOL_TOUCHING = 256 * 200
 MIN_POOL = 32
 #: Draws tried per held-out scene before the design is refused as too dense.
 _MAX_DRAWS = 10_000
+#: Second entropy word of a scene's root seed: ``SeedSequence([seed, SCENE_TAG, mu_key, Pi_key])``.
+SCENE_TAG = 0x7363656E  # "scen"
+#: Resolution of the groups in a scene's seed key: scenes closer than 1 / GROUP_KEY_SCALE in both
+#: mu and Pi draw the same streams.
+GROUP_KEY_SCALE = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -131,10 +136,31 @@ def design_scenes(design: AtlasDesign) -> list[Scene]:
     return scenes
 
 
+def scene_seed(seed: int, scene: Scene) -> int:
+    """The root seed of a scene's random streams (its oxide fields and asperity pool), from the base's
+    ``oxide.seed`` and the scene's groups.
+
+    Every scene draws its own fields, so the design scenes' sampling errors are independent: the
+    surrogate, smoothing across scenes, averages them down instead of inheriting the one error that
+    common streams would give every scene (at lambda 23, where a 5 % ensemble stops after 100-200
+    fields, that shared error was 3-5 % in ln R'), and a held-out scene's error is not shared with
+    the design that is judged against it. Two scenes of equal groups (the invariance twin and its
+    original) draw the same streams, so their comparison is the invariance alone.
+
+    Returns
+    -------
+    int
+        A seed in [0, 2^32).
+    """
+    key = [round(scene.mu * GROUP_KEY_SCALE), round(scene.Pi * GROUP_KEY_SCALE)]
+    return int(np.random.SeedSequence([int(seed), SCENE_TAG, *key]).generate_state(1)[0])
+
+
 def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None) -> Scenario:
-    """``base`` with the scene's eta and beta (at the base's sigma and R*), a held-out scene's
-    ensemble to ``atlas.heldout_half_width`` where that is tighter than the base's, approaches whose forces
-    span :data:`pipeline.atlas.loads.FORCE_RANGE` in F' (:func:`pipeline.atlas.loads.loading_for_range`,
+    """``base`` with the scene's eta and beta (at the base's sigma and R*), its own random streams
+    (``oxide.seed`` from :func:`scene_seed`), a held-out scene's ensemble to
+    ``atlas.heldout_half_width`` where that is tighter than the base's, approaches whose forces span
+    :data:`pipeline.atlas.loads.FORCE_RANGE` in F' (:func:`pipeline.atlas.loads.loading_for_range`,
     ``loading.n_delta`` kept), every step fitted, and ``auto`` domains.
 
     Raises
@@ -147,7 +173,7 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
 
     surface = surface_from_groups(scene.mu, scene.Pi, base.roughness.sigma, base.indenter.radius)
     roughness = dataclasses.replace(base.roughness, eta=surface.eta, beta=surface.beta)
-    oxide = base.oxide
+    oxide = dataclasses.replace(base.oxide, seed=scene_seed(base.oxide.seed, scene))
     if scene.heldout:  # measured closer than the design, so the verdict judges the surrogate
         oxide = dataclasses.replace(oxide, target_half_width=min(oxide.target_half_width,
                                                                  base.atlas.heldout_half_width))
