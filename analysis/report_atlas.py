@@ -57,14 +57,22 @@ def _cv_table(doc: dict[str, Any]) -> Block:
                   "LOSO max", "LOSO cells within"], rows)
 
 
-def _ceiling_words(held: dict[str, Any]) -> str:
-    """What a perfect surrogate would pass through the held-out scenes' own noise, if known."""
+def _ceiling_words(held: dict[str, Any], ceiling: dict[str, Any] | None) -> str:
+    """What a perfect surrogate would pass through the held-out scenes' own noise, if known, and the
+    noise ceiling of ``surrogate.json`` (None: fitted by an older g2tom)."""
     low, high = held.get("perfect_share_independent"), held.get("perfect_share_correlated")
     if low is None or not np.isfinite(low):
         return ""
-    return (f" A perfect surrogate, erring only by the held-out scenes' own noise, would pass {100 * low:.0f} % of the "
-            f"cells if that noise were independent from step to step and {100 * high:.0f} % if fully correlated "
-            f"along the load.")
+    words = (f" A perfect surrogate, erring only by the held-out scenes' own noise, would pass {100 * low:.0f} % of the "
+             f"cells if that noise were independent from step to step and {100 * high:.0f} % if fully correlated "
+             f"along the load.")
+    if ceiling:
+        words += (f" Its ceiling at this precision: were the truth exactly a model of the chosen kind, that kind refitted "
+                  f"on the design scenes through their sampling noise would pass "
+                  f"{100 * ceiling['independent_steps']:.0f} % of the cells (noise independent from step to step) to "
+                  f"{100 * ceiling['correlated_steps']:.0f} % (fully correlated along the load; mean of "
+                  f"{ceiling['draws']} draws each).")
+    return words
 
 
 def _band_table(doc: dict[str, Any]) -> Block:
@@ -108,7 +116,7 @@ def atlas_blocks(data_dir: Path) -> list[Block]:
         f"{worst['error']:.3g} against {worst['allowed']:.3g} allowed. Targets "
         f"{'met' if held['met'] else 'NOT met'}. Eq. 25's power law, for the record: "
         f"{held['power_law_cells_within']} of {held['cells']} cells (RMS {held['power_law_rms_ln_error']:.3g})."
-        + _ceiling_words(held))))
+        + _ceiling_words(held, doc["heldout"].get("noise_ceiling")))))
     blocks.append(Block("p", "Leave-one-scene-out cross-validation on the design scenes (each predicted by the model "
                              "fitted without it; scenes at the box's edge are extrapolated to):"))
     blocks.append(_cv_table(doc))

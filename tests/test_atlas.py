@@ -211,6 +211,32 @@ def test_atlas_surrogate_fitted_on_design_judged_on_heldout(tmp_path, base, unin
     assert doc["domain"]["force_normalized"][0] < 0.05 and doc["domain"]["force_normalized"][1] > 20
 
 
+def test_the_noise_ceiling_is_the_verdict_on_noisy_copies_of_the_fit(uninterrupted) -> None:
+    """The ceiling refits the chosen model on its own predictions plus the design's noise and judges
+    it on the held-out scenes' predictions plus theirs: without noise every cell passes; with the
+    intervals 30 times wider, fewer; the same seed, the same shares."""
+    from pipeline.atlas import fit as F
+
+    doc, _ = F.fit_atlas(uninterrupted)
+    ceiling = doc["heldout"]["noise_ceiling"]
+    assert ceiling["draws"] == F.CEILING_DRAWS
+    assert all(0.0 <= ceiling[k] <= 1.0 for k in ("independent_steps", "correlated_steps"))
+    held = uninterrupted["heldout"].values.astype(bool)
+    xi_nodes, w_nodes = F._nodes(uninterrupted)
+    design, heldout = (F.grid_points(uninterrupted, np.flatnonzero(m)) for m in (~held, held))
+    chosen = next(r for r in doc["cross_validation"] if r.get("chosen"))
+    curve = F.curve_model(doc[F.CURVE])
+
+    def at(scale: float) -> dict:
+        return F.noise_ceiling(chosen, curve, dict(design, half_width=design["half_width"] * scale),
+                               dict(heldout, half_width=heldout["half_width"] * scale), xi_nodes, w_nodes, 1.96, draws=6)
+
+    quiet, loud = at(0.0), at(30.0)
+    assert quiet["independent_steps"] == quiet["correlated_steps"] == 1.0
+    assert loud["independent_steps"] < 1.0 and loud["correlated_steps"] < 1.0
+    assert at(30.0) == loud
+
+
 def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     import json
 
@@ -240,6 +266,9 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     assert any(f"{held['cells_within']} of {held['cells']} (scene, xi, lambda) cells" in t for t in texts)
     assert again["perfect_share_independent"] == pytest.approx(held["perfect_share_independent"], rel=1e-12)
     assert any(f"would pass {100 * held['perfect_share_independent']:.0f} % of the cells" in t for t in texts)
+    ceiling = held["noise_ceiling"]
+    assert any(f"would pass {100 * ceiling['independent_steps']:.0f} % of the cells (noise independent" in t
+               for t in texts)
     assert any("Invariance of the groups" in t for t in texts)
     tables = [b for b in atlas_blocks(tmp_path) if b.kind == "table"]
     chosen = [row for row in tables[0].rows[1:] if row[0].endswith("(chosen)")]  # the cross-validation table

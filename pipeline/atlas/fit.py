@@ -26,7 +26,9 @@ lambda, mu, Pi) (:mod:`pipeline.fitting.atlas_surrogate`) stay beside it.
 Held-out verdict (:func:`verdict`, also what the report prints): at every fitted F' step of every
 held-out (scene, xi, lambda) cell, |ln R'_surrogate - ln R'_scene| against max(:data:`FLOOR`, the
 step's relative half-width of the scene's R'), R'_scene the scene's fitted reduction; the targets
-are :data:`TARGET_SHARE` of the cells within at every step and no step beyond :data:`WORST`.
+are :data:`TARGET_SHARE` of the cells within at every step and no step beyond :data:`WORST`. Beside
+it, its noise ceiling (:func:`noise_ceiling`): the share the chosen kind of model would reach if the
+truth were exactly of that kind, through the ensembles' sampling noise alone.
 Writes ``<atlas>/surrogate.json`` and ``<atlas>/heldout.csv`` (one line per held-out cell and step).
 """
 
@@ -44,12 +46,13 @@ from scipy.stats import norm
 from pipeline.fitting.atlas_band import fit_band, with_heldout
 from pipeline.fitting.atlas_grid import (FRAME_COORDINATES, FRAMES, GridTensorModel, cross_validate, fit_grid_tensor,
                                          group_powers, node_coordinates)
+from pipeline.fitting.atlas_noise import sampling_noise
 from pipeline.fitting.atlas_scene_series import KERNELS, SceneSeriesModel, fit_scene_series
 from pipeline.fitting.atlas_scene_series import cross_validate as cross_validate_series
 from pipeline.fitting.atlas_surrogate import AtlasModel, exponents, fit_atlas_model, select_degree
 from pipeline.store import atomic_path, git_commit
 
-__all__ = ["fit_atlas", "write_atlas_surrogate", "verdict", "code_hash", "curve_doc", "curve_model", "curve_words", "FLOOR", "WORST",
+__all__ = ["fit_atlas", "write_atlas_surrogate", "verdict", "noise_ceiling", "CEILING_DRAWS", "code_hash", "curve_doc", "curve_model", "curve_words", "FLOOR", "WORST",
            "TARGET_SHARE", "FORMAT", "FORMAT_VERSION", "CURVE", "DEGREES", "ORDERS", "SMOOTHINGS", "SCENE_SERIES"]
 
 FORMAT = "g2tom-atlas-surrogate"
@@ -79,9 +82,12 @@ SCENE_SERIES = "scene series"
 SMOOTHINGS = (0.0, 0.1, 0.3, 1.0)
 #: Degrees of the one polynomial in five logs cross-validated for the record (6: the first atlas's).
 POLY_DEGREES = (2, 4, 6)
+#: Draws of the held-out verdict's noise ceiling (:func:`noise_ceiling`) and the root seed of their noise.
+CEILING_DRAWS = 16
+CEILING_SEED = 20261128
 #: Modules whose code defines the fitted surrogate (their hash is recorded in its provenance).
 _FITTING_CODE = ("atlas/fit.py", "fitting/atlas_grid.py", "fitting/atlas_scene_series.py", "fitting/atlas_band.py",
-                 "fitting/atlas_surrogate.py")
+                 "fitting/atlas_surrogate.py", "fitting/atlas_noise.py")
 
 
 def code_hash() -> str:
@@ -397,7 +403,72 @@ def fit_atlas(atlas: xr.Dataset) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     })
     loso = residual[judged][:, 1:][np.isfinite(residual[judged][:, 1:])]
     doc["heldout"]["loso_rms_ln_error"] = float(np.sqrt(np.mean(loso**2)))
+    doc["heldout"]["noise_ceiling"] = noise_ceiling(chosen, curve, points, grid_points(atlas, np.flatnonzero(held)),
+                                                    xi_nodes, w_nodes, _z_c(atlas))
     return doc, rows
+
+
+def _at_points(model: GridTensorModel | SceneSeriesModel, points: dict[str, np.ndarray], xi_nodes: np.ndarray,
+               w_nodes: np.ndarray) -> np.ndarray:
+    """The curve model's ln R' at every point (a scene's step) and node, (n, nz, nw)."""
+    n, nz, nw = points["log_r"].shape
+    grid = lambda a: np.broadcast_to(a, (n, nz, nw)).ravel()  # noqa: E731
+    at = (grid(points[k][:, None, None]) for k in ("mu", "Pi", "force_normalized"))
+    return model.log_resistance(grid(xi_nodes[None, :, None]), grid(np.exp(w_nodes)[None, None, :]),
+                                *at).reshape(n, nz, nw)
+
+
+def noise_ceiling(chosen: dict[str, Any], curve: GridTensorModel | SceneSeriesModel, design: dict[str, np.ndarray],
+                  held: dict[str, np.ndarray], xi_nodes: np.ndarray, w_nodes: np.ndarray, z_c: float,
+                  draws: int = CEILING_DRAWS, seed: int = CEILING_SEED) -> dict[str, float]:
+    """The held-out share the chosen kind of model would reach if the truth were exactly the fitted
+    ``curve``, erring only through the ensembles' sampling noise: the verdict's ceiling at this
+    design's and these held-out scenes' precision (a parametric bootstrap).
+
+    Each draw gives the design scenes ln R' = truth + noise of one sigma half-width / z (their
+    intervals), refits the ``chosen`` candidate on them as :func:`fit_atlas` does, and judges it by
+    the verdict's rule against held-out ln R' = truth + their own noise. Scenes' errors are
+    independent (each scene draws its own fields); along the load they lie between independent and
+    fully correlated (:mod:`pipeline.fitting.atlas_noise`), so both ends are drawn.
+
+    Parameters
+    ----------
+    chosen
+        The cross-validation row of the chosen curve model.
+    curve
+        The curve model fitted on the design (the truth of the bootstrap).
+    design, held
+        :func:`grid_points` of the design and the held-out scenes.
+    xi_nodes, w_nodes
+        Nodes of the oxide fraction (0 first) and of ln lambda.
+    z_c
+        The intervals' normal quantile (a half-width is z_c sigma).
+    draws, seed
+        Draws per end and the root seed of their noise.
+
+    Returns
+    -------
+    dict
+        ``independent_steps`` and ``correlated_steps``: the mean share of the held-out cells within
+        at every step, each with its ``..._standard_error`` over the draws; ``draws``.
+    """
+    z_nodes = node_coordinates(xi_nodes, np.ones_like(xi_nodes))[0]
+    truth_design, truth_held = (_at_points(curve, p, xi_nodes, w_nodes) for p in (design, held))
+    rng = np.random.default_rng(np.random.SeedSequence(seed))
+    out: dict[str, float] = {"draws": draws}
+    for key, along_load in (("independent_steps", False), ("correlated_steps", True)):
+        shares = []
+        for _ in range(draws):
+            noisy = dict(design, log_r=truth_design + sampling_noise(rng, design["half_width"] / z_c, design["scene"],
+                                                                     along_load))
+            model = _fit_curve(chosen, noisy, z_nodes, w_nodes)
+            measured = truth_held + sampling_noise(rng, held["half_width"] / z_c, held["scene"], along_load)
+            within, total = _cells_within(_at_points(model, held, xi_nodes, w_nodes) - measured, held["half_width"],
+                                          held["scene"])
+            shares.append(within / total)
+        out[key] = float(np.mean(shares))
+        out[f"{key}_standard_error"] = float(np.std(shares, ddof=1) / np.sqrt(draws)) if draws > 1 else float("nan")
+    return out
 
 
 def _force_range(atlas: xr.Dataset) -> list[float]:
@@ -462,7 +533,7 @@ def heldout_rows(atlas: xr.Dataset, scenes: np.ndarray, models: dict[str, Any]) 
     mu, pi, force, scene = (grid(points[k][:, None, None]) for k in ("mu", "Pi", "force_normalized", "scene"))
     target = points["log_r"][:, 1:].ravel()
     half = points["half_width"][:, 1:].ravel()
-    curve = models[CURVE].log_resistance(xi, lam, mu, pi, force)
+    curve = _at_points(models[CURVE], points, xi_nodes, w_nodes)[:, 1:].ravel()
     power = np.log(models["alpha"](xi, lam, mu, pi)) - models["gamma"](xi, lam, mu, pi) * np.log(force)
     names = atlas["scene"].values
     rows = []
