@@ -291,6 +291,10 @@ def test_cli_runs_fits_and_summarizes(tmp_path, capsys) -> None:
     assert main(["atlas", "--data-dir", str(tmp_path), "--workers", "1", "--no-progress", *sets]) == 0
     err = capsys.readouterr().err
     assert err.count("atlas: scene ") == 6 and "held out: " in err and "cells within max(5 %, interval)" in err
+    import json
+    ceiling = json.loads((tmp_path / "atlas" / "surrogate.json").read_text())["heldout"]["noise_ceiling"]
+    assert (f"the noise ceiling at this precision {100 * ceiling['independent_steps']:.0f}-"
+            f"{100 * ceiling['correlated_steps']:.0f} % of the cells") in err
     assert (tmp_path / "atlas" / "atlas.nc").is_file() and (tmp_path / "atlas" / "surrogate.json").is_file()
     # a second run has nothing left to compute
     assert main(["atlas", "--data-dir", str(tmp_path), "--workers", "1", "--no-progress", *sets]) == 0

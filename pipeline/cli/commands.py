@@ -259,7 +259,9 @@ def atlas(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
           f"held out: {held['cells_within']} of "
           f"{held['cells']} cells within max(5 %, interval) at every step; worst {worst['scene']} (xi {worst['xi']:g}, "
           f"lambda {worst['lambda']:g}, F' {worst['force_normalized']:.3g}): {worst['error']:.3g} in ln R' vs "
-          f"{worst['allowed']:.3g} allowed; targets {'met' if held['met'] else 'not met'}", file=sys.stderr)
+          f"{worst['allowed']:.3g} allowed; targets {'met' if held['met'] else 'not met'}; the noise ceiling at this "
+          f"precision {100 * held['noise_ceiling']['independent_steps']:.0f}-"
+          f"{100 * held['noise_ceiling']['correlated_steps']:.0f} % of the cells", file=sys.stderr)
 
 
 def roughness(args: argparse.Namespace, scenario: Scenario) -> None:
