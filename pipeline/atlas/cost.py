@@ -85,11 +85,14 @@ class SceneCost:
 
 def _slowest_fields(scenario: Scenario, touching: np.ndarray) -> np.ndarray:
     """Realizations of the slowest xi per lambda of an adaptive discrete scene (see the module)."""
+    from pipeline.before_work.plan import control_variate_share
+
     ox = scenario.oxide
     mid = max(float(touching[touching.size // 2]), 1.0)
     # fewer touching asperities than the reference do not ask for more: at Pi 5 (N_mid 11) the
     # rule asked for 334 and 743 fields at lambda 1 and 23, below the reference's counts
-    scale = min(1.0, (REFERENCE_TOUCHING / mid) ** FIELDS_EXPONENT) * (REFERENCE_TARGET / ox.target_half_width) ** 2
+    scale = (min(1.0, (REFERENCE_TOUCHING / mid) ** FIELDS_EXPONENT) * (REFERENCE_TARGET / ox.target_half_width) ** 2
+             * control_variate_share(scenario))
     reference = np.interp(np.log(ox.lambda_), np.log([1.0, 3.0, 7.0, 11.0, 17.0, 23.0]), REFERENCE_FIELDS)
     return np.clip(reference * scale, ox.min_realizations, ox.max_realizations)
 

@@ -84,11 +84,29 @@ def _check_discrete(s: Scenario) -> None:
                           "= 'discrete': must be 0 (discrete spots have no lattice to complete)")
 
 
+def _check_control_variate(s: Scenario) -> None:
+    """The control variate's expectation is exact for discrete spots, the theoretical threshold
+    and ideal amplitudes only, and it adjusts the geometric mean."""
+    if s.fits.control_variate == "none":
+        return
+    for name, value, allowed, why in (
+        ("contact.model", s.contact.model, "discrete", "the control is the discrete spots' clean share"),
+        ("oxide.threshold", s.oxide.threshold, "theoretical", "its expectation needs one threshold for every field"),
+        ("oxide.amplitudes", s.oxide.amplitudes, "ideal",
+         "its expectation is exact for the random-phase field of fixed amplitudes"),
+        ("fits.reduction", s.fits.reduction, "geometric_mean", "the control variate adjusts the mean of ln R"),
+        ("oxide.film", s.oxide.film, "insulating", "a resistive film conducts where the control counts no share"),
+    ):
+        if value != allowed:
+            raise ConfigError(f"{name} = {value!r} is not allowed with fits.control_variate = "
+                              f"{s.fits.control_variate!r}: must be {allowed!r} ({why})")
+
+
 def check_scenario(s: Scenario) -> None:
     """Every check across parameters of a scenario, run as it is loaded (before any work).
 
     The settings that rule each other out (:func:`_check_point_model`, :func:`_check_spots`,
-    :func:`_check_discrete`), integers a netCDF attribute cannot hold, the approaches' order,
+    :func:`_check_discrete`, :func:`_check_control_variate`), integers a netCDF attribute cannot hold, the approaches' order,
     the atlas's box and, once ``contact.window`` and ``contact.r_max`` are both numbers, the
     window against the radial domain and the oxide band
     (:func:`pipeline.before_work.window_checks.check_domains`).
@@ -101,6 +119,7 @@ def check_scenario(s: Scenario) -> None:
     _check_point_model(s)
     _check_spots(s)
     _check_discrete(s)
+    _check_control_variate(s)
     for section in SECTIONS:
         obj = getattr(s, section)
         for f in dataclasses.fields(obj):

@@ -46,7 +46,7 @@ STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     # the fitted steps and fits.confidence: the adaptive ensemble's stopping rule
     "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance", "oxide.spot_rule", "fits.min_force",
              "fits.fit_range",
-             "fits.min_force_normalized", "fits.confidence"),
+             "fits.min_force_normalized", "fits.confidence", "fits.control_variate"),
     "fits": ("fits",),
     "surrogate": (
         "surrogate.method",
@@ -69,6 +69,9 @@ STAGE_INPUTS: dict[str, tuple[str, ...]] = {
 STAGE_EXCLUDED: dict[str, tuple[str, ...]] = {
     "oxide": ("oxide.film", "oxide.film_resistance", "oxide.spot_rule"),
 }
+#: Parameters left out of every hash while they hold these values (their defaults): a parameter added
+#: later keeps the hashes, and so the outputs on disk, of every scenario that does not use it.
+HASH_NEUTRAL: dict[str, Any] = {"fits.control_variate": "none"}
 #: The stages whose outputs each stage reads (their hashes enter its own).
 STAGE_UPSTREAM: dict[str, tuple[str, ...]] = {
     "contact": (),
@@ -154,6 +157,7 @@ class Scenario:
             k: v
             for k, v in flat.items()
             if any(k == w or k.startswith(w + ".") for w in wanted) and k not in excluded
+            and not (k in HASH_NEUTRAL and v == HASH_NEUTRAL[k])
         }
 
     def config_hash(self, stage: str | None = None) -> str:
@@ -162,7 +166,7 @@ class Scenario:
         With ``stage=None`` the hash covers the whole scenario (name and description aside).
         """
         if stage is None:
-            payload: Any = self.flat()
+            payload: Any = {k: v for k, v in self.flat().items() if not (k in HASH_NEUTRAL and v == HASH_NEUTRAL[k])}
         else:
             payload = {
                 "stage": stage,

@@ -182,6 +182,12 @@ class Fits:
         0.03, "1", "curve model: relative error of R' allowed at every fitted step (or the step's "
         "confidence interval where wider)", gt=0, lt=1
     )
+    control_variate: str = param(
+        "none", "1", "control variate of the geometric mean: none, or clean_share (ln R of each step regressed on "
+        "the realization's radius-weighted clean share of its spots, whose expectation is known exactly; needs "
+        "discrete asperities, the theoretical threshold, ideal amplitudes and the geometric mean)",
+        choices=("none", "clean_share"),
+    )
     n_bootstrap: int = param(400, "1", "bootstrap resamples over realizations", ge=10)
     confidence: float = param(0.95, "1", "confidence level of the intervals", gt=0, lt=1)
     seed: int = param(7, "1", "seed of the bootstrap", ge=0)

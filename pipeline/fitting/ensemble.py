@@ -17,7 +17,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-__all__ = ["fit_weights", "statistic", "prefix_half_width", "stop_count", "z_value", "log_standard_error"]
+__all__ = ["fit_weights", "statistic", "prefix_half_width", "prefix_controlled_half_width", "stop_count", "z_value",
+           "log_standard_error"]
 
 
 def fit_weights(log_x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -87,22 +88,61 @@ def prefix_half_width(t: np.ndarray, z: float) -> np.ndarray:
         two finite values). For ``t`` of :func:`statistic` with ``c_alpha`` this is the
         half-width of ``log alpha``; ``sinh`` of it is alpha's relative half-width.
     """
-    finite = np.isfinite(t)
-    value = np.where(finite, t, 0.0)
-    count = np.cumsum(finite, axis=-1)
-    # Shifting by the mean of the first (up to 16) finite values keeps the running sums well
-    # conditioned; it depends on those realizations only, so every prefix's result is fixed.
-    head = slice(0, min(t.shape[-1], 16))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        shift = value[..., head].sum(-1, keepdims=True) / finite[..., head].sum(-1, keepdims=True)
-    shift = np.where(np.isfinite(shift), shift, 0.0)
-    centred = np.where(finite, value - shift, 0.0)
+    count, (centred,) = _prefix_sums(t)
     s1 = np.cumsum(centred, axis=-1)
     s2 = np.cumsum(centred**2, axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
         var = (s2 - s1**2 / count) / (count - 1)
         out = z * np.sqrt(np.maximum(var, 0.0) / count)
     return np.where(count >= 2, out, np.nan)
+
+
+def _prefix_sums(*columns: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Running count of the realizations where every column is finite, and each column's running sum
+    over them, after shifting by its mean over the first (up to 16) of them: the shift depends on
+    those realizations only, so every prefix's result is fixed, and it keeps the sums conditioned."""
+    finite = np.all([np.isfinite(c) for c in columns], axis=0)
+    count = np.cumsum(finite, axis=-1)
+    head = slice(0, min(finite.shape[-1], 16))
+    out = []
+    for column in columns:
+        value = np.where(finite, column, 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            shift = value[..., head].sum(-1, keepdims=True) / finite[..., head].sum(-1, keepdims=True)
+        out.append(np.where(finite, value - np.where(np.isfinite(shift), shift, 0.0), 0.0))
+    return count, out
+
+
+def prefix_controlled_half_width(t: np.ndarray, u: np.ndarray, z: float) -> np.ndarray:
+    """:func:`prefix_half_width` of ``t`` adjusted by the control ``u`` (known mean): ``z`` times the
+    standard error of ``mean(t) - b (mean(u) - E u)``, from the residual variance of ``t`` after its
+    least-squares regression on ``u``, over every prefix of the realizations.
+
+    Parameters
+    ----------
+    t, u
+        Statistics and their controls on the last axis (..., r); a realization where either is NaN
+        (an open circuit) is skipped.
+    z
+        Normal quantile of the confidence level.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (..., r): entry n - 1 for the first n realizations (NaN below three finite ones);
+        where ``u`` does not vary, the plain one with n - 2 degrees of freedom.
+    """
+    count, (tc, uc) = _prefix_sums(t, u)
+    st, su = np.cumsum(tc, axis=-1), np.cumsum(uc, axis=-1)
+    stt, suu, stu = (np.cumsum(a * b, axis=-1) for a, b in ((tc, tc), (uc, uc), (tc, uc)))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        var_t = (stt - st**2 / count) / (count - 1)
+        var_u = (suu - su**2 / count) / (count - 1)
+        cov = (stu - st * su / count) / (count - 1)
+        explained = np.where(var_u > 1e-300, cov**2 / np.where(var_u > 1e-300, var_u, 1.0), 0.0)
+        residual = np.maximum(var_t - explained, 0.0) * (count - 1) / (count - 2)
+        out = z * np.sqrt(residual / count)
+    return np.where(count >= 3, out, np.nan)
 
 
 def stop_count(half_width: np.ndarray, target: float, n_min: int) -> int | None:

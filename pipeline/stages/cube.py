@@ -36,12 +36,14 @@ from pipeline.compute import ComputeOptions, single_threaded
 from pipeline.config import Scenario
 from pipeline.physics.crops import choose_crops
 from pipeline.physics.interaction import AUTO_METHOD
+from pipeline.physics import oxide_field
 from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
+from pipeline.physics.oxide_marginal import clean_probability
 from pipeline.stages.cube_chunks import CubeSettings, asperity_spots, clean_terms, exact_terms, spots_of
 from pipeline.stages.cube_dataset import dataset
 from pipeline.stages.cube_discrete import DiscretePool, clean_pool
 from pipeline.stages.cube_rounds import compute_cells, half_widths, padded, stopping_rule
-from pipeline.scene import FieldSource
+from pipeline.scene import FieldSource, bands
 from pipeline.stages.oxide import RecordedFields
 
 __all__ = ["build", "run", "spot_maps", "work_settings", "clean_conductances", "CLEAN_MODELS"]
@@ -196,6 +198,7 @@ def work_settings(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, 
         asperities=asperities,
         separation=separation,
         spot_rule=scenario.oxide.spot_rule,
+        control_variate=scenario.fits.control_variate == "clean_share",
     )
     if scenario.contact.model == "discrete":
         pool = DiscretePool.of(contact)
@@ -216,6 +219,13 @@ def clean_conductances(scenario: Scenario, contact: xr.Dataset,
     in ``known`` are taken from it)."""
     radius, weights, settings = work_settings(scenario, contact)
     return _clean_models(radius, weights, settings, _clean_draws(scenario), known or {})
+
+
+def expected_clean_share(scenario: Scenario) -> np.ndarray:
+    """The expectation of every (xi, lambda)'s control variate ``clean_share``: the probability that a
+    point of the field is clean at the float32 theoretical threshold, (xi, lambda)."""
+    thresholds = oxide_field.theoretical_threshold(np.asarray(scenario.oxide.xi, float)).astype(np.float32)
+    return np.array([[clean_probability(band.weight, float(t)) for band in bands(scenario)] for t in thresholds])
 
 
 @single_threaded
@@ -260,10 +270,13 @@ def build(
     rule = stopping_rule(scenario, contact["force"].values, contact["force_normalized"].values)
     cells, uncropped = compute_cells(scenario, source, radius, weights, settings, rule, options)
     counts = np.array([[c["resistance"].shape[-1] for c in row] for row in cells])
-    widths = [[half_widths(c["resistance"][None], rule) for c in row] for row in cells]
+    widths = [[half_widths(c["resistance"][None], rule, c["clean_share"][None] if "clean_share" in c else None)
+               for c in row] for row in cells]
     last = tuple(np.array([[w[k][0, -1] for w in row] for row in widths]) for k in (0, 1))
     out: dict[str, Any] = padded(cells)
     out["n_uncropped"] = uncropped
+    if "clean_share" in out:
+        out["clean_share_expected"] = expected_clean_share(scenario)
     clean = _clean(radius, weights, settings, _clean_draws(scenario))
     insulating_greenwood = scenario.cube.model == "greenwood" and scenario.oxide.film == "insulating"
     clean["models"] = clean_conductances(

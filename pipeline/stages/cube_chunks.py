@@ -61,6 +61,8 @@ class CubeSettings:
         ``asperities`` spots only: separation at the cell centres (delta, y, x), m.
     spot_rule
         ``oxide.spot_rule`` (discrete spots: ``centre`` or ``disc``).
+    control_variate
+        ``fits.control_variate``: discrete spots also return each realization's ``clean_share``.
     """
 
     pitch: float
@@ -79,6 +81,7 @@ class CubeSettings:
     asperities: tuple[int, float, float] | None = None
     separation: np.ndarray | None = None
     spot_rule: str = "centre"
+    control_variate: bool = False
 
 
 def model(settings: CubeSettings) -> Any:
@@ -97,8 +100,11 @@ def model(settings: CubeSettings) -> Any:
 
 
 def terms(settings: CubeSettings) -> tuple[str, ...]:
-    """The per-entry terms the model of ``settings`` returns (discrete spots: a direct solve, no solver terms)."""
-    return TERMS + SOLVER_TERMS if settings.model == "point" and settings.spots != "discrete" else TERMS
+    """The per-entry terms the model of ``settings`` returns (discrete spots: a direct solve, no solver
+    terms; with the control variate also the spots' ``clean_share``)."""
+    if settings.spots == "discrete":
+        return TERMS + ("clean_share",) if settings.control_variate else TERMS
+    return TERMS + SOLVER_TERMS if settings.model == "point" else TERMS
 
 
 def _resistance(masks: np.ndarray, radius: np.ndarray, weights: np.ndarray, settings: CubeSettings,

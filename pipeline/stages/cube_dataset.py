@@ -68,6 +68,15 @@ def dataset(
         "clean_open_probability": cube("clean_open_probability", clean["open"]),
         "crop_cells": cube("crop_cells", np.asarray(settings.crops, np.int32)),
     }
+    if "clean_share" in out:
+        for name in ("rule_alpha_half_width", "rule_gamma_half_width"):
+            data_vars[name][2]["control_variate"] = ("t_r's residual after its least-squares regression on "
+                                                     "u_r = the same weights . clean_share_r")
+        data_vars["clean_share"] = cube("clean_share", out["clean_share"], comment=padding)
+        data_vars["clean_share_expected"] = cube(
+            "clean_share_expected", out["clean_share_expected"],
+            method="Gil-Pelaez inversion of the random-phase field's characteristic function prod_k J0(w_k u) "
+                   "at the float32 threshold (pipeline.physics.oxide_marginal)")
     if "iterations" in out:
         data_vars["iterations"] = cube("iterations", out["iterations"].astype(np.int32),
                                        comment="-1 beyond n_realizations(xi, lambda)")

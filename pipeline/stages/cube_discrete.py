@@ -40,7 +40,8 @@ from pipeline.physics.spot_share import DEFAULT_RINGS, disc_points, disc_shares,
 if TYPE_CHECKING:  # cube_chunks imports this module
     from pipeline.stages.cube_chunks import CubeSettings
 
-__all__ = ["RINGS_PER_CORRELATION", "POINT_TOLERANCE", "DiscretePool", "rings", "clean_shares", "discrete_chunk", "clean_pool"]
+__all__ = ["RINGS_PER_CORRELATION", "POINT_TOLERANCE", "DiscretePool", "rings", "clean_shares", "discrete_chunk", "clean_pool",
+           "weighted_clean_share"]
 
 #: Disc rule: pattern rings per disc radius in correlation lengths l_O (8 rings at a = l_O / 2).
 RINGS_PER_CORRELATION = 16.0
@@ -166,11 +167,36 @@ def discrete_chunk(source: Any, index: int, realizations: np.ndarray, xi_index: 
         coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(base.seed, lam, int(k)), base.amplitudes)
         share = clean_shares(modes, coeffs, x, y, radius, thresholds[:, column], settings.spot_rule,
                              lam * base.cell_size)
-        pieces.append(_terms(pool.kernel(int(k)), effective_radius(radius[None], share, settings.spot_rule),
-                             settings.rho, settings.model))
+        piece = _terms(pool.kernel(int(k)), effective_radius(radius[None], share, settings.spot_rule),
+                       settings.rho, settings.model)
+        if settings.control_variate:
+            piece["clean_share"] = weighted_clean_share(share, radius)
+        pieces.append(piece)
     out: dict[str, Any] = {name: np.stack([p[name] for p in pieces], axis=-1) for name in pieces[0]}
     out["n_uncropped"] = 0
     return out
+
+
+def weighted_clean_share(share: np.ndarray, radius: np.ndarray) -> np.ndarray:
+    """The control variate of a realization: its spots' clean shares averaged with their contact radii.
+
+    Parameters
+    ----------
+    share
+        Clean share of every spot, (xi, delta, spot).
+    radius
+        Contact radii, m, (delta, spot); 0 off contact.
+
+    Returns
+    -------
+    numpy.ndarray
+        (xi, delta) ``sum_i a_i f_i / sum_i a_i`` (NaN at a step without contact). Its expectation
+        over the fields is the probability that a point is clean
+        (:func:`pipeline.physics.oxide_marginal.clean_probability`), whatever the surface.
+    """
+    total = radius.sum(axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(total > 0, (share * radius[None]).sum(axis=-1) / total, np.nan)
 
 
 def clean_pool(pool: DiscretePool, rho: float, model: str) -> dict[str, np.ndarray]:

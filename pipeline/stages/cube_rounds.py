@@ -5,7 +5,8 @@
 ``oxide.batch`` more while the cell's fast-rule 95 % half-width of alpha
 (:mod:`pipeline.fitting.ensemble`, exact for the geometric-mean fit on the steps with
 steps the fits stage fits, :func:`pipeline.stages.fit_steps.fit_range`) exceeds :data:`RULE_MARGIN` x ``oxide.target_half_width``, up to
-``oxide.max_realizations``. A cell keeps the first prefix of realizations that meets the
+``oxide.max_realizations``; with ``fits.control_variate = "clean_share"`` the half-width of the
+statistic adjusted by the control (its residual after the regression on the control's statistic). A cell keeps the first prefix of realizations that meets the
 target, so the result does not depend on the batch.
 """
 
@@ -36,7 +37,8 @@ def stopping_rule(scenario: Scenario, force: np.ndarray, force_normalized: np.nd
             "z": ensemble.z_value(scenario.fits.confidence)}
 
 
-def half_widths(resistance: np.ndarray, rule: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+def half_widths(resistance: np.ndarray, rule: dict[str, Any],
+                clean_share: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Fast-rule half-widths of alpha (relative) and gamma (absolute) for every prefix n.
 
     Parameters
@@ -45,6 +47,10 @@ def half_widths(resistance: np.ndarray, rule: dict[str, Any]) -> tuple[np.ndarra
         R in ohm, shape (xi, delta, realization) of one lambda.
     rule
         From :func:`stopping_rule`.
+    clean_share
+        The control variate (``fits.control_variate = "clean_share"``), shaped as ``resistance``:
+        the statistics' half-widths after their regression on the same weights of it
+        (:func:`pipeline.fitting.ensemble.prefix_controlled_half_width`); None: plain.
 
     Returns
     -------
@@ -56,9 +62,15 @@ def half_widths(resistance: np.ndarray, rule: dict[str, Any]) -> tuple[np.ndarra
         return nan, nan
     with np.errstate(divide="ignore"):
         log_r = np.log(resistance[:, rule["steps"], :])
-    alpha = np.sinh(ensemble.prefix_half_width(ensemble.statistic(log_r, rule["c_alpha"]), rule["z"]))
-    gamma = ensemble.prefix_half_width(ensemble.statistic(log_r, rule["c_gamma"]), rule["z"])
-    return alpha, gamma
+
+    def width(weights: np.ndarray) -> np.ndarray:
+        t = ensemble.statistic(log_r, weights)
+        if clean_share is None:
+            return ensemble.prefix_half_width(t, rule["z"])
+        u = ensemble.statistic(clean_share[:, rule["steps"], :], weights)
+        return ensemble.prefix_controlled_half_width(t, u, rule["z"])
+
+    return np.sinh(width(rule["c_alpha"])), width(rule["c_gamma"])
 
 
 #: The fast rule stops a cell at this fraction of oxide.target_half_width: the first prefix whose
@@ -68,13 +80,15 @@ def half_widths(resistance: np.ndarray, rule: dict[str, Any]) -> tuple[np.ndarra
 RULE_MARGIN = 0.9
 
 
-def _decide(scenario: Scenario, resistance: np.ndarray, rule: dict[str, Any]) -> list[int | None]:
-    """Realizations each xi keeps once ``resistance`` (xi, delta, r) is known (None: more needed)."""
+def _decide(scenario: Scenario, resistance: np.ndarray, rule: dict[str, Any],
+            clean_share: np.ndarray | None = None) -> list[int | None]:
+    """Realizations each xi keeps once ``resistance`` (xi, delta, r) is known (None: more needed);
+    ``clean_share``: the control variate, as in :func:`half_widths`."""
     ox = scenario.oxide
     computed = resistance.shape[-1]
     if ox.ensemble == "fixed":
         return [ox.n_realizations] * resistance.shape[0]
-    alpha, _ = half_widths(resistance, rule)
+    alpha, _ = half_widths(resistance, rule, clean_share)
     alpha = np.nan_to_num(alpha, nan=np.inf)
     out: list[int | None] = []
     for row in alpha:
@@ -139,7 +153,9 @@ def compute_cells(
                 continue
             done[a] = want[a]
             resistance = np.stack([_joined(pieces[a], z, "resistance") for z in active])
-            for z, count in zip(active, _decide(scenario, resistance, rule)):
+            share = (np.stack([_joined(pieces[a], z, "clean_share") for z in active]) if settings.control_variate
+                     else None)
+            for z, count in zip(active, _decide(scenario, resistance, rule, share)):
                 kept[a][z] = count
             want[a] = min(done[a] + ox.batch, ox.max_realizations)
     out = [

@@ -34,6 +34,7 @@ from scipy import stats
 
 from pipeline.compute import ComputeOptions, single_threaded
 from pipeline.config import Scenario
+from pipeline.fitting.control_variate import bootstrap_controlled_mean, controllable, controlled_mean
 from pipeline.fitting.curve_model import CurveFit, fit_curve
 from pipeline.fitting.powerlaw import (
     bootstrap_log_mean,
@@ -53,13 +54,15 @@ GRID = ("xi", "lambda")
 
 
 def _bootstrap(
-    scenario: Scenario, normalized: np.ndarray, force_n: np.ndarray, counts: np.ndarray
+    scenario: Scenario, normalized: np.ndarray, force_n: np.ndarray, counts: np.ndarray,
+    control: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Bootstrap alpha and gamma, each shaped (xi, lambda, resample), and the interval of the
     reduction at every fitted step, (xi, lambda, step, bound).
 
     ``normalized`` holds R' on the fitted steps, shape (xi, lambda, step, realization); cell
-    (xi, lambda) uses its first ``counts[xi, lambda]`` realizations.
+    (xi, lambda) uses its first ``counts[xi, lambda]`` realizations. ``control``: the control
+    variate's values (shaped as ``normalized``) and expectations (xi, lambda), or None.
     """
     rng = np.random.default_rng(scenario.fits.seed)
     alpha = np.empty(counts.shape + (scenario.fits.n_bootstrap,))
@@ -68,19 +71,25 @@ def _bootstrap(
     for n in np.unique(counts):  # ascending
         table = resample_counts(int(n), scenario.fits.n_bootstrap, rng)
         if np.all(counts == n):  # one count (a fixed ensemble): the whole grid at once
-            return _bootstrap_fit(scenario, normalized[..., :n], force_n, table)
+            return _bootstrap_fit(scenario, normalized[..., :n], force_n, table,
+                                  None if control is None else (control[0][..., :n], control[1]))
         cells = np.nonzero(counts == n)
-        alpha[cells], gamma[cells], band[cells] = _bootstrap_fit(scenario, normalized[..., :n][cells], force_n, table)
+        part = None if control is None else (control[0][..., :n][cells], control[1][cells])
+        alpha[cells], gamma[cells], band[cells] = _bootstrap_fit(scenario, normalized[..., :n][cells], force_n, table,
+                                                                 part)
     return alpha, gamma, band
 
 
 def _bootstrap_fit(
-    scenario: Scenario, values: np.ndarray, force_n: np.ndarray, table: np.ndarray
+    scenario: Scenario, values: np.ndarray, force_n: np.ndarray, table: np.ndarray,
+    control: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """alpha and gamma (..., resample) of the resamples ``table`` of ``values`` (..., step,
     realization), and the interval of the reduction at every step (..., step, bound)."""
     if scenario.fits.reduction == "median":
         reduced = bootstrap_median(values, table)
+    elif control is not None:
+        reduced = bootstrap_controlled_mean(values, control[0], control[1][..., None], table)
     else:
         reduced = bootstrap_log_mean(values, table, scenario.fits.reduction == "geometric_mean")
     fit = fit_power_law(force_n, np.moveaxis(reduced, -1, -2))
@@ -106,6 +115,43 @@ def _reduce(resistance: xr.DataArray, counts: np.ndarray, scale: float) -> xr.Da
         for z, row in enumerate(counts)
     ]
     return xr.concat(rows, dim="xi", combine_attrs="override")
+
+
+def _control(cube: xr.Dataset) -> tuple[np.ndarray, np.ndarray]:
+    """The cube's control variate (xi, lambda, delta, realization) and its expectation (xi, lambda).
+
+    Raises
+    ------
+    ValueError
+        If the cube holds no control variate (computed without ``fits.control_variate``).
+    """
+    if "clean_share" not in cube:
+        raise ValueError("cube.nc holds no clean_share: it was computed without fits.control_variate; rerun the cube")
+    return (cube["clean_share"].transpose(*GRID, "delta", DIM).values,
+            cube["clean_share_expected"].transpose(*GRID).values)
+
+
+def _controlled_reduction(ds: xr.Dataset, resistance: np.ndarray, control: tuple[np.ndarray, np.ndarray],
+                          counts: np.ndarray, scale: float) -> None:
+    """Replace the geometric mean (and R') of ``ds`` by its control-variate estimate
+    (:mod:`pipeline.fitting.control_variate`; the plain mean where it does not apply), each (xi,
+    lambda) over its own realizations, and record where it applied (``control_variate_applied``)."""
+    values, expected = control
+    mean = ds["geometric_mean"].transpose(*GRID, "delta").values.copy()
+    applied = np.zeros(mean.shape, np.int8)
+    for z, a in np.ndindex(counts.shape):
+        n = int(counts[z, a])
+        r, x = resistance[z, a, :, :n], values[z, a, :, :n]
+        use = controllable(r, x)
+        mean[z, a] = controlled_mean(r, x, expected[z, a])
+        applied[z, a] = use
+    for name, value in (("geometric_mean", mean), ("geometric_mean_normalized", mean / scale)):
+        ds[name] = ds[name].transpose(*GRID, "delta").copy(data=value)
+    for name in ("geometric_mean", "geometric_mean_normalized"):
+        ds[name].attrs["method"] = ("control variate where control_variate_applied: (mean(y c) - b_n (mean(x) - p)) / "
+                                    "(mean(c) - b_d (mean(x) - p)), y = ln R, c = 1 where conducting, x the spots' "
+                                    "radius-weighted clean share, p its exact expectation")
+    ds["control_variate_applied"] = variable("fits", "control_variate_applied", applied)
 
 
 def _interval(samples: np.ndarray, confidence: float) -> np.ndarray:
@@ -192,12 +238,17 @@ def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     ds = _reduce(resistance, counts, scale)
     mask = fitted_steps(scenario, cube["force"], cube["force_normalized"])
     force_n = cube["force_normalized"].values
+    steps = np.flatnonzero(mask.values)
+    control = None
+    if scenario.fits.control_variate == "clean_share":
+        control = _control(cube)
+        _controlled_reduction(ds, resistance.values, control, counts, scale)
+        control = (control[0][:, :, steps, :], control[1])
     center = ds[f"{scenario.fits.reduction}_normalized"]
 
     fit = fit_power_law(force_n, center.values, mask.values)
-    steps = np.flatnonzero(mask.values)
     boot_alpha, boot_gamma, step_band = _bootstrap(
-        scenario, resistance.values[:, :, steps, :] / scale, force_n[steps], counts)
+        scenario, resistance.values[:, :, steps, :] / scale, force_n[steps], counts, control)
     bound = ("bound", ["lower", "upper"])
     level = f"{100 * scenario.fits.confidence:g} % percentile bootstrap over realizations"
 

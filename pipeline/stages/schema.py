@@ -126,6 +126,10 @@ _CONTACT: dict[str, Variable] = {
 }
 
 _CUBE: dict[str, Variable] = {
+    "clean_share": _v("xi lambda delta realization", "1",
+              "the spots' clean shares averaged with their contact radii (the control variate)"),
+    "clean_share_expected": _v("xi lambda", "1",
+              "probability that a point of the field is clean: the expectation of clean_share"),
     "clean_open_probability": _v("delta", "1",
               "probability that the oxide-free surface is an open circuit (no touching asperity)"),
     "conductance_clean": _v("delta", "S", "conductance of the oxide-free surface ({model} model)"),
@@ -200,6 +204,8 @@ _FITS: dict[str, Variable] = {
     "gamma_clean": _v("", "1", "gamma of the clean surface"),
     "gamma_clean_ci": _v("bound", "1", "confidence interval of gamma_clean"),
     "gamma_half_width": _v("xi lambda", "1", "absolute half-width of the gamma interval, (upper - lower) / 2"),
+    "control_variate_applied": _v("xi lambda delta", "1",
+              "1 where the geometric mean is the control-variate estimate, else 0 (the plain mean)"),
     "geometric_mean": _v("xi lambda delta", "ohm", "geometric mean of R over realizations"),
     "geometric_mean_normalized": _v("xi lambda delta", "1", "geometric mean of R' = R sqrt(R* sigma)/(2 rho*)"),
     "arithmetic_mean_normalized_ci": _v("xi lambda delta bound", "1",
