@@ -145,12 +145,12 @@ def _controlled_reduction(ds: xr.Dataset, resistance: np.ndarray, control: tuple
         use = controllable(r, x)
         mean[z, a] = controlled_mean(r, x, expected[z, a])
         applied[z, a] = use
+    method = ("control variate where control_variate_applied: (mean(y c) - b_n (mean(x) - p)) / (mean(c) - b_d "
+              "(mean(x) - p)), y = ln R, c = 1 where conducting, x the spots' radius-weighted clean share, p its "
+              "exact expectation")
     for name, value in (("geometric_mean", mean), ("geometric_mean_normalized", mean / scale)):
         ds[name] = ds[name].transpose(*GRID, "delta").copy(data=value)
-    for name in ("geometric_mean", "geometric_mean_normalized"):
-        ds[name].attrs["method"] = ("control variate where control_variate_applied: (mean(y c) - b_n (mean(x) - p)) / "
-                                    "(mean(c) - b_d (mean(x) - p)), y = ln R, c = 1 where conducting, x the spots' "
-                                    "radius-weighted clean share, p its exact expectation")
+        ds[name].attrs["method"] = method
     ds["control_variate_applied"] = variable("fits", "control_variate_applied", applied)
 
 
