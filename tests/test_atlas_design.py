@@ -87,15 +87,15 @@ def test_heldout_scenes_are_measured_to_the_tighter_target() -> None:
     """A held-out scene's ensemble stops at atlas.heldout_half_width where that is tighter than the
     base's target; a design scene keeps the base's (and so its configuration hash)."""
     base = load_scenario("atlas")
-    assert (base.oxide.target_half_width, base.atlas.heldout_half_width) == (0.05, 0.025)
+    assert (base.oxide.target_half_width, base.atlas.heldout_half_width) == (0.025, 0.0125)
     scenes = design_scenes(AtlasDesign.of(base))
     design, held = scenes[0], next(s for s in scenes if s.heldout)
     own = lambda scene: dataclasses.replace(base.oxide, seed=scene_seed(base.oxide.seed, scene))  # noqa: E731
     assert scene_scenario(base, design).oxide == own(design)
     tight = scene_scenario(base, held).oxide
-    assert tight.target_half_width == 0.025 and tight == dataclasses.replace(own(held), target_half_width=0.025)
+    assert tight.target_half_width == 0.0125 and tight == dataclasses.replace(own(held), target_half_width=0.0125)
     looser = load_scenario("atlas", {"atlas.heldout_half_width": 0.1})
-    assert scene_scenario(looser, held).oxide.target_half_width == 0.05  # never looser than the design
+    assert scene_scenario(looser, held).oxide.target_half_width == 0.025  # never looser than the design
 
 
 def test_plan_grows_with_pi_and_reports_refusals() -> None:

@@ -12,12 +12,16 @@ from pipeline.atlas import cost, loads
 from pipeline.atlas.design import (BUDGET_SECONDS, MIN_POOL, POOL_TOUCHING, AtlasDesign, Scene, design_scenes,
                                    format_atlas_plan, scene_scenario, wall_seconds)
 from pipeline.before_work import discrete_cost
+from pipeline.before_work.plan import CONTROL_VARIATE_REALIZATIONS
 from pipeline.before_work.domains import resolve
 from pipeline.config import load_scenario
 
 DISCRETE = {"contact.model": "discrete", "oxide.spot_rule": "disc", "cube.model": "point"}
 #: The atlas on Greenwood-Tripp's grid spots (paper_gt's models).
-GRID = {"contact.model": "greenwood_tripp", "oxide.spot_rule": "centre", "cube.model": "greenwood"}
+GRID = {"contact.model": "greenwood_tripp", "oxide.spot_rule": "centre", "cube.model": "greenwood",
+        "fits.control_variate": "none"}  # the control is the discrete spots' share
+#: The cost model's reference ensemble: 5 % without the control variate (the bundled atlas: 2.5 % with it).
+PLAIN = {"oxide.target_half_width": cost.REFERENCE_TARGET, "fits.control_variate": "none"}
 
 
 @pytest.mark.parametrize("mu, Pi", [(1.0, 5.0), (7.07, 40.0), (50.0, 320.0)])
@@ -111,10 +115,15 @@ def test_discrete_cost_grows_with_the_touching_count_not_a_grid() -> None:
 
 
 def test_fields_of_an_adaptive_discrete_scene() -> None:
-    base = load_scenario("atlas", DISCRETE)
+    base = load_scenario("atlas", {**DISCRETE, **PLAIN})
     s = scene_scenario(base, Scene("x", 7.07, 40.0, False))
     n = np.full(20, cost.REFERENCE_TOUCHING)
     assert cost.discrete_fields(s, n) == pytest.approx(sum(max(f, 100) for f in cost.REFERENCE_FIELDS))
+    # the bundled atlas: half the half-width (4x the fields) with the control variate (0.3 of them)
+    shipped = scene_scenario(load_scenario("atlas", DISCRETE), Scene("x", 7.07, 40.0, False))
+    assert (shipped.oxide.target_half_width, shipped.fits.control_variate) == (0.025, "clean_share")
+    assert cost.discrete_fields(shipped, n) == pytest.approx(
+        sum(max(f * 4 * CONTROL_VARIATE_REALIZATIONS, 100) for f in cost.REFERENCE_FIELDS), rel=1e-12)
     assert cost.discrete_fields(s, n * 8) < cost.discrete_fields(s, n) == cost.discrete_fields(s, n / 8)
     tight = dataclasses.replace(s, oxide=dataclasses.replace(s.oxide, target_half_width=0.025))
     assert cost.discrete_fields(tight, n) > 3 * cost.discrete_fields(s, n)
