@@ -12,8 +12,8 @@ from pipeline.atlas import cost, loads
 from pipeline.atlas.design import (BUDGET_SECONDS, MIN_POOL, POOL_TOUCHING, AtlasDesign, Scene, design_scenes,
                                    format_atlas_plan, scene_scenario, wall_seconds)
 from pipeline.before_work import discrete_cost
-from pipeline.before_work.plan import CONTROL_VARIATE_REALIZATIONS
 from pipeline.before_work.domains import resolve
+from pipeline.before_work.plan import CONTROL_VARIATE_REALIZATIONS
 from pipeline.config import load_scenario
 
 DISCRETE = {"contact.model": "discrete", "oxide.spot_rule": "disc", "cube.model": "point"}
