@@ -114,7 +114,13 @@ class Contact:
         choices=("greenwood_tripp", "discrete"),
     )
     surfaces: int = param(
-        256, "1", "discrete: rough surfaces solved (the pool); oxide realization k meets surface "
-        "k mod surfaces", ge=1,
+        256, "1", "discrete: rough surfaces solved at every load step (the pool); oxide realization k meets "
+        "surface k mod the pool's size at each step", ge=1,
+    )
+    pool_half_width: float = param(
+        0.0, "1", "discrete: target relative 95 % half-width of the pool's mean clean conductance at every "
+        "load step: more surfaces, each solved only up to the last step still short of it (light steps, where "
+        "few asperities touch and surfaces differ most), until met or 4096 surfaces; 0: the fixed pool",
+        ge=0, lt=1,
     )
 

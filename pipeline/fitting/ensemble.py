@@ -18,7 +18,7 @@ import numpy as np
 from scipy import stats
 
 __all__ = ["fit_weights", "statistic", "prefix_half_width", "prefix_controlled_half_width", "stop_count", "z_value",
-           "log_standard_error"]
+           "log_standard_error", "mean_half_width"]
 
 
 def fit_weights(log_x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -185,3 +185,31 @@ def log_standard_error(values: np.ndarray, axis: int = -1) -> np.ndarray:
         mean = logs.sum(axis=-1) / count
         var = np.where(ok, (logs - mean[..., None]) ** 2, 0.0).sum(axis=-1) / (count - 1)
         return np.where(count >= 2, np.sqrt(var / count), np.nan)
+
+
+def mean_half_width(values: np.ndarray, z: float) -> np.ndarray:
+    """Relative half-width ``z std(v, ddof=1) / (sqrt(n) mean(v))`` of the mean of ``values`` over axis 0.
+
+    Parameters
+    ----------
+    values
+        Samples on axis 0 (e.g. a pool's surfaces), any further axes kept; NaN entries (not
+        sampled) are skipped.
+    z
+        Normal quantile of the confidence level.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``values.shape[1:]``; NaN where fewer than two values count or their mean is not
+        positive (no relative width).
+    """
+    values = np.asarray(values, dtype=float)
+    ok = np.isfinite(values)
+    count = ok.sum(axis=0)
+    filled = np.where(ok, values, 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = filled.sum(axis=0) / count
+        var = np.where(ok, (filled - mean) ** 2, 0.0).sum(axis=0) / (count - 1)
+        out = z * np.sqrt(var / count) / mean
+    return np.where((count >= 2) & (mean > 0), out, np.nan)

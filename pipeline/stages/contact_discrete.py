@@ -10,6 +10,14 @@ at every force. The contact file keeps, per surface, the asperities that touch a
 saying how many are real), its approach, stiffness K and Barber's conductance K / (E* rho*) per
 step, and the solver's report. The work is split over dask tasks of :data:`CHUNK` surfaces;
 each surface's result is independent of the chunking and the scheduler.
+
+With ``contact.pool_half_width`` > 0 the pool grows at the light steps (:func:`grow_pool`): the
+first ``contact.surfaces`` are solved at every step, further surfaces (the next streams) only up
+to the last step whose pool mean of Barber's conductance is still wider than the target, in
+rounds, until every step meets it or the pool holds :data:`MAX_SURFACES`. Each surface is solved
+at a prefix of the steps (``surface_steps``: the solver warm-starts step by step, so a prefix
+gives the same numbers as a full solve), and surface ``s`` is solved at step ``i`` exactly when
+``s`` is below the pool's size there: at each step the pool is its first surfaces.
 """
 
 from __future__ import annotations
@@ -23,13 +31,19 @@ import xarray as xr
 
 from pipeline.compute import ComputeOptions, compute
 from pipeline.config import Scenario
+from pipeline.fitting.ensemble import mean_half_width, z_value
 from pipeline.physics import discrete_contact as dc
 from pipeline.stages.schema import SCHEMA
 
-__all__ = ["CHUNK", "DOMAIN_MARGIN", "cap_contact", "domain", "surface_spots", "solve_pool", "variables"]
+__all__ = ["CHUNK", "DOMAIN_MARGIN", "MAX_SURFACES", "POOL_CONFIDENCE", "cap_contact", "domain", "surface_spots",
+           "solve_pool", "grow_pool", "pool_half_widths", "variables"]
 
 #: Surfaces per dask task.
 CHUNK = 16
+#: Most surfaces a growing pool (``contact.pool_half_width`` > 0) solves.
+MAX_SURFACES = 4096
+#: Confidence level of ``contact.pool_half_width``.
+POOL_CONFIDENCE = 0.95
 #: The disc serves approaches down to the Greenwood–Tripp solution's lowest minus this many sigma
 #: (the coupled caps' approach at the same force lies within a fraction of sigma of it).
 DOMAIN_MARGIN = 1.0
@@ -63,8 +77,8 @@ def surface_spots(settings: dict[str, Any], k: int) -> dict[str, np.ndarray]:
         If the solved approach falls below the one the disc serves (asperities may be missing).
     """
     asp = dc.draw_asperities(settings["seed"], k, settings["radius"], settings["eta"], settings["sigma"])
-    sol = dc.solve_forces(asp, settings["profile"], settings["forces"], settings["e_star"], settings["beta"],
-                          settings["floor"])
+    sol = dc.solve_forces(asp, settings["profile"], settings["forces"][: settings.get("steps")], settings["e_star"],
+                          settings["beta"], settings["floor"])
     if sol.delta.min() < settings["served"]:
         raise ValueError(f"surface {k}: the approach {sol.delta.min():.4g} m falls below the "
                          f"{settings['served']:.4g} m its asperity disc serves")
@@ -78,9 +92,16 @@ def _chunk(settings: dict[str, Any], surfaces: np.ndarray) -> list[dict[str, np.
     return [surface_spots(settings, int(k)) for k in surfaces]
 
 
+def _solve(shared: Any, first: int, stop: int, options: ComputeOptions, label: str) -> list[dict[str, np.ndarray]]:
+    """Surfaces ``first`` to ``stop - 1`` in dask tasks of :data:`CHUNK`."""
+    tasks = [dask.delayed(_chunk, pure=True)(shared, np.arange(s, min(s + CHUNK, stop))) for s in range(first, stop, CHUNK)]
+    return [r for chunk in compute(*tasks, options=options, label=label) for r in chunk]
+
+
 def solve_pool(scenario: Scenario, forces: np.ndarray, lowest_delta: float,
                options: ComputeOptions) -> tuple[list[dict[str, np.ndarray]], float]:
-    """Every surface of the pool at ``forces`` (N); returns the per-surface results and the disc radius (m)."""
+    """Every surface of the pool at ``forces`` (N), grown where ``contact.pool_half_width`` asks
+    (:func:`grow_pool`); returns the per-surface results and the disc radius (m)."""
     rough = scenario.roughness
     radius, served = domain(scenario, lowest_delta)
     cap_profile, cap_radius = cap_contact(scenario)
@@ -88,11 +109,60 @@ def solve_pool(scenario: Scenario, forces: np.ndarray, lowest_delta: float,
                 "sigma": rough.sigma, "beta": cap_radius, "e_star": scenario.material.E_star,
                 "profile": cap_profile, "forces": np.asarray(forces, float),
                 "floor": dc.coupling_floor(rough.beta, rough.sigma)}
-    shared = dask.delayed(settings)
     n = scenario.contact.surfaces
-    tasks = [dask.delayed(_chunk, pure=True)(shared, np.arange(s, min(s + CHUNK, n))) for s in range(0, n, CHUNK)]
-    chunks = compute(*tasks, options=options, label=f"contact: {n} discrete surfaces")
-    return [r for chunk in chunks for r in chunk], radius
+    pool = _solve(dask.delayed(settings), 0, n, options, f"contact: {n} discrete surfaces")
+    target = scenario.contact.pool_half_width
+    if target > 0:
+        pool = grow_pool(pool, target, lambda first, stop, steps: _solve(
+            dask.delayed({**settings, "steps": steps}), first, stop, options,
+            f"contact: pool surfaces {first}-{stop - 1} at the {steps} lightest steps"))
+    return pool, radius
+
+
+def pool_half_widths(pool: list[dict[str, np.ndarray]]) -> np.ndarray:
+    """Relative half-width (:data:`POOL_CONFIDENCE`) of the pool's mean Barber conductance at every
+    step, over the surfaces solved there (NaN where no surface touches)."""
+    width = pool[0]["delta"].size
+    stiffness = np.full((len(pool), width), np.nan)
+    for k, r in enumerate(pool):
+        stiffness[k, : r["stiffness"].size] = r["stiffness"]
+    return mean_half_width(stiffness, z_value(POOL_CONFIDENCE))
+
+
+def grow_pool(pool: list[dict[str, np.ndarray]], target: float,
+              solve: Callable[[int, int, int], list[dict[str, np.ndarray]]]) -> list[dict[str, np.ndarray]]:
+    """The pool grown until its mean clean conductance meets ``target`` at every step.
+
+    Parameters
+    ----------
+    pool
+        The surfaces solved so far (each at every step, or at a prefix of them).
+    target
+        Relative half-width (:data:`POOL_CONFIDENCE`) wanted at every step.
+    solve
+        ``solve(first, stop, steps)``: surfaces ``first`` to ``stop - 1`` at the ``steps`` lightest
+        forces, in :func:`surface_spots`'s form.
+
+    Returns
+    -------
+    list of dict
+        The pool: each round adds the surfaces the widest short step is estimated to need
+        (``n (w / target)^2``, at least :data:`CHUNK`, to at most :data:`MAX_SURFACES`), solved up
+        to the last short step. Steps beyond it are not short and their surfaces do not change, so
+        the solved prefixes shrink from round to round and the pool at every step is its first
+        surfaces.
+    """
+    while len(pool) < MAX_SURFACES:
+        widths = pool_half_widths(pool)
+        short = np.flatnonzero(widths > target)
+        if short.size == 0:
+            break
+        steps = int(short[-1]) + 1
+        counts = np.array([sum(r["stiffness"].size > i for r in pool) for i in short])
+        wanted = int(np.max(np.ceil(counts * (widths[short] / target) ** 2)))
+        stop = min(MAX_SURFACES, max(wanted, len(pool) + CHUNK))
+        pool = pool + solve(len(pool), stop, steps)
+    return pool
 
 
 def _var(name: str, data: np.ndarray) -> tuple:
@@ -108,11 +178,15 @@ def variables(scenario: Scenario, pool: list[dict[str, np.ndarray]], radius: flo
     width = max(1, max(r["x"].size for r in pool))
     x, y = np.full((n_s, width), np.nan), np.full((n_s, width), np.nan)
     spot_radius = np.zeros((n_s, n_d, width))
+    solved = np.array([r["delta"].size for r in pool], np.int32)
     for k, r in enumerate(pool):
         m = r["x"].size
-        x[k, :m], y[k, :m], spot_radius[k, :, :m] = r["x"], r["y"], r["radius"]
-    stacked = {name: np.stack([r[name] for r in pool]) for name in ("delta", "stiffness", "iterations",
-                                                                    "residual", "candidates")}
+        x[k, :m], y[k, :m], spot_radius[k, : solved[k], :m] = r["x"], r["y"], r["radius"]
+    stacked = {}  # steps a surface was not solved at: NaN (counts -1)
+    for name in ("delta", "stiffness", "iterations", "residual", "candidates"):
+        stacked[name] = np.full((n_s, n_d), -1 if name in ("iterations", "candidates") else np.nan)
+        for k, r in enumerate(pool):
+            stacked[name][k, : solved[k]] = r[name]
     e_star, rho = scenario.material.E_star, scenario.material.rho
     data_vars = {
         "spot_count": _var("spot_count", np.array([r["x"].size for r in pool], np.int32)),
@@ -126,6 +200,8 @@ def variables(scenario: Scenario, pool: list[dict[str, np.ndarray]], radius: flo
         "discrete_residual": _var("discrete_residual", stacked["residual"]),
         "discrete_candidates": _var("discrete_candidates", stacked["candidates"].astype(np.int32)),
     }
+    if np.any(solved < n_d):  # a grown pool (contact.pool_half_width)
+        data_vars["surface_steps"] = _var("surface_steps", solved)
     coords = {"surface": _var("surface", np.arange(n_s)), "spot": _var("spot", np.arange(width))}
     attrs = {"asperity_disc_radius": radius,
              "coupling_floor": dc.coupling_floor(scenario.roughness.beta, scenario.roughness.sigma),

@@ -113,14 +113,20 @@ def _clean(radius: np.ndarray, weights: np.ndarray, settings: CubeSettings, n_dr
 
 
 def _clean_discrete(pool: DiscretePool, rho: float, model: str) -> dict[str, np.ndarray]:
-    """:func:`_clean` on discrete spots: over the pool's surfaces, the resistance of the mean
-    conductance, the self term of the mean self-conductance, the probability of an open circuit."""
+    """:func:`_clean` on discrete spots: over the pool's surfaces (at each step, those solved there),
+    the resistance of the mean conductance, the self term of the mean self-conductance, the
+    probability of an open circuit."""
     terms = clean_pool(pool, rho, model)
+    resistance = terms["resistance"]
+    if pool.steps is None:
+        mean, is_open = np.mean, np.isinf(resistance)
+    else:  # NaN where a surface was not solved
+        mean, is_open = np.nanmean, np.where(np.isnan(resistance), np.nan, np.isinf(resistance))
     with np.errstate(divide="ignore"):
-        total = rho / np.mean(rho / terms["resistance"], axis=0)
-        own = rho / np.mean(rho / terms["resistance_self"], axis=0)
-    return {"resistance": total, "self": own, "interaction": total - own,
-            "open": np.mean(np.isinf(terms["resistance"]), axis=0), "n_drawn": pool.size}
+        total = rho / mean(rho / resistance, axis=0)
+        own = rho / mean(rho / terms["resistance_self"], axis=0)
+    open_ = mean(is_open, axis=0)
+    return {"resistance": total, "self": own, "interaction": total - own, "open": open_, "n_drawn": pool.size}
 
 
 #: The clean surface's conductance by each model, for Barber's check: (name, model, lattice constant).

@@ -39,7 +39,9 @@ def dataset(
     is_open = np.isposinf(out["resistance"])
     discrete = scenario.contact.model == "discrete"
     clean_comment = ("the mean conductance (self-conductance) over the "
-                     f"{clean['n_drawn']} discrete surfaces of contact.nc" if discrete else
+                     f"{clean['n_drawn']} discrete surfaces of contact.nc"
+                     + (" (at each step those solved there: a grown pool)" if scenario.contact.pool_half_width > 0 else "")
+                     if discrete else
                      "the mean conductance (self-conductance) over the first "
                      f"{clean['n_drawn']} realizations of the asperity heights"
                      if scenario.contact.spots == "asperities" else "exact, every spot conducting")

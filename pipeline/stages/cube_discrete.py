@@ -1,7 +1,8 @@
 """The cube on discrete spots (``contact.model = "discrete"``): oxide fields where each surface's spots lie.
 
-Oxide realization ``k`` meets surface ``k mod S`` of contact.nc's pool (``S = contact.surfaces``)
-and its own field (the same field as on grid spots, by seed and index, so paired comparisons
+Oxide realization ``k`` meets surface ``k mod S`` of contact.nc's pool (``S = contact.surfaces``;
+in a grown pool, ``contact.pool_half_width``, ``S`` is the pool's size at each step, so a light step
+may meet another surface than the heavy ones: :meth:`DiscretePool.groups`) and its own field (the same field as on grid spots, by seed and index, so paired comparisons
 stay possible). The field is evaluated where the spots are, exactly
 (:func:`pipeline.physics.oxide_points.values_at_points`), and each spot conducts by
 ``oxide.spot_rule``:
@@ -66,6 +67,9 @@ class DiscretePool:
         Spots of each surface, shape (surface,).
     floor
         The coupling kernel's distance floor, m.
+    steps
+        Load steps each surface was solved at, the lightest first, shape (surface,); None: every
+        step (the fixed pool).
     """
 
     x: np.ndarray
@@ -73,25 +77,46 @@ class DiscretePool:
     radius: np.ndarray
     count: np.ndarray
     floor: float
+    steps: np.ndarray | None = None
     #: Coupling kernels made so far, by surface (a surface meets many oxide realizations).
     _kernels: dict[int, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
 
     @classmethod
     def of(cls, contact: xr.Dataset) -> "DiscretePool":
         """The pool stored in a discrete contact dataset."""
+        steps = contact["surface_steps"].values if "surface_steps" in contact else None
         return cls(contact["asperity_x"].values, contact["asperity_y"].values,
                    contact["asperity_radius"].transpose("surface", "delta", "spot").values,
-                   contact["spot_count"].values, float(contact.attrs["coupling_floor"]))
+                   contact["spot_count"].values, float(contact.attrs["coupling_floor"]), steps)
 
     @property
     def size(self) -> int:
-        """Surfaces in the pool."""
+        """Surfaces in the pool (at its lightest step, in a grown pool)."""
         return int(self.count.size)
 
-    def kernel(self, realization: int) -> np.ndarray:
-        """The coupling kernel (1/m, spot x spot) of the surface oxide realization ``realization`` meets,
-        made once per surface and kept while the kept ones fit :data:`pipeline.config.KERNEL_CACHE_BYTES`."""
-        s = int(realization) % self.size
+    def sizes(self) -> np.ndarray:
+        """The pool's size at every step, shape (delta,): its first that many surfaces are solved there."""
+        n_delta = self.radius.shape[1]
+        if self.steps is None:
+            return np.full(n_delta, self.size)
+        return (self.steps[:, None] > np.arange(n_delta)).sum(axis=0)
+
+    def groups(self, realization: int) -> list[tuple[int, np.ndarray | None]]:
+        """The surfaces oxide realization ``realization`` meets, each with the steps it meets it at
+        (``k mod`` the pool's size at each step); steps None: one surface at every step."""
+        if self.steps is None:
+            return [(int(realization) % self.size, None)]
+        met = int(realization) % self.sizes()
+        return [(int(s), np.flatnonzero(met == s)) for s in np.unique(met)]
+
+    def solved(self, surface: int) -> np.ndarray | None:
+        """The steps ``surface`` was solved at (None: every step)."""
+        return None if self.steps is None else np.arange(int(self.steps[surface]))
+
+    def kernel(self, surface: int) -> np.ndarray:
+        """The coupling kernel (1/m, spot x spot) of ``surface``, made once per surface and kept while
+        the kept ones fit :data:`pipeline.config.KERNEL_CACHE_BYTES`."""
+        s = int(surface)
         kernel = self._kernels.get(s)
         if kernel is None:
             x, y, _ = self.spots(s)
@@ -100,9 +125,9 @@ class DiscretePool:
                 self._kernels[s] = kernel
         return kernel
 
-    def spots(self, realization: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Positions (m) and radii (delta, spot) of the surface oxide realization ``realization`` meets."""
-        s = int(realization) % self.size
+    def spots(self, surface: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions (m) and radii (delta, spot) of ``surface``."""
+        s = int(surface)
         m = int(self.count[s])
         return self.x[s, :m], self.y[s, :m], self.radius[s, :, :m]
 
@@ -163,17 +188,32 @@ def discrete_chunk(source: Any, index: int, realizations: np.ndarray, xi_index: 
     thresholds = source.thresholds(index, realizations)[xi_index]
     pieces = []
     for column, k in enumerate(realizations):
-        x, y, radius = pool.spots(int(k))
         coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(base.seed, lam, int(k)), base.amplitudes)
-        share = clean_shares(modes, coeffs, x, y, radius, thresholds[:, column], settings.spot_rule,
-                             lam * base.cell_size)
-        piece = _terms(pool.kernel(int(k)), effective_radius(radius[None], share, settings.spot_rule),
-                       settings.rho, settings.model)
-        if settings.control_variate:
-            piece["clean_share"] = weighted_clean_share(share, radius)
-        pieces.append(piece)
+        parts = []
+        for surface, steps in pool.groups(int(k)):
+            x, y, radius = pool.spots(surface)
+            radius = radius if steps is None else radius[steps]
+            share = clean_shares(modes, coeffs, x, y, radius, thresholds[:, column], settings.spot_rule,
+                                 lam * base.cell_size)
+            part = _terms(pool.kernel(surface), effective_radius(radius[None], share, settings.spot_rule),
+                          settings.rho, settings.model)
+            if settings.control_variate:
+                part["clean_share"] = weighted_clean_share(share, radius)
+            parts.append((steps, part))
+        pieces.append(parts[0][1] if parts[0][0] is None else _by_step(parts, pool.radius.shape[1]))
     out: dict[str, Any] = {name: np.stack([p[name] for p in pieces], axis=-1) for name in pieces[0]}
     out["n_uncropped"] = 0
+    return out
+
+
+def _by_step(parts: list[tuple[np.ndarray, dict[str, np.ndarray]]], n_delta: int) -> dict[str, np.ndarray]:
+    """One realization's terms (..., delta) put together from the surfaces it meets at the steps given."""
+    out = {}
+    for name, first in parts[0][1].items():
+        joined = np.empty(first.shape[:-1] + (n_delta,), first.dtype)
+        for steps, part in parts:
+            joined[..., steps] = part[name]
+        out[name] = joined
     return out
 
 
@@ -200,6 +240,16 @@ def weighted_clean_share(share: np.ndarray, radius: np.ndarray) -> np.ndarray:
 
 
 def clean_pool(pool: DiscretePool, rho: float, model: str) -> dict[str, np.ndarray]:
-    """The oxide-free terms of every surface of the pool, each (surface, delta)."""
-    pieces = [_terms(pool.kernel(s), pool.spots(s)[2], rho, model) for s in range(pool.size)]
+    """The oxide-free terms of every surface of the pool, each (surface, delta); in a grown pool,
+    NaN (counts -1) at the steps a surface was not solved at."""
+    n_delta = pool.radius.shape[1]
+    pieces = []
+    for s in range(pool.size):
+        steps = pool.solved(s)
+        radius = pool.spots(s)[2]
+        piece = _terms(pool.kernel(s), radius if steps is None else radius[steps], rho, model)
+        if steps is not None:
+            piece = {name: np.concatenate([v, np.full(n_delta - steps.size, -1 if v.dtype.kind == "i" else np.nan,
+                                                      v.dtype)]) for name, v in piece.items()}
+        pieces.append(piece)
     return {name: np.stack([p[name] for p in pieces]) for name in pieces[0]}

@@ -112,6 +112,7 @@ _CONTACT: dict[str, Variable] = {
     "surface": _v("surface", "1", "rough surface of the pool"),
     "spot": _v("spot", "1", "touching asperity of a surface"),
     "spot_count": _v("surface", "1", "asperities of the surface that touch at some load step"),
+    "surface_steps": _v("surface", "1", "load steps the surface was solved at, the lightest first (a grown pool)"),
     "asperity_x": _v("surface spot", "m", "touching asperity position x (from the indenter's axis)"),
     "asperity_y": _v("surface spot", "m", "touching asperity position y (from the indenter's axis)"),
     "asperity_radius": _v("surface delta spot", "m", "contact radius sqrt(beta w) of the touching asperity (0 off contact)"),
