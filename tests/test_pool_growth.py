@@ -10,6 +10,7 @@ import pytest
 
 from pipeline.before_work.domains import resolve
 from pipeline.compute import ComputeOptions
+from pipeline import config
 from pipeline.config import load_scenario
 from pipeline.config.scenario import HASH_NEUTRAL
 from pipeline.config.scene_sections import Contact
@@ -48,7 +49,7 @@ def test_the_pool_grows_at_the_light_steps_to_the_target(scene, grown):
     assert np.all(np.diff(steps) <= 0)  # the prefixes shrink: at each step the pool is its first surfaces
     stiffness = grown["discrete_stiffness"].values
     assert np.all(np.isnan(stiffness) == (np.arange(n_delta) >= steps[:, None]))
-    widths = mean_half_width(stiffness, z_value(contact_discrete.POOL_CONFIDENCE))
+    widths = mean_half_width(stiffness, z_value(config.POOL_CONFIDENCE))
     assert np.all(widths <= TARGET)
     # the fixed pool's first surfaces alone miss it at some light step
     assert np.nanmax(mean_half_width(stiffness[: scene.contact.surfaces], z_value(0.95))) > TARGET
@@ -72,7 +73,7 @@ def test_a_prefix_solve_equals_the_full_solve_of_the_same_surface(grown, full):
 def test_growth_stops_at_the_cap_and_adds_whole_rounds(monkeypatch):
     """A synthetic pool whose light step never meets the target stops at MAX_SURFACES; the rounds
     solve only up to the last short step."""
-    monkeypatch.setattr(contact_discrete, "MAX_SURFACES", 40)
+    monkeypatch.setattr(config, "MAX_POOL_SURFACES", 40)
     rng = np.random.default_rng(3)
     calls = []
 
@@ -115,5 +116,19 @@ def test_the_cube_meets_surface_k_mod_the_pool_size_at_each_step(scene, grown, f
 
 def test_the_fixed_pool_leaves_every_hash_as_it_was():
     assert HASH_NEUTRAL["contact.pool_half_width"] == Contact().pool_half_width == 0.0
-    assert f"or {contact_discrete.MAX_SURFACES} surfaces" in Contact.__dataclass_fields__[
-        "pool_half_width"].metadata["doc"]
+
+
+def test_the_plan_models_the_grown_pool_within_a_factor_of_three():
+    """``g2tom plan``'s model of a grown pool (pipeline.before_work.discrete_cost.grown_pool) against
+    the contact stage at the lightest step; off, it adds nothing."""
+    from pipeline.before_work.discrete_cost import expected_counts, grown_pool
+
+    scene = resolve(load_scenario("paper", {**DISCRETE, "contact.pool_half_width": 0.1}))
+    counts = expected_counts(scene)
+    sizes, seconds = grown_pool(scene, *counts)
+    assert np.all(np.diff(sizes) <= 0) and sizes[-1] >= scene.contact.surfaces and seconds > 0
+    solved = contact.build(scene, QUIET)["surface_steps"].values
+    measured = int(np.sum(solved > 0))
+    assert measured / 3 <= sizes[0] <= 3 * measured
+    off = dataclasses.replace(scene, contact=dataclasses.replace(scene.contact, pool_half_width=0.0))
+    assert grown_pool(off, *counts)[1] == 0.0 and np.all(grown_pool(off, *counts)[0] == scene.contact.surfaces)

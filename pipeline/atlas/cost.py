@@ -63,7 +63,8 @@ class SceneCost:
     touching
         (steps,) expected touching asperities per load step (discrete), or None on grid spots.
     surfaces
-        Discrete pool size (0 on grid spots).
+        Discrete pool size at every step (0 on grid spots); a grown pool adds surfaces at the light
+        steps (their seconds are in ``contact``).
     fields
         Oxide fields of the slowest xi (all lambda; the other xi stop earlier).
     contact, cube, other
@@ -123,7 +124,7 @@ def scene_cost(scenario: Scenario) -> SceneCost:
     """The modelled CPU seconds of one atlas scene (its scenario as :func:`pipeline.atlas.design.scene_scenario`
     makes it), single-threaded."""
     from pipeline.before_work import plan
-    from pipeline.before_work.discrete_cost import expected_counts, field_seconds, surface_seconds
+    from pipeline.before_work.discrete_cost import expected_counts, field_seconds, grown_pool, surface_seconds
 
     if scenario.contact.model != "discrete":
         estimates = {e.stage: e.seconds for e in plan.estimate(scenario, 1)}
@@ -131,7 +132,7 @@ def scene_cost(scenario: Scenario) -> SceneCost:
         return SceneCost(None, 0, counts.fields * len(scenario.oxide.lambda_), estimates["contact"],
                          estimates["cube"], estimates["oxide"] + estimates["fits"] + SCENE_S)
     n, c = expected_counts(scenario)
-    contact = scenario.contact.surfaces * surface_seconds(n, c)
+    contact = scenario.contact.surfaces * surface_seconds(n, c) + grown_pool(scenario, n, c)[1]
     per_field = field_seconds(n, c)
     fields = discrete_fields(scenario, n)
     work = discrete_xi_fields(scenario, n)

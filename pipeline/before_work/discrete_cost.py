@@ -10,7 +10,8 @@ fast solve, :func:`probe`; within a few % of the discrete pool's at the heavy st
 
 * one surface of the pool: ``sum_s (CONTACT_STEP_S + CONTACT_SQUARE_S C_s^2 + CONTACT_POWER_S
   N_s^2.5)`` (:func:`surface_seconds`), C_s the expected candidates (asperities above the undeformed
-  indenter);
+  indenter); a grown pool (``contact.pool_half_width``) adds the surfaces :func:`grown_pool` expects,
+  each solved up to its last step, plus :data:`ADDED_SURFACE_S` each;
 * one oxide field (one realization at one lambda, all its xi at once: the point solves of a step
   share one factorization, or one conjugate-gradient sweep from a union of
   :data:`pipeline.physics.discrete_resistance.ITERATIVE_FROM` spots): ``sum_s (FIELD_STEP_S +
@@ -34,7 +35,7 @@ import numpy as np
 
 from pipeline.config import Scenario
 
-__all__ = ["probe", "expected_counts", "expected_touching", "surface_seconds", "field_seconds"]
+__all__ = ["probe", "expected_counts", "expected_touching", "surface_seconds", "field_seconds", "grown_pool"]
 
 #: Radial nodes of the fast solve.
 _N_RADIAL = 400
@@ -67,6 +68,17 @@ FIELD_CUBE_S = 5.4e-11
 #: 5.68 s (N <= 6,084); with the factorized steps' constants above the model gives 0.83, 1.22, 0.86
 #: and 0.89 of those (d02 and d12: 0.93, 0.90).
 FIELD_ITERATIVE_S = 9.49e-9
+#: A grown pool: the relative sd of one surface's K at a step, modelled as
+#: ``POOL_SCATTER sqrt(M) / (M + POOL_SCATTER_KNEE)`` with ``M = N_s + 1`` (a surface touches on at
+#: least the one cap that carries the force; with a single cap K depends only on the force). Set to
+#: the contact stage of two held-out atlas scenes (2026-11-28): h06 (mu 4.3, Pi 156) measured 0.242,
+#: 0.169, 0.116, 0.084 at its four lightest steps (N 10-62; the model 0.24, 0.19, 0.15, 0.12) and h07
+#: (mu 26, Pi 7.5) 0.16-0.20 at N 0.1-2.4 (the model 0.26-0.28): up to 1.5x high, 2x in surfaces.
+POOL_SCATTER = 1.0
+POOL_SCATTER_KNEE = 3.0
+#: Seconds per added surface besides its solves (drawing its asperities on the heaviest step's disc
+#: and ordering them): h06's 531 added surfaces took 5.6 s more than its 39 (2026-11-28).
+ADDED_SURFACE_S = 0.01
 #: The expected touching and candidate counts found so far, by the parameters that set them.
 _COUNTS: dict[str, tuple[np.ndarray, np.ndarray]] = {}
 
@@ -163,3 +175,38 @@ def field_seconds(touching: np.ndarray, candidates: np.ndarray) -> float:
             + FIELD_MIXED_S * float(np.sum(candidates * touching))
             + FIELD_CUBE_S * float(np.sum(touching[factorized]**3))
             + FIELD_ITERATIVE_S * float(np.sum(touching[~factorized]**2)))
+
+
+def grown_pool(scenario: Scenario, touching: np.ndarray, candidates: np.ndarray) -> tuple[np.ndarray, float]:
+    """The pool a scenario's ``contact.pool_half_width`` is expected to grow, and what it adds.
+
+    Parameters
+    ----------
+    scenario
+        Its ``contact.surfaces``, ``contact.pool_half_width`` (0: the fixed pool).
+    touching, candidates
+        (steps,) expected touching asperities and candidates per load step (:func:`expected_counts`).
+
+    Returns
+    -------
+    tuple
+        The expected pool size per step, (steps,), and the modelled CPU seconds (one thread) of the
+        surfaces beyond ``contact.surfaces``, each solved up to the last step that still needs it.
+    """
+    from pipeline.config import MAX_POOL_SURFACES, POOL_CONFIDENCE
+    from pipeline.fitting.ensemble import z_value
+
+    fixed, target = scenario.contact.surfaces, scenario.contact.pool_half_width
+    if target <= 0:
+        return np.full(touching.size, fixed), 0.0
+    m = np.asarray(touching, float) + 1.0
+    scatter = POOL_SCATTER * np.sqrt(m) / (m + POOL_SCATTER_KNEE)
+    wanted = np.ceil((z_value(POOL_CONFIDENCE) * scatter / target) ** 2)
+    # the stage grows a prefix of the steps: a step is solved on at least the surfaces any heavier one needs
+    sizes = np.clip(np.maximum.accumulate(wanted[::-1])[::-1], fixed, max(fixed, MAX_POOL_SURFACES)).astype(int)
+    seconds = 0.0
+    for steps in range(1, touching.size + 1):  # surfaces solved at exactly the first `steps` steps
+        added = sizes[steps - 1] - (sizes[steps] if steps < touching.size else fixed)
+        if added > 0:
+            seconds += added * (ADDED_SURFACE_S + surface_seconds(touching[:steps], candidates[:steps]))
+    return sizes, seconds

@@ -301,12 +301,13 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     per_realization = per_map + per_field
     cube_s = per_map * counts.computed + per_field * counts.fields
     if scenario.contact.model == "discrete":  # the pool's solves; one dense solve set per (xi, field)
-        from pipeline.before_work.discrete_cost import expected_counts, field_seconds, surface_seconds
+        from pipeline.before_work.discrete_cost import expected_counts, field_seconds, grown_pool, surface_seconds
 
         touching, candidates = expected_counts(scenario)
         surface_scale = surface_seconds(touching, candidates) / DEFAULT_SURFACE_MODEL_S
         field_scale = field_seconds(touching, candidates) / DEFAULT_FIELD_MODEL_S
         contact_s += DISCRETE_SOLVE_S * DEFAULT_STEPS * surface_scale * scenario.contact.surfaces / t
+        contact_s += grown_pool(scenario, touching, candidates)[1] / t  # the light steps' added surfaces
         per_realization = n_xi * n_lam * DISCRETE_XI_MAP_S[(ox.spot_rule, scenario.cube.model)] * field_scale / t
         cube_s = per_realization * counts.computed
         # dense matrices per thread: the contact's coupling over the candidates and its Newton

@@ -22,7 +22,8 @@ from pipeline.config.loading import (
     USED_ONLY_WITH, bundled_scenarios, load_scenario, parameter_table, read_input_text, use_cross_checks)
 from pipeline.config.scenario import (
     SECTIONS, STAGE_EXCLUDED, STAGE_INPUTS, STAGE_UPSTREAM, ResolvedScenario, Scenario, odd_cells)
-from pipeline.config.scene_sections import Contact, Indenter, Loading, Material, Roughness
+from pipeline.config.scene_sections import (
+    MAX_POOL_SURFACES, POOL_CONFIDENCE, Contact, Indenter, Loading, Material, Roughness)
 from pipeline.config.study_sections import CHUNK_BYTES, KERNEL_CACHE_BYTES, Atlas, Cube, Fits, Oxide, Surrogate
 
 __all__ = [
@@ -55,4 +56,6 @@ __all__ = [
     "Atlas",
     "CHUNK_BYTES",
     "KERNEL_CACHE_BYTES",
+    "MAX_POOL_SURFACES",
+    "POOL_CONFIDENCE",
 ]

@@ -11,7 +11,12 @@ from dataclasses import dataclass
 
 from pipeline.config.declare import param
 
-__all__ = ["Material", "Roughness", "Indenter", "Loading", "Contact"]
+__all__ = ["Material", "Roughness", "Indenter", "Loading", "Contact", "MAX_POOL_SURFACES", "POOL_CONFIDENCE"]
+
+#: Most surfaces a grown discrete pool (``contact.pool_half_width`` > 0) solves.
+MAX_POOL_SURFACES = 4096
+#: Confidence level of ``contact.pool_half_width``.
+POOL_CONFIDENCE = 0.95
 
 
 @dataclass(frozen=True)
@@ -118,9 +123,9 @@ class Contact:
         "surface k mod the pool's size at each step", ge=1,
     )
     pool_half_width: float = param(
-        0.0, "1", "discrete: target relative 95 % half-width of the pool's mean clean conductance at every "
-        "load step: more surfaces, each solved only up to the last step still short of it (light steps, where "
-        "few asperities touch and surfaces differ most), until met or 4096 surfaces; 0: the fixed pool",
+        0.0, "1", f"discrete: target relative {POOL_CONFIDENCE:.0%} half-width of the pool's mean clean conductance at "
+        "every load step: more surfaces, each solved only up to the last step still short of it (light steps, where "
+        f"few asperities touch and surfaces differ most), until met or {MAX_POOL_SURFACES} surfaces; 0: the fixed pool",
         ge=0, lt=1,
     )
 

@@ -14,7 +14,7 @@ each surface's result is independent of the chunking and the scheduler.
 With ``contact.pool_half_width`` > 0 the pool grows at the light steps (:func:`grow_pool`): the
 first ``contact.surfaces`` are solved at every step, further surfaces (the next streams) only up
 to the last step whose pool mean of Barber's conductance is still wider than the target, in
-rounds, until every step meets it or the pool holds :data:`MAX_SURFACES`. Each surface is solved
+rounds, until every step meets it or the pool holds :data:`pipeline.config.MAX_POOL_SURFACES`. Each surface is solved
 at a prefix of the steps (``surface_steps``: the solver warm-starts step by step, so a prefix
 gives the same numbers as a full solve), and surface ``s`` is solved at step ``i`` exactly when
 ``s`` is below the pool's size there: at each step the pool is its first surfaces.
@@ -30,20 +30,17 @@ import numpy as np
 import xarray as xr
 
 from pipeline.compute import ComputeOptions, compute
-from pipeline.config import Scenario
+from pipeline import config
+from pipeline.config import POOL_CONFIDENCE, Scenario
 from pipeline.fitting.ensemble import mean_half_width, z_value
 from pipeline.physics import discrete_contact as dc
 from pipeline.stages.schema import SCHEMA
 
-__all__ = ["CHUNK", "DOMAIN_MARGIN", "MAX_SURFACES", "POOL_CONFIDENCE", "cap_contact", "domain", "surface_spots",
-           "solve_pool", "grow_pool", "pool_half_widths", "variables"]
+__all__ = ["CHUNK", "DOMAIN_MARGIN", "cap_contact", "domain", "surface_spots", "solve_pool", "grow_pool",
+           "pool_half_widths", "variables"]
 
 #: Surfaces per dask task.
 CHUNK = 16
-#: Most surfaces a growing pool (``contact.pool_half_width`` > 0) solves.
-MAX_SURFACES = 4096
-#: Confidence level of ``contact.pool_half_width``.
-POOL_CONFIDENCE = 0.95
 #: The disc serves approaches down to the Greenwood–Tripp solution's lowest minus this many sigma
 #: (the coupled caps' approach at the same force lies within a fraction of sigma of it).
 DOMAIN_MARGIN = 1.0
@@ -120,8 +117,8 @@ def solve_pool(scenario: Scenario, forces: np.ndarray, lowest_delta: float,
 
 
 def pool_half_widths(pool: list[dict[str, np.ndarray]]) -> np.ndarray:
-    """Relative half-width (:data:`POOL_CONFIDENCE`) of the pool's mean Barber conductance at every
-    step, over the surfaces solved there (NaN where no surface touches)."""
+    """Relative half-width (:data:`pipeline.config.POOL_CONFIDENCE`) of the pool's mean Barber conductance
+    at every step, over the surfaces solved there (NaN where no surface touches)."""
     width = pool[0]["delta"].size
     stiffness = np.full((len(pool), width), np.nan)
     for k, r in enumerate(pool):
@@ -138,7 +135,7 @@ def grow_pool(pool: list[dict[str, np.ndarray]], target: float,
     pool
         The surfaces solved so far (each at every step, or at a prefix of them).
     target
-        Relative half-width (:data:`POOL_CONFIDENCE`) wanted at every step.
+        Relative half-width (:data:`pipeline.config.POOL_CONFIDENCE`) wanted at every step.
     solve
         ``solve(first, stop, steps)``: surfaces ``first`` to ``stop - 1`` at the ``steps`` lightest
         forces, in :func:`surface_spots`'s form.
@@ -147,12 +144,12 @@ def grow_pool(pool: list[dict[str, np.ndarray]], target: float,
     -------
     list of dict
         The pool: each round adds the surfaces the widest short step is estimated to need
-        (``n (w / target)^2``, at least :data:`CHUNK`, to at most :data:`MAX_SURFACES`), solved up
+        (``n (w / target)^2``, at least :data:`CHUNK`, to at most :data:`pipeline.config.MAX_POOL_SURFACES`), solved up
         to the last short step. Steps beyond it are not short and their surfaces do not change, so
         the solved prefixes shrink from round to round and the pool at every step is its first
         surfaces.
     """
-    while len(pool) < MAX_SURFACES:
+    while len(pool) < config.MAX_POOL_SURFACES:
         widths = pool_half_widths(pool)
         short = np.flatnonzero(widths > target)
         if short.size == 0:
@@ -160,7 +157,7 @@ def grow_pool(pool: list[dict[str, np.ndarray]], target: float,
         steps = int(short[-1]) + 1
         counts = np.array([sum(r["stiffness"].size > i for r in pool) for i in short])
         wanted = int(np.max(np.ceil(counts * (widths[short] / target) ** 2)))
-        stop = min(MAX_SURFACES, max(wanted, len(pool) + CHUNK))
+        stop = min(config.MAX_POOL_SURFACES, max(wanted, len(pool) + CHUNK))
         pool = pool + solve(len(pool), stop, steps)
     return pool
 
