@@ -159,7 +159,8 @@ def scene_seed(seed: int, scene: Scene) -> int:
 def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None) -> Scenario:
     """``base`` with the scene's eta and beta (at the base's sigma and R*), its own random streams
     (``oxide.seed`` from :func:`scene_seed`), a held-out scene's ensemble to
-    ``atlas.heldout_half_width`` where that is tighter than the base's, approaches whose forces span
+    ``atlas.heldout_half_width`` where that is tighter than the base's (and its discrete pool grown to
+    ``atlas.heldout_pool_half_width``, likewise), approaches whose forces span
     :data:`pipeline.atlas.loads.FORCE_RANGE` in F' (:func:`pipeline.atlas.loads.loading_for_range`,
     ``loading.n_delta`` kept), every step fitted, and ``auto`` domains.
 
@@ -178,6 +179,9 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
         oxide = dataclasses.replace(oxide, target_half_width=min(oxide.target_half_width,
                                                                  base.atlas.heldout_half_width))
     contact = dataclasses.replace(base.contact, window=AUTO, r_max=AUTO)
+    if scene.heldout and base.atlas.heldout_pool_half_width > 0:  # its pool's error, too, below the design's
+        wanted = [w for w in (contact.pool_half_width, base.atlas.heldout_pool_half_width) if w > 0]
+        contact = dataclasses.replace(contact, pool_half_width=min(wanted))
     # every step is fitted: the lightest lies at FORCE_RANGE[0] / (1 + END_MARGIN)
     fits = dataclasses.replace(base.fits, fit_range="force_normalized",
                                min_force_normalized=round(FORCE_RANGE[0] / (1.0 + 2.0 * END_MARGIN), 6))

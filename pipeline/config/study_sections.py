@@ -256,3 +256,7 @@ class Atlas:
         0.025, "1", "target relative 95 % half-width of alpha in the held-out scenes (the smaller of this and "
         "oxide.target_half_width): their own noise should not decide the held-out verdict", gt=0, lt=1
     )
+    heldout_pool_half_width: float = param(
+        0.0, "1", "discrete: contact.pool_half_width of the held-out scenes (the smaller of the two where both "
+        "are set; 0: as the design's): a pool grown at the light steps, whose error no interval shows", ge=0, lt=1
+    )
