@@ -98,6 +98,24 @@ def test_heldout_scenes_are_measured_to_the_tighter_target() -> None:
     assert scene_scenario(looser, held).oxide.target_half_width == 0.025  # never looser than the design
 
 
+def test_heldout_scenes_grow_their_pools_to_the_tighter_target() -> None:
+    """atlas.heldout_pool_half_width grows a held-out scene's discrete pool (contact.pool_half_width);
+    a design scene keeps the base's contact section, and so its configuration hash."""
+    base = load_scenario("atlas")
+    assert (base.contact.pool_half_width, base.atlas.heldout_pool_half_width) == (0.0, 0.02)
+    scenes = design_scenes(AtlasDesign.of(base))
+    design, held = scenes[0], next(s for s in scenes if s.heldout)
+    assert scene_scenario(base, held).contact.pool_half_width == 0.02
+    assert scene_scenario(base, design).contact.pool_half_width == 0.0
+    without = load_scenario("atlas", {"atlas.heldout_pool_half_width": 0.0})
+    assert scene_scenario(without, design).config_hash("fits") == scene_scenario(base, design).config_hash("fits")
+    assert scene_scenario(without, held).contact.pool_half_width == 0.0
+    for own, wanted in ((0.01, 0.01), (0.05, 0.02)):  # the tighter of the two where both are set
+        both = load_scenario("atlas", {"contact.pool_half_width": own})
+        assert scene_scenario(both, held).contact.pool_half_width == wanted
+        assert scene_scenario(both, design).contact.pool_half_width == own
+
+
 def test_plan_grows_with_pi_and_reports_refusals() -> None:
     base = load_scenario("paper_gt", SMALL_OVERRIDES)
     design = AtlasDesign(mu=(2.0, 20.0), Pi=(10.0, 40.0), n_mu=2, n_pi=2, n_heldout=1)

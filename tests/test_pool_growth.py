@@ -104,8 +104,9 @@ def test_the_cube_meets_surface_k_mod_the_pool_size_at_each_step(scene, grown, f
     # an oxidized realization: the same resistance as on the fixed pool of the step's size
     source = FieldSource.of(scene)
     settings = cube.work_settings(scene, grown)[2]
+    grown_pool = cube_discrete.DiscretePool.of(grown)
     for k in (0, 3, sizes[0] - 1, sizes[0] + 2):
-        got = cube_discrete.discrete_chunk(source, 0, np.array([k]), np.array([0]), cube_discrete.DiscretePool.of(grown),
+        got = cube_discrete.discrete_chunk(source, 0, np.array([k]), np.array([0]), grown_pool,
                                            settings)["resistance"][0, :, 0]
         for i, size in enumerate(sizes):
             prefix = dataclasses.replace(pool, x=pool.x[:size], y=pool.y[:size], radius=pool.radius[:size],

@@ -14,8 +14,8 @@ each surface's result is independent of the chunking and the scheduler.
 With ``contact.pool_half_width`` > 0 the pool grows at the light steps (:func:`grow_pool`): the
 first ``contact.surfaces`` are solved at every step, further surfaces (the next streams) only up
 to the last step whose pool mean of Barber's conductance is still wider than the target, in
-rounds, until every step meets it or the pool holds :data:`pipeline.config.MAX_POOL_SURFACES`. Each surface is solved
-at a prefix of the steps (``surface_steps``: the solver warm-starts step by step, so a prefix
+rounds, until every step meets it or the pool holds :data:`pipeline.config.MAX_POOL_SURFACES`.
+Each surface is solved at a prefix of the steps (``surface_steps``: the solver warm-starts step by step, so a prefix
 gives the same numbers as a full solve), and surface ``s`` is solved at step ``i`` exactly when
 ``s`` is below the pool's size there: at each step the pool is its first surfaces.
 """
@@ -91,7 +91,8 @@ def _chunk(settings: dict[str, Any], surfaces: np.ndarray) -> list[dict[str, np.
 
 def _solve(shared: Any, first: int, stop: int, options: ComputeOptions, label: str) -> list[dict[str, np.ndarray]]:
     """Surfaces ``first`` to ``stop - 1`` in dask tasks of :data:`CHUNK`."""
-    tasks = [dask.delayed(_chunk, pure=True)(shared, np.arange(s, min(s + CHUNK, stop))) for s in range(first, stop, CHUNK)]
+    tasks = [dask.delayed(_chunk, pure=True)(shared, np.arange(s, min(s + CHUNK, stop)))
+             for s in range(first, stop, CHUNK)]
     return [r for chunk in compute(*tasks, options=options, label=label) for r in chunk]
 
 
@@ -144,10 +145,10 @@ def grow_pool(pool: list[dict[str, np.ndarray]], target: float,
     -------
     list of dict
         The pool: each round adds the surfaces the widest short step is estimated to need
-        (``n (w / target)^2``, at least :data:`CHUNK`, to at most :data:`pipeline.config.MAX_POOL_SURFACES`), solved up
-        to the last short step. Steps beyond it are not short and their surfaces do not change, so
-        the solved prefixes shrink from round to round and the pool at every step is its first
-        surfaces.
+        (``n (w / target)^2``, at least :data:`CHUNK`, to at most
+        :data:`pipeline.config.MAX_POOL_SURFACES`), solved up to the last short step. Steps beyond
+        it are not short and their surfaces do not change, so the solved prefixes shrink from round
+        to round and the pool at every step is its first surfaces.
     """
     while len(pool) < config.MAX_POOL_SURFACES:
         widths = pool_half_widths(pool)

@@ -2,8 +2,9 @@
 
 Oxide realization ``k`` meets surface ``k mod S`` of contact.nc's pool (``S = contact.surfaces``;
 in a grown pool, ``contact.pool_half_width``, ``S`` is the pool's size at each step, so a light step
-may meet another surface than the heavy ones: :meth:`DiscretePool.groups`) and its own field (the same field as on grid spots, by seed and index, so paired comparisons
-stay possible). The field is evaluated where the spots are, exactly
+may meet another surface than the heavy ones: :meth:`DiscretePool.groups`) and its own field
+(the same field as on grid spots, by seed and index, so paired comparisons stay possible). The
+field is evaluated where the spots are, exactly
 (:func:`pipeline.physics.oxide_points.values_at_points`), and each spot conducts by
 ``oxide.spot_rule``:
 
