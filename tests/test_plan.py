@@ -180,6 +180,14 @@ def test_plan_of_the_discrete_model_counts_its_pool_and_maps() -> None:
     assert discrete["contact"].seconds - grid["contact"].seconds == pytest.approx(256 * 20 * 3.85e-3 / 2, rel=1e-9)
     # 188,200 computed (xi, field) pairs on two workers: the default make run's measured 92.05 s
     assert discrete["cube"].seconds == pytest.approx(92.05, rel=1e-9)
+    # a pool grown at the light steps adds its modelled surfaces' seconds, shared by the workers
+    from pipeline.before_work.discrete_cost import expected_counts, grown_pool
+
+    grown_scene = load_scenario("paper", {"contact.pool_half_width": 0.01})
+    grown = {e.stage: e for e in plan.estimate(grown_scene, workers=2)}
+    added = grown_pool(grown_scene, *expected_counts(grown_scene))[1]
+    assert added > 0
+    assert grown["contact"].seconds - discrete["contact"].seconds == pytest.approx(added / 2, rel=1e-9)
 
 
 #: Both default studies measured on 2026-11-27 (2 cores): each stage run by `g2tom STAGE
