@@ -110,6 +110,10 @@ def test_heldout_scenes_grow_their_pools_to_the_tighter_target() -> None:
     without = load_scenario("atlas", {"atlas.heldout_pool_half_width": 0.0})
     assert scene_scenario(without, design).config_hash("fits") == scene_scenario(base, design).config_hash("fits")
     assert scene_scenario(without, held).contact.pool_half_width == 0.0
+    from pipeline.atlas.cost import scene_cost
+
+    held_cost, design_cost = scene_cost(scene_scenario(base, held)), scene_cost(scene_scenario(base, design))
+    assert held_cost.surfaces_lightest > held_cost.surfaces and design_cost.surfaces_lightest == design_cost.surfaces
     for own, wanted in ((0.01, 0.01), (0.05, 0.02)):  # the tighter of the two where both are set
         both = load_scenario("atlas", {"contact.pool_half_width": own})
         assert scene_scenario(both, held).contact.pool_half_width == wanted

@@ -63,8 +63,10 @@ class SceneCost:
     touching
         (steps,) expected touching asperities per load step (discrete), or None on grid spots.
     surfaces
-        Discrete pool size at every step (0 on grid spots); a grown pool adds surfaces at the light
-        steps (their seconds are in ``contact``).
+        Discrete pool size at every step (0 on grid spots).
+    surfaces_lightest
+        The pool's expected size at the lightest step: larger than ``surfaces`` where
+        ``contact.pool_half_width`` grows it (the added surfaces' seconds are in ``contact``).
     fields
         Oxide fields of the slowest xi (all lambda; the other xi stop earlier).
     contact, cube, other
@@ -73,6 +75,7 @@ class SceneCost:
 
     touching: np.ndarray | None
     surfaces: int
+    surfaces_lightest: int
     fields: float
     contact: float
     cube: float
@@ -129,13 +132,14 @@ def scene_cost(scenario: Scenario) -> SceneCost:
     if scenario.contact.model != "discrete":
         estimates = {e.stage: e.seconds for e in plan.estimate(scenario, 1)}
         counts = plan.realizations(scenario)
-        return SceneCost(None, 0, counts.fields * len(scenario.oxide.lambda_), estimates["contact"],
+        return SceneCost(None, 0, 0, counts.fields * len(scenario.oxide.lambda_), estimates["contact"],
                          estimates["cube"], estimates["oxide"] + estimates["fits"] + SCENE_S)
     n, c = expected_counts(scenario)
-    contact = scenario.contact.surfaces * surface_seconds(n, c) + grown_pool(scenario, n, c)[1]
+    sizes, added = grown_pool(scenario, n, c)
+    contact = scenario.contact.surfaces * surface_seconds(n, c) + added
     per_field = field_seconds(n, c)
     fields = discrete_fields(scenario, n)
     work = discrete_xi_fields(scenario, n)
     cells = len(scenario.oxide.xi) * len(scenario.oxide.lambda_)
     other = SCENE_S + FITS_S * fields / len(scenario.oxide.lambda_) * cells * scenario.fits.n_bootstrap / 100
-    return SceneCost(n, scenario.contact.surfaces, fields, contact, per_field * work, other)
+    return SceneCost(n, scenario.contact.surfaces, int(sizes[0]), fields, contact, per_field * work, other)

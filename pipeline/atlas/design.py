@@ -285,7 +285,7 @@ def schedule(seconds: list[float], parallel: int) -> tuple[int, float]:
 def format_atlas_plan(estimates: list[SceneEstimate], parallel: int = 1) -> list[str]:
     """One line per scene, the total and the wall time on ``parallel`` concurrent scenes
     (:func:`schedule`) against :data:`BUDGET_SECONDS`."""
-    lines = [f"{'scene':6s} {'mu':>8s} {'Pi':>8s} {'cells':>6s} {'touching':>9s} {'pool':>5s} {'fields':>7s} "
+    lines = [f"{'scene':6s} {'mu':>8s} {'Pi':>8s} {'cells':>6s} {'touching':>9s} {'pool':>10s} {'fields':>7s} "
              f"{'memory':>10s} {'time':>10s}"]
     for e in estimates:
         head = f"{e.scene.name:6s} {e.scene.mu:8.4g} {e.scene.Pi:8.4g}"
@@ -294,7 +294,10 @@ def format_atlas_plan(estimates: list[SceneEstimate], parallel: int = 1) -> list
             continue
         c = e.cost
         touching = f"{c.touching[-1]:9.0f}" if c is not None and c.touching is not None else f"{'-':>9s}"
-        pool = f"{c.surfaces:5d}" if c is not None and c.surfaces else f"{'-':>5s}"
+        pool = f"{'-':>10s}"
+        if c is not None and c.surfaces:
+            grown = f"{c.surfaces}/{c.surfaces_lightest}" if c.surfaces_lightest > c.surfaces else f"{c.surfaces}"
+            pool = f"{grown:>10s}"
         fields = f"{c.fields:7.0f}" if c is not None else f"{'-':>7s}"
         lines.append(f"{head} {e.n_cells:6d} {touching} {pool} {fields} {e.peak_bytes / 2**20:7.0f} MiB "
                      f"{e.seconds:8.3g} s")
@@ -304,7 +307,8 @@ def format_atlas_plan(estimates: list[SceneEstimate], parallel: int = 1) -> list
     first = f", the longest {alone} alone on all of them first" if alone else ""
     lines.append(f"{len(runnable)} of {len(estimates)} scenes runnable, {total:.3g} s of one thread in all, about "
                  f"{wall / 3600:.3g} h on {parallel} concurrent scene(s){first} (touching: expected asperities in "
-                 f"contact at the heaviest step; fields: oxide realizations x lambda)")
+                 f"contact at the heaviest step; pool: surfaces at every step, / at the lightest where the pool "
+                 f"grows there, expected; fields: oxide realizations x lambda)")
     if wall > BUDGET_SECONDS:
         worst = sorted(runnable, key=lambda e: -e.seconds)[:3]
         lines.append(f"over the {BUDGET_SECONDS / 3600:g} h budget by {wall / BUDGET_SECONDS:.3g} x; the costliest scenes: "
