@@ -99,15 +99,18 @@ def test_heldout_scenes_are_measured_to_the_tighter_target() -> None:
 
 
 def test_heldout_scenes_grow_their_pools_to_the_tighter_target() -> None:
-    """atlas.heldout_pool_half_width grows a held-out scene's discrete pool (contact.pool_half_width);
-    a design scene keeps the base's contact section, and so its configuration hash."""
-    base = load_scenario("atlas")
-    assert (base.contact.pool_half_width, base.atlas.heldout_pool_half_width) == (0.0, 0.02)
+    """The bundled atlas grows every scene's discrete pool to 2 % (contact.pool_half_width);
+    atlas.heldout_pool_half_width grows a held-out scene's further, a design scene keeps the base's
+    contact section, and so its configuration hash."""
+    bundled = load_scenario("atlas")
+    assert (bundled.contact.pool_half_width, bundled.atlas.heldout_pool_half_width) == (0.02, 0.02)
+    base = load_scenario("atlas", {"contact.pool_half_width": 0.0})
     scenes = design_scenes(AtlasDesign.of(base))
     design, held = scenes[0], next(s for s in scenes if s.heldout)
+    assert scene_scenario(bundled, design).contact.pool_half_width == 0.02
     assert scene_scenario(base, held).contact.pool_half_width == 0.02
     assert scene_scenario(base, design).contact.pool_half_width == 0.0
-    without = load_scenario("atlas", {"atlas.heldout_pool_half_width": 0.0})
+    without = load_scenario("atlas", {"contact.pool_half_width": 0.0, "atlas.heldout_pool_half_width": 0.0})
     assert scene_scenario(without, design).config_hash("fits") == scene_scenario(base, design).config_hash("fits")
     assert scene_scenario(without, held).contact.pool_half_width == 0.0
     from pipeline.atlas.cost import scene_cost
