@@ -64,7 +64,8 @@ def test_expected_counts_against_the_discrete_pool() -> None:
     within 10 %."""
     from pipeline.stages import contact
 
-    base = load_scenario("atlas", {**DISCRETE, "contact.surfaces": 16, "loading.n_delta": 6})
+    base = load_scenario("atlas", {**DISCRETE, "contact.surfaces": 16, "loading.n_delta": 6,
+                                   "contact.pool_half_width": 0.0})  # every surface at every step
     scenario = resolve(scene_scenario(base, Scene("x", 7.07, 20.0, False)))
     touching, candidates = discrete_cost.expected_counts(scenario)
     pool = contact.build(scenario)
@@ -95,7 +96,8 @@ MEASURED = [("d12", 0.085, 0.0123), ("d24", 1.94, 0.0586), ("d22", 10.1, 0.456),
 
 @pytest.mark.parametrize("name, surface_s, field_s", MEASURED)
 def test_cost_model_reproduces_the_calibration_runs(name, surface_s, field_s) -> None:
-    base = load_scenario("atlas", {**DISCRETE, "oxide.ensemble": "fixed", "oxide.n_realizations": 10})
+    base = load_scenario("atlas", {**DISCRETE, "oxide.ensemble": "fixed", "oxide.n_realizations": 10,
+                                   "contact.pool_half_width": 0.0})  # the calibration runs' fixed pools
     scene = next(s for s in design_scenes(AtlasDesign.of(base)) if s.name == name)
     scenario = scene_scenario(base, scene)
     c = cost.scene_cost(scenario)
