@@ -15,7 +15,10 @@ counts of touching asperities N_s and candidates C_s per load step, and the fiel
   its share :data:`XI_SHARE` (relative to the scenario's largest xi), between the same bounds,
   each a 1 / (number of xi) part of :func:`~pipeline.before_work.discrete_cost.field_seconds`.
   Without the shares the plan over-predicted the full atlas's 33 scenes 1.7x (median of
-  measured / planned 0.59, 0.47-1.37); with them 0.96 (0.67-1.75; interquartile 0.86-1.14).
+  measured / planned 0.59, 0.47-1.37); with them 0.96 (0.67-1.75; interquartile 0.86-1.14);
+* a per-step target (``oxide.step_half_width``): every cell's further realizations at its light
+  steps (:func:`pipeline.before_work.discrete_cost.step_fields`, from what alpha's target asks of
+  the cell before the ensemble's bounds), in the cube and in the fits' bootstrap.
 
 The constants are one thread's CPU seconds or counts measured on this 2-core machine (2026-11-27,
 small fixed ensembles of design scenes d02, d12, d22, d24: mu 7.07 at Pi 5, 40, 320, and mu 50 at
@@ -30,7 +33,7 @@ import numpy as np
 
 from pipeline.config import Scenario
 
-__all__ = ["SceneCost", "scene_cost", "discrete_fields", "discrete_xi_fields"]
+__all__ = ["SceneCost", "scene_cost", "discrete_fields", "discrete_xi_fields", "cell_fields"]
 
 #: Fields per lambda of the reference scene (the adaptive discrete d12, mu 7.07, Pi 40, target
 #: 5 %, min 400 realizations): the realizations of the slowest xi at lambda 1, 3, 7, 11, 17, 23.
@@ -87,8 +90,9 @@ class SceneCost:
         return self.contact + self.cube + self.other
 
 
-def _slowest_fields(scenario: Scenario, touching: np.ndarray) -> np.ndarray:
-    """Realizations of the slowest xi per lambda of an adaptive discrete scene (see the module)."""
+def _slowest_fields(scenario: Scenario, touching: np.ndarray, bounded: bool = True) -> np.ndarray:
+    """Realizations of the slowest xi per lambda of an adaptive discrete scene (see the module); not
+    ``bounded``: what alpha's target asks, before the ensemble's bounds."""
     from pipeline.before_work.plan import control_variate_share
 
     ox = scenario.oxide
@@ -98,7 +102,7 @@ def _slowest_fields(scenario: Scenario, touching: np.ndarray) -> np.ndarray:
     scale = (min(1.0, (REFERENCE_TOUCHING / mid) ** FIELDS_EXPONENT) * (REFERENCE_TARGET / ox.target_half_width) ** 2
              * control_variate_share(scenario))
     reference = np.interp(np.log(ox.lambda_), np.log([1.0, 3.0, 7.0, 11.0, 17.0, 23.0]), REFERENCE_FIELDS)
-    return np.clip(reference * scale, ox.min_realizations, ox.max_realizations)
+    return np.clip(reference * scale, ox.min_realizations, ox.max_realizations) if bounded else reference * scale
 
 
 def discrete_fields(scenario: Scenario, touching: np.ndarray) -> float:
@@ -110,24 +114,32 @@ def discrete_fields(scenario: Scenario, touching: np.ndarray) -> float:
     return float(np.sum(_slowest_fields(scenario, touching)))
 
 
+def cell_fields(scenario: Scenario, touching: np.ndarray, bounded: bool = True) -> np.ndarray:
+    """Realizations of every (xi, lambda) of an adaptive discrete scene by alpha's target: the slowest
+    xi's (:func:`discrete_fields`) times each xi's share (:data:`XI_SHARE`), within the ensemble's
+    bounds (not ``bounded``: what the target asks)."""
+    ox = scenario.oxide
+    xi = np.asarray(ox.xi, float)
+    share = np.interp(xi, XI_SHARE_AT, XI_SHARE) / np.interp(xi.max(), XI_SHARE_AT, XI_SHARE)
+    per_xi = _slowest_fields(scenario, touching, bounded)[None, :] * share[:, None]
+    return np.clip(per_xi, ox.min_realizations, ox.max_realizations) if bounded else per_xi
+
+
 def discrete_xi_fields(scenario: Scenario, touching: np.ndarray) -> float:
     """Fields' worth of cube work of a discrete scene: every xi's realizations summed over xi and
-    lambda, over the number of xi (:data:`XI_SHARE`; a fixed ensemble computes every xi of every field)."""
+    lambda, over the number of xi (:func:`cell_fields`; a fixed ensemble computes every xi of every field)."""
     ox = scenario.oxide
     if ox.ensemble != "adaptive":
         return discrete_fields(scenario, touching)
-    xi = np.asarray(ox.xi, float)
-    share = np.interp(xi, XI_SHARE_AT, XI_SHARE) / np.interp(xi.max(), XI_SHARE_AT, XI_SHARE)
-    per_xi = np.clip(_slowest_fields(scenario, touching)[None, :] * share[:, None], ox.min_realizations,
-                     ox.max_realizations)
-    return float(per_xi.sum() / xi.size)
+    return float(cell_fields(scenario, touching).sum() / len(ox.xi))
 
 
 def scene_cost(scenario: Scenario) -> SceneCost:
     """The modelled CPU seconds of one atlas scene (its scenario as :func:`pipeline.atlas.design.scene_scenario`
     makes it), single-threaded."""
     from pipeline.before_work import plan
-    from pipeline.before_work.discrete_cost import expected_counts, field_seconds, grown_pool, surface_seconds
+    from pipeline.before_work.discrete_cost import (expected_counts, field_seconds, grown_pool, step_fields,
+                                                    surface_seconds)
 
     if scenario.contact.model != "discrete":
         estimates = {e.stage: e.seconds for e in plan.estimate(scenario, 1)}
@@ -140,6 +152,12 @@ def scene_cost(scenario: Scenario) -> SceneCost:
     per_field = field_seconds(n, c)
     fields = discrete_fields(scenario, n)
     work = discrete_xi_fields(scenario, n)
+    extra, light_seconds = 0.0, 0.0
+    if scenario.oxide.ensemble == "adaptive":  # a per-step target's realizations at the light steps
+        steps, light_seconds = step_fields(scenario, n, c, cell_fields(scenario, n, bounded=False))
+        extra = float(np.sum(steps.mean(axis=-1) - steps[..., -1]))  # the fits' bootstrap runs over each step's own
     cells = len(scenario.oxide.xi) * len(scenario.oxide.lambda_)
-    other = SCENE_S + FITS_S * fields / len(scenario.oxide.lambda_) * cells * scenario.fits.n_bootstrap / 100
-    return SceneCost(n, scenario.contact.surfaces, int(sizes[0]), fields, contact, per_field * work, other)
+    other = (SCENE_S + FITS_S * (fields / len(scenario.oxide.lambda_) * cells + extra)
+             * scenario.fits.n_bootstrap / 100)
+    return SceneCost(n, scenario.contact.surfaces, int(sizes[0]), fields, contact,
+                     per_field * work + light_seconds, other)

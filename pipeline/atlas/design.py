@@ -156,11 +156,18 @@ def scene_seed(seed: int, scene: Scene) -> int:
     return int(np.random.SeedSequence([int(seed), SCENE_TAG, *key]).generate_state(1)[0])
 
 
+def _tighter(own: float, heldout: float) -> float:
+    """The smaller positive of a design target and its held-out counterpart (0: none set)."""
+    wanted = [w for w in (own, heldout) if w > 0]
+    return min(wanted) if wanted else 0.0
+
+
 def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None) -> Scenario:
     """``base`` with the scene's eta and beta (at the base's sigma and R*), its own random streams
     (``oxide.seed`` from :func:`scene_seed`), a held-out scene's ensemble to
-    ``atlas.heldout_half_width`` where that is tighter than the base's (and its discrete pool grown to
-    ``atlas.heldout_pool_half_width``, likewise), approaches whose forces span
+    ``atlas.heldout_half_width`` where that is tighter than the base's (its light steps' to
+    ``atlas.heldout_step_half_width`` and its discrete pool grown to ``atlas.heldout_pool_half_width``,
+    likewise), approaches whose forces span
     :data:`pipeline.atlas.loads.FORCE_RANGE` in F' (:func:`pipeline.atlas.loads.loading_for_range`,
     ``loading.n_delta`` kept), every step fitted, and ``auto`` domains.
 
@@ -177,11 +184,13 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
     oxide = dataclasses.replace(base.oxide, seed=scene_seed(base.oxide.seed, scene))
     if scene.heldout:  # measured closer than the design, so the verdict judges the surrogate
         oxide = dataclasses.replace(oxide, target_half_width=min(oxide.target_half_width,
-                                                                 base.atlas.heldout_half_width))
+                                                                 base.atlas.heldout_half_width),
+                                    step_half_width=_tighter(oxide.step_half_width,
+                                                             base.atlas.heldout_step_half_width))
     contact = dataclasses.replace(base.contact, window=AUTO, r_max=AUTO)
-    if scene.heldout and base.atlas.heldout_pool_half_width > 0:  # its pool's error, too, below the design's
-        wanted = [w for w in (contact.pool_half_width, base.atlas.heldout_pool_half_width) if w > 0]
-        contact = dataclasses.replace(contact, pool_half_width=min(wanted))
+    if scene.heldout:  # its pool's error, too, below the design's
+        contact = dataclasses.replace(contact, pool_half_width=_tighter(contact.pool_half_width,
+                                                                        base.atlas.heldout_pool_half_width))
     # every step is fitted: the lightest lies at FORCE_RANGE[0] / (1 + END_MARGIN)
     fits = dataclasses.replace(base.fits, fit_range="force_normalized",
                                min_force_normalized=round(FORCE_RANGE[0] / (1.0 + 2.0 * END_MARGIN), 6))

@@ -35,7 +35,8 @@ import numpy as np
 
 from pipeline.config import Scenario
 
-__all__ = ["probe", "expected_counts", "expected_touching", "surface_seconds", "field_seconds", "grown_pool"]
+__all__ = ["probe", "expected_counts", "expected_touching", "expected_force_normalized", "surface_seconds",
+           "field_seconds", "grown_pool", "step_fields"]
 
 #: Radial nodes of the fast solve.
 _N_RADIAL = 400
@@ -79,8 +80,20 @@ POOL_SCATTER_KNEE = 3.0
 #: Seconds per added surface besides its solves (drawing its asperities on the heaviest step's disc
 #: and ordering them): h06's 531 added surfaces took 5.6 s more than its 39 (2026-11-28).
 ADDED_SURFACE_S = 0.01
-#: The expected touching and candidate counts found so far, by the parameters that set them.
-_COUNTS: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+#: A per-step target (``oxide.step_half_width``): the 95 % relative half-width of one load step's
+#: geometric mean of R over alpha's at the same realizations, by F' (:data:`STEP_RATIO_AT`;
+#: interpolated in ln F', constant beyond): the medians over the 25 design scenes of the atlas of
+#: 2026-11-27 (mu 1-50, Pi 5-320, every (xi, lambda); the upper quartile is 1.2-2x these). The light
+#: steps are the noisy ones: their few touching spots, and alpha's fit averages 20 steps.
+STEP_RATIO_AT = (0.049, 0.111, 0.232, 0.44, 0.763, 1.218, 1.814, 2.551, 4.429, 8.161, 20.4)
+STEP_RATIO = (3.53, 2.8, 2.3, 2.1, 1.49, 1.17, 0.92, 0.72, 0.53, 0.38, 0.23)
+#: Seconds of one cell's oxide field computed at a prefix of the steps besides the steps' own
+#: (:func:`field_seconds`): drawing its coefficients and the field at the spots' discs. Measured on
+#: design scenes d02, d12 and d22 (2026-11-28, 40 fields at lambda 1 and 23, at the first 1 and 3
+#: steps, with the atlas computing beside it): 0.6-2.3 ms per field, 0.1-0.4 ms of it modelled.
+FIELD_PREFIX_S = 1.0e-3
+#: The expected touching and candidate counts and F' found so far, by the parameters that set them.
+_COUNTS: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
 
 def probe(scenario: Scenario, delta_sigma: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
@@ -129,9 +142,7 @@ def expected_counts(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     from pipeline.contact_solution import indenter_profile
     from pipeline.physics.greenwood_tripp import force_weights
 
-    flat = scenario.flat()
-    key = json.dumps({k: v for k, v in flat.items() if k.startswith(("material.", "roughness.", "indenter.",
-                                                                      "loading."))}, sort_keys=True)
+    key = _counts_key(scenario)
     if key not in _COUNTS:
         sigma = scenario.roughness.sigma
         deltas = np.asarray(scenario.deltas)
@@ -139,8 +150,20 @@ def expected_counts(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
         weights = scenario.roughness.eta * force_weights(nodes)
         rigid = deltas[:, None] + indenter_profile(scenario, nodes)[None, :]
         counts = tuple(0.5 * erfc(gap / (sigma * math.sqrt(2.0))) @ weights for gap in (solved["h"], rigid))
-        _COUNTS[key] = counts
+        _COUNTS[key] = (*counts, np.asarray(solved["force"], float) / scenario.force_scale)
     return _COUNTS[key][0].copy(), _COUNTS[key][1].copy()
+
+
+def expected_force_normalized(scenario: Scenario) -> np.ndarray:
+    """F' of Greenwood–Tripp's fast solve at each of the scenario's approaches (:func:`expected_counts`'s)."""
+    expected_counts(scenario)
+    return _COUNTS[_counts_key(scenario)][2].copy()
+
+
+def _counts_key(scenario: Scenario) -> str:
+    """The parameters that set :func:`expected_counts`'s solve, as its cache key."""
+    return json.dumps({k: v for k, v in scenario.flat().items()
+                       if k.startswith(("material.", "roughness.", "indenter.", "loading."))}, sort_keys=True)
 
 
 def expected_touching(scenario: Scenario) -> np.ndarray:
@@ -210,3 +233,47 @@ def grown_pool(scenario: Scenario, touching: np.ndarray, candidates: np.ndarray)
         if added > 0:
             seconds += added * (ADDED_SURFACE_S + surface_seconds(touching[:steps], candidates[:steps]))
     return sizes, seconds
+
+
+def step_fields(scenario: Scenario, touching: np.ndarray, candidates: np.ndarray,
+                needed: np.ndarray) -> tuple[np.ndarray, float]:
+    """The realizations a per-step target (``oxide.step_half_width``) is expected to add, and their cost.
+
+    A fitted step's half-width is :data:`STEP_RATIO` times alpha's at the same realizations, so where
+    alpha's target asks ``needed`` realizations the step asks ``needed (ratio target / step target)^2``: at
+    least alpha's count (``needed`` within the ensemble's bounds), at most ``oxide.max_realizations``,
+    each step at least what a heavier one asks; a realization past alpha's count is computed up to
+    the heaviest step that still needs it.
+
+    Parameters
+    ----------
+    scenario
+        Its ``oxide`` targets and bounds, its loading (the steps' F', :func:`expected_force_normalized`).
+    touching, candidates
+        (steps,) expected touching asperities and candidates per load step (:func:`expected_counts`).
+    needed
+        The realizations alpha's target asks in each cell (xi, lambda), before the ensemble's bounds;
+        any shape.
+
+    Returns
+    -------
+    tuple
+        Each cell's expected realizations at every step (``needed``'s shape, steps), and the modelled
+        CPU seconds (one thread) of all cells' realizations past alpha's count: per realization
+        :data:`FIELD_PREFIX_S` and a ``1 / n_xi`` part of :func:`field_seconds` over its steps.
+    """
+    ox = scenario.oxide
+    needed = np.asarray(needed, float)[..., None]
+    alpha = np.clip(needed, ox.min_realizations, ox.max_realizations)
+    if ox.ensemble != "adaptive" or ox.step_half_width <= 0:
+        return np.repeat(alpha, touching.size, axis=-1), 0.0
+    force = expected_force_normalized(scenario)
+    _, threshold, loads, _ = scenario.fits.fitted_loads(force * scenario.force_scale, force)
+    ratio = np.interp(np.log(np.maximum(force, 1e-300)), np.log(STEP_RATIO_AT), STEP_RATIO)
+    asked = np.where(loads >= threshold, (ratio * ox.target_half_width / ox.step_half_width) ** 2, 0.0)
+    wanted = np.maximum.accumulate(asked[::-1])[::-1]  # only fitted steps have a target
+    counts = np.clip(needed * wanted, alpha, ox.max_realizations)
+    prefix = [FIELD_PREFIX_S + field_seconds(touching[:m], candidates[:m]) / len(ox.xi)
+              for m in range(1, touching.size + 1)]
+    beyond = counts - np.concatenate([counts[..., 1:], alpha], axis=-1)  # computed at exactly m steps
+    return counts, float(np.sum(np.maximum(beyond, 0.0) * np.array(prefix)))

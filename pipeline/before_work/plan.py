@@ -301,7 +301,8 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     per_realization = per_map + per_field
     cube_s = per_map * counts.computed + per_field * counts.fields
     if scenario.contact.model == "discrete":  # the pool's solves; one dense solve set per (xi, field)
-        from pipeline.before_work.discrete_cost import expected_counts, field_seconds, grown_pool, surface_seconds
+        from pipeline.before_work.discrete_cost import (expected_counts, field_seconds, grown_pool, step_fields,
+                                                        surface_seconds)
 
         touching, candidates = expected_counts(scenario)
         surface_scale = surface_seconds(touching, candidates) / DEFAULT_SURFACE_MODEL_S
@@ -309,7 +310,11 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
         contact_s += DISCRETE_SOLVE_S * DEFAULT_STEPS * surface_scale * scenario.contact.surfaces / t
         contact_s += grown_pool(scenario, touching, candidates)[1] / t  # the light steps' added surfaces
         per_realization = n_xi * n_lam * DISCRETE_XI_MAP_S[(ox.spot_rule, scenario.cube.model)] * field_scale / t
-        cube_s = per_realization * counts.computed
+        # a per-step target's realizations at the light steps, and the cube's longer realization axis
+        steps, light_s = step_fields(scenario, touching, candidates, [[counts.typical] * n_lam] * n_xi)
+        cube_s = per_realization * counts.computed + light_s / t
+        n_cube = min(float(ox.max_realizations), n_cube * float(steps[0, 0, 0]) / counts.typical)
+        results = results_of(n_cube)
         # dense matrices per thread: the contact's coupling over the candidates and its Newton
         # copies over the touching caps; the cube's kept kernels (one per surface, bounded), a
         # kernel made in a task and the conjugate gradients' union coupling

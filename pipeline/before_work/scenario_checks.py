@@ -102,11 +102,29 @@ def _check_control_variate(s: Scenario) -> None:
                               f"{s.fits.control_variate!r}: must be {allowed!r} ({why})")
 
 
+def _check_step_target(s: Scenario) -> None:
+    """A per-step target (``oxide.step_half_width``, or the atlas's ``atlas.heldout_step_half_width``)
+    grows an adaptive ensemble on discrete spots, for the geometric mean."""
+    set_ = [(k, v) for k, v in (("oxide.step_half_width", s.oxide.step_half_width),
+                                ("atlas.heldout_step_half_width", s.atlas.heldout_step_half_width)) if v > 0]
+    if not set_:
+        return
+    target, given = set_[0]
+    for name, value, allowed, why in (
+        ("oxide.ensemble", s.oxide.ensemble, "adaptive", "a fixed ensemble has no target"),
+        ("contact.model", s.contact.model, "discrete", "only discrete spots compute a field at some steps alone"),
+        ("fits.reduction", s.fits.reduction, "geometric_mean", "the target is the geometric mean's"),
+    ):
+        if value != allowed:
+            raise ConfigError(f"{name} = {value!r} is not allowed with {target} = {given!r}: must be "
+                              f"{allowed!r} ({why})")
+
+
 def check_scenario(s: Scenario) -> None:
     """Every check across parameters of a scenario, run as it is loaded (before any work).
 
     The settings that rule each other out (:func:`_check_point_model`, :func:`_check_spots`,
-    :func:`_check_discrete`, :func:`_check_control_variate`), integers a netCDF attribute cannot hold, the approaches' order,
+    :func:`_check_discrete`, :func:`_check_control_variate`, :func:`_check_step_target`), integers a netCDF attribute cannot hold, the approaches' order,
     the atlas's box and, once ``contact.window`` and ``contact.r_max`` are both numbers, the
     window against the radial domain and the oxide band
     (:func:`pipeline.before_work.window_checks.check_domains`).
@@ -120,6 +138,7 @@ def check_scenario(s: Scenario) -> None:
     _check_spots(s)
     _check_discrete(s)
     _check_control_variate(s)
+    _check_step_target(s)
     for section in SECTIONS:
         obj = getattr(s, section)
         for f in dataclasses.fields(obj):

@@ -7,6 +7,7 @@ Each field declares its unit, meaning and allowed range (:func:`pipeline.config.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from pipeline.config.declare import param
 
@@ -58,6 +59,11 @@ class Oxide:
     max_realizations: int = param(30000, "1", "adaptive: cap on the realizations per (xi, lambda)", ge=2)
     target_half_width: float = param(
         0.025, "1", "adaptive: target relative 95 % half-width of alpha in every cell", gt=0, lt=1
+    )
+    step_half_width: float = param(
+        0.0, "1", "adaptive, discrete: target relative 95 % half-width of the geometric mean of R at every "
+        "fitted step as well (0: alpha's target only); the realizations past alpha's count are computed "
+        "only at the lightest steps still wider", ge=0, lt=1
     )
     period: str = param(
         "spectral",
@@ -192,6 +198,13 @@ class Fits:
     confidence: float = param(0.95, "1", "confidence level of the intervals", gt=0, lt=1)
     seed: int = param(7, "1", "seed of the bootstrap", ge=0)
 
+    def fitted_loads(self, force: Any, force_normalized: Any) -> tuple[str, float, Any, str]:
+        """What selects the fitted load steps: the parameter's key, its threshold, the loads it is
+        compared with (``force`` in N or ``force_normalized``, as given) and their unit."""
+        if self.fit_range == "force":
+            return "min_force", self.min_force, force, " N"
+        return "min_force_normalized", self.min_force_normalized, force_normalized, ""
+
 
 @dataclass(frozen=True)
 class Surrogate:
@@ -255,6 +268,10 @@ class Atlas:
     heldout_half_width: float = param(
         0.025, "1", "target relative 95 % half-width of alpha in the held-out scenes (the smaller of this and "
         "oxide.target_half_width): their own noise should not decide the held-out verdict", gt=0, lt=1
+    )
+    heldout_step_half_width: float = param(
+        0.0, "1", "adaptive, discrete: oxide.step_half_width of the held-out scenes (the smaller of the two where "
+        "both are set; 0: as the design's): their light steps' intervals, not only alpha's", ge=0, lt=1
     )
     heldout_pool_half_width: float = param(
         0.0, "1", "discrete: contact.pool_half_width of the held-out scenes (the smaller of the two where both "

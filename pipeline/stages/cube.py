@@ -18,7 +18,8 @@ field is regenerated inside its task from its seed (:class:`pipeline.scene.Field
 bit-identical to the record), so memory stays bounded and the ensemble can grow. ``oxide.ensemble = "fixed"`` computes
 ``oxide.n_realizations`` fields per lambda. ``"adaptive"`` grows every (xi, lambda) cell in
 rounds (:mod:`pipeline.stages.cube_rounds`). The realization axis is padded to the largest count
-(NaN, ``n_conducting`` -1) and ``n_realizations`` (xi, lambda) says how many entries are real.
+(NaN, ``n_conducting`` -1) and ``n_realizations`` (xi, lambda) says how many entries are real; with
+``oxide.step_half_width`` the light steps hold more, ``step_realizations`` (xi, lambda, delta).
 """
 
 from __future__ import annotations
@@ -266,21 +267,23 @@ def build(
     -------
     xarray.Dataset
         ``resistance``, its two terms and ``n_conducting`` (xi, lambda, delta, realization),
-        ``n_open`` (xi, lambda, delta), ``n_realizations`` (lambda), the fast rule's half-widths
-        (xi, lambda), the clean-surface terms and ``crop_cells`` (delta).
+        ``n_open`` (xi, lambda, delta), ``n_realizations`` (xi, lambda; with
+        ``oxide.step_half_width`` also ``step_realizations``, xi, lambda, delta), the fast rule's
+        half-widths (xi, lambda), the clean-surface terms and ``crop_cells`` (delta).
     """
     scenario = resolved(scenario)
     _check_grids(contact, oxide)
     source = RecordedFields.of(scenario, oxide) if source is None else source
     radius, weights, settings = work_settings(scenario, contact)
     rule = stopping_rule(scenario, contact["force"].values, contact["force_normalized"].values)
-    cells, uncropped = compute_cells(scenario, source, radius, weights, settings, rule, options)
-    counts = np.array([[c["resistance"].shape[-1] for c in row] for row in cells])
-    widths = [[half_widths(c["resistance"][None], rule, c["clean_share"][None] if "clean_share" in c else None)
-               for c in row] for row in cells]
+    cells, counts, step_counts, uncropped = compute_cells(scenario, source, radius, weights, settings, rule, options)
+    widths = [[half_widths(c["resistance"][None, ..., :n], rule, c["clean_share"][None, ..., :n] if "clean_share" in c
+                           else None) for c, n in zip(row, n_row)] for row, n_row in zip(cells, counts)]
     last = tuple(np.array([[w[k][0, -1] for w in row] for row in widths]) for k in (0, 1))
     out: dict[str, Any] = padded(cells)
     out["n_uncropped"] = uncropped
+    if step_counts is not None:
+        out["step_realizations"] = step_counts
     if "clean_share" in out:
         out["clean_share_expected"] = expected_clean_share(scenario)
     clean = _clean(radius, weights, settings, _clean_draws(scenario))

@@ -212,16 +212,17 @@ def spots_of(settings: CubeSettings, realizations: np.ndarray, radius: np.ndarra
 
 def field_chunk(
     source: FieldSource, index: int, realizations: np.ndarray, xi_index: np.ndarray,
-    radius: np.ndarray, weights: np.ndarray, settings: CubeSettings,
+    radius: np.ndarray, weights: np.ndarray, settings: CubeSettings, limit: int | None = None,
 ) -> dict[str, Any]:
     """Regenerate the fields of ``realizations`` at lambda number ``index`` and run :func:`chunk_terms`.
 
     Only the fractions ``xi_index`` are evaluated; returns the terms shaped (xi, delta, realization).
     Discrete spots (``radius`` a :class:`pipeline.stages.cube_discrete.DiscretePool`) go to
-    :func:`pipeline.stages.cube_discrete.discrete_chunk`.
+    :func:`pipeline.stages.cube_discrete.discrete_chunk`, which computes only the steps below
+    ``limit`` (None: every step; other spots compute every step).
     """
     if settings.spots == "discrete":
-        return discrete_chunk(source, index, realizations, xi_index, radius, settings)
+        return discrete_chunk(source, index, realizations, xi_index, radius, settings, limit)
     psi, threshold = source.fields(index, realizations)
     radius, weights = spots_of(settings, realizations, radius, weights)
     out = chunk_terms(psi[None], threshold[xi_index][:, None], radius, weights, settings)

@@ -79,6 +79,14 @@ def dataset(
             "clean_share_expected", out["clean_share_expected"],
             method="Gil-Pelaez inversion of the random-phase field's characteristic function prod_k J0(w_k u) "
                    "at the float32 threshold (pipeline.physics.oxide_marginal)")
+    if "step_realizations" in out:
+        for name in ("resistance", "resistance_self", "resistance_interaction", "clean_share"):
+            if name in data_vars:
+                data_vars[name][2]["comment"] = data_vars[name][2]["comment"].replace(
+                    "n_realizations(xi, lambda)", "step_realizations(xi, lambda, delta)")
+        data_vars["n_conducting"][2]["comment"] = "-1 beyond step_realizations(xi, lambda, delta)"
+        data_vars["step_realizations"] = cube("step_realizations", out["step_realizations"].astype(np.int32),
+                                              comment="at least n_realizations, the lightest steps more")
     if "iterations" in out:
         data_vars["iterations"] = cube("iterations", out["iterations"].astype(np.int32),
                                        comment="-1 beyond n_realizations(xi, lambda)")
@@ -125,6 +133,12 @@ def dataset(
                 f"alpha half-width is <= {RULE_MARGIN:g} x target_half_width, else max_realizations"
             ),
         })
+    if "step_realizations" in out:
+        attrs["step_half_width"] = ox.step_half_width
+        attrs["stopping_rule"] += (
+            f"; then per fitted step, the smallest n >= n_realizations at which the fast-rule half-width of the "
+            f"geometric mean is <= {RULE_MARGIN:g} x step_half_width, else max_realizations, each step keeping at "
+            "least the count of the steps above it")
     ds = xr.Dataset(data_vars, coords=coords, attrs=attrs)
     if ox.ensemble == "adaptive":  # the padding compresses to almost nothing
         for name in ("resistance", "resistance_self", "resistance_interaction", "n_conducting"):

@@ -178,20 +178,28 @@ def _terms(kernel: np.ndarray, radius: np.ndarray, rho: float, model: str) -> di
 
 
 def discrete_chunk(source: Any, index: int, realizations: np.ndarray, xi_index: np.ndarray,
-                   pool: DiscretePool, settings: "CubeSettings") -> dict[str, Any]:
+                   pool: DiscretePool, settings: "CubeSettings", limit: int | None = None) -> dict[str, Any]:
     """The terms (xi, delta, realization) of the fields of ``realizations`` at lambda number ``index``.
 
     ``source`` is a :class:`pipeline.scene.FieldSource` (or the record in front of one):
-    its thresholds and its fields' coefficients.
+    its thresholds and its fields' coefficients. ``limit``: only the steps below it are computed
+    (NaN, counts -1, at the others; ``oxide.step_half_width``); None: every step.
     """
     base = getattr(source, "source", source)
     modes, lam = base.modes[index], base.lambdas[index]
     thresholds = source.thresholds(index, realizations)[xi_index]
+    n_delta = pool.radius.shape[1]
+    limit = n_delta if limit is None else int(limit)
     pieces = []
     for column, k in enumerate(realizations):
         coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(base.seed, lam, int(k)), base.amplitudes)
         parts = []
         for surface, steps in pool.groups(int(k)):
+            if limit < n_delta:
+                steps = (np.arange(n_delta) if steps is None else steps)
+                steps = steps[steps < limit]
+                if steps.size == 0:
+                    continue
             x, y, radius = pool.spots(surface)
             radius = radius if steps is None else radius[steps]
             share = clean_shares(modes, coeffs, x, y, radius, thresholds[:, column], settings.spot_rule,
@@ -201,17 +209,19 @@ def discrete_chunk(source: Any, index: int, realizations: np.ndarray, xi_index: 
             if settings.control_variate:
                 part["clean_share"] = weighted_clean_share(share, radius)
             parts.append((steps, part))
-        pieces.append(parts[0][1] if parts[0][0] is None else _by_step(parts, pool.radius.shape[1]))
+        pieces.append(parts[0][1] if parts[0][0] is None else _by_step(parts, n_delta))
     out: dict[str, Any] = {name: np.stack([p[name] for p in pieces], axis=-1) for name in pieces[0]}
     out["n_uncropped"] = 0
     return out
 
 
 def _by_step(parts: list[tuple[np.ndarray, dict[str, np.ndarray]]], n_delta: int) -> dict[str, np.ndarray]:
-    """One realization's terms (..., delta) put together from the surfaces it meets at the steps given."""
+    """One realization's terms (..., delta) put together from the surfaces it meets at the steps given
+    (NaN, counts -1, at steps none of them gives)."""
     out = {}
     for name, first in parts[0][1].items():
-        joined = np.empty(first.shape[:-1] + (n_delta,), first.dtype)
+        fill = -1 if np.issubdtype(first.dtype, np.integer) else np.nan
+        joined = np.full(first.shape[:-1] + (n_delta,), fill, first.dtype)
         for steps, part in parts:
             joined[..., steps] = part[name]
         out[name] = joined

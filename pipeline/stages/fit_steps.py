@@ -4,22 +4,11 @@ adaptive ensemble (whose stopping rule looks at the fitted steps only)."""
 
 from __future__ import annotations
 
-from typing import Any
-
 import xarray as xr
 
 from pipeline.config import ConfigError, Scenario
 
-__all__ = ["fit_range", "fitted_steps", "range_label"]
-
-
-def fit_range(scenario: Scenario, force: Any, force_normalized: Any) -> tuple[str, float, Any, str]:
-    """What selects the fitted load steps: the parameter's key, its threshold, the loads it is
-    compared with (``force`` in N or ``force_normalized``, as given) and their unit."""
-    f = scenario.fits
-    if f.fit_range == "force":
-        return "min_force", f.min_force, force, " N"
-    return "min_force_normalized", f.min_force_normalized, force_normalized, ""
+__all__ = ["fitted_steps", "range_label"]
 
 
 def fitted_steps(scenario: Scenario, force: xr.DataArray, force_normalized: xr.DataArray) -> xr.DataArray:
@@ -31,7 +20,7 @@ def fitted_steps(scenario: Scenario, force: xr.DataArray, force_normalized: xr.D
     ConfigError
         If fewer than two steps qualify.
     """
-    key, threshold, values, unit = fit_range(scenario, force, force_normalized)
+    key, threshold, values, unit = scenario.fits.fitted_loads(force, force_normalized)
     mask = values >= threshold
     if int(mask.sum()) < 2:
         raise ConfigError(

@@ -55,45 +55,65 @@ GRID = ("xi", "lambda")
 
 def _bootstrap(
     scenario: Scenario, normalized: np.ndarray, force_n: np.ndarray, counts: np.ndarray,
-    control: tuple[np.ndarray, np.ndarray] | None = None,
+    control: tuple[np.ndarray, np.ndarray] | None = None, step_counts: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Bootstrap alpha and gamma, each shaped (xi, lambda, resample), and the interval of the
     reduction at every fitted step, (xi, lambda, step, bound).
 
     ``normalized`` holds R' on the fitted steps, shape (xi, lambda, step, realization); cell
-    (xi, lambda) uses its first ``counts[xi, lambda]`` realizations. ``control``: the control
-    variate's values (shaped as ``normalized``) and expectations (xi, lambda), or None.
+    (xi, lambda) uses its first ``counts[xi, lambda]`` realizations, or at each step its first
+    ``step_counts[xi, lambda, step]`` (``oxide.step_half_width``: one table of the lightest step's
+    count serves the cell, each step taking its columns of its own realizations, so a resample
+    redraws a realization at every step that holds it). ``control``: the control variate's values
+    (shaped as ``normalized``) and expectations (xi, lambda), or None.
     """
     rng = np.random.default_rng(scenario.fits.seed)
     alpha = np.empty(counts.shape + (scenario.fits.n_bootstrap,))
     gamma = np.empty_like(alpha)
     band = np.empty(counts.shape + (normalized.shape[2], 2))
-    for n in np.unique(counts):  # ascending
-        table = resample_counts(int(n), scenario.fits.n_bootstrap, rng)
-        if np.all(counts == n):  # one count (a fixed ensemble): the whole grid at once
+    per_cell = counts[..., None] if step_counts is None else step_counts
+    keys = {tuple(int(n) for n in per_cell[z, a]) for z, a in np.ndindex(counts.shape)}
+    for key in sorted(keys, key=lambda k: (max(k), k)):  # ascending (one count per cell: as the counts)
+        n = max(key)
+        table = resample_counts(n, scenario.fits.n_bootstrap, rng)
+        steps = None if len(set(key)) == 1 else np.array(key)
+        if len(keys) == 1 and steps is None:  # one count (a fixed ensemble): the whole grid at once
             return _bootstrap_fit(scenario, normalized[..., :n], force_n, table,
                                   None if control is None else (control[0][..., :n], control[1]))
-        cells = np.nonzero(counts == n)
+        cells = np.nonzero(np.all(per_cell == np.array(key), axis=-1))
         part = None if control is None else (control[0][..., :n][cells], control[1][cells])
         alpha[cells], gamma[cells], band[cells] = _bootstrap_fit(scenario, normalized[..., :n][cells], force_n, table,
-                                                                 part)
+                                                                 part, steps)
     return alpha, gamma, band
 
 
 def _bootstrap_fit(
     scenario: Scenario, values: np.ndarray, force_n: np.ndarray, table: np.ndarray,
-    control: tuple[np.ndarray, np.ndarray] | None = None,
+    control: tuple[np.ndarray, np.ndarray] | None = None, steps: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """alpha and gamma (..., resample) of the resamples ``table`` of ``values`` (..., step,
-    realization), and the interval of the reduction at every step (..., step, bound)."""
-    if scenario.fits.reduction == "median":
-        reduced = bootstrap_median(values, table)
-    elif control is not None:
-        reduced = bootstrap_controlled_mean(values, control[0], control[1][..., None], table)
+    realization), and the interval of the reduction at every step (..., step, bound); ``steps``:
+    the realizations of each step (step,), each taking the table's first that many columns."""
+    if steps is None:
+        reduced = _resampled(scenario, values, table, control)
     else:
-        reduced = bootstrap_log_mean(values, table, scenario.fits.reduction == "geometric_mean")
+        reduced = np.empty(values.shape[:-1] + (table.shape[0],))
+        for n in np.unique(steps):
+            at = np.flatnonzero(steps == n)
+            part = None if control is None else (control[0][..., at, :n], control[1])
+            reduced[..., at, :] = _resampled(scenario, values[..., at, :n], table[:, :n], part)
     fit = fit_power_law(force_n, np.moveaxis(reduced, -1, -2))
     return fit.alpha, fit.gamma, _interval(reduced, scenario.fits.confidence)
+
+
+def _resampled(scenario: Scenario, values: np.ndarray, table: np.ndarray,
+               control: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
+    """The reduction of every resample ``table`` of ``values`` (..., step, realization), (..., step, resample)."""
+    if scenario.fits.reduction == "median":
+        return bootstrap_median(values, table)
+    if control is not None:
+        return bootstrap_controlled_mean(values, control[0], control[1][..., None], table)
+    return bootstrap_log_mean(values, table, scenario.fits.reduction == "geometric_mean")
 
 
 def _counts(cube: xr.Dataset) -> np.ndarray:
@@ -103,17 +123,33 @@ def _counts(cube: xr.Dataset) -> np.ndarray:
     return np.full((cube.sizes["xi"], cube.sizes["lambda"]), cube.sizes[DIM])
 
 
-def _reduce(resistance: xr.DataArray, counts: np.ndarray, scale: float) -> xr.Dataset:
-    """:func:`reduce_realizations` of every (xi, lambda) over its own realizations."""
-    if np.all(counts == resistance.sizes[DIM]):
+def _step_counts(cube: xr.Dataset) -> np.ndarray | None:
+    """Realizations per (xi, lambda, delta) where the cube has them (``oxide.step_half_width``), else None."""
+    if "step_realizations" not in cube:
+        return None
+    return cube["step_realizations"].transpose(*GRID, "delta").values.astype(int)
+
+
+def _reduce(resistance: xr.DataArray, counts: np.ndarray, scale: float,
+            step_counts: np.ndarray | None = None) -> xr.Dataset:
+    """:func:`reduce_realizations` of every (xi, lambda) over its own realizations (at each step its
+    own, with ``step_counts``)."""
+    if step_counts is None and np.all(counts == resistance.sizes[DIM]):
         return reduce_realizations(resistance, scale)
-    rows = [
-        xr.concat([
-            reduce_realizations(resistance.isel({"xi": [z], "lambda": [a], DIM: slice(0, int(n))}), scale)
-            for a, n in enumerate(row)
-        ], dim="lambda", combine_attrs="override")
-        for z, row in enumerate(counts)
-    ]
+
+    def cell(z: int, a: int) -> xr.Dataset:
+        at = resistance.isel({"xi": [z], "lambda": [a]})
+        if step_counts is None or np.all(step_counts[z, a] == counts[z, a]):
+            return reduce_realizations(at.isel({DIM: slice(0, int(counts[z, a]))}), scale)
+        own = step_counts[z, a]
+        groups = [np.flatnonzero(own == n) for n in np.unique(own)]
+        parts = [reduce_realizations(at.isel({"delta": steps, DIM: slice(0, int(own[steps[0]]))}), scale)
+                 for steps in groups]
+        order = np.argsort(np.concatenate(groups))
+        return xr.concat(parts, dim="delta", combine_attrs="override").isel(delta=order)
+
+    rows = [xr.concat([cell(z, a) for a in range(counts.shape[1])], dim="lambda", combine_attrs="override")
+            for z in range(counts.shape[0])]
     return xr.concat(rows, dim="xi", combine_attrs="override")
 
 
@@ -132,19 +168,21 @@ def _control(cube: xr.Dataset) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _controlled_reduction(ds: xr.Dataset, resistance: np.ndarray, control: tuple[np.ndarray, np.ndarray],
-                          counts: np.ndarray, scale: float) -> None:
+                          counts: np.ndarray, scale: float, step_counts: np.ndarray | None = None) -> None:
     """Replace the geometric mean (and R') of ``ds`` by its control-variate estimate
     (:mod:`pipeline.fitting.control_variate`; the plain mean where it does not apply), each (xi,
-    lambda) over its own realizations, and record where it applied (``control_variate_applied``)."""
+    lambda) over its own realizations (at each step its own, with ``step_counts``), and record where
+    it applied (``control_variate_applied``)."""
     values, expected = control
     mean = ds["geometric_mean"].transpose(*GRID, "delta").values.copy()
     applied = np.zeros(mean.shape, np.int8)
     for z, a in np.ndindex(counts.shape):
-        n = int(counts[z, a])
-        r, x = resistance[z, a, :, :n], values[z, a, :, :n]
-        use = controllable(r, x)
-        mean[z, a] = controlled_mean(r, x, expected[z, a])
-        applied[z, a] = use
+        own = np.full(mean.shape[-1], counts[z, a]) if step_counts is None else step_counts[z, a]
+        for n in np.unique(own):
+            at = slice(None) if np.all(own == n) else np.flatnonzero(own == n)
+            r, x = resistance[z, a, at, :n], values[z, a, at, :n]
+            applied[z, a, at] = controllable(r, x)
+            mean[z, a, at] = controlled_mean(r, x, expected[z, a])
     method = ("control variate where control_variate_applied: (mean(y c) - b_n (mean(x) - p)) / (mean(c) - b_d "
               "(mean(x) - p)), y = ln R, c = 1 where conducting, x the spots' radius-weighted clean share, p its "
               "exact expectation")
@@ -234,21 +272,22 @@ def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     """
     resistance = cube["resistance"].transpose(*GRID, "delta", DIM)
     scale = scenario.resistance_scale
-    counts = _counts(cube)
-    ds = _reduce(resistance, counts, scale)
+    counts, step_counts = _counts(cube), _step_counts(cube)
+    ds = _reduce(resistance, counts, scale, step_counts)
     mask = fitted_steps(scenario, cube["force"], cube["force_normalized"])
     force_n = cube["force_normalized"].values
     steps = np.flatnonzero(mask.values)
     control = None
     if scenario.fits.control_variate == "clean_share":
         control = _control(cube)
-        _controlled_reduction(ds, resistance.values, control, counts, scale)
+        _controlled_reduction(ds, resistance.values, control, counts, scale, step_counts)
         control = (control[0][:, :, steps, :], control[1])
     center = ds[f"{scenario.fits.reduction}_normalized"]
 
     fit = fit_power_law(force_n, center.values, mask.values)
     boot_alpha, boot_gamma, step_band = _bootstrap(
-        scenario, resistance.values[:, :, steps, :] / scale, force_n[steps], counts, control)
+        scenario, resistance.values[:, :, steps, :] / scale, force_n[steps], counts, control,
+        None if step_counts is None else step_counts[:, :, steps])
     bound = ("bound", ["lower", "upper"])
     level = f"{100 * scenario.fits.confidence:g} % percentile bootstrap over realizations"
 
@@ -259,6 +298,8 @@ def build(scenario: Scenario, cube: xr.Dataset) -> xr.Dataset:
     ds = ds.assign_coords(bound=bound[1])
     for name, value in _ensemble_summary(scenario, cube, ds, counts).items():
         ds[name] = value
+    if step_counts is not None:
+        ds["step_realizations"] = variable("fits", "step_realizations", step_counts.astype(np.int32))
     ds["fit_residual"] = variable("fits", "fit_residual", fit.residual)
     ds["fit_residual_rms"] = variable("fits", "fit_residual_rms", fit.residual_rms)
     ds["n_fitted"] = variable("fits", "n_fitted", fit.n_points)

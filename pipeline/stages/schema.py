@@ -161,6 +161,8 @@ _CUBE: dict[str, Variable] = {
     "resistance_self": _v("xi lambda delta realization", "ohm", "self term rho* / (2 sum phi a)"),
     "rule_alpha_half_width": _v("xi lambda", "1", "fast-rule relative half-width of alpha at n_realizations"),
     "rule_gamma_half_width": _v("xi lambda", "1", "fast-rule absolute half-width of gamma at n_realizations"),
+    "step_realizations": _v("xi lambda delta", "1",
+              "realizations used at this (xi, lambda) and load step: the leading entries of realization"),
     "xi": COORDINATES["xi"],
 }
 
@@ -231,6 +233,8 @@ _FITS: dict[str, Variable] = {
     "resistance_scale": _v("", "ohm", "2 rho*/sqrt(R* sigma): R' = R / resistance_scale"),
     "rule_alpha_half_width": _v("xi lambda", "1", "fast-rule relative half-width of alpha at n_realizations"),
     "rule_gamma_half_width": _v("xi lambda", "1", "fast-rule absolute half-width of gamma at n_realizations"),
+    "step_realizations": _v("xi lambda delta", "1",
+              "realizations used at this (xi, lambda) and load step: the leading entries of realization"),
     "xi": COORDINATES["xi"],
 }
 
