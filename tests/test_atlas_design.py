@@ -93,7 +93,8 @@ def test_heldout_scenes_are_measured_to_the_tighter_target() -> None:
     own = lambda scene: dataclasses.replace(base.oxide, seed=scene_seed(base.oxide.seed, scene))  # noqa: E731
     assert scene_scenario(base, design).oxide == own(design)
     tight = scene_scenario(base, held).oxide
-    assert tight.target_half_width == 0.0125 and tight == dataclasses.replace(own(held), target_half_width=0.0125)
+    assert tight.target_half_width == 0.0125 and tight == dataclasses.replace(own(held), target_half_width=0.0125,
+                                                                              step_half_width=0.025)
     looser = load_scenario("atlas", {"atlas.heldout_half_width": 0.1})
     assert scene_scenario(looser, held).oxide.target_half_width == 0.025  # never looser than the design
 
@@ -104,6 +105,7 @@ def test_heldout_scenes_grow_their_pools_to_the_tighter_target() -> None:
     contact section, and so its configuration hash."""
     bundled = load_scenario("atlas")
     assert (bundled.contact.pool_half_width, bundled.atlas.heldout_pool_half_width) == (0.02, 0.02)
+    assert (bundled.oxide.step_half_width, bundled.atlas.heldout_step_half_width) == (0.0, 0.025)
     base = load_scenario("atlas", {"contact.pool_half_width": 0.0})
     scenes = design_scenes(AtlasDesign.of(base))
     design, held = scenes[0], next(s for s in scenes if s.heldout)

@@ -134,8 +134,6 @@ def test_no_step_target_leaves_the_cube_and_every_hash_as_they_were(plain):
 def test_a_step_target_is_refused_where_it_cannot_work(override, named):
     with pytest.raises(ConfigError, match=rf"{named} = .* is not allowed with oxide.step_half_width = 0.06"):
         load_scenario("paper", {**ADAPTIVE, "oxide.step_half_width": STEP_TARGET, **override})
-    with pytest.raises(ConfigError, match=rf"{named} = .* is not allowed with atlas.heldout_step_half_width = 0.06"):
-        load_scenario("paper", {**ADAPTIVE, "atlas.heldout_step_half_width": STEP_TARGET, **override})
 
 
 def test_heldout_atlas_scenes_take_the_tighter_step_target():
@@ -148,6 +146,11 @@ def test_heldout_atlas_scenes_take_the_tighter_step_target():
         design, heldout = scenes[0], next(s for s in scenes if s.heldout)
         assert scene_scenario(base, heldout).oxide.step_half_width == wanted
         assert scene_scenario(base, design).oxide.step_half_width == own
+    # an ensemble that cannot take one (a fixed one, or of the median) is left as it is
+    for other in ({"oxide.ensemble": "fixed"}, {"fits.reduction": "median", "fits.control_variate": "none"}):
+        base = load_scenario("atlas", {**other, "atlas.heldout_step_half_width": 0.025})
+        heldout = next(s for s in design_scenes(AtlasDesign.of(base)) if s.heldout)
+        assert scene_scenario(base, heldout).oxide.step_half_width == 0.0
 
 
 @pytest.mark.parametrize("targets", [(0.1, 0.1), (0.06, 0.08)])

@@ -166,8 +166,8 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
     """``base`` with the scene's eta and beta (at the base's sigma and R*), its own random streams
     (``oxide.seed`` from :func:`scene_seed`), a held-out scene's ensemble to
     ``atlas.heldout_half_width`` where that is tighter than the base's (its light steps' to
-    ``atlas.heldout_step_half_width`` and its discrete pool grown to ``atlas.heldout_pool_half_width``,
-    likewise), approaches whose forces span
+    ``atlas.heldout_step_half_width`` where its ensemble takes a step target, and its discrete pool
+    grown to ``atlas.heldout_pool_half_width``, likewise), approaches whose forces span
     :data:`pipeline.atlas.loads.FORCE_RANGE` in F' (:func:`pipeline.atlas.loads.loading_for_range`,
     ``loading.n_delta`` kept), every step fitted, and ``auto`` domains.
 
@@ -184,9 +184,12 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
     oxide = dataclasses.replace(base.oxide, seed=scene_seed(base.oxide.seed, scene))
     if scene.heldout:  # measured closer than the design, so the verdict judges the surrogate
         oxide = dataclasses.replace(oxide, target_half_width=min(oxide.target_half_width,
-                                                                 base.atlas.heldout_half_width),
-                                    step_half_width=_tighter(oxide.step_half_width,
-                                                             base.atlas.heldout_step_half_width))
+                                                                 base.atlas.heldout_half_width))
+        steps_apply = (oxide.ensemble == "adaptive" and base.contact.model == "discrete"
+                       and base.fits.reduction == "geometric_mean")
+        if steps_apply:
+            oxide = dataclasses.replace(oxide, step_half_width=_tighter(oxide.step_half_width,
+                                                                        base.atlas.heldout_step_half_width))
     contact = dataclasses.replace(base.contact, window=AUTO, r_max=AUTO)
     if scene.heldout:  # its pool's error, too, below the design's
         contact = dataclasses.replace(contact, pool_half_width=_tighter(contact.pool_half_width,

@@ -103,21 +103,17 @@ def _check_control_variate(s: Scenario) -> None:
 
 
 def _check_step_target(s: Scenario) -> None:
-    """A per-step target (``oxide.step_half_width``, or the atlas's ``atlas.heldout_step_half_width``)
-    grows an adaptive ensemble on discrete spots, for the geometric mean."""
-    set_ = [(k, v) for k, v in (("oxide.step_half_width", s.oxide.step_half_width),
-                                ("atlas.heldout_step_half_width", s.atlas.heldout_step_half_width)) if v > 0]
-    if not set_:
+    """A per-step target grows an adaptive ensemble on discrete spots, for the geometric mean."""
+    if s.oxide.step_half_width == 0:
         return
-    target, given = set_[0]
     for name, value, allowed, why in (
         ("oxide.ensemble", s.oxide.ensemble, "adaptive", "a fixed ensemble has no target"),
         ("contact.model", s.contact.model, "discrete", "only discrete spots compute a field at some steps alone"),
         ("fits.reduction", s.fits.reduction, "geometric_mean", "the target is the geometric mean's"),
     ):
         if value != allowed:
-            raise ConfigError(f"{name} = {value!r} is not allowed with {target} = {given!r}: must be "
-                              f"{allowed!r} ({why})")
+            raise ConfigError(f"{name} = {value!r} is not allowed with oxide.step_half_width = "
+                              f"{s.oxide.step_half_width!r}: must be {allowed!r} ({why})")
 
 
 def check_scenario(s: Scenario) -> None:

@@ -270,8 +270,9 @@ class Atlas:
         "oxide.target_half_width): their own noise should not decide the held-out verdict", gt=0, lt=1
     )
     heldout_step_half_width: float = param(
-        0.0, "1", "adaptive, discrete: oxide.step_half_width of the held-out scenes (the smaller of the two where "
-        "both are set; 0: as the design's): their light steps' intervals, not only alpha's", ge=0, lt=1
+        0.0, "1", "oxide.step_half_width of the held-out scenes where their ensemble can take one (adaptive, "
+        "discrete, the geometric mean; the smaller of the two where both are set; 0: as the design's): their "
+        "light steps' intervals, not only alpha's", ge=0, lt=1
     )
     heldout_pool_half_width: float = param(
         0.0, "1", "discrete: contact.pool_half_width of the held-out scenes (the smaller of the two where both "
