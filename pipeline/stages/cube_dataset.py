@@ -45,13 +45,14 @@ def dataset(
                      "the mean conductance (self-conductance) over the first "
                      f"{clean['n_drawn']} realizations of the asperity heights"
                      if scenario.contact.spots == "asperities" else "exact, every spot conducting")
-    padding = "NaN beyond n_realizations(xi, lambda)"
+    counted = ("step_realizations(xi, lambda, delta)" if "step_realizations" in out
+               else "n_realizations(xi, lambda)")
+    padding = f"NaN beyond {counted}"
     data_vars = {
         "resistance": cube("resistance", out["resistance"], comment=f"+inf: open circuit (no conducting spot); {padding}"),
         "resistance_self": cube("resistance_self", out["resistance_self"], comment=padding),
         "resistance_interaction": cube("resistance_interaction", out["resistance_interaction"], comment=padding),
-        "n_conducting": cube("n_conducting", out["n_conducting"].astype(np.int32),
-                             comment="-1 beyond n_realizations(xi, lambda)"),
+        "n_conducting": cube("n_conducting", out["n_conducting"].astype(np.int32), comment=f"-1 beyond {counted}"),
         "n_open": cube("n_open", is_open.sum(axis=-1).astype(np.int32)),
         "n_realizations": cube("n_realizations", counts.astype(np.int32), ensemble=ox.ensemble),
         "rule_alpha_half_width": cube(
@@ -80,11 +81,6 @@ def dataset(
             method="Gil-Pelaez inversion of the random-phase field's characteristic function prod_k J0(w_k u) "
                    "at the float32 threshold (pipeline.physics.oxide_marginal)")
     if "step_realizations" in out:
-        for name in ("resistance", "resistance_self", "resistance_interaction", "clean_share"):
-            if name in data_vars:
-                data_vars[name][2]["comment"] = data_vars[name][2]["comment"].replace(
-                    "n_realizations(xi, lambda)", "step_realizations(xi, lambda, delta)")
-        data_vars["n_conducting"][2]["comment"] = "-1 beyond step_realizations(xi, lambda, delta)"
         data_vars["step_realizations"] = cube("step_realizations", out["step_realizations"].astype(np.int32),
                                               comment="at least n_realizations, the lightest steps more")
     if "iterations" in out:
