@@ -105,7 +105,7 @@ def test_heldout_scenes_grow_their_pools_to_the_tighter_target() -> None:
     contact section, and so its configuration hash."""
     bundled = load_scenario("atlas")
     assert (bundled.contact.pool_half_width, bundled.atlas.heldout_pool_half_width) == (0.02, 0.02)
-    assert (bundled.oxide.step_half_width, bundled.atlas.heldout_step_half_width) == (0.0, 0.025)
+    assert (bundled.oxide.step_half_width, bundled.atlas.heldout_step_half_width) == (0.04, 0.025)
     base = load_scenario("atlas", {"contact.pool_half_width": 0.0})
     scenes = design_scenes(AtlasDesign.of(base))
     design, held = scenes[0], next(s for s in scenes if s.heldout)

@@ -148,7 +148,7 @@ def test_heldout_atlas_scenes_take_the_tighter_step_target():
         assert scene_scenario(base, design).oxide.step_half_width == own
     # an ensemble that cannot take one (a fixed one, or of the median) is left as it is
     for other in ({"oxide.ensemble": "fixed"}, {"fits.reduction": "median", "fits.control_variate": "none"}):
-        base = load_scenario("atlas", {**other, "atlas.heldout_step_half_width": 0.025})
+        base = load_scenario("atlas", {**other, "oxide.step_half_width": 0.0, "atlas.heldout_step_half_width": 0.025})
         heldout = next(s for s in design_scenes(AtlasDesign.of(base)) if s.heldout)
         assert scene_scenario(base, heldout).oxide.step_half_width == 0.0
 
