@@ -185,9 +185,7 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
     if scene.heldout:  # measured closer than the design, so the verdict judges the surrogate
         oxide = dataclasses.replace(oxide, target_half_width=min(oxide.target_half_width,
                                                                  base.atlas.heldout_half_width))
-        steps_apply = (oxide.ensemble == "adaptive" and base.contact.model == "discrete"
-                       and base.fits.reduction == "geometric_mean")
-        if steps_apply:
+        if not base.step_target_conflicts():
             oxide = dataclasses.replace(oxide, step_half_width=_tighter(oxide.step_half_width,
                                                                         base.atlas.heldout_step_half_width))
     contact = dataclasses.replace(base.contact, window=AUTO, r_max=AUTO)

@@ -104,16 +104,12 @@ def _check_control_variate(s: Scenario) -> None:
 
 def _check_step_target(s: Scenario) -> None:
     """A per-step target grows an adaptive ensemble on discrete spots, for the geometric mean."""
-    if s.oxide.step_half_width == 0:
+    conflicts = s.step_target_conflicts()
+    if s.oxide.step_half_width == 0 or not conflicts:
         return
-    for name, value, allowed, why in (
-        ("oxide.ensemble", s.oxide.ensemble, "adaptive", "a fixed ensemble has no target"),
-        ("contact.model", s.contact.model, "discrete", "only discrete spots compute a field at some steps alone"),
-        ("fits.reduction", s.fits.reduction, "geometric_mean", "the target is the geometric mean's"),
-    ):
-        if value != allowed:
-            raise ConfigError(f"{name} = {value!r} is not allowed with oxide.step_half_width = "
-                              f"{s.oxide.step_half_width!r}: must be {allowed!r} ({why})")
+    name, value, allowed, why = conflicts[0]
+    raise ConfigError(f"{name} = {value!r} is not allowed with oxide.step_half_width = "
+                      f"{s.oxide.step_half_width!r}: must be {allowed!r} ({why})")
 
 
 def check_scenario(s: Scenario) -> None:
