@@ -14,9 +14,12 @@ from pipeline.physics.groups import groups
 from tests.conftest import SMALL_OVERRIDES
 
 
-def test_the_atlas_scenario_has_25_design_and_8_heldout_scenes() -> None:
+def test_the_atlas_scenario_has_36_design_and_8_heldout_scenes() -> None:
     scenes = design_scenes(AtlasDesign.of(load_scenario("atlas")))
-    assert sum(not s.heldout for s in scenes) == 25 and sum(s.heldout for s in scenes) == 8
+    assert sum(not s.heldout for s in scenes) == 36 and sum(s.heldout for s in scenes) == 8
+    design = [s for s in scenes if not s.heldout]
+    assert sorted({s.mu for s in design}) == pytest.approx(np.geomspace(1.0, 50.0, 6), rel=1e-12)
+    assert sorted({s.Pi for s in design}) == pytest.approx(np.geomspace(5.0, 320.0, 6), rel=1e-12)
 
 
 def test_default_design_covers_engineering_surfaces() -> None:

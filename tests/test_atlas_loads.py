@@ -91,7 +91,7 @@ def test_the_discrete_pool_shrinks_with_the_touching_count() -> None:
 #: Measured one-thread CPU seconds on this machine (2026-11-27; the constants' sources in
 #: pipeline/before_work/discrete_cost.py): (scene, per surface of the pool, per oxide field); d22,
 #: d21 and d20 (up to 1,993, 3,676 and 6,084 touching asperities) solve their large unions by
-#: conjugate gradients.
+#: conjugate gradients. The names are the 5 x 5 design's (the atlas's before it became 6 x 6).
 MEASURED = [("d12", 0.085, 0.0123), ("d24", 1.94, 0.0586), ("d22", 10.1, 0.456), ("d21", 29.1, 2.09),
             ("d20", 80.4, 5.68)]
 
@@ -100,7 +100,8 @@ MEASURED = [("d12", 0.085, 0.0123), ("d24", 1.94, 0.0586), ("d22", 10.1, 0.456),
 def test_cost_model_reproduces_the_calibration_runs(name, surface_s, field_s) -> None:
     base = load_scenario("atlas", {**DISCRETE, "oxide.ensemble": "fixed", "oxide.n_realizations": 10,
                                    "oxide.step_half_width": 0.0,  # a fixed ensemble has no target
-                                   "contact.pool_half_width": 0.0})  # the calibration runs' fixed pools
+                                   "contact.pool_half_width": 0.0,  # the calibration runs' fixed pools
+                                   "atlas.n_mu": 5, "atlas.n_pi": 5})
     scene = next(s for s in design_scenes(AtlasDesign.of(base)) if s.name == name)
     scenario = scene_scenario(base, scene)
     c = cost.scene_cost(scenario)
