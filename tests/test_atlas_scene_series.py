@@ -17,7 +17,7 @@ from scipy.interpolate import RBFInterpolator
 
 from pipeline.fitting.atlas_grid import FRAMES, fit_grid_tensor, group_coordinates, node_coordinates
 from pipeline.fitting import atlas_grid
-from pipeline.fitting.atlas_scene_series import KERNELS, cross_validate, fit_scene_series
+from pipeline.fitting.atlas_scene_series import KERNELS, TAIL_DEGREE, cross_validate, fit_scene_series
 
 XI = np.array([0.0, 0.3, 0.7])
 LAM = np.array([1.0, 5.0])
@@ -67,6 +67,27 @@ def test_a_response_linear_in_the_groups_is_reproduced_anywhere(kernel: str, smo
     for mu, pi in ((2.0, 40.0), (33.0, 9.0), (7.0, 250.0)):  # between scenes, off every one
         expected = _linear(np.log(mu), np.log(pi), np.log(force)[:, None, None], Z[None, :, None], W[None, None, :])
         assert np.max(np.abs(_at(model, mu, pi, force) - expected)) < 1e-9
+
+
+def _quadratic(m, p, f, z, w):
+    """Quadratic in (ln mu, ln Pi), cubic in ln F', other at every node."""
+    return 0.3 - 0.2 * m + 0.1 * p + 0.04 * m**2 - 0.03 * m * p * (1 + z) + 0.02 * p**2 - 0.6 * f + 0.02 * f**3 + z * w
+
+
+@pytest.mark.parametrize("smoothing", [0.0, 3.0])
+def test_the_quintic_reproduces_a_response_quadratic_in_the_groups_and_the_cubic_does_not(smoothing: float) -> None:
+    """The quintic's quadratic tail holds a quadratic exactly at any smoothing (smoothing acts on the
+    radial part only); the cubic's linear tail bends between the scenes."""
+    pts = _scenes(_quadratic, n=12)
+    force = np.geomspace(0.06, 18.0, 7)
+    errors = {}
+    for kernel in ("quintic", "cubic"):
+        model = _fit(pts, kernel=kernel, smoothing=smoothing)
+        errors[kernel] = max(np.max(np.abs(_at(model, mu, pi, force) - _quadratic(
+            np.log(mu), np.log(pi), np.log(force)[:, None, None], Z[None, :, None], W[None, None, :])))
+            for mu, pi in ((2.0, 40.0), (33.0, 9.0), (7.0, 250.0)))
+    assert errors["quintic"] < 1e-8 and errors["cubic"] > 1e-3
+    assert TAIL_DEGREE == {"cubic": 1, "thin_plate_spline": 1, "quintic": 2}
 
 
 def test_between_nodes_linear_and_the_clean_node_is_the_clean_curve() -> None:
@@ -128,6 +149,16 @@ def test_refuses_scenes_on_a_line_too_few_points_and_an_unknown_kernel() -> None
         _fit(pts, order=9)
     with pytest.raises(ValueError, match="kernel 'gaussian'"):
         _fit(pts, kernel="gaussian")
+    five = _scenes(_linear, n=5)  # fix a plane, not the quintic's quadratic tail (six terms)
+    assert np.isfinite(_at(_fit(five, kernel="cubic"), 3.0, 30.0, FORCE)).all()
+    with pytest.raises(ValueError, match="cannot fix the quintic kernel's tail of degree 2"):
+        _fit(five, kernel="quintic")
+    rows = _scenes(_linear, n=8)  # eight scenes on two rows of Pi: no term in (ln Pi)^2
+    rows["Pi"] = np.where(rows["scene"] % 2 == 0, 10.0, 100.0)
+    with pytest.raises(ValueError, match="cannot fix the quintic"):
+        _fit(rows, kernel="quintic")
+    assert np.all(np.isinf(cross_validate(Z, W, five["mu"], five["Pi"], five["force"], five["log_r"], five["sigma"],
+                                          five["scene"], 3, "quintic", 0.0)))
     # a fold that cannot be fitted (two scenes left) stays inf
     assert np.all(np.isinf(cross_validate(Z, W, pts["mu"], pts["Pi"], pts["force"], pts["log_r"], pts["sigma"],
                                           pts["scene"], 3, "cubic", 0.0)))

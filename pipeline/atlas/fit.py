@@ -47,7 +47,7 @@ from pipeline.fitting.atlas_band import fit_band, with_heldout
 from pipeline.fitting.atlas_grid import (FRAME_COORDINATES, FRAMES, GridTensorModel, cross_validate, fit_grid_tensor,
                                          group_powers, node_coordinates)
 from pipeline.fitting.atlas_noise import sampling_noise
-from pipeline.fitting.atlas_scene_series import KERNELS, SceneSeriesModel, fit_scene_series
+from pipeline.fitting.atlas_scene_series import KERNELS, TAIL_DEGREE, SceneSeriesModel, fit_scene_series
 from pipeline.fitting.atlas_scene_series import cross_validate as cross_validate_series
 from pipeline.fitting.atlas_surrogate import AtlasModel, exponents, fit_atlas_model, select_degree
 from pipeline.store import atomic_path, git_commit
@@ -77,9 +77,10 @@ TRANSFORM = {"alpha": "log", "gamma": "identity"}
 DEGREES: tuple[int | tuple[int, int], ...] = (1, 2, 3, 4, (1, 1), (2, 2), (3, 2), (2, 3), (3, 3))
 ORDERS = (3, 5)
 #: The scene series' name, and the smoothings of its radial basis functions cross-validated (0: through
-#: every design scene).
+#: every design scene; half decades to 30, as the quintic's -r^5 needs ~10x the cubic's smoothing to
+#: pass off the same noise).
 SCENE_SERIES = "scene series"
-SMOOTHINGS = (0.0, 0.1, 0.3, 1.0)
+SMOOTHINGS = (0.0, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0)
 #: Degrees of the one polynomial in five logs cross-validated for the record (6: the first atlas's).
 POLY_DEGREES = (2, 4, 6)
 #: Draws of the held-out verdict's noise ceiling (:func:`noise_ceiling`) and the root seed of their noise.
@@ -319,8 +320,9 @@ def curve_words(doc: dict[str, Any]) -> str:
     across = FRAME_COORDINATES[doc.get("frame", "log")]
     if doc.get("kind") == "grid":
         return f"the grid surrogate, {common}, its coefficients a polynomial of degree {doc['degree']} in {across}"
+    tail = {1: "linear", 2: "quadratic"}[TAIL_DEGREE[doc["kernel"]]]
     return (f"the scene series, {common}, each design scene's own coefficients interpolated across {across} by a "
-            f"{doc['kernel']} radial basis function (smoothing {doc['smoothing']:g})")
+            f"{doc['kernel']} radial basis function with a {tail} tail (smoothing {doc['smoothing']:g})")
 
 
 #: The frames of the groups in words, as the document's descriptions name them.
@@ -334,7 +336,8 @@ _DESCRIPTION = {
                   "scene's ln R' = sum_{q<=P} c_q T_q(L) (L: ln F' mapped to [-1, 1] by load_low/high, T_q "
                   "Chebyshev polynomials; coef[scene][z][lambda][q]), each c_q interpolated over the groups' "
                   f"coordinates in the frame ({_FRAMES_IN_WORDS}) from the scenes' "
-                  "centers by scipy's RBFInterpolator (kernel, smoothing, degree 1); linear between nodes",
+                  "centers by scipy's RBFInterpolator (kernel, smoothing, degree 1; 2 for the quintic); linear "
+                  "between nodes",
 }
 
 

@@ -9,9 +9,10 @@ scenes between. This model keeps what each scene measured and interpolates only 
   the scene's steps (weights 1 / sigma^2; points that are not finite left out);
 * across scenes, each coefficient of each node interpolated over the groups' coordinates
   (:data:`~pipeline.fitting.atlas_grid.FRAMES`: (ln mu, ln Pi) or (ln(mu / Pi), ln Pi)) by a radial basis
-  function (polyharmonic ``cubic`` r^3 or ``thin_plate_spline`` r^2 ln r, with a linear polynomial
-  tail, so a response linear in ln mu and ln Pi is reproduced exactly) with a ``smoothing`` that
-  lets it pass off a scene's own noise (0: through every scene's series);
+  function (polyharmonic ``cubic`` r^3 or ``thin_plate_spline`` r^2 ln r with a linear polynomial
+  tail, ``quintic`` -r^5 with the quadratic tail it needs: :data:`TAIL_DEGREE`; so a response linear
+  in the groups' coordinates is reproduced exactly by every kernel) with a ``smoothing`` that lets
+  it pass off a scene's own noise (0: through every scene's series);
 * between oxide nodes, linear in (z, ln lambda), as the grid surrogate is.
 
 Frame, kernel, smoothing and P are chosen by leave-one-scene-out cross-validation beside the grid
@@ -29,10 +30,15 @@ from scipy.interpolate import RBFInterpolator
 from pipeline.fitting.atlas_grid import (group_coordinates, leave_one_scene_out, load_basis, node_series_value,
                                          weighted_fit)
 
-__all__ = ["KERNELS", "SceneSeriesModel", "fit_scene_series", "cross_validate"]
+__all__ = ["KERNELS", "TAIL_DEGREE", "SceneSeriesModel", "fit_scene_series", "cross_validate"]
 
-#: Radial basis functions offered (polyharmonic: no length scale to choose).
-KERNELS = ("cubic", "thin_plate_spline")
+#: Radial basis functions offered (polyharmonic: no length scale to choose). The quintic is the
+#: smoothest: on the 6 x 6 atlas's noisy light steps it passes off a scene's noise with less bend
+#: between scenes than the cubic at the same leave-one-scene-out error.
+KERNELS = ("cubic", "thin_plate_spline", "quintic")
+#: Degree of each kernel's polynomial tail: the least that makes its system solvable (scipy's
+#: minimum: 1 for r^3 and r^2 ln r, 2 for -r^5).
+TAIL_DEGREE = {"cubic": 1, "thin_plate_spline": 1, "quintic": 2}
 
 
 @dataclass(frozen=True)
@@ -81,7 +87,7 @@ class SceneSeriesModel:
     @cached_property
     def _interpolator(self) -> RBFInterpolator:
         return RBFInterpolator(self.centers, self.coef.reshape(self.coef.shape[0], -1), kernel=self.kernel,
-                               smoothing=self.smoothing, degree=1)
+                               smoothing=self.smoothing, degree=TAIL_DEGREE[self.kernel])
 
     def log_resistance(self, xi: np.ndarray, lam: np.ndarray, mu: np.ndarray, pi: np.ndarray,
                        force_n: np.ndarray) -> np.ndarray:
@@ -96,6 +102,12 @@ class SceneSeriesModel:
         per_surface = self._interpolator(at).reshape((pairs.shape[0],) + self.coef.shape[1:])
         return node_series_value(per_surface, inverse.ravel(), xi, lam, force_n, self.z_nodes, self.w_nodes,
                                  (self.load_low, self.load_high))
+
+
+def _tail_monomials(centers: np.ndarray, degree: int) -> np.ndarray:
+    """(scenes, terms) monomials x^i y^j, i + j <= ``degree``, of the centers (shifted to their mean)."""
+    x = centers - centers.mean(axis=0)
+    return np.column_stack([x[:, 0] ** i * x[:, 1] ** j for i in range(degree + 1) for j in range(degree + 1 - i)])
 
 
 def fit_scene_series(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi: np.ndarray, force_n: np.ndarray,
@@ -123,7 +135,8 @@ def fit_scene_series(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, p
     ValueError
         If a scene's node has no more finite points than P + 1, fewer than three scenes are
         given, they lie on one line in (ln mu, ln Pi) (the linear tail is then undetermined),
-        or the kernel or frame is unknown.
+        the scenes cannot fix the kernel's tail (the quintic's quadratic: six scenes not on one
+        conic), or the kernel or frame is unknown.
     """
     if load is None:
         load = (float(np.log(force_n).min()), float(np.log(force_n).max()))
@@ -141,6 +154,10 @@ def fit_scene_series(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, p
         raise ValueError(f"{labels.size} scenes on one line in (ln mu, ln Pi) cannot fix a linear tail")
     if kernel not in KERNELS:
         raise ValueError(f"kernel {kernel!r} is not one of {KERNELS}")
+    tail = _tail_monomials(centers, TAIL_DEGREE[kernel])
+    if np.linalg.matrix_rank(tail) < tail.shape[1]:
+        raise ValueError(f"{labels.size} scenes cannot fix the {kernel} kernel's tail of degree {TAIL_DEGREE[kernel]}"
+                         f" ({tail.shape[1]} terms)")
     return SceneSeriesModel(np.asarray(z_nodes, float), np.asarray(w_nodes, float), centers, coef, float(load[0]),
                             float(load[1]), kernel, float(smoothing), frame)
 
