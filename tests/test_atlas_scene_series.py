@@ -159,6 +159,14 @@ def test_refuses_scenes_on_a_line_too_few_points_and_an_unknown_kernel() -> None
         _fit(rows, kernel="quintic")
     assert np.all(np.isinf(cross_validate(Z, W, five["mu"], five["Pi"], five["force"], five["log_r"], five["sigma"],
                                           five["scene"], 3, "quintic", 0.0)))
+    # a scene whose own series cannot be fitted spoils every fold but its own
+    holed = _scenes(_linear, n=7)
+    holed["log_r"][(holed["scene"] == 2) & (holed["force"] > 0.3)] = np.nan  # 3 finite steps for P = 3
+    residual = cross_validate(Z, W, holed["mu"], holed["Pi"], holed["force"], holed["log_r"], holed["sigma"],
+                              holed["scene"], 3, "cubic", 0.0)
+    assert np.all(np.isinf(residual[holed["scene"] != 2]))
+    own = residual[holed["scene"] == 2]
+    assert np.max(np.abs(own[np.isfinite(own)])) < 1e-8 and np.isfinite(own).sum() == 3 * XI.size * LAM.size
     # a fold that cannot be fitted (two scenes left) stays inf
     assert np.all(np.isinf(cross_validate(Z, W, pts["mu"], pts["Pi"], pts["force"], pts["log_r"], pts["sigma"],
                                           pts["scene"], 3, "cubic", 0.0)))

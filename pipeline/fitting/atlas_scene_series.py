@@ -140,26 +140,52 @@ def fit_scene_series(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, p
     """
     if load is None:
         load = (float(np.log(force_n).min()), float(np.log(force_n).max()))
+    centers, fits = _own_series(z_nodes, w_nodes, mu, pi, force_n, log_r, sigma, scenes, order, load, frame)
+    return _interpolated(z_nodes, w_nodes, centers, fits, load, kernel, smoothing, frame)
+
+
+def _own_series(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi: np.ndarray, force_n: np.ndarray,
+                log_r: np.ndarray, sigma: np.ndarray, scenes: np.ndarray, order: int, load: tuple[float, float],
+                frame: str) -> tuple[np.ndarray, list[np.ndarray | ValueError]]:
+    """Every scene's (in :func:`numpy.unique` order) center in ``frame`` (scenes, 2) and its own series'
+    coefficients (nz, nw, P + 1), or the ValueError its fit raised (too few finite points)."""
     labels = np.unique(scenes)
     centers = np.empty((labels.size, 2))
-    coef = np.empty((labels.size, z_nodes.size, w_nodes.size, order + 1))
+    fits: list[np.ndarray | ValueError] = []
     for k, s in enumerate(labels):
         own = scenes == s
         centers[k] = group_coordinates(mu[own][:1], pi[own][:1], frame)[0]
         basis = load_basis(force_n[own], load[0], load[1], order)
-        for i in range(z_nodes.size):
-            for j in range(w_nodes.size):
-                coef[k, i, j] = weighted_fit(basis, log_r[own, i, j], sigma[own, i, j])
-    if labels.size < 3 or np.linalg.matrix_rank(centers - centers.mean(axis=0)) < 2:
-        raise ValueError(f"{labels.size} scenes on one line in (ln mu, ln Pi) cannot fix a linear tail")
+        coef = np.empty((z_nodes.size, w_nodes.size, order + 1))
+        try:
+            for i in range(z_nodes.size):
+                for j in range(w_nodes.size):
+                    coef[i, j] = weighted_fit(basis, log_r[own, i, j], sigma[own, i, j])
+        except ValueError as error:
+            fits.append(error)
+            continue
+        fits.append(coef)
+    return centers, fits
+
+
+def _interpolated(z_nodes: np.ndarray, w_nodes: np.ndarray, centers: np.ndarray, fits: list[np.ndarray | ValueError],
+                  load: tuple[float, float], kernel: str, smoothing: float, frame: str) -> SceneSeriesModel:
+    """The model interpolating the scenes' own series (:func:`_own_series`) across their ``centers``;
+    raises what :func:`fit_scene_series` documents."""
+    for fit in fits:
+        if isinstance(fit, ValueError):
+            raise fit
+    scenes = centers.shape[0]
+    if scenes < 3 or np.linalg.matrix_rank(centers - centers.mean(axis=0)) < 2:
+        raise ValueError(f"{scenes} scenes on one line in (ln mu, ln Pi) cannot fix a linear tail")
     if kernel not in KERNELS:
         raise ValueError(f"kernel {kernel!r} is not one of {KERNELS}")
     tail = _tail_monomials(centers, TAIL_DEGREE[kernel])
     if np.linalg.matrix_rank(tail) < tail.shape[1]:
-        raise ValueError(f"{labels.size} scenes cannot fix the {kernel} kernel's tail of degree {TAIL_DEGREE[kernel]}"
+        raise ValueError(f"{scenes} scenes cannot fix the {kernel} kernel's tail of degree {TAIL_DEGREE[kernel]}"
                          f" ({tail.shape[1]} terms)")
-    return SceneSeriesModel(np.asarray(z_nodes, float), np.asarray(w_nodes, float), centers, coef, float(load[0]),
-                            float(load[1]), kernel, float(smoothing), frame)
+    return SceneSeriesModel(np.asarray(z_nodes, float), np.asarray(w_nodes, float), centers, np.stack(fits),
+                            float(load[0]), float(load[1]), kernel, float(smoothing), frame)
 
 
 def cross_validate(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi: np.ndarray, force_n: np.ndarray,
@@ -168,10 +194,16 @@ def cross_validate(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi:
     """Leave-one-scene-out residuals ln R'_predicted - ln R' (n, nz, nw) of the scene-series surrogate.
 
     Each scene's points are predicted by the model fitted on the other scenes (the load mapping
-    fixed to all points' ends). A fold that cannot be fitted leaves its residuals inf.
+    fixed to all points' ends); as a scene's own series does not depend on the others, each is fitted
+    once and every fold only interpolates. A fold that cannot be fitted leaves its residuals inf.
     """
     load = (float(np.log(force_n).min()), float(np.log(force_n).max()))
-    return leave_one_scene_out(
-        lambda keep: fit_scene_series(z_nodes, w_nodes, mu[keep], pi[keep], force_n[keep], log_r[keep], sigma[keep],
-                                      scenes[keep], order, kernel, smoothing, load, frame),
-        z_nodes, w_nodes, mu, pi, force_n, log_r, scenes)
+    labels = np.unique(scenes)
+    centers, fits = _own_series(z_nodes, w_nodes, mu, pi, force_n, log_r, sigma, scenes, order, load, frame)
+
+    def fold(keep: np.ndarray) -> SceneSeriesModel:
+        kept = np.isin(labels, scenes[keep])
+        return _interpolated(z_nodes, w_nodes, centers[kept], [f for f, k in zip(fits, kept) if k], load, kernel,
+                             smoothing, frame)
+
+    return leave_one_scene_out(fold, z_nodes, w_nodes, mu, pi, force_n, log_r, scenes)
