@@ -27,8 +27,8 @@ from functools import cached_property
 import numpy as np
 from scipy.interpolate import RBFInterpolator
 
-from pipeline.fitting.atlas_grid import (group_coordinates, leave_one_scene_out, load_basis, node_series_value,
-                                         weighted_fit)
+from pipeline.fitting.atlas_grid import (group_coordinates, group_powers, leave_one_scene_out, load_basis,
+                                         node_series_value, weighted_fit)
 
 __all__ = ["KERNELS", "TAIL_DEGREE", "SceneSeriesModel", "fit_scene_series", "cross_validate"]
 
@@ -104,12 +104,6 @@ class SceneSeriesModel:
                                  (self.load_low, self.load_high))
 
 
-def _tail_monomials(centers: np.ndarray, degree: int) -> np.ndarray:
-    """(scenes, terms) monomials x^i y^j, i + j <= ``degree``, of the centers (shifted to their mean)."""
-    x = centers - centers.mean(axis=0)
-    return np.column_stack([x[:, 0] ** i * x[:, 1] ** j for i in range(degree + 1) for j in range(degree + 1 - i)])
-
-
 def fit_scene_series(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, pi: np.ndarray, force_n: np.ndarray,
                      log_r: np.ndarray, sigma: np.ndarray, scenes: np.ndarray, order: int, kernel: str,
                      smoothing: float, load: tuple[float, float] | None = None, frame: str = "log") -> SceneSeriesModel:
@@ -180,7 +174,8 @@ def _interpolated(z_nodes: np.ndarray, w_nodes: np.ndarray, centers: np.ndarray,
         raise ValueError(f"{scenes} scenes on one line in (ln mu, ln Pi) cannot fix a linear tail")
     if kernel not in KERNELS:
         raise ValueError(f"kernel {kernel!r} is not one of {KERNELS}")
-    tail = _tail_monomials(centers, TAIL_DEGREE[kernel])
+    shifted = centers - centers.mean(axis=0)
+    tail = np.prod(shifted[:, None, :] ** group_powers(TAIL_DEGREE[kernel])[None, :, :], axis=-1)
     if np.linalg.matrix_rank(tail) < tail.shape[1]:
         raise ValueError(f"{scenes} scenes cannot fix the {kernel} kernel's tail of degree {TAIL_DEGREE[kernel]}"
                          f" ({tail.shape[1]} terms)")
