@@ -16,7 +16,7 @@ SOURCES  := $(shell find pipeline -name '*.py' -o -name '*.toml')
 ANALYSIS := $(shell find analysis -name '*.py')
 STAMPS   := $(DATA)/.stamps
 
-.PHONY: all run test stress test-gpu bench compare figures report contact oxide cube fits surrogate params validate atlas atlas-plan run-check clean FORCE
+.PHONY: all run test stress test-gpu bench compare figures report contact oxide cube fits surrogate params validate atlas atlas-plan run-check docs clean FORCE
 all: run
 
 $(VENV)/.installed: pyproject.toml
@@ -121,6 +121,11 @@ test-gpu: | $(VENV)/.installed
 # Long numerical-stability sweeps (pytest marker `stress`; a fast subset runs in `make test`).
 stress: | $(VENV)/.installed
 	$(VENV)/bin/python -m pytest -m stress tests/test_stability.py
+
+# The documentation (docs/, Sphinx with the `docs` extra) into docs/_build/html; warnings are errors.
+docs: | $(VENV)/.installed
+	$(VENV)/bin/pip install --quiet -e '.[docs]'
+	$(VENV)/bin/sphinx-build -W --keep-going -b html docs docs/_build/html
 
 # Also the temporaries (.<name>.*.tmp) an interrupted (SIGKILLed) write leaves behind.
 clean:
