@@ -12,19 +12,19 @@ from pathlib import Path
 
 import matplotlib
 
-from pipeline.config import Scenario
+from g2tom.config import Scenario
 
 matplotlib.use("Agg")
 
 __all__ = ["FAMILIES", "write_figures"]
 
 FAMILIES: tuple[str, ...] = (
-    "analysis.figures_contact",
-    "analysis.figures_oxide",
-    "analysis.figures_results",
-    "analysis.figures_point",
-    "analysis.figures_barber",
-    "analysis.figures_validate",
+    "g2tom.analysis.figures_contact",
+    "g2tom.analysis.figures_oxide",
+    "g2tom.analysis.figures_results",
+    "g2tom.analysis.figures_point",
+    "g2tom.analysis.figures_barber",
+    "g2tom.analysis.figures_validate",
 )
 
 

@@ -15,8 +15,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from analysis.style import LABELS, context, plain_log_ticks, save, size
-from pipeline.config import Scenario
+from g2tom.analysis.style import LABELS, context, plain_log_ticks, save, size
+from g2tom.config import Scenario
 
 __all__ = ["write"]
 

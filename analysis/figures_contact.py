@@ -14,11 +14,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-from analysis.style import LABELS, context, equals, save, size
-from pipeline.config import Scenario
-from pipeline.physics.asperity import area_fraction
-from pipeline.physics.hertz import hertz_force
-from pipeline.store import read_stage
+from g2tom.analysis.style import LABELS, context, equals, save, size
+from g2tom.config import Scenario
+from g2tom.physics.asperity import area_fraction
+from g2tom.physics.hertz import hertz_force
+from g2tom.store import read_stage
 
 __all__ = ["write", "FIG5_DELTAS", "FIG4_DELTA"]
 

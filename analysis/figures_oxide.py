@@ -1,7 +1,7 @@
 """Fig. 6: random fields for lambda = 2, 5, 10 and the oxides thresholded at xi = 50, 20, 10 %.
 
 The fields are those the oxide stage draws for these lambda values (realization 0 of the
-scenario's seed), evaluated exactly by :func:`pipeline.physics.oxide_field.field_at_points` on a
+scenario's seed), evaluated exactly by :func:`g2tom.physics.oxide_field.field_at_points` on a
 display grid finer than the cells; the lower row marks the oxide-covered cell centres.
 """
 
@@ -12,10 +12,10 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from analysis.style import LABELS, context, equals, save, size
-from pipeline.config import ResolvedScenario, Scenario
-from pipeline.physics import oxide_band, oxide_field
-from pipeline.physics.grid import cell_centres
+from g2tom.analysis.style import LABELS, context, equals, save, size
+from g2tom.config import ResolvedScenario, Scenario
+from g2tom.physics import oxide_band, oxide_field
+from g2tom.physics.grid import cell_centres
 
 __all__ = ["write", "LAMBDAS", "FRACTIONS"]
 

@@ -20,10 +20,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-from analysis.style import LABELS, context, equals, save, size
-from pipeline.config import Scenario
-from pipeline.physics import point_model
-from pipeline.physics.spot_geometry import SpotGeometry
+from g2tom.analysis.style import LABELS, context, equals, save, size
+from g2tom.config import Scenario
+from g2tom.physics import point_model
+from g2tom.physics.spot_geometry import SpotGeometry
 
 __all__ = ["COMPARE", "MODELS", "load_comparison", "film_sweep", "write"]
 

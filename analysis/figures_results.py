@@ -18,11 +18,11 @@ from matplotlib.collections import LineCollection
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from analysis.style import COLORS, LABELS, context, equals, plain_log_ticks, save, size
-from pipeline.config import Scenario
-from pipeline.physics import barber
-from pipeline.fitting.surrogate import evaluate
-from pipeline.store import read_stage
+from g2tom.analysis.style import COLORS, LABELS, context, equals, plain_log_ticks, save, size
+from g2tom.config import Scenario
+from g2tom.physics import barber
+from g2tom.fitting.surrogate import evaluate
+from g2tom.store import read_stage
 
 __all__ = ["write"]
 

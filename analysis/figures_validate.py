@@ -15,9 +15,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
-from analysis.style import LABELS, context, equals, plain_log_ticks, save, size
-from pipeline.config import Scenario
-from pipeline.reference.summary import ratios
+from g2tom.analysis.style import LABELS, context, equals, plain_log_ticks, save, size
+from g2tom.config import Scenario
+from g2tom.reference.summary import ratios
 
 __all__ = ["FOLDER", "figure", "write"]
 

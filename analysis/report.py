@@ -18,17 +18,17 @@ from markdown.extensions.toc import slugify, unique
 import numpy as np
 import xarray as xr
 
-from analysis.report_appendix import (
+from g2tom.analysis.report_appendix import (
     FRONTIER_FIGURES, benchmark_blocks, frontier_blocks, parameter_blocks, stability_blocks, timing_blocks)
-from analysis.report_blocks import Block
-from analysis.report_physics import (
+from g2tom.analysis.report_blocks import Block
+from g2tom.analysis.report_physics import (
     atlas_blocks, barber_blocks, bias_blocks, curve_blocks, point_blocks, validation_blocks)
-from analysis.report_render import to_html, to_markdown
-from analysis.report_results import ensemble_blocks, fit_blocks, surrogate_model_blocks, surrogate_table_blocks
-from pipeline import __version__
-from pipeline.config import Scenario
-from pipeline.stages.table3 import PARAMETERS
-from pipeline.store import StaleInputError, atomic_path, read_stage
+from g2tom.analysis.report_render import to_html, to_markdown
+from g2tom.analysis.report_results import ensemble_blocks, fit_blocks, surrogate_model_blocks, surrogate_table_blocks
+from g2tom import __version__
+from g2tom.config import Scenario
+from g2tom.stages.table3 import PARAMETERS
+from g2tom.store import StaleInputError, atomic_path, read_stage
 
 __all__ = ["Block", "build_blocks", "to_markdown", "to_html", "write_report"]
 

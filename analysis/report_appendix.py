@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from analysis.report_blocks import Block, table as _table
-from pipeline.config import STAGE_INPUTS, Scenario, parameter_table
+from g2tom.analysis.report_blocks import Block, table as _table
+from g2tom.config import STAGE_INPUTS, Scenario, parameter_table
 
 __all__ = ["FRONTIER_FIGURES", "frontier_blocks", "stability_blocks", "benchmark_blocks", "parameter_blocks",
            "timing_blocks"]

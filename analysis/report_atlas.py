@@ -1,7 +1,7 @@
 """Report section "The atlas over (mu, Pi)": the surrogate chosen by leave-one-scene-out
 cross-validation with its error table, the band by region, and the held-out verdict, computed by
-:func:`pipeline.atlas.fit.verdict` from ``<data>/atlas/heldout.csv`` (the code that wrote
-``surrogate.json``'s verdict); then the measured-surface chain (:mod:`analysis.report_chain`)."""
+:func:`g2tom.atlas.fit.verdict` from ``<data>/atlas/heldout.csv`` (the code that wrote
+``surrogate.json``'s verdict); then the measured-surface chain (:mod:`g2tom.analysis.report_chain`)."""
 
 from __future__ import annotations
 
@@ -13,11 +13,11 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from analysis.report_blocks import Block, table
-from analysis.report_chain import chain_blocks
-from pipeline.atlas.fit import curve_words, verdict
-from pipeline.fitting.atlas_band import region_labels
-from pipeline.fitting.atlas_grid import FRAME_COORDINATES
+from g2tom.analysis.report_blocks import Block, table
+from g2tom.analysis.report_chain import chain_blocks
+from g2tom.atlas.fit import curve_words, verdict
+from g2tom.fitting.atlas_band import region_labels
+from g2tom.fitting.atlas_grid import FRAME_COORDINATES
 
 __all__ = ["atlas_blocks", "read_heldout"]
 
@@ -26,7 +26,7 @@ _FLOATS = ("mu", "Pi", "xi", "lambda", "force_normalized", "resistance_normalize
 
 
 def read_heldout(path: Path) -> list[dict[str, Any]]:
-    """The rows of ``heldout.csv`` with their types (as :func:`pipeline.atlas.fit.heldout_rows` made them)."""
+    """The rows of ``heldout.csv`` with their types (as :func:`g2tom.atlas.fit.heldout_rows` made them)."""
     with open(path, newline="") as handle:
         rows = list(csv.DictReader(handle))
     for r in rows:

@@ -1,6 +1,6 @@
 """Report section "The measured-surface chain": the random-process surface's height map through
 ``g2tom roughness`` and ``g2tom predict`` against its full field (``chain.nc`` of
-:mod:`pipeline.predict.chain`), the ratio per load."""
+:mod:`g2tom.predict.chain`), the ratio per load."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from analysis.report_blocks import Block, table
+from g2tom.analysis.report_blocks import Block, table
 
 __all__ = ["chain_blocks"]
 
@@ -23,14 +23,14 @@ def _cell(mean: float, se: float) -> str:
 def chain_blocks(data_dir: Path) -> list[Block]:
     """Section "The measured-surface chain": per load, chain / full field, clean and per oxide case, with
     the set's own parameters beside it."""
-    from pipeline.predict.chain import CHAIN_FILE
-    from pipeline.reference.validate import output_folder
+    from g2tom.predict.chain import CHAIN_FILE
+    from g2tom.reference.validate import output_folder
 
     path = output_folder(Path(data_dir), "random_process") / CHAIN_FILE
     blocks = [Block("h3", "The measured-surface chain: height map -> roughness -> predict, against the full field")]
     if not path.is_file():
         return blocks + [Block("p", "Not available: run `g2tom validate --surface random_process`, then "
-                                    "`python -m pipeline.predict.chain`.")]
+                                    "`python -m g2tom.predict.chain`.")]
     with xr.open_dataset(path, engine="netcdf4") as c:
         c = c.load()
     n = c.sizes["realization"]

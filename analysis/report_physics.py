@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from analysis.report_atlas import atlas_blocks  # the atlas section lives in its own module
-from analysis.report_blocks import Block, markdown_blocks, table
-from pipeline.config import Scenario
-from pipeline.store import StaleInputError, read_stage
+from g2tom.analysis.report_atlas import atlas_blocks  # the atlas section lives in its own module
+from g2tom.analysis.report_blocks import Block, markdown_blocks, table
+from g2tom.config import Scenario
+from g2tom.store import StaleInputError, read_stage
 
 __all__ = ["atlas_blocks", "barber_blocks", "bias_blocks", "curve_blocks", "point_blocks", "validation_blocks"]
 
@@ -135,7 +135,7 @@ def _worst(ratio: np.ndarray) -> str:
 
 def point_blocks(data_dir: Path) -> list[Block]:
     """alpha and gamma of both models on ``make compare``'s shared ensemble, and their ratio."""
-    from analysis.figures_point import COMPARE, load_comparison
+    from g2tom.analysis.figures_point import COMPARE, load_comparison
 
     try:
         fits = load_comparison(data_dir)

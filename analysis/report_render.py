@@ -8,7 +8,7 @@ import re
 
 import markdown
 
-from analysis.report_blocks import Block
+from g2tom.analysis.report_blocks import Block
 
 __all__ = ["to_markdown", "to_html", "STYLE"]
 

@@ -6,10 +6,10 @@ import numpy as np
 import xarray as xr
 from scipy.stats import norm
 
-from analysis.report_blocks import Block, table as _table
-from pipeline.config import Scenario
-from pipeline.fitting import surrogate as sg
-from pipeline.stages.table3 import PARAMETERS, table3_rows
+from g2tom.analysis.report_blocks import Block, table as _table
+from g2tom.config import Scenario
+from g2tom.fitting import surrogate as sg
+from g2tom.stages.table3 import PARAMETERS, table3_rows
 
 __all__ = ["fit_blocks", "ensemble_blocks", "surrogate_model_blocks", "surrogate_table_blocks", "surrogate_half_width",
            "surrogate_misses"]

@@ -1,13 +1,12 @@
-"""g2tom: the Greenwood²–Tripp oxidized model (G²TOM) pipeline.
+"""g2tom: the electrical contact resistance of rough, partially oxidized sphere-on-flat contacts.
 
-``pipeline.predict_resistance(surface, force=..., xi=..., lam=...)`` answers as ``g2tom predict``
-(:func:`pipeline.predict.answer.predict_resistance`). It is imported on first use: ``import pipeline``
-stays free of numpy, so the CLI still sets its BLAS thread counts before numpy loads.
+``g2tom.predict_resistance(surface, force=..., xi=..., lam=...)`` answers as ``g2tom predict``
+(:func:`g2tom.predict.answer.predict_resistance`). It is imported on first use, so ``import g2tom``
+imports nothing else from the package and no numpy: the command line still sets its BLAS thread
+counts before numpy loads.
 
-Importing the package sets the checks across parameters that every loaded scenario passes
-(:func:`pipeline.before_work.scenario_checks.check_scenario`, through
-:func:`pipeline.config.use_cross_checks`): they stand before work, above config, which imports
-nothing from the package.
+The source tree keeps the package in ``pipeline/`` (the stages, physics and fitting) and its
+figures and report in ``analysis/``, installed as :mod:`g2tom` and :mod:`g2tom.analysis`.
 """
 
 from importlib.metadata import PackageNotFoundError, version
@@ -20,15 +19,10 @@ try:
 except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0.0.0+unknown"
 
-from pipeline.before_work.scenario_checks import check_scenario as _check_scenario  # noqa: E402
-from pipeline.config import use_cross_checks as _use_cross_checks  # noqa: E402
-
-_use_cross_checks(_check_scenario)
-
 
 def __getattr__(name: str) -> Any:
     if name == "predict_resistance":
-        from pipeline.predict import predict_resistance
+        from g2tom.predict import predict_resistance
 
         return predict_resistance
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

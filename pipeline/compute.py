@@ -17,7 +17,7 @@ from typing import Any, Callable, Iterator, TypeVar
 import dask
 from threadpoolctl import threadpool_limits
 
-from pipeline.progress import DaskProgress, ProgressLine, watch_futures
+from g2tom.progress import DaskProgress, ProgressLine, watch_futures
 
 __all__ = ["ComputeOptions", "compute", "in_turn", "single_threaded"]
 
@@ -61,7 +61,7 @@ class ComputeOptions:
         per core.
     progress
         Show a progress line with the time left while computing (on a terminal only, see
-        :class:`pipeline.progress.ProgressLine`).
+        :class:`g2tom.progress.ProgressLine`).
     """
 
     scheduler: str | None = None

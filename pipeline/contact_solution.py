@@ -1,10 +1,10 @@
 """The Greenwood–Tripp solve of a scenario: its indenter profile, radial grid, solution and fields.
 
-The glue between a :class:`pipeline.config.Scenario` and :mod:`pipeline.physics.greenwood_tripp`,
-shared by the contact stage and by :mod:`pipeline.before_work.domains` (which sizes the domains from a fast
+The glue between a :class:`g2tom.config.Scenario` and :mod:`g2tom.physics.greenwood_tripp`,
+shared by the contact stage and by :mod:`g2tom.before_work.domains` (which sizes the domains from a fast
 solve before any stage runs); no I/O. :func:`solve` needs numeric domains
-(:func:`pipeline.before_work.domains.resolve` resolves ``auto``;
-:func:`pipeline.before_work.domains.solve_scenario` resolves, then solves). :func:`fields` are the
+(:func:`g2tom.before_work.domains.resolve` resolves ``auto``;
+:func:`g2tom.before_work.domains.solve_scenario` resolves, then solves). :func:`fields` are the
 solution's separation, pressure, area fraction and force, as the contact stage stores them.
 """
 
@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.config import AUTO, Scenario
-from pipeline.physics import greenwood_tripp as gt
-from pipeline.physics import radial_grid as rg
-from pipeline.physics.asperity import area_fraction, asperity_pressure
-from pipeline.physics.indenter import profile
+from g2tom.config import AUTO, Scenario
+from g2tom.physics import greenwood_tripp as gt
+from g2tom.physics import radial_grid as rg
+from g2tom.physics.asperity import area_fraction, asperity_pressure
+from g2tom.physics.indenter import profile
 
 __all__ = ["indenter_profile", "radial_grid", "layer", "solve", "solve_with_stiffness", "fields"]
 
@@ -63,7 +63,7 @@ def _solve(
     """Radial nodes (m), influence matrix (m/Pa) and the solution of every approach."""
     c = scenario.contact
     if c.r_max == AUTO:
-        raise ValueError("contact.r_max = 'auto' must be resolved first (pipeline.before_work.domains.resolve)")
+        raise ValueError("contact.r_max = 'auto' must be resolved first (g2tom.before_work.domains.resolve)")
     r = radial_grid(scenario, n_radial)
     matrix = rg.influence_matrix(r, scenario.material.E_star)
     sols = gt.solve(
@@ -99,7 +99,7 @@ def solve(
 
 def solve_with_stiffness(scenario: Scenario) -> tuple[np.ndarray, list[gt.Solution], np.ndarray]:
     """:func:`solve` and the contact stiffness ``K = -dF/d delta`` of every approach (N/m), by the
-    exact linearisation of the discretised system (:func:`pipeline.physics.greenwood_tripp.stiffness`)."""
+    exact linearisation of the discretised system (:func:`g2tom.physics.greenwood_tripp.stiffness`)."""
     r, matrix, sols = _solve(scenario, None, None, None)
     stiffness = gt.stiffness(matrix, indenter_profile(scenario, r), scenario.deltas, layer(scenario), sols, r)
     return r, sols, stiffness

@@ -9,17 +9,17 @@ MountainsMap, SurfaceTopography's netCDF, ...) through SurfaceTopography (the op
 result is in SI units whatever the file's unit.
 
 The moments m0, m2, m4 come from the power spectrum below a stated short-wavelength cutoff
-(:func:`pipeline.physics.surface_spectrum.psd_moments`), the summit parameters from them
-(:func:`pipeline.physics.surface_spectrum.summit_parameters`).
+(:func:`g2tom.physics.surface_spectrum.psd_moments`), the summit parameters from them
+(:func:`g2tom.physics.surface_spectrum.summit_parameters`).
 
 A region of undefined pixels that touches the map's border and holds more than
 :data:`OUTSIDE_FILL_SHARE` of it (an instrument's frame, a round or irregular field of view) lies
 outside the measured area: the map is cropped to the largest rectangle without it first (``cropped_to``); undefined (NaN)
 pixels inside, up to
 :data:`MAX_MISSING_SHARE` of the cropped map, are filled by the fill of
-least curvature (:func:`pipeline.physics.height_fill.fill_gaps`) before the moments are taken;
+least curvature (:func:`g2tom.physics.height_fill.fill_gaps`) before the moments are taken;
 the report says how many, and how the rms height, m2 and m4 change if those pixels are masked
-instead (:func:`pipeline.physics.height_fill.masked_moments`, finite differences on both maps).
+instead (:func:`g2tom.physics.height_fill.masked_moments`, finite differences on both maps).
 On a synthetic surface with 5 % of its pixels missing (tests/test_height_fill.py's, three seeds),
 masked and filled agree within 0.5 % (rms height, m2) and 1.1 % (m4) by that estimator, and the
 filled map's spectral moments are within 0.2 % of the complete map's.
@@ -36,11 +36,11 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.config import ConfigError
-from pipeline.errors import install_hint
-from pipeline.physics.height_fill import fill_gaps, masked_moments
-from pipeline.physics.roughness import validated_heights
-from pipeline.physics.surface_spectrum import BETA_RULES, psd_moments, summit_parameters
+from g2tom.config import ConfigError
+from g2tom.errors import install_hint
+from g2tom.physics.height_fill import fill_gaps, masked_moments
+from g2tom.physics.roughness import validated_heights
+from g2tom.physics.surface_spectrum import BETA_RULES, psd_moments, summit_parameters
 
 __all__ = ["read_heightmap", "read_measured", "Measured", "measure", "PLAUSIBLE_SIGMA", "CUTOFF_PIXELS", "INSTALL",
            "MAX_MISSING_SHARE", "MAP_EXTENT", "OUTSIDE_FILL_SHARE"]

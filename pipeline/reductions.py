@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from pipeline.fitting.powerlaw import quantile_with_inf
+from g2tom.fitting.powerlaw import quantile_with_inf
 
 __all__ = [
     "DIM",
@@ -96,7 +96,7 @@ def reduce_realizations(resistance: xr.DataArray, scale: float) -> xr.Dataset:
     resistance
         Resistance in ohm with a ``realization`` dimension (+inf = open circuit).
     scale
-        :attr:`pipeline.config.Scenario.resistance_scale`, ohm.
+        :attr:`g2tom.config.Scenario.resistance_scale`, ohm.
 
     Returns
     -------

@@ -1,5 +1,5 @@
 """What a scenario's stages, predictor, reference and benchmarks share beyond its contact solution
-(:mod:`pipeline.contact_solution`): its dimensionless groups and its oxide fields, regenerable
+(:mod:`g2tom.contact_solution`): its dimensionless groups and its oxide fields, regenerable
 from their seed. Library code: no I/O, no xarray.
 """
 
@@ -9,15 +9,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.config import ResolvedScenario, Scenario
-from pipeline.physics import oxide_band, oxide_field
-from pipeline.physics.groups import Groups, groups
+from g2tom.config import ResolvedScenario, Scenario
+from g2tom.physics import oxide_band, oxide_field
+from g2tom.physics.groups import Groups, groups
 
 __all__ = ["scene_groups", "bands", "threshold_block", "FieldSource"]
 
 
 def scene_groups(scenario: Scenario) -> Groups:
-    """(mu, Pi) of a scenario's surface and sphere (:mod:`pipeline.physics.groups`)."""
+    """(mu, Pi) of a scenario's surface and sphere (:mod:`g2tom.physics.groups`)."""
     rough = scenario.roughness
     return groups(rough.sigma, rough.eta, rough.beta, scenario.indenter.radius)
 

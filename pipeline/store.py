@@ -21,9 +21,9 @@ from typing import Any, Iterator
 import numpy as np
 import xarray as xr
 
-from pipeline import __version__
-from pipeline.config import STAGE_UPSTREAM, Scenario
-from pipeline.errors import StaleInputError
+from g2tom import __version__
+from g2tom.config import STAGE_UPSTREAM, Scenario
+from g2tom.errors import StaleInputError
 
 __all__ = [
     "StaleInputError",

@@ -11,8 +11,9 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import pytest  # noqa: E402
 
-from pipeline.config import ResolvedScenario, load_scenario  # noqa: E402
-from pipeline.before_work.domains import resolve  # noqa: E402
+from g2tom.config import ResolvedScenario  # noqa: E402
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve  # noqa: E402
 
 SMALL_OVERRIDES = {
     "loading.n_delta": 6,

@@ -2,11 +2,11 @@
 
 * :func:`fine_grid`: oxide fields synthesised on a fine pixel image by one inverse FFT.
 * :func:`spot_points`, :func:`clean_share`: the disc rule's points and clean shares, spot by
-  spot in plain NumPy (the compiled :func:`pipeline.physics.spot_share.disc_points` and
-  :func:`~pipeline.physics.spot_share.disc_shares` equal them).
+  spot in plain NumPy (the compiled :func:`g2tom.physics.spot_share.disc_points` and
+  :func:`~g2tom.physics.spot_share.disc_shares` equal them).
 * :func:`roughness_parameters`: Greenwood–Williamson parameters of a height map from
   finite-difference moments, independent of the spectral estimator of
-  :mod:`pipeline.physics.surface_spectrum`:
+  :mod:`g2tom.physics.surface_spectrum`:
 
   The spectral moments of an isotropic surface are those of any straight profile through it
   (Nayak): ``m0 = <z^2>``, ``m2 = <(dz/dx)^2>``, ``m4 = <(d^2z/dx^2)^2>``. For an isotropic map
@@ -35,9 +35,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pipeline.physics.oxide_band import Band
-from pipeline.physics.spot_share import DiscRule
-from pipeline.physics.roughness import detrend, validated_heights
+from g2tom.physics.oxide_band import Band
+from g2tom.physics.spot_share import DiscRule
+from g2tom.physics.roughness import detrend, validated_heights
 
 
 def fine_grid(modes: Band, coeffs: np.ndarray, n_pixels: int) -> np.ndarray:

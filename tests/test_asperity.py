@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import quad
 from scipy.special import erfc
 
-from pipeline.physics.asperity import (
+from g2tom.physics.asperity import (
     area_fraction,
     asperity_integral,
     asperity_integral_slope,

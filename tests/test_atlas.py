@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.atlas import run as atlas
-from pipeline.atlas.design import AtlasDesign, design_scenes
-from pipeline.atlas.schema import ATLAS
-from pipeline.compute import ComputeOptions
-from pipeline.config import ConfigError, load_scenario
+from g2tom.atlas import run as atlas
+from g2tom.atlas.design import AtlasDesign, design_scenes
+from g2tom.atlas.schema import ATLAS
+from g2tom.compute import ComputeOptions
+from g2tom.config import ConfigError
+from g2tom.before_work import load_scenario
 from tests.conftest import SMALL_OVERRIDES
 
 BASE = {**SMALL_OVERRIDES, "oxide.xi": [0.5], "oxide.lambda": [1.0, 5.0], "fits.n_bootstrap": 20,
@@ -139,7 +140,7 @@ def test_a_scene_longer_than_the_others_share_runs_alone_first(tmp_path, base, u
 def test_the_schedule_runs_a_scene_alone_only_where_it_saves_time() -> None:
     """By hand: [1000, 10 x 4] on two workers takes 1000 s one scene per worker, 1000 / (2 x 0.95)
     + 20 = 546.3 s with the long one alone first; equal scenes, or one worker, never run alone."""
-    from pipeline.atlas.design import ALONE_EFFICIENCY, schedule
+    from g2tom.atlas.design import ALONE_EFFICIENCY, schedule
 
     assert ALONE_EFFICIENCY == 0.95
     first, wall = schedule([10.0, 1000.0, 10.0, 10.0, 10.0], 2)
@@ -176,8 +177,8 @@ def test_a_refused_scene_stops_the_atlas_before_work(tmp_path) -> None:
 
 
 def test_atlas_surrogate_fitted_on_design_judged_on_heldout(tmp_path, base, uninterrupted) -> None:
-    from pipeline.atlas.fit import CURVE, FLOOR, curve_model, fit_atlas
-    from pipeline.fitting.atlas_surrogate import AtlasModel
+    from g2tom.atlas.fit import CURVE, FLOOR, curve_model, fit_atlas
+    from g2tom.fitting.atlas_surrogate import AtlasModel
 
     doc, rows = fit_atlas(uninterrupted)
     assert doc["alpha"]["degree"] == 1  # 8 design points: only degree 1 (5 terms) cross-validates
@@ -216,7 +217,7 @@ def test_the_noise_ceiling_is_the_verdict_on_noisy_copies_of_the_fit(uninterrupt
     """The ceiling refits the chosen model on its own predictions plus the design's noise and judges
     it on the held-out scenes' predictions plus theirs: without noise every cell passes; with the
     intervals 30 times wider, fewer; the same seed, the same shares."""
-    from pipeline.atlas import fit as F
+    from g2tom.atlas import fit as F
 
     doc, _ = F.fit_atlas(uninterrupted)
     ceiling = doc["heldout"]["noise_ceiling"]
@@ -241,7 +242,7 @@ def test_the_noise_ceiling_is_the_verdict_on_noisy_copies_of_the_fit(uninterrupt
 def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     import json
 
-    from pipeline.atlas.fit import CURVE, FORMAT, write_atlas_surrogate
+    from g2tom.atlas.fit import CURVE, FORMAT, write_atlas_surrogate
 
     target, doc = write_atlas_surrogate(atlas.run_atlas(base, DESIGN, tmp_path))
     def strict(name: str) -> None:
@@ -250,9 +251,9 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
     assert json.loads(target.read_text(), parse_constant=strict)["format"] == FORMAT == doc["format"]
     lines = (tmp_path / "atlas" / "heldout.csv").read_text().splitlines()
     assert lines[0].startswith("scene,mu,Pi,xi,lambda,force_normalized") and len(lines) == 1 + doc["heldout"]["steps"]
-    from analysis.report_atlas import atlas_blocks, read_heldout
-    from pipeline.atlas.fit import verdict
-    from pipeline.fitting.atlas_grid import FRAME_COORDINATES
+    from g2tom.analysis.report_atlas import atlas_blocks, read_heldout
+    from g2tom.atlas.fit import verdict
+    from g2tom.fitting.atlas_grid import FRAME_COORDINATES
 
     with xr.open_dataset(tmp_path / "atlas" / atlas.ATLAS_FILE) as ds:  # the twin: equal groups, other sizes
         assert ds.attrs["invariance_pair"].startswith("d") and ds.attrs["invariance_max_ln_error"] <= 2e-6
@@ -283,7 +284,7 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
 
 
 def test_cli_runs_fits_and_summarizes(tmp_path, capsys) -> None:
-    from pipeline.cli.main import main
+    from g2tom.cli.main import main
 
     small = {"atlas.mu_min": DESIGN.mu[0], "atlas.mu_max": DESIGN.mu[1], "atlas.pi_min": DESIGN.Pi[0],
              "atlas.pi_max": DESIGN.Pi[1], "atlas.n_mu": DESIGN.n_mu, "atlas.n_pi": DESIGN.n_pi,
@@ -305,7 +306,7 @@ def test_cli_runs_fits_and_summarizes(tmp_path, capsys) -> None:
 def test_the_atlas_runs_on_discrete_asperities(tmp_path) -> None:
     """The atlas on whatever model its base has: discrete coupled asperities with the disc rule and the
     point model (what `paper` is about to become), on a small design."""
-    from pipeline.atlas.fit import fit_atlas
+    from g2tom.atlas.fit import fit_atlas
 
     discrete = load_scenario("paper", {**BASE, "contact.model": "discrete", "oxide.spot_rule": "disc",
                                        "cube.model": "point", "contact.surfaces": 8})
@@ -325,8 +326,8 @@ def test_the_atlas_runs_on_discrete_asperities(tmp_path) -> None:
 def test_a_scene_computes_on_one_thread_as_the_plan_assumes(monkeypatch) -> None:
     """Each worker runs one scene single-threaded: the discrete contact pool too (two threads per scene on two
     workers oversubscribed the cores and the plan's one-thread seconds)."""
-    from pipeline.atlas.design import Scene
-    from pipeline.stages import contact_discrete
+    from g2tom.atlas.design import Scene
+    from g2tom.stages import contact_discrete
 
     seen = []
     real = contact_discrete.compute
@@ -342,7 +343,7 @@ def test_a_scene_computes_on_one_thread_as_the_plan_assumes(monkeypatch) -> None
 
 
 def test_scenes_are_submitted_longest_first_as_the_plan_assumes() -> None:
-    from pipeline.atlas.design import Scene, SceneEstimate, wall_seconds
+    from g2tom.atlas.design import Scene, SceneEstimate, wall_seconds
 
     scenes = [Scene(f"d{k:02d}", 1.0, 5.0, False) for k in range(4)]
     seconds = [10.0, 300.0, 20.0, 300.0]
@@ -362,7 +363,7 @@ def test_the_verdict_says_what_a_perfect_surrogate_would_pass() -> None:
     intervals (5 % is ~10 sigma) is passed for sure."""
     from scipy.stats import norm
 
-    from pipeline.atlas.fit import FLOOR, verdict
+    from g2tom.atlas.fit import FLOOR, verdict
 
     z = norm.ppf(0.975)
 
@@ -384,7 +385,7 @@ def test_the_twin_is_measured_as_its_original() -> None:
     the invariance, not two ensembles' noise."""
     import dataclasses
 
-    from pipeline.atlas.design import scene_scenario
+    from g2tom.atlas.design import scene_scenario
 
     base = load_scenario("atlas")
     scenes = design_scenes(AtlasDesign.of(base))

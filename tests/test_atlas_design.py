@@ -8,9 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from pipeline.atlas.design import AtlasDesign, design_scenes, format_atlas_plan, plan_atlas, scene_scenario, scene_seed
-from pipeline.config import AUTO, ConfigError, load_scenario
-from pipeline.physics.groups import groups
+from g2tom.atlas.design import AtlasDesign, design_scenes, format_atlas_plan, plan_atlas, scene_scenario, scene_seed
+from g2tom.config import AUTO, ConfigError
+from g2tom.before_work import load_scenario
+from g2tom.physics.groups import groups
 from tests.conftest import SMALL_OVERRIDES
 
 
@@ -81,7 +82,7 @@ def test_every_scene_draws_its_own_streams() -> None:
     assert scene_seed(base.oxide.seed + 1, first) != seeds[0]
     assert scene_seed(base.oxide.seed, dataclasses.replace(first, mu=first.mu * (1 + 1e-5))) != seeds[0]
     # the streams themselves differ: the first field of two scenes at lambda 23
-    from pipeline.physics.oxide_band import field_stream
+    from g2tom.physics.oxide_band import field_stream
     draws = [field_stream(s, 23.0, 0).random(4) for s in seeds[:2]]
     assert not np.allclose(*draws)
 
@@ -118,7 +119,7 @@ def test_heldout_scenes_grow_their_pools_to_the_tighter_target() -> None:
     without = load_scenario("atlas", {"contact.pool_half_width": 0.0, "atlas.heldout_pool_half_width": 0.0})
     assert scene_scenario(without, design).config_hash("fits") == scene_scenario(base, design).config_hash("fits")
     assert scene_scenario(without, held).contact.pool_half_width == 0.0
-    from pipeline.atlas.cost import scene_cost
+    from g2tom.atlas.cost import scene_cost
 
     held_cost, design_cost = scene_cost(scene_scenario(base, held)), scene_cost(scene_scenario(base, design))
     assert held_cost.surfaces_lightest > held_cost.surfaces and design_cost.surfaces_lightest == design_cost.surfaces
@@ -142,7 +143,7 @@ def test_plan_grows_with_pi_and_reports_refusals() -> None:
 
 
 def test_cli_plans_the_atlas(capsys) -> None:
-    from pipeline.cli.main import main
+    from g2tom.cli.main import main
 
     small = {**SMALL_OVERRIDES, "atlas.n_mu": 2, "atlas.n_pi": 3, "atlas.n_heldout": 2}
     assert main(["plan", "--atlas", "--workers", "2", "--config", "paper_gt",
@@ -164,7 +165,7 @@ def test_the_design_is_the_scenarios_atlas_section() -> None:
 def test_atlas_commands_default_to_the_atlas_scenario() -> None:
     """Without --config, `g2tom atlas` and `g2tom plan --atlas` take the bundled `atlas` (what
     `make atlas` passes: its 5 x 6 oxide grid and 5 % target), every other command `paper`."""
-    from pipeline.cli.arguments import build_parser, default_config
+    from g2tom.cli.arguments import build_parser, default_config
 
     parser = build_parser()
     assert default_config(parser.parse_args(["plan", "--atlas"])) == "atlas"

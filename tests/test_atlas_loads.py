@@ -8,13 +8,13 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pipeline.atlas import cost, loads
-from pipeline.atlas.design import (BUDGET_SECONDS, MIN_POOL, POOL_TOUCHING, AtlasDesign, Scene, design_scenes,
+from g2tom.atlas import cost, loads
+from g2tom.atlas.design import (BUDGET_SECONDS, MIN_POOL, POOL_TOUCHING, AtlasDesign, Scene, design_scenes,
                                    format_atlas_plan, scene_scenario, wall_seconds)
-from pipeline.before_work import discrete_cost
-from pipeline.before_work.domains import resolve
-from pipeline.before_work.plan import CONTROL_VARIATE_REALIZATIONS
-from pipeline.config import load_scenario
+from g2tom.before_work import discrete_cost
+from g2tom.before_work.domains import resolve
+from g2tom.before_work.plan import CONTROL_VARIATE_REALIZATIONS
+from g2tom.before_work import load_scenario
 
 DISCRETE = {"contact.model": "discrete", "oxide.spot_rule": "disc", "cube.model": "point"}
 #: The atlas on Greenwood-Tripp's grid spots (paper_gt's models).
@@ -30,7 +30,7 @@ PLAIN = {"oxide.target_half_width": cost.REFERENCE_TARGET, "fits.control_variate
 def test_every_scene_spans_the_force_range_by_the_stage_solve(mu, Pi) -> None:
     """The steps found by the fast solve, solved by the contact stage's own solve (720 nodes, the
     resolved domains), reach past F' 0.05 and 20 by less than twice the margin."""
-    from pipeline.contact_solution import fields, solve
+    from g2tom.contact_solution import fields, solve
 
     scenario = resolve(scene_scenario(load_scenario("atlas"), Scene("x", mu, Pi, False)))
     force = fields(scenario, *solve(scenario))["force"] / scenario.force_scale
@@ -64,7 +64,7 @@ def test_expected_counts_against_the_discrete_pool() -> None:
     means at the heavy steps (16 surfaces, Pi 20): touching within 25 % (GT counts +17 ... +19 %
     here, +7 % at Pi 40 and +2 % at Pi 320: the cost model is calibrated on GT's counts), candidates
     within 10 %."""
-    from pipeline.stages import contact
+    from g2tom.stages import contact
 
     base = load_scenario("atlas", {**DISCRETE, "contact.surfaces": 16, "loading.n_delta": 6,
                                    "contact.pool_half_width": 0.0})  # every surface at every step
@@ -144,7 +144,7 @@ def test_fields_of_an_adaptive_discrete_scene() -> None:
         sum(max(max(f, 100) * share, 100) for f in cost.REFERENCE_FIELDS for share in (0.14 / 0.17, 1.0)) / 2, rel=1e-12)
     fixed = dataclasses.replace(s, oxide=dataclasses.replace(s.oxide, ensemble="fixed", n_realizations=64))
     assert cost.discrete_xi_fields(fixed, n) == cost.discrete_fields(fixed, n) == 64 * 6
-    from pipeline.before_work.discrete_cost import expected_counts, field_seconds
+    from g2tom.before_work.discrete_cost import expected_counts, field_seconds
 
     touching, candidates = expected_counts(s)
     assert cost.scene_cost(s).cube == pytest.approx(
@@ -153,7 +153,7 @@ def test_fields_of_an_adaptive_discrete_scene() -> None:
 
 def test_wall_time_and_the_budget_line() -> None:
     assert wall_seconds([5.0, 4.0, 3.0, 3.0], 2) == 8.0 and wall_seconds([10.0, 1.0], 4) == 10.0
-    from pipeline.atlas.design import SceneEstimate
+    from g2tom.atlas.design import SceneEstimate
 
     heavy = [SceneEstimate(Scene(f"d{k:02d}", 1.0, 5.0, False), 17, 2**28, BUDGET_SECONDS, None) for k in range(3)]
     lines = format_atlas_plan(heavy, parallel=2)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.fitting.atlas_noise import sampling_noise
+from g2tom.fitting.atlas_noise import sampling_noise
 
 
 def _points(steps: int = 20, scenes: int = 400) -> tuple[np.ndarray, np.ndarray]:

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from pipeline.atlas import run as atlas
-from pipeline.before_work.domains import resolve
-from pipeline.atlas.fit import FORMAT_VERSION, code_hash, write_atlas_surrogate
-from pipeline.config import load_scenario
-from pipeline.predict.atlas import shipped_path
-from pipeline.store import git_commit
+from g2tom.atlas import run as atlas
+from g2tom.before_work.domains import resolve
+from g2tom.atlas.fit import FORMAT_VERSION, code_hash, write_atlas_surrogate
+from g2tom.before_work import load_scenario
+from g2tom.predict.atlas import shipped_path
+from g2tom.store import git_commit
 from tests.test_atlas import BASE, DESIGN
 
 

@@ -12,12 +12,12 @@ import numpy as np
 import pytest
 from numpy.polynomial import chebyshev
 
-from pipeline.atlas.fit import FORMAT, FORMAT_VERSION, curve_doc, curve_model
+from g2tom.atlas.fit import FORMAT, FORMAT_VERSION, curve_doc, curve_model
 from scipy.interpolate import RBFInterpolator
 
-from pipeline.fitting.atlas_grid import FRAMES, fit_grid_tensor, group_coordinates, node_coordinates
-from pipeline.fitting import atlas_grid
-from pipeline.fitting.atlas_scene_series import KERNELS, TAIL_DEGREE, cross_validate, fit_scene_series
+from g2tom.fitting.atlas_grid import FRAMES, fit_grid_tensor, group_coordinates, node_coordinates
+from g2tom.fitting import atlas_grid
+from g2tom.fitting.atlas_scene_series import KERNELS, TAIL_DEGREE, cross_validate, fit_scene_series
 
 XI = np.array([0.0, 0.3, 0.7])
 LAM = np.array([1.0, 5.0])

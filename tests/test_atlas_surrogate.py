@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.fitting.atlas_surrogate import exponents, fit_atlas_model, select_degree
+from g2tom.fitting.atlas_surrogate import exponents, fit_atlas_model, select_degree
 
 
 def truth(xi, lam, mu, pi):
@@ -59,7 +59,7 @@ def test_identity_transform_and_refusals() -> None:
 
 def test_design_by_parents_equals_the_products_of_powers():
     """The monomial table built term by term from a parent equals prod_i u_i^p_i (5 coordinates)."""
-    from pipeline.fitting.atlas_surrogate import AtlasModel
+    from g2tom.fitting.atlas_surrogate import AtlasModel
 
     rng = np.random.default_rng(3)
     powers = exponents(4, 5)

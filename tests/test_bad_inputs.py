@@ -22,9 +22,10 @@ from typing import Callable
 import numpy as np
 import pytest
 
-from pipeline.cli.main import main
-from pipeline.config import SECTIONS, load_scenario, parameter_key
-from pipeline.store import stage_path, write_dataset
+from g2tom.cli.main import main
+from g2tom.config import SECTIONS, parameter_key
+from g2tom.before_work import load_scenario
+from g2tom.store import stage_path, write_dataset
 from tests.conftest import SMALL_ARGS, SMALL_OVERRIDES
 
 
@@ -274,8 +275,8 @@ def _snapshot(root: Path) -> dict[str, tuple[int, str]]:
 @pytest.fixture(scope="module")
 def results(tmp_path_factory, small) -> Path:
     """A data directory with every stage file and figure of a small run (synthetic cube)."""
-    from pipeline.compute import ComputeOptions
-    from pipeline.stages import contact, oxide
+    from g2tom.compute import ComputeOptions
+    from g2tom.stages import contact, oxide
     from tests.test_fits_stage import synthetic_cube
 
     data = tmp_path_factory.mktemp("results") / "data"
@@ -351,7 +352,7 @@ def test_a_reader_that_closes_the_pipe_early_gets_no_traceback() -> None:
     import subprocess
     import sys
 
-    g2tom = [sys.executable, "-c", "import sys; from pipeline.cli.main import main; sys.exit(main())"]
+    g2tom = [sys.executable, "-c", "import sys; from g2tom.cli.main import main; sys.exit(main())"]
     proc = subprocess.Popen([*g2tom, "plan"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     proc.stdout.close()  # the reader is gone before the first write
     err = proc.stderr.read().decode()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.physics import barber
+from g2tom.physics import barber
 
 
 def test_f_of_zero_is_one() -> None:

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.config import load_scenario
-from pipeline.before_work.domains import resolve
-from pipeline.stages import contact, cube
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.stages import contact, cube
 
 #: A coarse paper scene: 6 load steps from 39 N to 9.7 kN, 160 radial nodes, 200 drawn surfaces.
 COARSE = {"loading.n_delta": 6, "contact.n_radial": 160, "oxide.ensemble": "fixed", "oxide.n_realizations": 200}

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from pipeline.before_work.domains import resolve
-from pipeline.config import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.before_work import load_scenario
 from tests.conftest import SMALL_OVERRIDES
 
 
 def test_bench_prints_one_line_unless_verbose(tmp_path, capsys):
-    from pipeline.bench import run_benchmarks
+    from g2tom.bench import run_benchmarks
 
     scene = resolve(load_scenario("paper_gt", SMALL_OVERRIDES))
     paths = run_benchmarks(scene, tmp_path, only=["predict"])

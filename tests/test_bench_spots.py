@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.before_work.domains import resolve
-from pipeline.bench import spots
-from pipeline.config import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.bench import spots
+from g2tom.before_work import load_scenario
 from tests.conftest import SMALL_OVERRIDES
 
 

@@ -12,8 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from pipeline.cli.main import main
-from pipeline.config import ResolvedScenario, load_scenario
+from g2tom.cli.main import main
+from g2tom.config import ResolvedScenario
+from g2tom.before_work import load_scenario
 from tests.test_bad_inputs import _snapshot
 from tests.test_fits_stage import cli_overrides
 from tests.test_predict import data_dir  # noqa: F401 - the module's fixture: fits.nc and the surrogate files
@@ -115,9 +116,9 @@ def test_one_cell_run_answers_with_its_cell(tmp_path, capsys, small) -> None:
     """No interpolation on one cell: the cell's own curve, its band without a surrogate error, said so."""
     import warnings
 
-    from pipeline.before_work.domains import resolve
-    from pipeline.stages import fits, surrogate
-    from pipeline.store import write_dataset
+    from g2tom.before_work.domains import resolve
+    from g2tom.stages import fits, surrogate
+    from g2tom.store import write_dataset
     from tests.conftest import SMALL_OVERRIDES
     from tests.test_fits_stage import synthetic_cube
 
@@ -152,7 +153,7 @@ def test_pixel_size_beyond_a_physical_map(tmp_path, capsys, pixel: str) -> None:
 # ------------------------------------------------------------------ 6: validate's checks before work
 @pytest.mark.parametrize("where, expect", [("a_file", "is not a directory"), ("a_file/data", "is not writable")])
 def test_validate_data_dir_refused_before_work(tmp_path, capsys, monkeypatch, where: str, expect: str) -> None:
-    import pipeline.reference.validate as validate
+    import g2tom.reference.validate as validate
 
     def never(*args, **kwargs) -> None:
         raise AssertionError("validate started work on an unusable --data-dir")
@@ -165,8 +166,8 @@ def test_validate_data_dir_refused_before_work(tmp_path, capsys, monkeypatch, wh
 
 # ------------------------------------------------------------------ 7: Ctrl-C during validate or atlas
 @pytest.mark.parametrize("command, module, function, kept", [
-    ("validate", "pipeline.reference.validate", "run_validation", "validate/cases"),
-    ("atlas", "pipeline.atlas.run", "run_atlas", "atlas"),
+    ("validate", "g2tom.reference.validate", "run_validation", "validate/cases"),
+    ("atlas", "g2tom.atlas.run", "run_atlas", "atlas"),
 ])
 def test_ctrl_c_says_what_was_kept(tmp_path, capsys, monkeypatch, command, module, function, kept) -> None:
     import importlib
@@ -273,7 +274,7 @@ def test_json_and_the_terminal_table(capsys, small, data_dir, monkeypatch) -> No
 
 
 def test_atlas_answer_leaves_out_what_the_atlas_lacks(capsys, small, data_dir) -> None:  # noqa: F811
-    from pipeline.predict.atlas import NOT_IN_ATLAS, shipped_path
+    from g2tom.predict.atlas import NOT_IN_ATLAS, shipped_path
 
     shipped = shipped_path()
     if shipped is None:

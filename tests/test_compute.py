@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.cli.main import main
-from pipeline.compute import ComputeOptions
-from pipeline.stages import oxide
+from g2tom.cli.main import main
+from g2tom.compute import ComputeOptions
+from g2tom.stages import oxide
 from tests.conftest import SMALL_ARGS
 
 distributed = pytest.importorskip("distributed")
@@ -37,7 +37,7 @@ def test_compute_pins_blas_to_one_thread_for_any_caller() -> None:
     import dask
     from threadpoolctl import threadpool_info, threadpool_limits
 
-    from pipeline.compute import compute
+    from g2tom.compute import compute
 
     def blas_threads() -> list[int]:
         return [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
@@ -55,7 +55,7 @@ def test_progress_bar_stays_out_of_logs(monkeypatch, capfd) -> None:
     import dask
     import time
 
-    from pipeline import compute as compute_module
+    from g2tom import compute as compute_module
 
     monkeypatch.setattr(compute_module, "PROGRESS_AFTER", 0.0)
     compute_module.compute(dask.delayed(time.sleep)(0.6), options=ComputeOptions(progress=True))
@@ -65,7 +65,7 @@ def test_progress_bar_stays_out_of_logs(monkeypatch, capfd) -> None:
 
 def test_multi_process_cluster_gives_identical_cube(tmp_path, small) -> None:
     """Two worker processes (as `dask scheduler` + `dask worker` would give) reproduce the local cube."""
-    from pipeline.stages import contact, cube
+    from g2tom.stages import contact, cube
 
     quiet = ComputeOptions(progress=False)
     expected = cube.build(small, contact.build(small), oxide.build(small, quiet), quiet)
@@ -97,7 +97,7 @@ def test_tasks_start_in_the_given_order_one_per_thread() -> None:
     """The atlas's scenes longest first: each starts only when a thread is free, in the list's order
     (submitted at once, the scheduler would queue them on the workers in turn, and a long one could
     wait behind another long one while the other worker runs short ones)."""
-    from pipeline.compute import in_turn
+    from g2tom.compute import in_turn
 
     seconds = {"long": 0.6, "long2": 0.5, "mid": 0.3, "short": 0.05, "short2": 0.05, "short3": 0.05}
     _LOG.clear()

@@ -7,8 +7,9 @@ import warnings
 
 import pytest
 
-from pipeline.config import ConfigError, bundled_scenarios, load_scenario, odd_cells, parameter_table
-from pipeline.before_work.domains import resolve
+from g2tom.config import ConfigError, bundled_scenarios, odd_cells, parameter_table
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
 
 
 def test_bundled_scenarios_are_listed() -> None:
@@ -179,7 +180,7 @@ def test_integers_must_fit_the_64_bit_attributes_they_are_stored_in() -> None:
 
 
 def test_list_split_at_spaces_by_make_is_glued_back(capsys) -> None:
-    from pipeline.cli.main import _rejoin, main
+    from g2tom.cli.main import _rejoin, main
 
     assert _rejoin(["oxide.xi=[0.3,", "0.5]", "cube.weights=area"]) == ["oxide.xi=[0.3, 0.5]", "cube.weights=area"]
     assert _rejoin(["oxide.lambda=[1.0,", "5.0,", "13.0]"]) == ["oxide.lambda=[1.0, 5.0, 13.0]"]
@@ -191,8 +192,8 @@ def test_list_split_at_spaces_by_make_is_glued_back(capsys) -> None:
 
 
 def test_version_names_package_and_commit(capsys) -> None:
-    from pipeline import __version__
-    from pipeline.cli.main import main
+    from g2tom import __version__
+    from g2tom.cli.main import main
 
     with pytest.raises(SystemExit) as exit_:
         main(["--version"])

@@ -10,11 +10,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pipeline.physics import constriction as cn
-from pipeline.physics import crops as cc
-from pipeline.physics import interaction as ia
-from pipeline.physics import interaction_fft as fi
-from pipeline.physics.spot_geometry import SpotGeometry
+from g2tom.physics import constriction as cn
+from g2tom.physics import crops as cc
+from g2tom.physics import interaction as ia
+from g2tom.physics import interaction_fft as fi
+from g2tom.physics.spot_geometry import SpotGeometry
 
 RHO = 7.2e-7  # ohm m
 PITCH = 7.0e-5  # m

@@ -8,15 +8,16 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.bench import contact as bench_contact
-from pipeline.cli.main import main
-from pipeline.compute import ComputeOptions
-from pipeline.config import ConfigError, Scenario, load_scenario
-from pipeline.before_work.domains import resolve
-from pipeline.physics import spot_models
-from pipeline.physics.asperity import area_fraction
-from pipeline.physics.grid import cell_centres
-from pipeline.stages import contact
+from g2tom.bench import contact as bench_contact
+from g2tom.cli.main import main
+from g2tom.compute import ComputeOptions
+from g2tom.config import ConfigError, Scenario
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.physics import spot_models
+from g2tom.physics.asperity import area_fraction
+from g2tom.physics.grid import cell_centres
+from g2tom.stages import contact
 from tests.conftest import SMALL_OVERRIDES
 
 FIELDS = ("pressure", "displacement", "separation", "area_fraction")

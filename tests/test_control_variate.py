@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from pipeline.fitting.control_variate import bootstrap_controlled_mean, controllable, controlled_mean
-from pipeline.fitting.powerlaw import bootstrap_log_mean, resample_counts
-from pipeline.physics.oxide_marginal import MIN_MODES, clean_probability
+from g2tom.fitting.control_variate import bootstrap_controlled_mean, controllable, controlled_mean
+from g2tom.fitting.powerlaw import bootstrap_log_mean, resample_counts
+from g2tom.physics.oxide_marginal import MIN_MODES, clean_probability
 
 
 def test_clean_probability_is_the_normal_one_for_many_equal_modes_and_the_sampled_one_for_few() -> None:
@@ -98,10 +98,10 @@ DISCRETE_CV = {"contact.model": "discrete", "contact.surfaces": 4, "oxide.xi": [
 @pytest.fixture(scope="module")
 def stages():
     """The small discrete chain with and without the control variate (the same contact and fields)."""
-    from pipeline.before_work.domains import resolve
-    from pipeline.compute import ComputeOptions
-    from pipeline.config import load_scenario
-    from pipeline.stages import contact, cube, fits, oxide
+    from g2tom.before_work.domains import resolve
+    from g2tom.compute import ComputeOptions
+    from g2tom.before_work import load_scenario
+    from g2tom.stages import contact, cube, fits, oxide
     from tests.conftest import SMALL_OVERRIDES
 
     quiet = ComputeOptions(progress=False)
@@ -143,7 +143,8 @@ def test_the_stages_record_the_control_and_adjust_the_geometric_mean(stages) -> 
 
 
 def test_the_control_variate_is_refused_where_its_expectation_is_not_exact() -> None:
-    from pipeline.config import ConfigError, load_scenario
+    from g2tom.config import ConfigError
+    from g2tom.before_work import load_scenario
 
     for key, value in (("contact.model", "greenwood_tripp"), ("oxide.amplitudes", "rayleigh"),
                        ("fits.reduction", "median"), ("oxide.threshold", "empirical")):
@@ -156,7 +157,7 @@ def test_the_control_variate_is_refused_where_its_expectation_is_not_exact() -> 
 
 def test_the_rules_controlled_half_width_is_the_regressions_standard_error_of_every_prefix() -> None:
     """Against a least-squares fit of t on u for each prefix, by hand (residual variance over n - 2)."""
-    from pipeline.fitting.ensemble import prefix_controlled_half_width, prefix_half_width
+    from g2tom.fitting.ensemble import prefix_controlled_half_width, prefix_half_width
 
     rng = np.random.default_rng(8)
     u = rng.uniform(0.0, 1.0, 80)

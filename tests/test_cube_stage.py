@@ -9,14 +9,14 @@ import pytest
 import xarray as xr
 from scipy.special import erfcinv
 
-from pipeline import store
-from pipeline.compute import ComputeOptions
-from pipeline.config import load_scenario
-from pipeline.physics import constriction, oxide_field, point_model, spot_models
-from pipeline.physics.interaction import AUTO_METHOD
-from pipeline.physics.spot_geometry import SpotGeometry
-from pipeline.stages import contact, cube
-from pipeline.stages import oxide as oxide_stage
+from g2tom import store
+from g2tom.compute import ComputeOptions
+from g2tom.before_work import load_scenario
+from g2tom.physics import constriction, oxide_field, point_model, spot_models
+from g2tom.physics.interaction import AUTO_METHOD
+from g2tom.physics.spot_geometry import SpotGeometry
+from g2tom.stages import contact, cube
+from g2tom.stages import oxide as oxide_stage
 
 N = 13
 PITCH = 7.07e-5  # m

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from numpy.polynomial import polynomial
 
-from pipeline.fitting.curve_model import evaluate_curve, fit_curve, tolerance_band
-from pipeline.fitting.powerlaw import fit_power_law
+from g2tom.fitting.curve_model import evaluate_curve, fit_curve, tolerance_band
+from g2tom.fitting.powerlaw import fit_power_law
 
 FORCE = np.geomspace(0.5, 19.0, 16)  # F' over the paper's fitted loads
 
@@ -104,7 +104,7 @@ def test_bad_arguments(call, message):
 def test_interpolation_error_of_a_grid_of_curves():
     """Zero for values linear in both coordinates; for a quadratic in u, the leave-one-out error of
     linear interpolation from the two neighbours is h^2 a / ... = a (h_-) (h_+) exactly."""
-    from pipeline.fitting.curve_model import interpolation_error
+    from g2tom.fitting.curve_model import interpolation_error
 
     u, v = np.array([0.0, 1.0, 3.0, 4.0]), np.array([0.0, 0.5, 2.0])
     steps = np.array([1.0, 2.0])

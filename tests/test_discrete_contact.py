@@ -7,9 +7,9 @@ import pytest
 from scipy.integrate import quad
 from scipy.special import ndtr
 
-from pipeline.physics import discrete_contact as dc
-from pipeline.physics.discrete_resistance import resistances
-from pipeline.physics.hertz import hertz_radius
+from g2tom.physics import discrete_contact as dc
+from g2tom.physics.discrete_resistance import resistances
+from g2tom.physics.hertz import hertz_radius
 
 E_STAR = 2.1e11 / (2 * (1 - 0.3**2))
 SIGMA, ETA, BETA, RADIUS = 20e-6, 2e8, 30e-6, 10e-3
@@ -157,7 +157,7 @@ def test_bad_forces_are_refused():
 def test_rigid_approach_when_only_the_highest_cap_touches():
     """The bracket's lower end is where the highest cap alone carries the force: with no other cap
     touching there the excess is zero up to rounding, of either sign, and that end is the root."""
-    from pipeline.physics.discrete_contact import _rigid_delta, hertz_load
+    from g2tom.physics.discrete_contact import _rigid_delta, hertz_load
 
     rng = np.random.default_rng(4)
     e_star, beta = 1.154e11, 3e-5
@@ -237,10 +237,10 @@ def test_continuation_halves_a_failing_step_however_short(monkeypatch):
 def test_the_default_scene_solves_every_surface_at_coarse_steps():
     """Surface 12 of the default scene with six load steps (38.8 N, then 406.9 N) stalled Newton
     from 290.9 N on a step of 1.4x; the walk refines it now."""
-    from pipeline.before_work.domains import resolve
-    from pipeline.config import load_scenario
-    from pipeline.compute import ComputeOptions
-    from pipeline.stages import contact
+    from g2tom.before_work.domains import resolve
+    from g2tom.before_work import load_scenario
+    from g2tom.compute import ComputeOptions
+    from g2tom.stages import contact
     from tests.conftest import SMALL_OVERRIDES
 
     scene = resolve(load_scenario("paper", {**SMALL_OVERRIDES, "contact.surfaces": 13}))
@@ -354,7 +354,7 @@ def test_one_cap_under_a_sphere_is_hertz_of_the_two_curvatures() -> None:
 def test_a_caps_gap_is_the_least_over_the_line_through_both_axes(shape, params) -> None:
     """`cap_gap` against a brute-force minimum of (t - r)^2 / (2 beta) + z(|t|) over t, the indenter's
     own profile, at caps on the apex or face, near it and far out (within 1e-9 of the largest gap)."""
-    from pipeline.physics.indenter import profile
+    from g2tom.physics.indenter import profile
 
     beta = 60e-6
     t = np.linspace(-4e-3, 4e-3, 4_000_001)
@@ -370,8 +370,8 @@ def test_a_caps_gap_is_the_least_over_the_line_through_both_axes(shape, params) 
 def test_the_stage_places_caps_by_their_first_contact_with_every_indenter() -> None:
     """The stage's gap and Hertz radius are the physics' closed forms for the scenario's indenter:
     a cone of slope s lowers every flank cap's gap by s^2 beta / 2, a sphere's radius is beta R / (beta + R)."""
-    from pipeline.config import load_scenario
-    from pipeline.stages.contact_discrete import cap_contact
+    from g2tom.before_work import load_scenario
+    from g2tom.stages.contact_discrete import cap_contact
 
     cone = load_scenario("paper", {"indenter.shape": "cone", "indenter.cone_angle": 0.2})
     gap, radius = cap_contact(cone)

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.physics import discrete_resistance as dr
-from pipeline.physics.discrete_contact import interaction_kernel
+from g2tom.physics import discrete_resistance as dr
+from g2tom.physics.discrete_contact import interaction_kernel
 
 RHO = 7.2e-7
 
@@ -176,8 +176,8 @@ def test_large_unions_take_conjugate_gradients_by_default():
 def test_bench_of_large_unions_compares_both_paths_on_a_solved_surface(monkeypatch):
     """The bench's large unions on a small scene (mu 7, Pi 40: unions of ~100-250 spots): both
     paths timed on the same sets of a solved surface, equal within 1e-9."""
-    from pipeline.bench import discrete as bench_discrete
-    from pipeline.config import load_scenario
+    from g2tom.bench import discrete as bench_discrete
+    from g2tom.before_work import load_scenario
 
     monkeypatch.setattr(bench_discrete, "LARGE_SCENE", (7.0, 40.0))
     monkeypatch.setattr(bench_discrete, "LARGE_UNIONS", (100, 200))

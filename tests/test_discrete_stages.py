@@ -5,16 +5,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.compute import ComputeOptions
-from pipeline import config
-from pipeline.config import load_scenario
-from pipeline.before_work.domains import resolve
-from pipeline.physics import oxide_band
-from pipeline.physics.discrete_contact import interaction_kernel
-from pipeline.physics.discrete_resistance import resistances
-from pipeline.physics.spot_share import DEFAULT_RINGS
-from pipeline.scene import bands
-from pipeline.stages import contact, contact_discrete, cube, cube_discrete, oxide
+from g2tom.compute import ComputeOptions
+from g2tom import config
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.physics import oxide_band
+from g2tom.physics.discrete_contact import interaction_kernel
+from g2tom.physics.discrete_resistance import resistances
+from g2tom.physics.spot_share import DEFAULT_RINGS
+from g2tom.scene import bands
+from g2tom.stages import contact, contact_discrete, cube, cube_discrete, oxide
 from tests.conftest import SMALL_OVERRIDES
 
 QUIET = ComputeOptions(progress=False)
@@ -121,7 +121,7 @@ def test_segment_rule_conducts_more_than_disc_on_the_same_shares(scene, pool):
 
 
 def test_pool_variables_are_the_schemas(pool):
-    from pipeline.stages.schema import matches
+    from g2tom.stages.schema import matches
 
     for name in ("spot_count", "asperity_x", "asperity_radius", "discrete_approach", "discrete_barber_conductance",
                  "surface", "spot"):

@@ -7,12 +7,13 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pipeline.before_work import domains
-from pipeline.config import AUTO, ConfigError, ResolvedScenario, Scenario, load_scenario
-from pipeline.before_work.domains import resolve
-from pipeline.physics import constriction
-from pipeline.physics.spot_geometry import SpotGeometry
-from pipeline.stages import contact
+from g2tom.before_work import domains
+from g2tom.config import AUTO, ConfigError, ResolvedScenario, Scenario
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.physics import constriction
+from g2tom.physics.spot_geometry import SpotGeometry
+from g2tom.stages import contact
 
 FAST = {"loading.n_delta": 4, "contact.n_radial": 240}
 SHAPES = {

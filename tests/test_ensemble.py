@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.compute import ComputeOptions
-from pipeline.config import ResolvedScenario
-from pipeline.fitting import ensemble
-from pipeline.fitting.powerlaw import fit_power_law
-from pipeline.scene import FieldSource
-from pipeline.stages import contact as contact_stage
-from pipeline.stages import cube, cube_rounds, fits
-from pipeline.stages import oxide as oxide_stage
+from g2tom.compute import ComputeOptions
+from g2tom.config import ResolvedScenario
+from g2tom.fitting import ensemble
+from g2tom.fitting.powerlaw import fit_power_law
+from g2tom.scene import FieldSource
+from g2tom.stages import contact as contact_stage
+from g2tom.stages import cube, cube_rounds, fits
+from g2tom.stages import oxide as oxide_stage
 
 OPTIONS = ComputeOptions(progress=False)
 
@@ -154,7 +154,7 @@ def test_fits_use_each_lambdas_realizations_and_flag_the_cap(adaptive_inputs, ad
 
 def test_doubling_the_spectral_resolution_stays_within_the_intervals(small: ResolvedScenario) -> None:
     """A small case: resolution 6 against 12 at lambda 3 and 13 (the bench does the full grid)."""
-    from pipeline.bench import convergence
+    from g2tom.bench import convergence
 
     scenario = _adaptive(small, lambda_=[3.0, 13.0], xi=[0.5], min_realizations=150, max_realizations=150,
                          target_half_width=0.5)

@@ -6,11 +6,11 @@ import matplotlib.figure
 import numpy as np
 import pytest
 
-from analysis import figures_contact
-from pipeline import store
-from pipeline.config import load_scenario
-from pipeline.before_work.domains import resolve
-from pipeline.stages import contact
+from g2tom.analysis import figures_contact
+from g2tom import store
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.stages import contact
 
 FAST = {"loading.n_delta": 6, "contact.n_radial": 160}
 

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis import figures_point
-from analysis.report import build_blocks
-from pipeline.cli.main import main
-from pipeline.config import ResolvedScenario
+from g2tom.analysis import figures_point
+from g2tom.analysis.report import build_blocks
+from g2tom.cli.main import main
+from g2tom.config import ResolvedScenario
 from tests.test_fits_stage import cli_overrides
 
 

@@ -18,11 +18,11 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.text import Text
 from matplotlib.transforms import Bbox
 
-from analysis import figures_results, figures_validate, style
-from analysis.figures import write_figures
-from pipeline.cli.main import main
-from pipeline.config import ResolvedScenario
-from pipeline.store import read_stage
+from g2tom.analysis import figures_results, figures_validate, style
+from g2tom.analysis.figures import write_figures
+from g2tom.cli.main import main
+from g2tom.config import ResolvedScenario
+from g2tom.store import read_stage
 from tests.test_fits_stage import cli_overrides
 
 #: ASCII spellings of symbols that belong in mathtext (whole words, outside $...$).

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.config import ConfigError, load_scenario
-from pipeline.stages import fits
+from g2tom.config import ConfigError
+from g2tom.before_work import load_scenario
+from g2tom.stages import fits
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import assert_labelled, synthetic_cube, true_alpha, true_gamma
 

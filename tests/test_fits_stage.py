@@ -9,16 +9,17 @@ import pytest
 import xarray as xr
 from scipy import stats
 
-from pipeline.reductions import (
+from g2tom.reductions import (
     geometric_mean,
     open_probability,
     quantiles,
     reduce_realizations,
 )
-from pipeline.cli.main import main
-from pipeline.config import ConfigError, ResolvedScenario, Scenario, load_scenario
-from pipeline.stages import fits
-from pipeline.store import read_stage, write_dataset
+from g2tom.cli.main import main
+from g2tom.config import ConfigError, ResolvedScenario, Scenario
+from g2tom.before_work import load_scenario
+from g2tom.stages import fits
+from g2tom.store import read_stage, write_dataset
 from tests.conftest import SMALL_OVERRIDES
 
 

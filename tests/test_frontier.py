@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.bench import frontier, frontier_plot, frontier_sweeps
-from pipeline.before_work.domains import resolve
-from pipeline.config import load_scenario
+from g2tom.bench import frontier, frontier_plot, frontier_sweeps
+from g2tom.before_work.domains import resolve
+from g2tom.before_work import load_scenario
 
 
 def _ensemble(widths: list[float]) -> xr.Dataset:
@@ -88,9 +88,9 @@ def test_contact_sweep_errors_fall_with_nodes_and_tolerance(monkeypatch) -> None
 def test_report_sections_show_the_frontier_and_the_stability_map(tmp_path) -> None:
     import json
 
-    from analysis.report_appendix import frontier_blocks, stability_blocks
-    from analysis.report_render import to_markdown
-    from pipeline.bench import stability
+    from g2tom.analysis.report_appendix import frontier_blocks, stability_blocks
+    from g2tom.analysis.report_render import to_markdown
+    from g2tom.bench import stability
 
     assert "Not available" in to_markdown(frontier_blocks(tmp_path) + stability_blocks(tmp_path))
     rec = frontier.recommend(CONTACT, CUBE, _ensemble([0.2, 0.09, 0.04, 0.02]))

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.bench import frontier, frontier_plot, frontier_prefix
-from pipeline.cli.main import main
-from pipeline.config import load_scenario
+from g2tom.bench import frontier, frontier_plot, frontier_prefix
+from g2tom.cli.main import main
+from g2tom.before_work import load_scenario
 
 SETS = {"oxide.xi": "[0.3, 0.7]", "oxide.lambda": "[3.0, 9.0]", "oxide.min_realizations": 60,
         "oxide.batch": 40, "oxide.max_realizations": 260, "oxide.target_half_width": 0.02,
@@ -28,7 +28,7 @@ def adaptive_dir(tmp_path_factory):
 
 
 def _scenario():
-    from pipeline.before_work.domains import resolve
+    from g2tom.before_work.domains import resolve
 
     return resolve(load_scenario("paper_gt", {k: json.loads(v) if isinstance(v, str) else v for k, v in SETS.items()}))
 
@@ -69,8 +69,8 @@ def test_prefix_curve_of_an_adaptive_cube(adaptive_dir) -> None:
 
 
 def test_prefix_curve_written_plotted_and_reported(adaptive_dir, tmp_path) -> None:
-    from analysis.report_appendix import frontier_blocks
-    from analysis.report_render import to_markdown
+    from g2tom.analysis.report_appendix import frontier_blocks
+    from g2tom.analysis.report_render import to_markdown
     from tests.test_frontier import CONTACT, CUBE, _ensemble
 
     curve, note = frontier_prefix.adaptive_prefix(_scenario(), adaptive_dir)
@@ -95,7 +95,7 @@ def test_prefix_curve_skipped_with_a_note(tmp_path) -> None:
     assert curve is None and note.startswith("prefix curve skipped:") and "cube.nc is missing" in note
     (tmp_path / "bench").mkdir()
     (tmp_path / "bench" / "frontier.json").write_text(json.dumps({"prefix": frontier_prefix.prefix_summary(None, note)}))
-    from analysis.report_appendix import frontier_blocks
-    from analysis.report_render import to_markdown
+    from g2tom.analysis.report_appendix import frontier_blocks
+    from g2tom.analysis.report_render import to_markdown
 
     assert "prefix curve skipped:" in to_markdown(frontier_blocks(tmp_path))

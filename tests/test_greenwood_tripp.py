@@ -9,11 +9,11 @@ import pytest
 from scipy.integrate import quad
 from scipy.special import ellipkm1, i0e
 
-from pipeline.config import load_scenario
-from pipeline.physics import greenwood_tripp as gt
-from pipeline.physics import radial_grid as rg
-from pipeline.physics.asperity import asperity_pressure
-from pipeline.physics.hertz import (
+from g2tom.before_work import load_scenario
+from g2tom.physics import greenwood_tripp as gt
+from g2tom.physics import radial_grid as rg
+from g2tom.physics.asperity import asperity_pressure
+from g2tom.physics.hertz import (
     hertz_approach,
     hertz_displacement,
     hertz_force,
@@ -21,9 +21,9 @@ from pipeline.physics.hertz import (
     hertz_radius,
     roughness_parameter,
 )
-from pipeline.physics.indenter import profile
-from pipeline.contact_solution import indenter_profile, layer as _layer, radial_grid
-from pipeline.before_work.domains import solve_scenario
+from g2tom.physics.indenter import profile
+from g2tom.contact_solution import indenter_profile, layer as _layer, radial_grid
+from g2tom.before_work.domains import solve_scenario
 
 
 def _quad_displacement(r_nodes, p_nodes, r, e_star):

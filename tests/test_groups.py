@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from pipeline.config import load_scenario
-from pipeline.before_work.domains import resolve
-from pipeline.physics.groups import greenwood_tripp_mu, groups, lattice_pi, surface_from_groups
-from pipeline.stages import contact, cube, fits, oxide
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.physics.groups import greenwood_tripp_mu, groups, lattice_pi, surface_from_groups
+from g2tom.stages import contact, cube, fits, oxide
 from tests.conftest import SMALL_OVERRIDES
 
 

@@ -1,4 +1,4 @@
-"""Filling undefined pixels in height maps (pipeline.physics.height_fill, issue 31): curvature and harmonic."""
+"""Filling undefined pixels in height maps (g2tom.physics.height_fill, issue 31): curvature and harmonic."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy.ndimage import gaussian_filter
 
-from pipeline.physics.height_fill import fill_gaps, masked_moments
-from pipeline.physics.surface_spectrum import psd_moments
+from g2tom.physics.height_fill import fill_gaps, masked_moments
+from g2tom.physics.surface_spectrum import psd_moments
 
 PIXEL = 1e-6  # m
 N = 256

@@ -7,7 +7,7 @@ import math
 import pytest
 from scipy.special import zeta
 
-from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT, lattice_constant, square_partial
+from g2tom.physics.lattice import SQUARE_LATTICE_CONSTANT, lattice_constant, square_partial
 
 
 def _dirichlet_beta_half() -> float:

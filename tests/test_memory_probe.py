@@ -6,9 +6,9 @@ import os
 
 import psutil
 
-from pipeline.before_work.plan import available_memory
-from pipeline.before_work.resources import check_resources
-from pipeline.config import load_scenario
+from g2tom.before_work.plan import available_memory
+from g2tom.before_work.resources import check_resources
+from g2tom.before_work import load_scenario
 
 
 def test_memory_probe_without_sysconf(monkeypatch) -> None:

@@ -1,4 +1,4 @@
-"""Oxide random fields (pipeline.physics.oxide_band, oxide_field): exact point values, spectrum, statistics."""
+"""Oxide random fields (g2tom.physics.oxide_band, oxide_field): exact point values, spectrum, statistics."""
 
 from __future__ import annotations
 
@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from pipeline.physics import oxide_band as ob
-from pipeline.physics import oxide_field as of
-from pipeline.physics.grid import cell_centres
+from g2tom.physics import oxide_band as ob
+from g2tom.physics import oxide_field as of
+from g2tom.physics.grid import cell_centres
 from tests.oracles import fine_grid
 
 N_CELLS = 57  # the paper scenario's window

@@ -1,4 +1,4 @@
-"""Stage 2 (pipeline.stages.oxide): layout, reproducibility, realized fractions, CLI errors."""
+"""Stage 2 (g2tom.stages.oxide): layout, reproducibility, realized fractions, CLI errors."""
 
 from __future__ import annotations
 
@@ -10,17 +10,18 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from analysis import figures_oxide
-from pipeline import store
-from pipeline.cli import main as cli
-from pipeline.bench import oxide as bench_oxide
-from pipeline.compute import ComputeOptions
-from pipeline.config import ConfigError, ResolvedScenario, load_scenario
-from pipeline.before_work.domains import resolve
-from pipeline.physics import oxide_band, oxide_field
-from pipeline.physics.grid import cell_centres
-from pipeline.scene import FieldSource, bands
-from pipeline.stages import oxide
+from g2tom.analysis import figures_oxide
+from g2tom import store
+from g2tom.cli import main as cli
+from g2tom.bench import oxide as bench_oxide
+from g2tom.compute import ComputeOptions
+from g2tom.config import ConfigError, ResolvedScenario
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.physics import oxide_band, oxide_field
+from g2tom.physics.grid import cell_centres
+from g2tom.scene import FieldSource, bands
+from g2tom.stages import oxide
 
 
 def _with(scenario: ResolvedScenario, **changes) -> ResolvedScenario:

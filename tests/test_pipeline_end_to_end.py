@@ -9,11 +9,11 @@ import numpy as np
 import xarray as xr
 import pytest
 
-from pipeline import __version__
-from pipeline.cli.commands import STAGES
-from pipeline.cli.main import main
-from pipeline.config import load_scenario
-from pipeline.store import read_stage
+from g2tom import __version__
+from g2tom.cli.commands import STAGES
+from g2tom.cli.main import main
+from g2tom.before_work import load_scenario
+from g2tom.store import read_stage
 from tests.conftest import SMALL_ARGS, SMALL_OVERRIDES
 from tests.test_schema import written_against_schema
 
@@ -87,21 +87,21 @@ def test_a_second_run_computes_nothing(run_dir, monkeypatch, capsys) -> None:
     benchmarks make run adds before the figures, and redraws figures and report."""
     import importlib
 
-    import pipeline.bench as bench
+    import g2tom.bench as bench
 
     def refuse(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
         raise AssertionError("a stage computed on a second run")
 
     for stage in STAGES:
-        module = importlib.import_module(f"pipeline.stages.{stage}")
+        module = importlib.import_module(f"g2tom.stages.{stage}")
         monkeypatch.setattr(module, "build", refuse)
         monkeypatch.setattr(module, "run", refuse)
     order: list[str] = []
     monkeypatch.setattr(bench, "physics_benchmarks", lambda scenario, data_dir: order.append("bench") or ["bench: ok"])
-    import analysis.figures
+    import g2tom.analysis.figures
 
-    write_figures = analysis.figures.write_figures
-    monkeypatch.setattr(analysis.figures, "write_figures", lambda *a: order.append("figures") or write_figures(*a))
+    write_figures = g2tom.analysis.figures.write_figures
+    monkeypatch.setattr(g2tom.analysis.figures, "write_figures", lambda *a: order.append("figures") or write_figures(*a))
     report = (run_dir / "report.md").stat().st_mtime_ns
     assert main(["run", "--data-dir", str(run_dir), "--no-progress", *_set_args()]) == 0
     err = capsys.readouterr().err
@@ -119,11 +119,11 @@ def test_a_second_run_computes_nothing(run_dir, monkeypatch, capsys) -> None:
 def test_physics_benchmarks_run_once_per_configuration(tmp_path, monkeypatch, small) -> None:
     import importlib
 
-    import pipeline.bench as bench
+    import g2tom.bench as bench
 
     calls: list[str] = []
     for name in bench.PHYSICS_BENCH:
-        monkeypatch.setattr(importlib.import_module(f"pipeline.bench.{name}"), "run",
+        monkeypatch.setattr(importlib.import_module(f"g2tom.bench.{name}"), "run",
                             lambda scenario, name=name: calls.append(name) or {"value": 1.0})
     lines = bench.physics_benchmarks(small, tmp_path)
     assert calls == list(bench.PHYSICS_BENCH)

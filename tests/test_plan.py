@@ -8,10 +8,11 @@ import warnings
 
 import pytest
 
-from pipeline.before_work import plan, resources
-from pipeline.cli.main import main
-from pipeline.config import ConfigError, load_scenario
-from pipeline.before_work.domains import resolve
+from g2tom.before_work import plan, resources
+from g2tom.cli.main import main
+from g2tom.config import ConfigError
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
 
 MEMORY = 16.0 * 2**30  # a fixed machine, so the refusals do not depend on the one running the test
 
@@ -64,7 +65,7 @@ def test_estimates_grow_with_the_cell_count():
 # VmHWM, the peak RSS of this process image (ru_maxrss would carry the forking parent's peak).
 _RSS = """
 import sys
-from pipeline.cli.main import main
+from g2tom.cli.main import main
 code = main(sys.argv[1:])
 with open("/proc/self/status") as fh:
     print(next(int(line.split()[1]) * 1024 for line in fh if line.startswith("VmHWM:")))
@@ -171,8 +172,8 @@ def test_a_typical_run_that_cannot_fit_is_refused_before_work_by_the_cli(tmp_pat
 
 
 def test_plan_of_the_discrete_model_counts_its_pool_and_maps() -> None:
-    from pipeline.before_work import plan
-    from pipeline.config import load_scenario
+    from g2tom.before_work import plan
+    from g2tom.before_work import load_scenario
 
     grid = {e.stage: e for e in plan.estimate(load_scenario("paper_gt"), workers=2)}
     discrete = {e.stage: e for e in plan.estimate(load_scenario("paper"), workers=2)}
@@ -181,7 +182,7 @@ def test_plan_of_the_discrete_model_counts_its_pool_and_maps() -> None:
     # 188,200 computed (xi, field) pairs on two workers: the default make run's measured 92.05 s
     assert discrete["cube"].seconds == pytest.approx(92.05, rel=1e-9)
     # a pool grown at the light steps adds its modelled surfaces' seconds, shared by the workers
-    from pipeline.before_work.discrete_cost import expected_counts, grown_pool
+    from g2tom.before_work.discrete_cost import expected_counts, grown_pool
 
     grown_scene = load_scenario("paper", {"contact.pool_half_width": 0.01})
     grown = {e.stage: e for e in plan.estimate(grown_scene, workers=2)}
@@ -220,7 +221,7 @@ def test_every_stage_time_within_1_5x_of_the_measured_default_run(name):
 def test_the_default_scene_s_discrete_models_are_the_recorded_ones() -> None:
     """plan scales the default's measured discrete costs by the cost models' ratio; the ratio is 1 on
     the default scene only if the recorded model values are the models' own there."""
-    from pipeline.before_work.discrete_cost import expected_counts, field_seconds, surface_seconds
+    from g2tom.before_work.discrete_cost import expected_counts, field_seconds, surface_seconds
 
     touching, candidates = expected_counts(load_scenario("paper"))
     assert surface_seconds(touching, candidates) == pytest.approx(plan.DEFAULT_SURFACE_MODEL_S, rel=1e-12)
@@ -232,7 +233,7 @@ def test_a_scene_with_more_touching_asperities_is_planned_dearer_by_the_models_r
     """sigma 100 um instead of 20 um: ~2x the touching asperities and 5x the candidates at the
     heaviest step; the pool's and the cube's estimates grow by the discrete cost models' ratios (the
     previous plan kept the default's 10.8 s and 92 s whatever the scene)."""
-    from pipeline.before_work.discrete_cost import expected_counts, field_seconds, surface_seconds
+    from g2tom.before_work.discrete_cost import expected_counts, field_seconds, surface_seconds
 
     default, rough = load_scenario("paper"), load_scenario("paper", {"roughness.sigma": 1e-4})
     grid = {e.stage: e.seconds for e in plan.estimate(load_scenario("paper_gt", {"roughness.sigma": 1e-4}), workers=2)}

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.physics import constriction, point_model
-from pipeline.physics.crops import choose_crops
-from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
-from pipeline.physics.spot_geometry import SpotGeometry
-from pipeline.stages import contact
+from g2tom.physics import constriction, point_model
+from g2tom.physics.crops import choose_crops
+from g2tom.physics.lattice import SQUARE_LATTICE_CONSTANT
+from g2tom.physics.spot_geometry import SpotGeometry
+from g2tom.stages import contact
 from tests.test_point_model import PITCH, RHO, _random_case, _whole
 
 

@@ -7,18 +7,19 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pipeline.cli import main as cli
-from pipeline.compute import ComputeOptions
-from pipeline.config import ConfigError, load_scenario
-from pipeline.physics import constriction, point_model, point_solve
-from pipeline.physics.crops import choose_crops
-from pipeline.physics.interaction_folded import (
+from g2tom.cli import main as cli
+from g2tom.compute import ComputeOptions
+from g2tom.config import ConfigError
+from g2tom.before_work import load_scenario
+from g2tom.physics import constriction, point_model, point_solve
+from g2tom.physics.crops import choose_crops
+from g2tom.physics.interaction_folded import (
     interaction_apply,
     interaction_apply_columns,
     interaction_apply_dense,
     interaction_folded,
 )
-from pipeline.physics.spot_geometry import SpotGeometry
+from g2tom.physics.spot_geometry import SpotGeometry
 from tests.test_cube_stage import N, N_REAL, _build, _contact, _oxide
 
 RHO = 7.2e-7  # ohm m

@@ -8,15 +8,15 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pipeline.before_work.domains import resolve
-from pipeline.compute import ComputeOptions
-from pipeline import config
-from pipeline.config import load_scenario
-from pipeline.config.scenario import HASH_NEUTRAL
-from pipeline.config.scene_sections import Contact
-from pipeline.fitting.ensemble import mean_half_width, z_value
-from pipeline.scene import FieldSource
-from pipeline.stages import contact, contact_discrete, cube, cube_discrete, oxide
+from g2tom.before_work.domains import resolve
+from g2tom.compute import ComputeOptions
+from g2tom import config
+from g2tom.before_work import load_scenario
+from g2tom.config.scenario import HASH_NEUTRAL
+from g2tom.config.scene_sections import Contact
+from g2tom.fitting.ensemble import mean_half_width, z_value
+from g2tom.scene import FieldSource
+from g2tom.stages import contact, contact_discrete, cube, cube_discrete, oxide
 from tests.test_discrete_stages import DISCRETE
 
 QUIET = ComputeOptions(progress=False)
@@ -120,9 +120,9 @@ def test_the_fixed_pool_leaves_every_hash_as_it_was():
 
 
 def test_the_plan_models_the_grown_pool_within_a_factor_of_three():
-    """``g2tom plan``'s model of a grown pool (pipeline.before_work.discrete_cost.grown_pool) against
+    """``g2tom plan``'s model of a grown pool (g2tom.before_work.discrete_cost.grown_pool) against
     the contact stage at the lightest step; off, it adds nothing."""
-    from pipeline.before_work.discrete_cost import expected_counts, grown_pool
+    from g2tom.before_work.discrete_cost import expected_counts, grown_pool
 
     scene = resolve(load_scenario("paper", {**DISCRETE, "contact.pool_half_width": 0.1}))
     counts = expected_counts(scene)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.fitting import powerlaw
+from g2tom.fitting import powerlaw
 
 
 def test_exact_power_law_vectorized() -> None:

@@ -10,13 +10,14 @@ import pytest
 import xarray as xr
 from numpy.polynomial import polynomial as P
 
-from pipeline.cli.main import main
-from pipeline.config import ConfigError, ResolvedScenario, load_scenario
-from pipeline.before_work.domains import resolve
-from pipeline.fitting.surrogate import evaluate
-from pipeline.predict.predictor import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
-from pipeline.stages import fits, surrogate
-from pipeline.store import write_dataset
+from g2tom.cli.main import main
+from g2tom.config import ConfigError, ResolvedScenario
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.fitting.surrogate import evaluate
+from g2tom.predict.predictor import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
+from g2tom.stages import fits, surrogate
+from g2tom.store import write_dataset
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import cli_overrides, synthetic_cube
 
@@ -232,7 +233,7 @@ def test_cli_malformed_csv(tmp_path, capsys, small: ResolvedScenario, data_dir, 
 
 
 def test_bench_vectorized_agrees_with_one_at_a_time(small: ResolvedScenario, monkeypatch: pytest.MonkeyPatch) -> None:
-    from pipeline.bench import predict as bench_predict
+    from g2tom.bench import predict as bench_predict
 
     for name, value in (("_REPEATS", 1), ("_QUERIES", 2000), ("_LOOP_QUERIES", 20)):
         monkeypatch.setattr(bench_predict, name, value)

@@ -11,15 +11,16 @@ import warnings
 import numpy as np
 import pytest
 
-from pipeline.atlas import run as atlas
-from pipeline.atlas.fit import CURVE, FORMAT_VERSION, curve_doc, write_atlas_surrogate
-from pipeline.cli.main import main
-from pipeline.config import ConfigError, load_scenario
-from pipeline.predict.atlas import NOT_IN_ATLAS, load_atlas_surrogate, predict_atlas
-from pipeline.predict.predictor import ExtrapolationWarning
-from pipeline.stages import fits, surrogate
-from pipeline.scene import scene_groups
-from pipeline.store import write_dataset
+from g2tom.atlas import run as atlas
+from g2tom.atlas.fit import CURVE, FORMAT_VERSION, curve_doc, write_atlas_surrogate
+from g2tom.cli.main import main
+from g2tom.config import ConfigError
+from g2tom.before_work import load_scenario
+from g2tom.predict.atlas import NOT_IN_ATLAS, load_atlas_surrogate, predict_atlas
+from g2tom.predict.predictor import ExtrapolationWarning
+from g2tom.stages import fits, surrogate
+from g2tom.scene import scene_groups
+from g2tom.store import write_dataset
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_atlas import BASE, DESIGN
 from tests.test_fits_stage import cli_overrides, synthetic_cube
@@ -77,8 +78,8 @@ def test_refuses_outside_the_domain_naming_the_group(atlas_json) -> None:
 
 
 def test_cli_the_run_own_for_its_surface_the_atlas_for_others(tmp_path, capsys, atlas_json) -> None:
-    from pipeline.before_work.domains import resolve
-    from pipeline.predict.predictor import load_surrogate
+    from g2tom.before_work.domains import resolve
+    from g2tom.predict.predictor import load_surrogate
 
     small = resolve(load_scenario("paper_gt", SMALL_OVERRIDES))  # the run's own: a 3 x 3 grid
     write_dataset(fits.build(small, synthetic_cube(small, noise=0.2)), tmp_path, "fits", small)
@@ -113,7 +114,7 @@ def test_cli_the_run_own_for_its_surface_the_atlas_for_others(tmp_path, capsys, 
 
 
 def test_fresh_install_answers_from_the_shipped_atlas(tmp_path, capsys, atlas_json, monkeypatch) -> None:
-    import pipeline.predict.atlas as pa
+    import g2tom.predict.atlas as pa
 
     sur = load_atlas_surrogate(atlas_json)
     scenario = _surface(1.5e8)
@@ -146,7 +147,7 @@ def test_the_band_is_regional(atlas_json) -> None:
 def test_a_format_one_surrogate_is_still_read(tmp_path) -> None:
     """The first atlas's surrogate (one polynomial in five logs, one global error; the file shipped
     before issue 31's full run) still answers, with its global band."""
-    from pipeline.predict.atlas import shipped_path
+    from g2tom.predict.atlas import shipped_path
 
     path = shipped_path()
     if path is None or json.loads(path.read_text()).get("format_version", 1) != 1:
@@ -166,7 +167,7 @@ def test_a_format_one_surrogate_is_still_read(tmp_path) -> None:
 
 def test_a_format_two_surrogate_is_still_read(tmp_path, atlas_json) -> None:
     """A format-2 file (the grid surrogate; shipped before the scene series) answers by its grid."""
-    from pipeline.fitting.atlas_grid import fit_grid_tensor, node_coordinates
+    from g2tom.fitting.atlas_grid import fit_grid_tensor, node_coordinates
 
     doc = json.loads(atlas_json.read_text())
     sur = load_atlas_surrogate(atlas_json)

@@ -7,17 +7,17 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.atlas import run as atlas
-from pipeline.atlas.fit import write_atlas_surrogate
-from pipeline.config import load_scenario
-from pipeline.predict import chain
+from g2tom.atlas import run as atlas
+from g2tom.atlas.fit import write_atlas_surrogate
+from g2tom.before_work import load_scenario
+from g2tom.predict import chain
 from tests.test_atlas import BASE, DESIGN
 
 
 @pytest.fixture(scope="module")
 def validated(tmp_path_factory):
     pytest.importorskip("tamaas")
-    from pipeline.reference.validate import chosen_set, output_folder, run_validation
+    from g2tom.reference.validate import chosen_set, output_folder, run_validation
 
     data = tmp_path_factory.mktemp("chain")
     out = output_folder(data, "random_process")
@@ -35,7 +35,7 @@ def surrogate(tmp_path_factory):
 
 def test_chain_measures_predicts_and_compares(validated, surrogate, capsys) -> None:
     assert chain.main(["--data-dir", str(validated), "--surrogate", str(surrogate)]) == 0
-    from pipeline.reference.validate import output_folder
+    from g2tom.reference.validate import output_folder
 
     with xr.open_dataset(output_folder(validated, "random_process") / chain.CHAIN_FILE) as c:
         c = c.load()
@@ -52,7 +52,7 @@ def test_chain_measures_predicts_and_compares(validated, surrogate, capsys) -> N
     np.testing.assert_allclose(c["ratio_clean"].values, c["ratio_clean_known"].values, rtol=0.15)
     for name, var in c.variables.items():
         assert var.attrs.get("units") is not None and var.attrs.get("long_name"), name
-    from analysis.report_chain import chain_blocks
+    from g2tom.analysis.report_chain import chain_blocks
 
     blocks = chain_blocks(validated)
     assert blocks[-1].kind == "table" and len(blocks[-1].rows) == 1 + c.sizes["load"]

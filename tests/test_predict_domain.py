@@ -8,11 +8,12 @@ import warnings
 import numpy as np
 import pytest
 
-from pipeline.cli.main import main
-from pipeline.config import ConfigError, ResolvedScenario, load_scenario
-from pipeline.physics.groups import groups, surface_from_groups
-from pipeline.predict.predictor import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
-from pipeline.heightmap import measure
+from g2tom.cli.main import main
+from g2tom.config import ConfigError, ResolvedScenario
+from g2tom.before_work import load_scenario
+from g2tom.physics.groups import groups, surface_from_groups
+from g2tom.predict.predictor import ExtrapolationWarning, SurrogateErrorWarning, load_surrogate, predict
+from g2tom.heightmap import measure
 from tests.test_fits_stage import cli_overrides
 from tests.test_predict import _quiet, _rows, data_dir  # noqa: F401 (the fixture: fits.nc and the surrogate stage run)
 from tests.test_roughness import PIXEL, wave_surface

@@ -8,13 +8,14 @@ import warnings
 import numpy as np
 import pytest
 
-import pipeline
-from pipeline.config import ConfigError, load_scenario
-from pipeline.predict.atlas import NOT_IN_ATLAS, load_atlas_surrogate, shipped_path
-from pipeline.predict.predictor import load_surrogate, predict
-from pipeline.scene import scene_groups
-from pipeline.stages import fits, surrogate
-from pipeline.store import write_dataset
+import g2tom
+from g2tom.config import ConfigError
+from g2tom.before_work import load_scenario
+from g2tom.predict.atlas import NOT_IN_ATLAS, load_atlas_surrogate, shipped_path
+from g2tom.predict.predictor import load_surrogate, predict
+from g2tom.scene import scene_groups
+from g2tom.stages import fits, surrogate
+from g2tom.store import write_dataset
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import synthetic_cube
 
@@ -22,7 +23,7 @@ from tests.test_fits_stage import synthetic_cube
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
     """A data directory holding a small run's own surrogate (synthetic cube, the paper's surface)."""
-    from pipeline.before_work.domains import resolve
+    from g2tom.before_work.domains import resolve
 
     data = tmp_path_factory.mktemp("run")
     small = resolve(load_scenario("paper_gt", SMALL_OVERRIDES))
@@ -49,7 +50,7 @@ def test_readme_case_other_sigma_is_answered_by_the_atlas(run_dir) -> None:
     # the run's own surrogate alone refuses this surface (the README's snippets before issue 32)
     with pytest.raises(ConfigError, match="mu"):
         predict(load_surrogate(data / "surrogate.json"), scenario, force, 0.5, 3.0)
-    result = pipeline.predict_resistance(scenario, force=[force, 1.5 * force], xi=0.5, lam=3.0, data_dir=data)
+    result = g2tom.predict_resistance(scenario, force=[force, 1.5 * force], xi=0.5, lam=3.0, data_dir=data)
     assert result.attrs["answered_by"].startswith("the atlas surrogate")
     assert str(shipped_path()) in result.attrs["answered_by"]
     assert not set(NOT_IN_ATLAS) & set(result.data_vars)
@@ -57,8 +58,8 @@ def test_readme_case_other_sigma_is_answered_by_the_atlas(run_dir) -> None:
     # heavier load, lower resistance; the band holds the answer
     r = np.asarray(result["resistance"])
     assert r[1] < r[0] and np.all(result["lower"] < r) and np.all(r < result["upper"])
-    # the same call by the scenario's name and overrides, through pipeline.predict
-    from pipeline.predict import predict_resistance
+    # the same call by the scenario's name and overrides, through g2tom.predict
+    from g2tom.predict import predict_resistance
 
     again = predict_resistance("paper", force, 0.5, 3.0, data_dir=data, overrides={"roughness.sigma": 15e-6})
     np.testing.assert_allclose(np.asarray(again["resistance"]).ravel(), r[:1], rtol=1e-14)
@@ -67,19 +68,19 @@ def test_readme_case_other_sigma_is_answered_by_the_atlas(run_dir) -> None:
 def test_the_run_own_surface_is_answered_by_its_own_surrogate(run_dir) -> None:
     data, small = run_dir
     force = _shared_force(data, small)
-    result = pipeline.predict_resistance(small, force, 0.5, 3.0, data_dir=data)
+    result = g2tom.predict_resistance(small, force, 0.5, 3.0, data_dir=data)
     assert result.attrs["answered_by"].startswith("the run's own single-scene surrogate")
     by_hand = predict(load_surrogate(data / "surrogate.json"), small, force, 0.5, 3.0)
     assert float(result["resistance"]) == pytest.approx(float(by_hand["resistance"]), rel=1e-14)
     assert "open_probability" in result
     # the paper scenario by name has the same surface: also the run's own
-    named = pipeline.predict_resistance("paper", force, 0.5, 3.0, data_dir=data, model="power_law")
+    named = g2tom.predict_resistance("paper", force, 0.5, 3.0, data_dir=data, model="power_law")
     assert named.attrs["answered_by"].startswith("the run's own") and named.attrs["model"] == "power_law"
 
 
 def test_a_height_map_is_measured_like_predict_roughness(run_dir, tmp_path) -> None:
-    from pipeline.predict.answer import surface_scenario
-    from pipeline.predict.domain import with_measured_roughness
+    from g2tom.predict.answer import surface_scenario
+    from g2tom.predict.domain import with_measured_roughness
 
     rng = np.random.default_rng(3)
     heights = np.fft.irfft2(np.fft.rfft2(rng.standard_normal((128, 128))) * 0.05, s=(128, 128)) * 1e-5
@@ -90,4 +91,4 @@ def test_a_height_map_is_measured_like_predict_roughness(run_dir, tmp_path) -> N
     with pytest.raises(ConfigError, match="pixel_size"):
         surface_scenario("paper", pixel_size=1e-6)
     with pytest.raises(ConfigError, match="no_such_scenario"):
-        pipeline.predict_resistance("no_such_scenario", 500.0, 0.5, 3.0, data_dir=run_dir[0])
+        g2tom.predict_resistance("no_such_scenario", 500.0, 0.5, 3.0, data_dir=run_dir[0])

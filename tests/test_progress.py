@@ -10,10 +10,10 @@ import dask.array as da
 import numpy as np
 import pytest
 
-from pipeline import compute as compute_module
-from pipeline import progress
-from pipeline.compute import ComputeOptions, compute
-from pipeline.progress import DaskProgress, ProgressLine, describe, format_duration
+from g2tom import compute as compute_module
+from g2tom import progress
+from g2tom.compute import ComputeOptions, compute
+from g2tom.progress import DaskProgress, ProgressLine, describe, format_duration
 
 PERCENT = re.compile(r"\]\s+(\d+) %")
 
@@ -239,9 +239,9 @@ def test_distributed_futures_draw_the_same_line_with_the_same_result(monkeypatch
 
 # ------------------------------------------------------------------ the cube's rounds
 def test_cube_labels_each_round_with_the_cells_still_open(monkeypatch, small) -> None:
-    from pipeline.stages import contact as contact_stage
-    from pipeline.stages import cube, cube_rounds
-    from pipeline.stages import oxide as oxide_stage
+    from g2tom.stages import contact as contact_stage
+    from g2tom.stages import cube, cube_rounds
+    from g2tom.stages import oxide as oxide_stage
     from tests.test_ensemble import _adaptive
 
     scenario = _adaptive(small)

@@ -32,9 +32,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.compute import ComputeOptions
-from pipeline.config import load_scenario
-from pipeline.stages import contact, cube, fits, oxide
+from g2tom.compute import ComputeOptions
+from g2tom.before_work import load_scenario
+from g2tom.stages import contact, cube, fits, oxide
 
 #: A small published-like case (every override is a key the round-1 code knew too).
 OVERRIDES = {"loading.n_delta": 6, "oxide.xi": [0.2, 0.5, 0.8], "oxide.lambda": [1.0, 5.0, 13.0, 23.0],

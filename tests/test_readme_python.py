@@ -12,9 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from pipeline.config import load_scenario
-from pipeline.stages import fits, surrogate
-from pipeline.store import write_dataset
+from g2tom.before_work import load_scenario
+from g2tom.stages import fits, surrogate
+from g2tom.store import write_dataset
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import synthetic_cube
 
@@ -33,7 +33,7 @@ def test_blocks_are_found() -> None:
 
 
 def test_readme_python_examples_run_in_order(tmp_path, monkeypatch, capsys) -> None:
-    from pipeline.before_work.domains import resolve
+    from g2tom.before_work.domains import resolve
 
     small = resolve(load_scenario("paper_gt", SMALL_OVERRIDES))
     data = tmp_path / "data"

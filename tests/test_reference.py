@@ -1,4 +1,4 @@
-"""The full-field reference (pipeline.reference, the `reference` extra): checked before it is trusted.
+"""The full-field reference (g2tom.reference, the `reference` extra): checked before it is trusted.
 
 `make test` installs the extra, so nothing here is skipped: a missing tamaas fails these tests.
 """
@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from tests.oracles import roughness_parameters
-from pipeline.reference import elastic, surfaces
-from pipeline.reference.contact import contact_at_force
-from pipeline.reference.oxide import field_on_grid, oxide_on_grid
-from pipeline.reference.punch import punch_conductance
-from pipeline.scene import FieldSource
+from g2tom.reference import elastic, surfaces
+from g2tom.reference.contact import contact_at_force
+from g2tom.reference.oxide import field_on_grid, oxide_on_grid
+from g2tom.reference.punch import punch_conductance
+from g2tom.scene import FieldSource
 
 E_STAR, RHO = 1.154e11, 7.2e-7
 

@@ -15,13 +15,13 @@ import pytest
 from scipy.integrate import dblquad
 from scipy.sparse.linalg import cg
 
-from pipeline.physics.boussinesq import influence_coefficients, rectangle_integral
-from pipeline.reference import cases, cost, devices, elastic, scene, surfaces
-from pipeline.reference.contact import contact_at_force
-from pipeline.reference.fft_surface import FftSurface, fft_surface
-from pipeline.reference.polonsky_keer import solve_at_mean_pressure
-from pipeline.reference.punch import conjugate_gradients, punch_conductance
-from pipeline.scene import FieldSource
+from g2tom.physics.boussinesq import influence_coefficients, rectangle_integral
+from g2tom.reference import cases, cost, devices, elastic, scene, surfaces
+from g2tom.reference.contact import contact_at_force
+from g2tom.reference.fft_surface import FftSurface, fft_surface
+from g2tom.reference.polonsky_keer import solve_at_mean_pressure
+from g2tom.reference.punch import conjugate_gradients, punch_conductance
+from g2tom.scene import FieldSource
 
 E_STAR, RHO = 1.154e11, 7.2e-7
 GPU_MISSING = devices.gpu_missing()
@@ -265,8 +265,8 @@ def test_the_plan_of_our_solver_on_the_cpu_is_tamaas_over_the_measured_speedup()
 
 
 def test_the_reference_benchmarks_compare_our_solver_with_tamaas_and_say_when_there_is_no_gpu(monkeypatch) -> None:
-    from pipeline.bench import gpu as gpu_bench
-    from pipeline.bench.reference_step import largest_differences, row
+    from g2tom.bench import gpu as gpu_bench
+    from g2tom.bench.reference_step import largest_differences, row
 
     result = row(96, ("cpu", "g2tom", "g2tom"), ("cpu", "tamaas", "tamaas"), 1, 1, warm=False)
     assert result["contact_pixels"] > 0 and result["contact_pixels_differing"] == 0

@@ -11,14 +11,15 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from analysis import figures_results
-from analysis.report import write_report
-from analysis.report_blocks import Block
-from analysis.report_render import to_html, to_markdown
-from pipeline.cli.main import main
-from pipeline.config import ResolvedScenario, load_scenario
-from pipeline.stages import fits as fits_stage
-from pipeline.store import write_dataset
+from g2tom.analysis import figures_results
+from g2tom.analysis.report import write_report
+from g2tom.analysis.report_blocks import Block
+from g2tom.analysis.report_render import to_html, to_markdown
+from g2tom.cli.main import main
+from g2tom.config import ResolvedScenario
+from g2tom.before_work import load_scenario
+from g2tom.stages import fits as fits_stage
+from g2tom.store import write_dataset
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import cli_overrides, synthetic_cube
 
@@ -118,8 +119,8 @@ def test_report_parameters_carry_units(run_dir: Path, small: ResolvedScenario) -
 
 
 def test_curve_section_counts_the_cells(small) -> None:
-    from analysis.report_physics import curve_blocks
-    from pipeline.stages import fits
+    from g2tom.analysis.report_physics import curve_blocks
+    from g2tom.stages import fits
     from tests.test_fits_stage import synthetic_cube
 
     ds = fits.build(small, synthetic_cube(small, noise=0.0))
@@ -130,8 +131,8 @@ def test_curve_section_counts_the_cells(small) -> None:
 
 
 def test_a_stage_markdown_section_becomes_headings_paragraphs_and_tables(tmp_path) -> None:
-    from analysis.report_blocks import markdown_blocks
-    from analysis.report_physics import validation_blocks
+    from g2tom.analysis.report_blocks import markdown_blocks
+    from g2tom.analysis.report_physics import validation_blocks
 
     text = ("## How right is the model?\n\n**Clean: off by +40 %.**\nScene: mu = 8.26.\n\n### expected, greenwood\n\n"
             "| F (N) | clean |\n|---|---|\n| 27.45 | 1.397 [1.2-1.9] |\n| 1768 | 1.024 |\n\nGrid convergence: -1.4 %.\n")
@@ -194,8 +195,8 @@ def test_report_lists_benchmarks_and_renders_code(run_dir: Path, small: Resolved
 
 
 def test_summary_quotes_the_validation_flags(tmp_path, small: ResolvedScenario) -> None:
-    from analysis.report import _summary_blocks
-    from analysis.report_physics import validation_blocks
+    from g2tom.analysis.report import _summary_blocks
+    from g2tom.analysis.report_physics import validation_blocks
 
     (tmp_path / "validate").mkdir()
     (tmp_path / "validate" / "validate.md").write_text("## How right?\n\n**Clean: off by +40 %.**\nScene: mu = 8.\n")
@@ -208,7 +209,7 @@ def test_summary_quotes_the_validation_flags(tmp_path, small: ResolvedScenario) 
 def test_surrogate_cells_outside_the_target_are_named() -> None:
     import xarray as xr
 
-    from analysis.report_results import surrogate_misses
+    from g2tom.analysis.report_results import surrogate_misses
 
     lam, xi = [1.0, 5.0], [0.3, 0.5, 0.9]
     sigma = np.full((2, 3), 0.01)  # 2 % half-width at z = 2: the bound is the 3 % floor

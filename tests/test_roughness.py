@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.cli.main import main
+from g2tom.cli.main import main
 from tests.oracles import roughness_parameters
 
 PIXEL = 1e-6  # m

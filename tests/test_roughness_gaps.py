@@ -7,9 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from pipeline.cli.main import main
-from pipeline.config import ConfigError
-from pipeline.heightmap import MAX_MISSING_SHARE, measure
+from g2tom.cli.main import main
+from g2tom.config import ConfigError
+from g2tom.heightmap import MAX_MISSING_SHARE, measure
 from tests.test_height_fill import PIXEL, punch_holes, rough_surface
 
 

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline.cli.main import main
-from pipeline.heightmap import OUTSIDE_FILL_SHARE, measure
+from g2tom.cli.main import main
+from g2tom.heightmap import OUTSIDE_FILL_SHARE, measure
 from tests.test_height_fill import PIXEL, punch_holes, rough_surface
 
 #: The environment variable naming the directory with SurfaceTopography's test files.
@@ -47,7 +47,7 @@ def _instrument_file(name: str) -> Path:
 def _surface_topography_rms(path: Path) -> float:
     """SurfaceTopography's rms height of the file, m: a plane removed, undefined pixels left out."""
     st = pytest.importorskip("SurfaceTopography")
-    from pipeline.heightmap import _UNITS
+    from g2tom.heightmap import _UNITS
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -129,7 +129,7 @@ def test_a_few_edge_dropouts_are_filled_not_cropped(tmp_path) -> None:
 
 
 def test_largest_rectangle_against_brute_force() -> None:
-    from pipeline.heightmap import _largest_rectangle
+    from g2tom.heightmap import _largest_rectangle
 
     rng = np.random.default_rng(4)
     for _ in range(20):

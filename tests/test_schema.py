@@ -1,4 +1,4 @@
-"""The variable schemas (pipeline.stages.schema, pipeline.bench.schema) against their stored lists, and the
+"""The variable schemas (g2tom.stages.schema, g2tom.bench.schema) against their stored lists, and the
 files against the schema."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ from pathlib import Path
 
 import xarray as xr
 
-from pipeline.atlas.schema import ATLAS
-from pipeline.bench.schema import FRONTIER, STABILITY
-from pipeline.stages.schema import SCHEMA, matches
+from g2tom.atlas.schema import ATLAS
+from g2tom.bench.schema import FRONTIER, STABILITY
+from g2tom.stages.schema import SCHEMA, matches
 
 STORED = Path(__file__).parent / "fixtures" / "schema.json"
 BENCH_STORED = Path(__file__).parent / "fixtures" / "bench_schema.json"
@@ -26,13 +26,13 @@ def test_schema_is_the_stored_list() -> None:
 
 def test_bench_schema_is_the_stored_list() -> None:
     """The benchmark files' variables as they were written before the schema (the sweep tables'
-    columns are made per key by pipeline.bench.schema.sweep_column)."""
+    columns are made per key by g2tom.bench.schema.sweep_column)."""
     declared = {"frontier": FRONTIER, "stability": STABILITY}
     rows = [[name, var, list(v.dims), v.units, v.long_name] for name, vs in declared.items() for var, v in sorted(vs.items())]
     assert rows == json.loads(BENCH_STORED.read_text())
 
 def test_atlas_schema_is_the_stored_list() -> None:
-    """The atlas files' own variables as they were written before their schema (pipeline.atlas.schema)."""
+    """The atlas files' own variables as they were written before their schema (g2tom.atlas.schema)."""
     rows = [[name, list(v.dims), v.units, v.long_name] for name, v in sorted(ATLAS.items())]
     assert rows == json.loads(ATLAS_STORED.read_text())
 

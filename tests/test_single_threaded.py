@@ -1,4 +1,4 @@
-"""Library entry points run with one BLAS thread (issue 32): ``pipeline.compute.single_threaded``."""
+"""Library entry points run with one BLAS thread (issue 32): ``g2tom.compute.single_threaded``."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
 
-from pipeline.compute import single_threaded
+from g2tom.compute import single_threaded
 
 STAGE_MODULES = ("contact", "oxide", "cube", "fits", "surrogate")
 #: The variables the console script sets to one thread before numpy loads.
@@ -47,17 +47,17 @@ def test_one_blas_thread_inside_the_limits_restored_after() -> None:
 @pytest.mark.parametrize("name", STAGE_MODULES)
 def test_every_stage_build_and_run_and_the_predict_call_wear_it(name: str) -> None:
     wrapper_code = single_threaded(lambda: None).__code__
-    module = importlib.import_module(f"pipeline.stages.{name}")
+    module = importlib.import_module(f"g2tom.stages.{name}")
     for function in (module.build, module.run):
         assert function.__code__ is wrapper_code, f"{name}.{function.__name__} is not single_threaded"
-    from pipeline.predict.answer import predict_resistance, predict_with
+    from g2tom.predict.answer import predict_resistance, predict_with
 
     assert predict_resistance.__code__ is wrapper_code and predict_with.__code__ is wrapper_code
 
 
 def test_a_stage_build_runs_single_threaded(monkeypatch, small) -> None:
     """Inside a real stage call (fits.build), BLAS runs one thread."""
-    from pipeline.stages import fits
+    from g2tom.stages import fits
     from tests.test_fits_stage import synthetic_cube
 
     seen: list[list[int]] = []
@@ -76,8 +76,8 @@ def test_a_stage_build_runs_single_threaded(monkeypatch, small) -> None:
 
 
 def test_the_entry_point_sets_one_thread_before_numpy_loads() -> None:
-    """``pipeline.cli.main`` (the console script) sets the thread variables and loads no numpy on import."""
-    probe = ("import os, sys; import pipeline.cli.main; "
+    """``g2tom.cli.main`` (the console script) sets the thread variables and loads no numpy on import."""
+    probe = ("import os, sys; import g2tom.cli.main; "
              f"print('numpy' in sys.modules, *(os.environ.get(v) for v in {THREAD_VARIABLES!r}))")
     env = {k: v for k, v in os.environ.items() if k not in THREAD_VARIABLES}
     out = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True)

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from pipeline.physics import spot_models
-from pipeline.physics.asperity import asperity_integral
+from g2tom.physics import spot_models
+from g2tom.physics.asperity import asperity_integral
 
 SIGMA, ETA, BETA = 20e-6, 2e8, 30e-6
 

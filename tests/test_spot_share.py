@@ -1,14 +1,14 @@
-"""The disc spot rule (pipeline.physics.spot_share) and the field at arbitrary points (oxide_points)."""
+"""The disc spot rule (g2tom.physics.spot_share) and the field at arbitrary points (oxide_points)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from pipeline.physics import oxide_band as ob
-from pipeline.physics import oxide_field as of
-from pipeline.physics.oxide_points import values_at_points
-from pipeline.physics.spot_share import DEFAULT_RINGS, DiscRule, disc_points, disc_shares, effective_radius
+from g2tom.physics import oxide_band as ob
+from g2tom.physics import oxide_field as of
+from g2tom.physics.oxide_points import values_at_points
+from g2tom.physics.spot_share import DEFAULT_RINGS, DiscRule, disc_points, disc_shares, effective_radius
 from tests.oracles import clean_share, spot_points
 
 N_CELLS = 57  # the paper scenario's window
@@ -54,7 +54,7 @@ def test_values_at_points_beyond_three_pi_are_wrapped_into_the_period(periods: f
 def test_unsorted_points_give_the_sorted_transforms_values_bit_for_bit() -> None:
     import finufft
 
-    from pipeline.physics import oxide_points
+    from g2tom.physics import oxide_points
 
     modes = _paper_band(1.0)
     coeffs = _coeffs(modes, 1.0, 3)
@@ -237,7 +237,7 @@ def test_disc_rings_out_of_range_are_refused() -> None:
 def test_segment_rule_lies_between_the_equal_area_disc_and_the_whole_disc():
     """h(f) >= sqrt(f) (the disc has the least capacity of its area), <= 1 (a part of the disc
     conducts less than all of it), increasing in f, equal to both at f = 0 and 1."""
-    from pipeline.physics.spot_share import SEGMENT_GAIN, SEGMENT_SHARE
+    from g2tom.physics.spot_share import SEGMENT_GAIN, SEGMENT_SHARE
 
     shares, gains = np.array(SEGMENT_SHARE), np.array(SEGMENT_GAIN)
     assert np.all(np.diff(shares) > 0) and np.all(np.diff(gains) <= 0) and gains[-1] == 1.0 and shares[-1] == 1.0
@@ -256,8 +256,8 @@ def test_segment_table_is_the_full_fields_flat_punch():
     """The table against the reference's own flat punch on a coarser grid (60 pixels of radius on
     128^2; the table: 80 pixels on 256^2): within 0.2 % from f = 0.19, within 1.5 % on the thin
     segment (f 0.03, 8 pixels thick here: -3.1 % on 40 pixels, -1.05 % on 60, converging)."""
-    from pipeline.physics.spot_share import SEGMENT_GAIN, SEGMENT_SHARE
-    from pipeline.reference.segment import segment_gains
+    from g2tom.physics.spot_share import SEGMENT_GAIN, SEGMENT_SHARE
+    from g2tom.reference.segment import segment_gains
 
     shares, gains = segment_gains(radius=60.0, n=128, chords=5, tolerance=1e-8)
     assert shares.size == 5 and np.all(np.diff(shares) > 0) and shares[0] < 0.05 < shares[1]

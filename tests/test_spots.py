@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from pipeline.physics import spots
-from pipeline.physics.interaction import pair_sum_points
+from g2tom.physics import spots
+from g2tom.physics.interaction import pair_sum_points
 
 
 def test_holm_greenwood_two_spots():

@@ -1,6 +1,6 @@
 """Numerical stability across extreme but valid scenarios, stage 1 to stage 4.
 
-The sweep of :mod:`pipeline.bench.stability` (the stability map of ``make bench``) is checked
+The sweep of :mod:`g2tom.bench.stability` (the stability map of ``make bench``) is checked
 case by case under the ``stress`` marker (``make stress``); a fast subset runs in ``make test``.
 """
 
@@ -9,12 +9,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.bench import stability
-from pipeline.compute import ComputeOptions
-from pipeline.config import load_scenario
-from pipeline.before_work.domains import resolve, solve_scenario
-from pipeline.contact_solution import fields
-from pipeline.stages import contact, cube, fits, oxide
+from g2tom.bench import stability
+from g2tom.compute import ComputeOptions
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve, solve_scenario
+from g2tom.contact_solution import fields
+from g2tom.stages import contact, cube, fits, oxide
 
 FAST = {"contact.n_radial": 240, "loading.n_delta": 8}
 
@@ -152,7 +152,7 @@ def test_random_scenes_converge_and_stay_physical() -> None:
     from hypothesis import HealthCheck, assume, given, settings
     from hypothesis import strategies as st
 
-    from pipeline.config import ConfigError
+    from g2tom.config import ConfigError
 
     @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
     @given(sigma=st.floats(-9, -3), eta=st.floats(6, 14), beta=st.floats(-7, -3), radius=st.floats(-3, 0),

@@ -8,14 +8,15 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pipeline.before_work.domains import resolve
-from pipeline.compute import ComputeOptions
-from pipeline.config import ConfigError, load_scenario
-from pipeline.config.scenario import HASH_NEUTRAL
-from pipeline.fitting import ensemble
-from pipeline.fitting.control_variate import controlled_mean
-from pipeline.stages import contact, cube, fits, oxide
-from pipeline.stages.cube_rounds import RULE_MARGIN, stopping_rule
+from g2tom.before_work.domains import resolve
+from g2tom.compute import ComputeOptions
+from g2tom.config import ConfigError
+from g2tom.before_work import load_scenario
+from g2tom.config.scenario import HASH_NEUTRAL
+from g2tom.fitting import ensemble
+from g2tom.fitting.control_variate import controlled_mean
+from g2tom.stages import contact, cube, fits, oxide
+from g2tom.stages.cube_rounds import RULE_MARGIN, stopping_rule
 from tests.test_discrete_stages import DISCRETE
 
 QUIET = ComputeOptions(progress=False)
@@ -137,7 +138,7 @@ def test_a_step_target_is_refused_where_it_cannot_work(override, named):
 
 
 def test_heldout_atlas_scenes_take_the_tighter_step_target():
-    from pipeline.atlas.design import AtlasDesign, design_scenes, scene_scenario
+    from g2tom.atlas.design import AtlasDesign, design_scenes, scene_scenario
 
     for own, held, wanted in ((0.0, 0.0, 0.0), (0.04, 0.0, 0.04), (0.0, 0.025, 0.025), (0.04, 0.025, 0.025),
                               (0.02, 0.025, 0.02)):
@@ -155,9 +156,9 @@ def test_heldout_atlas_scenes_take_the_tighter_step_target():
 
 @pytest.mark.parametrize("targets", [(0.1, 0.1), (0.06, 0.08)])
 def test_the_plan_models_the_light_steps_realizations_within_a_factor_of_two(targets):
-    """``g2tom plan``'s model (pipeline.before_work.discrete_cost.step_fields) from the stage's own
+    """``g2tom plan``'s model (g2tom.before_work.discrete_cost.step_fields) from the stage's own
     alpha counts, against the counts the stage reached at the lightest fitted step; off, it adds nothing."""
-    from pipeline.before_work.discrete_cost import expected_counts, step_fields
+    from g2tom.before_work.discrete_cost import expected_counts, step_fields
 
     alpha_target, step_target = targets
     scene = resolve(load_scenario("paper", {**ADAPTIVE, "oxide.min_realizations": 10, "oxide.max_realizations": 3000,

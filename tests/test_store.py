@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import __version__
-from pipeline.cli.main import main
-from pipeline.config import load_scenario
-from pipeline.store import StaleInputError, atomic_path, read_stage, stage_path, stage_problem, write_dataset
+from g2tom import __version__
+from g2tom.cli.main import main
+from g2tom.before_work import load_scenario
+from g2tom.store import StaleInputError, atomic_path, read_stage, stage_path, stage_problem, write_dataset
 from tests.conftest import SMALL_ARGS, SMALL_OVERRIDES
 
 
@@ -81,7 +81,7 @@ def test_cli_rejects_bad_input_with_status_2_and_touches_nothing(tmp_path, capsy
     assert main(["cube", "--data-dir", str(tmp_path), "--workers", "0"]) == 2
     assert "--workers = 0 is out of range" in capsys.readouterr().err
     assert main(["bench", "--data-dir", str(tmp_path), "--only", "contakt"]) == 2
-    from pipeline.bench import BENCHMARKS
+    from g2tom.bench import BENCHMARKS
 
     assert f"--only 'contakt' is not a benchmark: must be one of {', '.join(BENCHMARKS)}" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["contact.nc"]

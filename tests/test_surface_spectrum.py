@@ -8,8 +8,8 @@ import sys
 import numpy as np
 import pytest
 
-from pipeline.cli.main import main
-from pipeline.physics.surface_spectrum import psd_moments, summit_parameters
+from g2tom.cli.main import main
+from g2tom.physics.surface_spectrum import psd_moments, summit_parameters
 from tests.test_roughness import PIXEL, wave_surface
 
 N = 256

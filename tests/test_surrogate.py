@@ -7,12 +7,13 @@ import pytest
 from numpy.polynomial import polynomial as P
 from scipy.optimize import least_squares
 
-from pipeline.config import ConfigError, load_scenario
-from pipeline.before_work.domains import resolve
-from pipeline.fitting import surrogate as sg
-from pipeline.fitting import surrogate_joint as sg_joint
-from pipeline.fitting import surrogate_paper as sg_paper
-from pipeline.stages import fits, surrogate, table3
+from g2tom.config import ConfigError
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.fitting import surrogate as sg
+from g2tom.fitting import surrogate_joint as sg_joint
+from g2tom.fitting import surrogate_paper as sg_paper
+from g2tom.stages import fits, surrogate, table3
 from tests.conftest import SMALL_OVERRIDES
 from tests.test_fits_stage import assert_labelled, synthetic_cube, true_alpha
 

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from pipeline.cli.main import main
-from pipeline.before_work.surrogate_grid import check_surrogate_grid
-from pipeline.config import ConfigError, load_scenario
+from g2tom.cli.main import main
+from g2tom.before_work.surrogate_grid import check_surrogate_grid
+from g2tom.config import ConfigError
+from g2tom.before_work import load_scenario
 from tests.conftest import SMALL_ARGS
 
 _SMALL = list(SMALL_ARGS)

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.cli.main import main
-from pipeline.config import ConfigError
-from pipeline.reference import cases, cost, ensemble, scene, statistics
-from analysis.figures_validate import figure
-from pipeline.reference.validate import Part2Precision, chosen_set, run_validation
+from g2tom.cli.main import main
+from g2tom.config import ConfigError
+from g2tom.reference import cases, cost, ensemble, scene, statistics
+from g2tom.analysis.figures_validate import figure
+from g2tom.reference.validate import Part2Precision, chosen_set, run_validation
 
 TINY = dataclasses.replace(scene.QUICK, radius=1e-3, deltas=(1.0, 0.0), realizations=(0, 1), n_grid=96,
                            pixels_per_cell=4.0, convergence_grid=48, ensemble_grid=48, max_ensemble=4,
@@ -42,7 +42,7 @@ def test_without_the_extra_validate_names_the_install_command_and_exits_2(tmp_pa
 ])
 def test_bad_device_or_solver_exits_2_with_one_line_before_work(tmp_path, monkeypatch, capsys, options,
                                                                  message) -> None:
-    from pipeline.reference import devices
+    from g2tom.reference import devices
 
     monkeypatch.setattr(devices, "gpu_missing", lambda: "CuPy sees no GPU (0 devices)")
     assert main(["validate", "--quick", "--data-dir", str(tmp_path), *options]) == 2
@@ -69,7 +69,7 @@ def test_validate_plan_prints_the_chosen_sets_estimate_and_does_no_work(tmp_path
 
 
 def _force_normalized(vset: scene.ValidationSet) -> np.ndarray:
-    from pipeline.stages import contact as contact_stage
+    from g2tom.stages import contact as contact_stage
 
     return contact_stage.build(scene.g2tom_scenario(vset, "greenwood", "expected"))["force_normalized"].values
 
@@ -197,7 +197,7 @@ def test_part_2_compares_the_ensembles_at_equal_force_with_combined_errors(tiny_
 
 
 def test_log_standard_error_against_a_bootstrap() -> None:
-    from pipeline.fitting.ensemble import log_standard_error
+    from g2tom.fitting.ensemble import log_standard_error
 
     rng = np.random.default_rng(5)
     ratios = np.exp(rng.normal(0.05, 0.3, size=40))
@@ -230,8 +230,8 @@ def test_a_rerun_resumes_from_the_stored_cases(tiny_run) -> None:
 
 
 def test_a_combination_g2tom_refuses_is_nan_and_named(monkeypatch) -> None:
-    from pipeline.config import ConfigError
-    from pipeline.reference import validate
+    from g2tom.config import ConfigError
+    from g2tom.reference import validate
 
     real = scene.g2tom_resistances
 
@@ -248,8 +248,8 @@ def test_a_combination_g2tom_refuses_is_nan_and_named(monkeypatch) -> None:
 
 
 def test_random_process_set_feeds_g2tom_its_summit_statistics() -> None:
-    from pipeline.physics.surface_spectrum import summit_parameters
-    from pipeline.reference import surfaces
+    from g2tom.physics.surface_spectrum import summit_parameters
+    from g2tom.reference import surfaces
 
     vset = chosen_set(False, "random_process")
     q_high = 2 * np.pi / vset.short_wavelength
@@ -263,7 +263,7 @@ def test_random_process_set_feeds_g2tom_its_summit_statistics() -> None:
 
 
 def test_a_tiny_random_process_run(tmp_path) -> None:
-    from pipeline.reference.scene import random_process_set
+    from g2tom.reference.scene import random_process_set
 
     vset = dataclasses.replace(random_process_set(TINY, rms=20e-6), convergence_grid=0,  # 48^2 cannot hold the band
                                ensemble_grid=96, discretizations=("expected", "asperities"))  # its asperities are not known
@@ -276,7 +276,7 @@ def test_a_tiny_random_process_run(tmp_path) -> None:
 
 
 def test_surface_asperities_are_the_reference_surfaces_own_tips() -> None:
-    from pipeline.reference import surface_spots, surfaces
+    from g2tom.reference import surface_spots, surfaces
 
     vset = dataclasses.replace(TINY, realizations=(1,))
     tips = surfaces.gw_asperities(vset.side, vset.eta, vset.sigma, vset.beta, scene.surface_stream(vset, 1))
@@ -299,7 +299,7 @@ def test_surface_asperities_are_the_reference_surfaces_own_tips() -> None:
 
 @pytest.mark.parametrize("surface", ["gw", "random_process"])
 def test_a_smaller_window_samples_the_same_surface(surface) -> None:
-    from pipeline.reference.scene import random_process_set
+    from g2tom.reference.scene import random_process_set
 
     vset = TINY if surface == "gw" else random_process_set(TINY, rms=20e-6)
     n = vset.n_grid
@@ -311,7 +311,7 @@ def test_a_smaller_window_samples_the_same_surface(surface) -> None:
 
 
 def test_a_case_window_holds_its_contact_and_grows_when_too_small() -> None:
-    from pipeline.reference import window
+    from g2tom.reference import window
 
     force = float(scene.g2tom_resistances(TINY, "greenwood", "expected")["force"].values[0])
     side, reach = window.fitted_side(TINY, 0, force)
@@ -342,7 +342,7 @@ def test_realizations_and_loads_override_the_set_and_bad_values_exit_2(tmp_path,
         seen.update(vset=vset, progress=progress)
         return []
 
-    import pipeline.reference.validate as validate
+    import g2tom.reference.validate as validate
 
     monkeypatch.setattr(validate, "run_validation", record)
     assert main(["validate", "--quick", "--no-progress", "--realizations", "2", "--data-dir", str(tmp_path)]) == 0
@@ -534,7 +534,8 @@ def test_proxies_and_pairs_are_allocated_at_least_cost() -> None:
 def _bundled_with(model: str) -> str:
     """A bundled scenario of ``contact.model`` (``paper`` first: whichever model the default has, the
     side-by-side scenario has the other)."""
-    from pipeline.config import bundled_scenarios, load_scenario
+    from g2tom.config import bundled_scenarios
+    from g2tom.before_work import load_scenario
 
     names = ["paper"] + [n for n in ("paper_gt", "paper_discrete") if n in bundled_scenarios()]
     return next(n for n in names if load_scenario(n).contact.model == model)
@@ -543,7 +544,7 @@ def _bundled_with(model: str) -> str:
 @pytest.mark.parametrize("model", ["greenwood_tripp", "discrete"])
 def test_part_2_validates_the_scenarios_own_model(model) -> None:
     config = _bundled_with(model)
-    from pipeline.config import load_scenario
+    from g2tom.before_work import load_scenario
 
     own = load_scenario(config)
     scenario = ensemble.validated_scenario(TINY, config)
@@ -577,7 +578,7 @@ def test_a_run_on_the_discrete_model_reuses_part_1s_cases(tiny_run, tmp_path) ->
 
 
 def test_validate_takes_the_global_options_and_refuses_bad_values_before_work(tmp_path, monkeypatch, capsys) -> None:
-    import pipeline.reference.validate as validate
+    import g2tom.reference.validate as validate
 
     seen = {}
 
@@ -620,7 +621,7 @@ def test_plan_validate_prints_both_surfaces_cases_grids_and_estimate(capsys) -> 
 
 
 def test_cases_on_a_local_cluster_give_the_serial_run(tiny_run, tmp_path) -> None:
-    from pipeline.compute import ComputeOptions
+    from g2tom.compute import ComputeOptions
 
     out, _ = tiny_run
     log = io.StringIO()
@@ -634,8 +635,8 @@ def test_part_one_discrete_rows_take_the_validated_scenarios_spot_rule_and_no_ca
     """The discrete rows count oxide by the validated scenario's rule (segment for paper; disc
     where the scenario has none of disc and segment), and the rule shapes no full-field case: the
     stored cases serve either rule."""
-    from pipeline.reference import discrete_spots
-    from pipeline.scene import FieldSource
+    from g2tom.reference import discrete_spots
+    from g2tom.scene import FieldSource
 
     assert discrete_spots.with_rule_of(scene.DEFAULT, "paper").spot_rule == "segment"
     assert discrete_spots.with_rule_of(scene.DEFAULT, "paper_gt").spot_rule == "disc"  # centre: disc

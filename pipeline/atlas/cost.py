@@ -1,8 +1,8 @@
 """What an atlas scene costs, before any work: the model behind ``g2tom plan --atlas``.
 
-On Greenwood–Tripp's grid spots a scene costs what :func:`pipeline.before_work.plan.estimate` says
+On Greenwood–Tripp's grid spots a scene costs what :func:`g2tom.before_work.plan.estimate` says
 for its cell grid. On discrete asperities (``contact.model = "discrete"``) the pool and every oxide
-field cost what :mod:`pipeline.before_work.discrete_cost` models from Greenwood–Tripp's expected
+field cost what :mod:`g2tom.before_work.discrete_cost` models from Greenwood–Tripp's expected
 counts of touching asperities N_s and candidates C_s per load step, and the fields are counted here:
 
 * fields: per lambda the realizations of its slowest xi: the measured counts of the adaptive
@@ -13,11 +13,11 @@ counts of touching asperities N_s and candidates C_s per load step, and the fiel
 * the cube: a field computes every xi in the first round, but later rounds only the xi whose
   interval is still open, so each xi costs its own realizations: the slowest xi's count times
   its share :data:`XI_SHARE` (relative to the scenario's largest xi), between the same bounds,
-  each a 1 / (number of xi) part of :func:`~pipeline.before_work.discrete_cost.field_seconds`.
+  each a 1 / (number of xi) part of :func:`~g2tom.before_work.discrete_cost.field_seconds`.
   Without the shares the plan over-predicted the full atlas's 33 scenes 1.7x (median of
   measured / planned 0.59, 0.47-1.37); with them 0.96 (0.67-1.75; interquartile 0.86-1.14);
 * a per-step target (``oxide.step_half_width``): every cell's further realizations at its light
-  steps (:func:`pipeline.before_work.discrete_cost.step_fields`, from what alpha's target asks of
+  steps (:func:`g2tom.before_work.discrete_cost.step_fields`, from what alpha's target asks of
   the cell before the ensemble's bounds), in the cube and in the fits' bootstrap.
 
 The constants are one thread's CPU seconds or counts measured on this 2-core machine (2026-11-27,
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.config import Scenario
+from g2tom.config import Scenario
 
 __all__ = ["SceneCost", "scene_cost", "discrete_fields", "discrete_xi_fields", "cell_fields"]
 
@@ -93,7 +93,7 @@ class SceneCost:
 def _slowest_fields(scenario: Scenario, touching: np.ndarray, bounded: bool = True) -> np.ndarray:
     """Realizations of the slowest xi per lambda of an adaptive discrete scene (see the module); not
     ``bounded``: what alpha's target asks, before the ensemble's bounds."""
-    from pipeline.before_work.plan import control_variate_share
+    from g2tom.before_work.plan import control_variate_share
 
     ox = scenario.oxide
     mid = max(float(touching[touching.size // 2]), 1.0)
@@ -135,10 +135,10 @@ def discrete_xi_fields(scenario: Scenario, touching: np.ndarray) -> float:
 
 
 def scene_cost(scenario: Scenario) -> SceneCost:
-    """The modelled CPU seconds of one atlas scene (its scenario as :func:`pipeline.atlas.design.scene_scenario`
+    """The modelled CPU seconds of one atlas scene (its scenario as :func:`g2tom.atlas.design.scene_scenario`
     makes it), single-threaded."""
-    from pipeline.before_work import plan
-    from pipeline.before_work.discrete_cost import (expected_counts, field_seconds, grown_pool, step_fields,
+    from g2tom.before_work import plan
+    from g2tom.before_work.discrete_cost import (expected_counts, field_seconds, grown_pool, step_fields,
                                                     surface_seconds)
 
     if scenario.contact.model != "discrete":

@@ -2,7 +2,7 @@
 
 The atlas (issue 23) runs the whole chain contact -> oxide -> cube -> fits on many scenes that
 differ only in mu = (8/3) eta sigma sqrt(2 R* beta) and Pi = eta R* sigma
-(:mod:`pipeline.physics.groups`): everything else, E*, rho* and the reference lengths sigma and
+(:mod:`g2tom.physics.groups`): everything else, E*, rho* and the reference lengths sigma and
 R*, only scales F and R. This module holds what is known before any scene runs:
 
 * :class:`AtlasDesign`: a log-spaced grid of ``n_mu x n_pi`` design scenes over the box
@@ -11,9 +11,9 @@ R*, only scales F and R. This module holds what is known before any scene runs:
   in both coordinates, so none duplicates a design scene;
 * :func:`scene_scenario`: the scenario of one scene: the base scenario with eta and beta from
   (mu, Pi) at the base's sigma and R*, its own random streams (:func:`scene_seed`), load steps
-  spanning F' 0.05-20 (:mod:`pipeline.atlas.loads`), every step fitted, on discrete asperities a
+  spanning F' 0.05-20 (:mod:`g2tom.atlas.loads`), every step fitted, on discrete asperities a
   pool sized by its touching count, and the domains back to ``auto``;
-* :func:`plan_atlas`: each scene's window, memory and time (:mod:`pipeline.atlas.cost`: on
+* :func:`plan_atlas`: each scene's window, memory and time (:mod:`g2tom.atlas.cost`: on
   discrete asperities the time grows with the touching asperities), or why it cannot run (a
   refusal of the plan or the preflight), before any work; :func:`format_atlas_plan` adds the wall
   time on the workers against the 3 h budget.
@@ -27,9 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.atlas.cost import SceneCost
-from pipeline.config import AUTO, ConfigError, Loading, Scenario
-from pipeline.physics.groups import surface_from_groups
+from g2tom.atlas.cost import SceneCost
+from g2tom.config import AUTO, ConfigError, Loading, Scenario
+from g2tom.physics.groups import surface_from_groups
 
 __all__ = ["AtlasDesign", "Scene", "SceneEstimate", "design_scenes", "scene_seed", "scene_scenario", "plan_atlas",
            "format_atlas_plan", "SCENE_TAG", "GROUP_KEY_SCALE", "wall_seconds", "schedule", "ALONE_EFFICIENCY", "BUDGET_SECONDS", "POOL_TOUCHING", "MIN_POOL"]
@@ -168,7 +168,7 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
     ``atlas.heldout_half_width`` where that is tighter than the base's (its light steps' to
     ``atlas.heldout_step_half_width`` where its ensemble takes a step target, and its discrete pool
     grown to ``atlas.heldout_pool_half_width``, likewise), approaches whose forces span
-    :data:`pipeline.atlas.loads.FORCE_RANGE` in F' (:func:`pipeline.atlas.loads.loading_for_range`,
+    :data:`g2tom.atlas.loads.FORCE_RANGE` in F' (:func:`g2tom.atlas.loads.loading_for_range`,
     ``loading.n_delta`` kept), every step fitted, and ``auto`` domains.
 
     Raises
@@ -176,8 +176,8 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
     ConfigError
         If the scene's approaches cannot be found (naming the scene).
     """
-    from pipeline.atlas.loads import END_MARGIN, FORCE_RANGE, loading_for_range
-    from pipeline.before_work.discrete_cost import expected_touching
+    from g2tom.atlas.loads import END_MARGIN, FORCE_RANGE, loading_for_range
+    from g2tom.before_work.discrete_cost import expected_touching
 
     surface = surface_from_groups(scene.mu, scene.Pi, base.roughness.sigma, base.indenter.radius)
     roughness = dataclasses.replace(base.roughness, eta=surface.eta, beta=surface.beta)
@@ -211,7 +211,7 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
 @dataclass(frozen=True)
 class SceneEstimate:
     """A scene's plan: cells per window side, peak memory (bytes), time (s, one thread) and what
-    drives it (:class:`pipeline.atlas.cost.SceneCost`), or why it cannot run."""
+    drives it (:class:`g2tom.atlas.cost.SceneCost`), or why it cannot run."""
 
     scene: Scene
     n_cells: int | None
@@ -224,16 +224,16 @@ class SceneEstimate:
 def plan_atlas(base: Scenario, design: AtlasDesign, workers: int | None = 1) -> list[SceneEstimate]:
     """Every scene's resolved window, peak memory and modelled time, before any work.
 
-    Memory comes from :func:`pipeline.before_work.resources.check_resources` (a scene that does not fit
-    is refused there), time from :func:`pipeline.atlas.cost.scene_cost` (on discrete asperities it
+    Memory comes from :func:`g2tom.before_work.resources.check_resources` (a scene that does not fit
+    is refused there), time from :func:`g2tom.atlas.cost.scene_cost` (on discrete asperities it
     grows with the touching asperities, not with a grid). ``workers`` is the per-scene worker
     count (1: one scene per single-threaded task). A scene the plan or the preflight refuses
     carries the refusal as ``problem`` instead of raising, so the whole design is seen at once.
     """
-    from pipeline.atlas.cost import scene_cost
-    from pipeline.before_work.domains import resolve
-    from pipeline.before_work.preflight import check_scene
-    from pipeline.before_work.resources import check_resources
+    from g2tom.atlas.cost import scene_cost
+    from g2tom.before_work.domains import resolve
+    from g2tom.before_work.preflight import check_scene
+    from g2tom.before_work.resources import check_resources
 
     out = []
     for scene in design_scenes(design):

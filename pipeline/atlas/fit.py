@@ -6,13 +6,13 @@ both with the clean curve R'_c(mu, Pi, F') as the node xi = 0 and a Chebyshev se
 every oxide node (xi, lambda), interpolated linearly between nodes in (-ln(1 - xi), ln lambda), so
 R' = R'_c Phi with an oxide factor Phi that is exactly 1 at xi = 0:
 
-* the grid surrogate (:mod:`pipeline.fitting.atlas_grid`): the series' coefficients one polynomial
+* the grid surrogate (:mod:`g2tom.fitting.atlas_grid`): the series' coefficients one polynomial
   in the groups' coordinates through all design scenes (degree D over :data:`DEGREES`);
-* the scene series (:mod:`pipeline.fitting.atlas_scene_series`): each design scene's own series,
+* the scene series (:mod:`g2tom.fitting.atlas_scene_series`): each design scene's own series,
   its coefficients interpolated across the groups' coordinates by a radial basis function (kernel
-  over :data:`~pipeline.fitting.atlas_scene_series.KERNELS`, smoothing over :data:`SMOOTHINGS`).
+  over :data:`~g2tom.fitting.atlas_scene_series.KERNELS`, smoothing over :data:`SMOOTHINGS`).
 
-Both are built in either frame of the groups (:data:`~pipeline.fitting.atlas_grid.FRAMES`): (ln mu,
+Both are built in either frame of the groups (:data:`~g2tom.fitting.atlas_grid.FRAMES`): (ln mu,
 ln Pi), or (ln(mu / Pi), ln Pi), in which the light loads' strong dependence on the asperities'
 curvature against the sphere's (mu / Pi) runs along one coordinate. Kind, frame, their parameters
 and P (:data:`ORDERS`) are chosen by leave-one-scene-out cross-validation on
@@ -20,8 +20,8 @@ the scenes off the box's corners by the held-out target's own measure (the most 
 every step; then the RMS; then fewer terms); one polynomial of total degree 2..6 in the five logs
 (the first atlas's model) is cross-validated beside them, for the record. The band is the
 cross-validated error where the query is, raised to the held-out scenes' error in its region where
-that is larger (:mod:`pipeline.fitting.atlas_band`). ln alpha and gamma of Eq. 27 over (xi,
-lambda, mu, Pi) (:mod:`pipeline.fitting.atlas_surrogate`) stay beside it.
+that is larger (:mod:`g2tom.fitting.atlas_band`). ln alpha and gamma of Eq. 27 over (xi,
+lambda, mu, Pi) (:mod:`g2tom.fitting.atlas_surrogate`) stay beside it.
 
 Held-out verdict (:func:`verdict`, also what the report prints): at every fitted F' step of every
 held-out (scene, xi, lambda) cell, |ln R'_surrogate - ln R'_scene| against max(:data:`FLOOR`, the
@@ -35,6 +35,7 @@ Writes ``<atlas>/surrogate.json`` and ``<atlas>/heldout.csv`` (one line per held
 from __future__ import annotations
 
 import hashlib
+import re
 import json
 from pathlib import Path
 from typing import Any
@@ -43,14 +44,14 @@ import numpy as np
 import xarray as xr
 from scipy.stats import norm
 
-from pipeline.fitting.atlas_band import fit_band, with_heldout
-from pipeline.fitting.atlas_grid import (FRAME_COORDINATES, FRAMES, GridTensorModel, cross_validate, fit_grid_tensor,
+from g2tom.fitting.atlas_band import fit_band, with_heldout
+from g2tom.fitting.atlas_grid import (FRAME_COORDINATES, FRAMES, GridTensorModel, cross_validate, fit_grid_tensor,
                                          group_powers, node_coordinates)
-from pipeline.fitting.atlas_noise import sampling_noise
-from pipeline.fitting.atlas_scene_series import KERNELS, TAIL_DEGREE, SceneSeriesModel, fit_scene_series
-from pipeline.fitting.atlas_scene_series import cross_validate as cross_validate_series
-from pipeline.fitting.atlas_surrogate import AtlasModel, exponents, fit_atlas_model, select_degree
-from pipeline.store import atomic_path, git_commit
+from g2tom.fitting.atlas_noise import sampling_noise
+from g2tom.fitting.atlas_scene_series import KERNELS, TAIL_DEGREE, SceneSeriesModel, fit_scene_series
+from g2tom.fitting.atlas_scene_series import cross_validate as cross_validate_series
+from g2tom.fitting.atlas_surrogate import AtlasModel, exponents, fit_atlas_model, select_degree
+from g2tom.store import atomic_path, git_commit
 
 __all__ = ["fit_atlas", "write_atlas_surrogate", "verdict", "noise_ceiling", "CEILING_DRAWS", "code_hash", "curve_doc", "curve_model", "curve_words", "FLOOR", "WORST",
            "TARGET_SHARE", "FORMAT", "FORMAT_VERSION", "CURVE", "DEGREES", "ORDERS", "SMOOTHINGS", "SCENE_SERIES"]
@@ -91,12 +92,18 @@ _FITTING_CODE = ("atlas/fit.py", "fitting/atlas_grid.py", "fitting/atlas_scene_s
                  "fitting/atlas_surrogate.py", "fitting/atlas_noise.py")
 
 
+#: The package's import names, present and past, written as one word in the hashed source
+#: (:func:`code_hash`): renaming the package is no change to the code that fits the surrogate.
+_PACKAGE_NAMES = re.compile(rb"\b(?:g2tom\.analysis|g2tom|pipeline|analysis)\.(?=[A-Za-z_])")
+
+
 def code_hash() -> str:
-    """SHA-256 (16 hex digits) of the modules that fit the atlas surrogate (:data:`_FITTING_CODE`)."""
+    """SHA-256 (16 hex digits) of the modules that fit the atlas surrogate (:data:`_FITTING_CODE`), each
+    with the package's own import names written as ``PKG.`` (:data:`_PACKAGE_NAMES`)."""
     root = Path(__file__).resolve().parents[1]
     digest = hashlib.sha256()
     for name in _FITTING_CODE:
-        digest.update((root / name).read_bytes())
+        digest.update(_PACKAGE_NAMES.sub(b"PKG.", (root / name).read_bytes()))
     return digest.hexdigest()[:16]
 
 
@@ -174,7 +181,7 @@ def _candidates() -> list[dict[str, Any]]:
 
 
 def _degree(row: dict[str, Any]) -> int | tuple[int, int]:
-    """A grid candidate's degree as :func:`~pipeline.fitting.atlas_grid.group_powers` takes it (a
+    """A grid candidate's degree as :func:`~g2tom.fitting.atlas_grid.group_powers` takes it (a
     tensor product's pair is a list in the row, for JSON)."""
     degree = row["degree"]
     return tuple(degree) if isinstance(degree, list) else degree
@@ -432,7 +439,7 @@ def noise_ceiling(chosen: dict[str, Any], curve: GridTensorModel | SceneSeriesMo
     intervals), refits the ``chosen`` candidate on them as :func:`fit_atlas` does, and judges it by
     the verdict's rule against held-out ln R' = truth + their own noise. Scenes' errors are
     independent (each scene draws its own fields); along the load they lie between independent and
-    fully correlated (:mod:`pipeline.fitting.atlas_noise`), so both ends are drawn.
+    fully correlated (:mod:`g2tom.fitting.atlas_noise`), so both ends are drawn.
 
     Parameters
     ----------

@@ -27,12 +27,12 @@ from pathlib import Path
 
 import xarray as xr
 
-from pipeline.atlas.design import (AtlasDesign, Scene, SceneEstimate, design_scenes, format_atlas_plan, plan_atlas,
+from g2tom.atlas.design import (AtlasDesign, Scene, SceneEstimate, design_scenes, format_atlas_plan, plan_atlas,
                                    scene_scenario, schedule)
-from pipeline.atlas.schema import ATLAS, SCALARS
-from pipeline.compute import ComputeOptions, in_turn
-from pipeline.config import ConfigError, Loading, Scenario
-from pipeline.store import atomic_path, provenance
+from g2tom.atlas.schema import ATLAS, SCALARS
+from g2tom.compute import ComputeOptions, in_turn
+from g2tom.config import ConfigError, Loading, Scenario
+from g2tom.store import atomic_path, provenance
 
 __all__ = ["scene_dataset", "scene_path", "run_atlas", "longest_first", "ATLAS_FILE"]
 
@@ -49,10 +49,10 @@ def scene_dataset(base: Scenario, scene: Scene, loading: Loading | None = None,
                   options: ComputeOptions = _ONE) -> xr.Dataset:
     """Run the chain on one scene in memory, single-threaded unless ``options`` say otherwise (a
     scene that runs alone); its slice of ``atlas.nc`` (``loading``: see
-    :func:`pipeline.atlas.design.scene_scenario`). The result does not depend on ``options``."""
-    from pipeline.before_work.domains import resolve
-    from pipeline.stages import contact, cube, fits, oxide
-    from pipeline.stages.schema import SURROGATE_COORDINATES
+    :func:`g2tom.atlas.design.scene_scenario`). The result does not depend on ``options``."""
+    from g2tom.before_work.domains import resolve
+    from g2tom.stages import contact, cube, fits, oxide
+    from g2tom.stages.schema import SURROGATE_COORDINATES
 
     start = time.perf_counter()
     scenario = resolve(scene_scenario(base, scene, loading))
@@ -65,7 +65,7 @@ def scene_dataset(base: Scenario, scene: Scene, loading: Loading | None = None,
         return dims, f[name].transpose(*dims).values, dict(f[name].attrs)
 
     def own(name: str, data: object) -> tuple:
-        """``(dims, data, attrs)`` of one of the atlas's own variables (:data:`pipeline.atlas.schema.ATLAS`)."""
+        """``(dims, data, attrs)`` of one of the atlas's own variables (:data:`g2tom.atlas.schema.ATLAS`)."""
         var = ATLAS[name]
         return var.dims, data, var.attrs(reduction=scenario.fits.reduction)
 
@@ -186,7 +186,7 @@ def _line(done: int, total: int, name: str, seconds: float, scene: Scene) -> Non
 
 def longest_first(scenes: list[Scene], estimates: list[SceneEstimate]) -> list[Scene]:
     """``scenes`` by their planned seconds, longest first (ties in the given order): the order the
-    plan's wall time assumes (:func:`pipeline.atlas.design.wall_seconds`); a long scene started
+    plan's wall time assumes (:func:`g2tom.atlas.design.wall_seconds`); a long scene started
     last would run alone at the end."""
     seconds = {e.scene.name: e.seconds for e in estimates}
     return sorted(scenes, key=lambda s: -seconds[s.name])
@@ -208,7 +208,7 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
         ``scheduler`` or ``workers`` > 1: a dask.distributed cluster, one single-threaded scene per
         task; otherwise the scenes run one after the other in this process. A scene that runs alone
         (the one left of a resumed atlas, the invariance twin, every scene without a cluster, or
-        one of the longest that :func:`pipeline.atlas.design.schedule` runs alone first because it
+        one of the longest that :func:`g2tom.atlas.design.schedule` runs alone first because it
         would outlast the others' share) computes with ``options`` itself, on every worker.
 
     Raises
@@ -216,7 +216,7 @@ def run_atlas(base: Scenario, design: AtlasDesign, data_dir: str | Path,
     ConfigError
         Before any work, if the plan or the preflight refuses a scene (naming it).
     """
-    from pipeline.compute import _client
+    from g2tom.compute import _client
 
     data_dir = Path(data_dir)
     scenes = design_scenes(design)

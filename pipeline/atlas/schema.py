@@ -2,14 +2,14 @@
 gathered ``atlas/atlas.nc`` (over ``scene``), each variable's dims, units and long name, once.
 
 The variables a scene file takes over from fits.nc (alpha, gamma, their intervals, the curve
-model, ``open_probability``) keep the fits stage's declaration (:mod:`pipeline.stages.schema`)
+model, ``open_probability``) keep the fits stage's declaration (:mod:`g2tom.stages.schema`)
 and its coordinates the surrogate's; this declares the rest, in the form of the stage files'
 schema. A long name's ``{reduction}`` slot is the scenario's ``fits.reduction``.
 """
 
 from __future__ import annotations
 
-from pipeline.stages.schema import Variable
+from g2tom.stages.schema import Variable
 
 __all__ = ["ATLAS", "SCALARS"]
 

@@ -3,4 +3,10 @@ a scenario is loaded), ``window_checks`` (the window, the radial domain and the 
 are numbers), ``domains`` (the auto domains and the cell count), ``plan`` (each stage's memory and
 run time against the machine), ``preflight`` (the data directory, the inputs and the cluster) and
 ``surrogate_grid`` (the surrogate's limits on the oxide grid). The range of each single parameter
-is checked from its declaration, as it is loaded (:mod:`pipeline.config.validation`)."""
+is checked from its declaration, as it is loaded (:mod:`g2tom.config.validation`).
+
+:func:`load_scenario` is the loader every command uses: the scenario read and every check run."""
+
+from g2tom.before_work.scenario_checks import load_scenario
+
+__all__ = ["load_scenario"]

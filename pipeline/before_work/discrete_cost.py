@@ -14,15 +14,15 @@ fast solve, :func:`probe`; within a few % of the discrete pool's at the heavy st
   each solved up to its last step, plus :data:`ADDED_SURFACE_S` each;
 * one oxide field (one realization at one lambda, all its xi at once: the point solves of a step
   share one factorization, or one conjugate-gradient sweep from a union of
-  :data:`pipeline.physics.discrete_resistance.ITERATIVE_FROM` spots): ``sum_s (FIELD_STEP_S +
+  :data:`g2tom.physics.discrete_resistance.ITERATIVE_FROM` spots): ``sum_s (FIELD_STEP_S +
   FIELD_SQUARE_S N_s^2 + FIELD_MIXED_S C_s N_s + FIELD_CUBE_S N_s^3)`` over the factorized steps
   and ``FIELD_ITERATIVE_S N_s^2`` in place of the cube on the others (:func:`field_seconds`).
 
 The constants are one thread's CPU seconds measured on a 2-core machine (2026-11-27, small fixed
 ensembles of atlas design scenes d02, d12, d22, d24: mu 7.07 at Pi 5, 40, 320, and mu 50 at Pi 320;
 d21 and d20, mu 2.66 and 1 at Pi 320, for the large unions; see each constant). ``g2tom plan`` scales its estimates of the default scene by these models'
-ratio (:mod:`pipeline.before_work.plan`); ``g2tom plan --atlas`` adds them up per scene
-(:mod:`pipeline.atlas.cost`).
+ratio (:mod:`g2tom.before_work.plan`); ``g2tom plan --atlas`` adds them up per scene
+(:mod:`g2tom.atlas.cost`).
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-from pipeline.config import Scenario
+from g2tom.config import Scenario
 
 __all__ = ["probe", "expected_counts", "expected_touching", "expected_force_normalized", "surface_seconds",
            "field_seconds", "grown_pool", "step_fields"]
@@ -99,7 +99,7 @@ _COUNTS: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 def probe(scenario: Scenario, delta_sigma: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """A fast Greenwood–Tripp solve at the approaches ``delta_sigma`` (units of sigma, lightest
     first, evenly spaced), warm-started along them: radial nodes (m) and the contact stage's fields
-    (:func:`pipeline.contact_solution.fields`: separation ``h``, pressure ``p``, ``force``, ...).
+    (:func:`g2tom.contact_solution.fields`: separation ``h``, pressure ``p``, ``force``, ...).
 
     Parameters
     ----------
@@ -113,7 +113,7 @@ def probe(scenario: Scenario, delta_sigma: np.ndarray) -> tuple[np.ndarray, dict
     ValueError
         If the approaches are not evenly spaced and decreasing.
     """
-    from pipeline.contact_solution import fields, indenter_profile, solve
+    from g2tom.contact_solution import fields, indenter_profile, solve
 
     deltas = np.atleast_1d(np.asarray(delta_sigma, float))
     sigma = scenario.roughness.sigma
@@ -139,8 +139,8 @@ def expected_counts(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     solve's candidate set, displacements only lowering asperities), by one fast solve."""
     from scipy.special import erfc
 
-    from pipeline.contact_solution import indenter_profile
-    from pipeline.physics.greenwood_tripp import force_weights
+    from g2tom.contact_solution import indenter_profile
+    from g2tom.physics.greenwood_tripp import force_weights
 
     key = _counts_key(scenario)
     if key not in _COUNTS:
@@ -191,7 +191,7 @@ def field_seconds(touching: np.ndarray, candidates: np.ndarray) -> float:
     touching, candidates
         (steps,) expected touching asperities and candidates per load step (:func:`expected_counts`).
     """
-    from pipeline.physics.discrete_resistance import ITERATIVE_FROM  # numba: only where a field is costed
+    from g2tom.physics.discrete_resistance import ITERATIVE_FROM  # numba: only where a field is costed
 
     factorized = touching < ITERATIVE_FROM
     return (FIELD_STEP_S * touching.size + FIELD_SQUARE_S * float(np.sum(touching**2))
@@ -216,8 +216,8 @@ def grown_pool(scenario: Scenario, touching: np.ndarray, candidates: np.ndarray)
         The expected pool size per step, (steps,), and the modelled CPU seconds (one thread) of the
         surfaces beyond ``contact.surfaces``, each solved up to the last step that still needs it.
     """
-    from pipeline.config import MAX_POOL_SURFACES, POOL_CONFIDENCE
-    from pipeline.fitting.ensemble import z_value
+    from g2tom.config import MAX_POOL_SURFACES, POOL_CONFIDENCE
+    from g2tom.fitting.ensemble import z_value
 
     fixed, target = scenario.contact.surfaces, scenario.contact.pool_half_width
     if target <= 0:

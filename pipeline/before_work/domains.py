@@ -5,7 +5,7 @@ resolved once, up front, from a fast solve at the heaviest approach (:func:`reso
 
 * **window**: the smallest odd square of cells outside of which the spots cannot change
   ``R`` by more than ``cube.crop_tolerance`` for any oxide mask (the cropping bound of
-  :func:`pipeline.physics.crops.truncation_bounds`, with the scenario's interaction
+  :func:`g2tom.physics.crops.truncation_bounds`, with the scenario's interaction
   weights), at every approach (the heaviest needs the most).
 * **r_max**: far enough that the window's corner cells lie inside the radial domain (with a
   margin of :data:`MARGIN_CELLS` cells) and the pressure at ``r_max`` is below
@@ -27,13 +27,13 @@ import math
 
 import numpy as np
 
-from pipeline.before_work.window_checks import check_domains
-from pipeline.config import AUTO, ConfigError, ResolvedScenario, Scenario, odd_cells
-from pipeline.contact_solution import indenter_profile, solve
-from pipeline.physics import crops, spot_models, spots
-from pipeline.physics import greenwood_tripp as gt
-from pipeline.physics.asperity import log_asperity_integral
-from pipeline.physics.grid import cell_centres
+from g2tom.before_work.window_checks import check_domains
+from g2tom.config import AUTO, ConfigError, ResolvedScenario, Scenario, odd_cells
+from g2tom.contact_solution import indenter_profile, solve
+from g2tom.physics import crops, spot_models, spots
+from g2tom.physics import greenwood_tripp as gt
+from g2tom.physics.asperity import log_asperity_integral
+from g2tom.physics.grid import cell_centres
 
 __all__ = ["Domains", "resolve", "solve_scenario", "domains", "estimate_cells", "check_cell_count", "MARGIN_CELLS",
            "TOLERANCE_FLOOR"]
@@ -168,7 +168,7 @@ def check_cell_count(scenario: Scenario, memory: float) -> None:
 def estimate_cells(scenario: Scenario) -> int:
     """Cheap upper estimate of the ``auto`` window's cells per side (no solve, 1-D rigid gap).
 
-    The bound of :func:`pipeline.physics.crops.truncation_bounds` with the rigid gap's
+    The bound of :func:`g2tom.physics.crops.truncation_bounds` with the rigid gap's
     spots (an upper bound of the solved ones) summed over rings of radius r (2 pi r dr / h^2
     cells), the square of half-side r containing the disc of radius r.
     """
@@ -256,7 +256,7 @@ def domains(scenario: Scenario) -> Domains:
 
 
 def resolved(scenario: Scenario) -> ResolvedScenario:
-    """``scenario`` itself where it is a :class:`~pipeline.config.ResolvedScenario` already, else
+    """``scenario`` itself where it is a :class:`~g2tom.config.ResolvedScenario` already, else
     :func:`resolve` of it: what a stage called from Python with a loaded scenario does first."""
     return scenario if isinstance(scenario, ResolvedScenario) else resolve(scenario)
 
@@ -267,7 +267,7 @@ def resolve(scenario: Scenario) -> ResolvedScenario:
     Explicit values are checked (an explicit window or r_max that truncates the contact by
     more than ``cube.crop_tolerance`` is refused) and kept exactly as given, so a scenario
     with both explicit keeps its results bit for bit, and resolving a resolved scenario gives
-    it back. The result is a :class:`~pipeline.config.ResolvedScenario`, also when both were
+    it back. The result is a :class:`~g2tom.config.ResolvedScenario`, also when both were
     explicit.
 
     Raises
@@ -291,7 +291,7 @@ def solve_scenario(
     tolerance: float | None = None,
 ) -> tuple[np.ndarray, list[gt.Solution]]:
     """Radial nodes (m) and the Greenwood–Tripp solution of every approach, ``auto`` domains
-    resolved first (see :func:`pipeline.contact_solution.solve`)."""
+    resolved first (see :func:`g2tom.contact_solution.solve`)."""
     if scenario.contact.r_max == AUTO:
         scenario = resolve(scenario)
     return solve(scenario, solver=solver, n_radial=n_radial, tolerance=tolerance)

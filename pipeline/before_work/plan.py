@@ -3,7 +3,7 @@
 :func:`estimate` models each stage's largest arrays (the stored results and the work arrays
 of its concurrently running tasks) and its run time (flop-count models with constants
 measured on the 2-core reference machine; ``make bench`` measures the real ones).
-The checks that refuse a run on these estimates are :mod:`pipeline.before_work.resources`'.
+The checks that refuse a run on these estimates are :mod:`g2tom.before_work.resources`'.
 An adaptive ensemble's realization count is known only after the work, so its estimates
 carry a range (every cell stopped at ``oxide.min_realizations`` .. every cell at the cap
 ``oxide.max_realizations``) and a central value typical of the paper's scene
@@ -17,7 +17,7 @@ import math
 import os
 from dataclasses import dataclass
 
-from pipeline.config import AUTO, CHUNK_BYTES, KERNEL_CACHE_BYTES, ResolvedScenario, Scenario, odd_cells
+from g2tom.config import AUTO, CHUNK_BYTES, KERNEL_CACHE_BYTES, ResolvedScenario, Scenario, odd_cells
 
 __all__ = ["StageEstimate", "Realizations", "realizations", "estimate", "format_plan", "available_memory", "BASE_BYTES"]
 
@@ -74,7 +74,7 @@ DISCRETE_XI_MAP_S = {("disc", "point"): 2 * 92.05 / 188_200, ("centre", "point")
                      ("disc", "greenwood"): 2.8e-3, ("centre", "greenwood"): 0.75e-3}
 # the segment rule counts shares as disc does (its table lookup is a few % of a field's work)
 DISCRETE_XI_MAP_S.update({("segment", model): DISCRETE_XI_MAP_S[("disc", model)] for model in ("point", "greenwood")})
-#: The discrete cost models (:mod:`pipeline.before_work.discrete_cost`) on the default scene (its
+#: The discrete cost models (:mod:`g2tom.before_work.discrete_cost`) on the default scene (its
 #: 20 steps' expected counts: at most 210 touching asperities and 754 candidates), CPU seconds of
 #: one thread: one surface of the pool, one oxide field's point solves (every xi). Another scene's
 #: discrete pool and cube are estimated as the default's measured constants above times the
@@ -185,7 +185,7 @@ def _cells(scenario: Scenario) -> int:
     """Cells per window side: the explicit or resolved window's, or a cheap estimate while ``auto``."""
     if scenario.contact.window != AUTO:
         return odd_cells(float(scenario.contact.window) * scenario.indenter.radius, scenario.cell_size)
-    from pipeline.before_work.domains import estimate_cells
+    from g2tom.before_work.domains import estimate_cells
 
     return estimate_cells(scenario)
 
@@ -211,8 +211,8 @@ def _field_seconds(scenario: Scenario, n: int) -> float:
 
 
 def _per_map_seconds(n: int) -> float:
-    from pipeline.physics.interaction import auto_method
-    from pipeline.physics.interaction_fft import padded_length
+    from g2tom.physics.interaction import auto_method
+    from g2tom.physics.interaction_fft import padded_length
 
     if auto_method(n) == "folded":
         return _FOLDED_S * n**3 + _MAP_S * n * n
@@ -228,12 +228,12 @@ def _map_speedup(n: int, workers: int | None, ensemble: str) -> float:
     """Speed-up of the cube's maps over one thread: local processes and the threaded scheduler
     on FFT maps (whose constant was fitted on two threads) scale with the workers; the threaded
     scheduler on folded maps by :data:`THREADED_FOLDED_SPEEDUP` (measured)."""
-    from pipeline.compute import _distributed_available
-    from pipeline.physics.interaction import auto_method
+    from g2tom.compute import _distributed_available
+    from g2tom.physics.interaction import auto_method
 
     if _threads(workers) == 1:
         return 1.0
-    processes = workers is not None and workers > 1 and _distributed_available()  # as pipeline.compute
+    processes = workers is not None and workers > 1 and _distributed_available()  # as g2tom.compute
     if processes or auto_method(n) != "folded":
         return float(_threads(workers))
     return min(float(_threads(workers)), THREADED_FOLDED_SPEEDUP[ensemble])
@@ -254,8 +254,8 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     list of StageEstimate
         contact, oxide, cube, fits, surrogate, in order.
     """
-    from pipeline.physics.interaction import FFT_FROM, block_size, work_bytes_per_map
-    from pipeline.physics.interaction_fft import padded_length
+    from g2tom.physics.interaction import FFT_FROM, block_size, work_bytes_per_map
+    from g2tom.physics.interaction_fft import padded_length
 
     n = _cells(scenario)
     cells = float(n) * n
@@ -301,7 +301,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     per_realization = per_map + per_field
     cube_s = per_map * counts.computed + per_field * counts.fields
     if scenario.contact.model == "discrete":  # the pool's solves; one dense solve set per (xi, field)
-        from pipeline.before_work.discrete_cost import (expected_counts, field_seconds, grown_pool, step_fields,
+        from g2tom.before_work.discrete_cost import (expected_counts, field_seconds, grown_pool, step_fields,
                                                         surface_seconds)
 
         touching, candidates = expected_counts(scenario)
@@ -374,7 +374,7 @@ def format_plan(scenario: ResolvedScenario, workers: int | None = None) -> list[
             f"(range: every cell at oxide.min_realizations .. at oxide.max_realizations); so is memory "
             f"(in brackets: a cell at oxide.max_realizations)")
     if scenario.contact.model == "discrete":
-        from pipeline.before_work.discrete_cost import expected_counts
+        from g2tom.before_work.discrete_cost import expected_counts
 
         touching, candidates = expected_counts(scenario)
         lines.append(

@@ -10,7 +10,7 @@
   contact stage's own output when ``contact.nc`` is current, otherwise on a coarse solve of
   the same scene (a few hundredths of a second).
 
-Every failure is a :class:`~pipeline.config.ConfigError` naming the parameter, its value and
+Every failure is a :class:`~g2tom.config.ConfigError` naming the parameter, its value and
 what is allowed; the CLI turns it into one line and exit status 2.
 """
 
@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.config import ConfigError, ResolvedScenario, Scenario
+from g2tom.config import ConfigError, ResolvedScenario, Scenario
 
 __all__ = ["check_data_dir", "check_output_file", "check_scheduler", "check_scene", "check_discrete_reach",
            "scene_forces", "preflight"]
@@ -139,8 +139,8 @@ def scene_forces(scenario: ResolvedScenario, data_dir: str | Path | None = None)
     """
     from scipy.special import erfc
 
-    from pipeline.physics.radial_grid import force_weights
-    from pipeline.store import stage_path, stage_problem  # xarray only when needed
+    from g2tom.physics.radial_grid import force_weights
+    from g2tom.store import stage_path, stage_problem  # xarray only when needed
 
     rough = scenario.roughness
 
@@ -155,10 +155,10 @@ def scene_forces(scenario: ResolvedScenario, data_dir: str | Path | None = None)
             touching = np.count_nonzero(ds["spot_radius"].values > 0, axis=(-2, -1))
             expected = asperities(ds["r"].values, ds["separation"].transpose("delta", "r").values)
         return force, touching, expected
-    from pipeline.before_work.domains import solve_scenario
-    from pipeline.contact_solution import fields
-    from pipeline.physics.grid import cell_centres
-    from pipeline.physics.spots import cell_radii
+    from g2tom.before_work.domains import solve_scenario
+    from g2tom.contact_solution import fields
+    from g2tom.physics.grid import cell_centres
+    from g2tom.physics.spots import cell_radii
 
     coarse = dataclasses.replace(
         scenario, contact=dataclasses.replace(

@@ -1,10 +1,10 @@
 """Refusals before work on the plan's estimates, and what the CLI runs before any stage.
 
-:func:`check_resources` refuses, with :class:`~pipeline.config.ConfigError` naming the parameter
+:func:`check_resources` refuses, with :class:`~g2tom.config.ConfigError` naming the parameter
 that drives the excess (its value against the paper's), a run whose estimate
-(:func:`pipeline.before_work.plan.estimate`) exceeds the machine's memory or :data:`MAX_SECONDS`.
+(:func:`g2tom.before_work.plan.estimate`) exceeds the machine's memory or :data:`MAX_SECONDS`.
 :func:`prepare` is what the CLI runs before any stage: the checks, then the resolution of ``auto``
-domains (:func:`pipeline.before_work.domains.resolve`), then the checks on the resolved cell count.
+domains (:func:`g2tom.before_work.domains.resolve`), then the checks on the resolved cell count.
 """
 
 from __future__ import annotations
@@ -13,8 +13,9 @@ import dataclasses
 import warnings
 from typing import Any, Callable
 
-from pipeline.before_work.plan import StageEstimate, available_memory, estimate
-from pipeline.config import ConfigError, Scenario, load_scenario
+from g2tom.before_work.plan import StageEstimate, available_memory, estimate
+from g2tom.config import ConfigError, Scenario
+from g2tom.before_work.scenario_checks import load_scenario
 
 __all__ = ["MAX_SECONDS", "ANNOUNCE_AFTER", "check_resources", "prepare"]
 
@@ -108,7 +109,7 @@ def check_resources(scenario: Scenario, workers: int | None = None, memory: floa
     ConfigError
         Naming the parameter that drives the excess, its value and the estimate.
     """
-    from pipeline.before_work.domains import check_cell_count
+    from g2tom.before_work.domains import check_cell_count
 
     check_cell_count(scenario, memory or available_memory())
     limit = memory or available_memory()
@@ -140,7 +141,7 @@ def prepare(command: str, scenario: Scenario, workers: int | None = None) -> tup
     """
     if command in _NO_DOMAINS:
         return scenario, []
-    from pipeline.before_work.domains import resolve
+    from g2tom.before_work.domains import resolve
 
     check_resources(scenario, workers)
     resolved = resolve(scenario)

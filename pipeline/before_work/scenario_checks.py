@@ -1,21 +1,21 @@
 """The checks across a scenario's parameters: settings that rule each other out, run as it is loaded.
 
-:func:`check_scenario` is what :func:`pipeline.config.load_scenario` runs on every scenario it
-builds (``pipeline/__init__.py`` sets it, :func:`pipeline.config.use_cross_checks`): each value has
-then passed its own declared range, and a combination that cannot work stops the run before any
-work, with one :class:`~pipeline.config.ConfigError` naming the parameter, its value and what is
-allowed (exit status 2 from the CLI). This module imports no numpy: ``import pipeline`` stays free
-of it.
+:func:`load_scenario` reads a scenario (:func:`g2tom.config.read_scenario`: each value against
+its own declared range) and runs :func:`check_scenario` on it: a combination that cannot work stops
+the run before any work, with one :class:`~g2tom.config.ConfigError` naming the parameter, its value
+and what is allowed (exit status 2 from the CLI). This module imports no numpy at the top.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
+from typing import Any, Iterable, Mapping
 
-from pipeline.before_work.window_checks import check_domains
-from pipeline.config import AUTO, SECTIONS, ConfigError, Scenario, parameter_key
+from g2tom.before_work.window_checks import check_domains
+from g2tom.config import AUTO, SECTIONS, ConfigError, Scenario, parameter_key, read_scenario
 
-__all__ = ["check_scenario"]
+__all__ = ["check_scenario", "load_scenario"]
 
 
 #: Largest integer a netCDF attribute (64-bit signed) can record.
@@ -119,7 +119,7 @@ def check_scenario(s: Scenario) -> None:
     :func:`_check_discrete`, :func:`_check_control_variate`, :func:`_check_step_target`), integers a netCDF attribute cannot hold, the approaches' order,
     the atlas's box and, once ``contact.window`` and ``contact.r_max`` are both numbers, the
     window against the radial domain and the oxide band
-    (:func:`pipeline.before_work.window_checks.check_domains`).
+    (:func:`g2tom.before_work.window_checks.check_domains`).
 
     Raises
     ------
@@ -155,3 +155,25 @@ def check_scenario(s: Scenario) -> None:
                               f"atlas.{low} = {getattr(s.atlas, low)!r}")
     if AUTO not in (s.contact.window, s.contact.r_max):
         check_domains(s)
+
+
+def load_scenario(config: str | Path = "paper", overrides: Iterable[str] | Mapping[str, Any] = ()) -> Scenario:
+    """Load a bundled scenario by name or a TOML file, apply overrides, and check every value and
+    every combination (:func:`check_scenario`).
+
+    Parameters
+    ----------
+    config
+        A bundled scenario name (:func:`g2tom.config.bundled_scenarios`) or a path to a TOML file,
+        which may set ``base = "paper"`` to start from a bundled scenario.
+    overrides
+        ``"section.key=value"`` strings (values in TOML syntax) or a mapping ``{"section.key": value}``.
+
+    Raises
+    ------
+    ConfigError
+        Naming the parameter, its value and the allowed range.
+    """
+    scenario = read_scenario(config, overrides)
+    check_scenario(scenario)
+    return scenario

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from pipeline.config import ConfigError, Scenario
+from g2tom.config import ConfigError, Scenario
 
 __all__ = ["JOINT_MIN_VALUES", "check_surrogate_grid"]
 

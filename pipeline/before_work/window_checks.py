@@ -1,10 +1,10 @@
 """The checks of a scenario's spot window, radial domain and oxide band, once they are numbers.
 
 :func:`check_domains` runs as a scenario with an explicit ``contact.window`` and
-``contact.r_max`` is loaded (:func:`pipeline.before_work.scenario_checks.check_scenario`), and
-again on the resolved scenario (:func:`pipeline.before_work.domains.resolve`): both before any
+``contact.r_max`` is loaded (:func:`g2tom.before_work.scenario_checks.check_scenario`), and
+again on the resolved scenario (:func:`g2tom.before_work.domains.resolve`): both before any
 work. It takes a scenario whose two domains are numbers, resolved or not, so it counts the window's
-cells itself (:func:`pipeline.config.odd_cells`). Like the other checks it imports no numpy at the
+cells itself (:func:`g2tom.config.odd_cells`). Like the other checks it imports no numpy at the
 top (``import pipeline`` stays free of it).
 """
 
@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import warnings
 
-from pipeline.config import ConfigError, Scenario, odd_cells
+from g2tom.config import ConfigError, Scenario, odd_cells
 
 __all__ = ["check_domains", "FIELD_BYTES_PER_ENTRY"]
 
@@ -62,8 +62,8 @@ def check_domains(s: Scenario) -> None:
 
 def _modes_in_band(s: Scenario, n_cells: int, lam: float) -> int:
     """Independent modes of ``lam``'s band on the lattice of the window of ``n_cells`` cells a side:
-    the size of :func:`pipeline.physics.oxide_band.band`, 0 where it holds none."""
-    from pipeline.physics import oxide_band  # here, not above: import pipeline stays free of numpy
+    the size of :func:`g2tom.physics.oxide_band.band`, 0 where it holds none."""
+    from g2tom.physics import oxide_band  # here, not above: import pipeline stays free of numpy
 
     try:
         return oxide_band.band(n_cells, s.cell_size, lam, s.oxide.ks_ratio, s.oxide.hurst).size
@@ -80,7 +80,7 @@ def _physical_memory() -> int:
     """Physical memory of the machine, in bytes (psutil: also on Windows, which has no os.sysconf).
 
     The bound of one chunk of fields, which no run can exceed; the plan's memory checks use the
-    memory available now instead (:func:`pipeline.before_work.plan.available_memory`).
+    memory available now instead (:func:`g2tom.before_work.plan.available_memory`).
     """
     import psutil
 

@@ -1,6 +1,6 @@
 """Benchmarks behind ``make bench``: run time against error, as ratios to a plain reference.
 
-Each module ``pipeline.bench.<name>`` exposes ``run(scenario) -> dict`` returning JSON-ready
+Each module ``g2tom.bench.<name>`` exposes ``run(scenario) -> dict`` returning JSON-ready
 figures (medians of repeated timings, errors, ratios to a reference run in the same process).
 :func:`run_benchmarks` saves ``<data_dir>/bench/<name>.json`` (and prints them with ``verbose``). Modules whose
 ``run`` also takes ``data_dir`` save labelled data there too: ``frontier`` (the accuracy–time
@@ -19,9 +19,9 @@ import platform
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
-from pipeline import __version__
-from pipeline.config import ConfigError, Scenario
-from pipeline.store import atomic_path
+from g2tom import __version__
+from g2tom.config import ConfigError, Scenario
+from g2tom.store import atomic_path
 
 __all__ = ["BENCHMARKS", "PHYSICS_BENCH", "bench_problem", "physics_benchmarks", "run_benchmarks", "summary_lines"]
 
@@ -84,7 +84,7 @@ def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str]
     out_dir = Path(data_dir) / "bench"
     written: dict[str, Path] = {}
     for name in names:
-        module = importlib.import_module(f"pipeline.bench.{name}")
+        module = importlib.import_module(f"g2tom.bench.{name}")
         extra = {"data_dir": data_dir} if "data_dir" in inspect.signature(module.run).parameters else {}
         result = {"benchmark": name, "scenario": scenario.name, "config_hash": scenario.config_hash(),
                   "machine": _machine(), **module.run(scenario, **extra)}
@@ -106,7 +106,7 @@ def bench_problem(data_dir: str | Path, name: str, scenario: Scenario) -> str | 
     """Why ``<data_dir>/bench/<name>.json`` cannot be kept for ``scenario`` (one line), or None if it can.
 
     A benchmark's JSON is kept when it is readable and records the scenario's whole configuration
-    hash (:meth:`~pipeline.config.Scenario.config_hash`).
+    hash (:meth:`~g2tom.config.Scenario.config_hash`).
     """
     path = Path(data_dir) / "bench" / f"{name}.json"
     if not path.is_file():

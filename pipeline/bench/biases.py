@@ -29,10 +29,11 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.compute import ComputeOptions
-from pipeline.config import ResolvedScenario, Scenario, load_scenario
-from pipeline.before_work.domains import resolve
-from pipeline.stages import contact, cube, fits, oxide
+from g2tom.compute import ComputeOptions
+from g2tom.config import ResolvedScenario, Scenario
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.stages import contact, cube, fits, oxide
 
 __all__ = ["STEPS", "run"]
 

@@ -15,11 +15,11 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.before_work.domains import solve_scenario
-from pipeline.bench.timing import median_time
-from pipeline.config import Scenario
-from pipeline.contact_solution import fields
-from pipeline.stages import contact
+from g2tom.before_work.domains import solve_scenario
+from g2tom.bench.timing import median_time
+from g2tom.config import Scenario
+from g2tom.contact_solution import fields
+from g2tom.stages import contact
 
 __all__ = ["run"]
 

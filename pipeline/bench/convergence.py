@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.compute import ComputeOptions
-from pipeline.config import ResolvedScenario
-from pipeline.stages import contact, cube, fits, oxide
+from g2tom.compute import ComputeOptions
+from g2tom.config import ResolvedScenario
+from g2tom.stages import contact, cube, fits, oxide
 
 __all__ = ["run", "compare", "fit_at"]
 
@@ -96,7 +96,7 @@ def run(scenario: ResolvedScenario) -> dict[str, Any]:
     dict
         ``resolution`` (r), ``doubling`` and ``window_control`` (see :func:`compare`, rows
         dropped from the JSON summary lines but kept in the file), the wall seconds of each run
-        and the field cost per field at r and 2 r (:mod:`pipeline.bench.oxide` reports more).
+        and the field cost per field at r and 2 r (:mod:`g2tom.bench.oxide` reports more).
     """
     ox = scenario.oxide
     options = ComputeOptions(progress=False)

@@ -18,14 +18,14 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.compute import ComputeOptions
-from pipeline.config import ResolvedScenario, Scenario
-from pipeline.physics import constriction
-from pipeline.physics.crops import choose_crops
-from pipeline.physics.spot_geometry import SpotGeometry
-from pipeline.stages import contact as contact_stage
-from pipeline.stages import cube
-from pipeline.stages import oxide as oxide_stage
+from g2tom.compute import ComputeOptions
+from g2tom.config import ResolvedScenario, Scenario
+from g2tom.physics import constriction
+from g2tom.physics.crops import choose_crops
+from g2tom.physics.spot_geometry import SpotGeometry
+from g2tom.stages import contact as contact_stage
+from g2tom.stages import cube
+from g2tom.stages import oxide as oxide_stage
 
 __all__ = ["run"]
 

@@ -25,16 +25,16 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.compute import ComputeOptions
-from pipeline.config import ResolvedScenario, Scenario
-from pipeline.before_work.domains import resolve, solve_scenario
-from pipeline.contact_solution import fields
-from pipeline.physics import discrete_contact as dc
-from pipeline.physics import oxide_band
-from pipeline.physics.discrete_resistance import ITERATIVE, currents, resistances
-from pipeline.physics.spot_share import RULES, effective_radius
-from pipeline.scene import FieldSource
-from pipeline.stages import contact, contact_discrete, cube, cube_discrete
+from g2tom.compute import ComputeOptions
+from g2tom.config import ResolvedScenario, Scenario
+from g2tom.before_work.domains import resolve, solve_scenario
+from g2tom.contact_solution import fields
+from g2tom.physics import discrete_contact as dc
+from g2tom.physics import oxide_band
+from g2tom.physics.discrete_resistance import ITERATIVE, currents, resistances
+from g2tom.physics.spot_share import RULES, effective_radius
+from g2tom.scene import FieldSource
+from g2tom.stages import contact, contact_discrete, cube, cube_discrete
 
 __all__ = ["run"]
 
@@ -132,7 +132,7 @@ def _large_unions(scenario: ResolvedScenario) -> list[dict[str, Any]]:
     at :data:`LARGE_SCENE` (mu, Pi), the scenario's sigma and R* (loads spanning F' 0.05-20, as an
     atlas scene): at the steps whose union of conducting spots is nearest each of
     :data:`LARGE_UNIONS`, every oxide fraction of the first field at the smallest and largest lambda."""
-    from pipeline.atlas.design import Scene, scene_scenario
+    from g2tom.atlas.design import Scene, scene_scenario
 
     mu, pi = LARGE_SCENE
     big = scene_scenario(scenario, Scene("bench", mu, pi, False))

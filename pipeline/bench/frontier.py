@@ -15,7 +15,7 @@ Three sweeps, each against a reference computed in the same process:
   the width of the bootstrap intervals of alpha and gamma per (xi, lambda), and the time
   (oxide and cube prorated to n from one timed run of N, plus the timed fits).
 * prefix (from an existing adaptive ``<data_dir>/cube.nc``, else skipped with a note): per
-  (xi, lambda), the fast rule's half-widths of alpha and gamma (:func:`pipeline.stages.cube_rounds.half_widths`)
+  (xi, lambda), the fast rule's half-widths of alpha and gamma (:func:`g2tom.stages.cube_rounds.half_widths`)
   at log-spaced prefixes n = 50 .. the cell's count, and the cube time prorated to n.
 
 ``make bench`` writes ``<data_dir>/bench/frontier.nc`` (:func:`write`) and its figures
@@ -32,13 +32,13 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.bench.frontier_plot import plot
-from pipeline.bench.frontier_prefix import adaptive_prefix, prefix_summary
-from pipeline.bench.frontier_sweeps import contact_frontier, cube_frontier, ensemble_frontier
-from pipeline.bench.schema import sweep_column, sweep_index
-from pipeline.config import ResolvedScenario
-from pipeline.stages.schema import labelled
-from pipeline.store import atomic_path
+from g2tom.bench.frontier_plot import plot
+from g2tom.bench.frontier_prefix import adaptive_prefix, prefix_summary
+from g2tom.bench.frontier_sweeps import contact_frontier, cube_frontier, ensemble_frontier
+from g2tom.bench.schema import sweep_column, sweep_index
+from g2tom.config import ResolvedScenario
+from g2tom.stages.schema import labelled
+from g2tom.store import atomic_path
 
 __all__ = ["run", "recommend", "write", "USES"]
 

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.bench import frontier_sweeps as sweeps
+from g2tom.bench import frontier_sweeps as sweeps
 
 __all__ = ["plot"]
 

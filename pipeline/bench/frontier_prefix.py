@@ -1,7 +1,7 @@
 """The frontier's prefix curve: an adaptive cube's fast-rule half-widths at prefixes of every cell.
 
 From an existing adaptive ``<data_dir>/cube.nc`` (else skipped with a note): per (xi, lambda), the
-fast rule's half-widths of alpha and gamma (:func:`pipeline.stages.cube_rounds.half_widths`) at
+fast rule's half-widths of alpha and gamma (:func:`g2tom.stages.cube_rounds.half_widths`) at
 log-spaced prefixes n = 50 .. the cell's count, and the cube time prorated to n.
 """
 
@@ -14,9 +14,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.bench.schema import FRONTIER
-from pipeline.config import Scenario
-from pipeline.stages.schema import labelled
+from g2tom.bench.schema import FRONTIER
+from g2tom.config import Scenario
+from g2tom.stages.schema import labelled
 
 __all__ = ["PREFIX_FROM", "PREFIX_POINTS", "prefix_counts", "prefix_curve", "adaptive_prefix", "prefix_summary"]
 
@@ -51,7 +51,7 @@ def prefix_curve(scenario: Scenario, cube_ds: xr.Dataset, cube_seconds: float) -
         (absolute) and ``prefix_seconds``, each (cube_xi, cube_lambda, prefix_step); the last
         step is the cell's count, where the half-widths equal the cube's ``rule_*_half_width``.
     """
-    from pipeline.stages import cube_rounds
+    from g2tom.stages import cube_rounds
 
     rule = cube_rounds.stopping_rule(scenario, cube_ds["force"].values, cube_ds["force_normalized"].values)
     resistance = cube_ds["resistance"].transpose("xi", "lambda", "delta", "realization").values
@@ -89,7 +89,7 @@ def adaptive_prefix(scenario: Scenario, data_dir: str | Path) -> tuple[xr.Datase
     tuple
         The curve (None when skipped) and a one-line note saying where it came from or why not.
     """
-    from pipeline import store
+    from g2tom import store
 
     problem = store.stage_problem(data_dir, "cube", scenario)
     if problem:

@@ -1,6 +1,6 @@
 """The accuracy–time frontier's three sweeps: contact settings, cube settings and ensemble size.
 
-Each is measured against a reference computed in the same process (see :mod:`pipeline.bench.frontier`,
+Each is measured against a reference computed in the same process (see :mod:`g2tom.bench.frontier`,
 which writes, plots and turns them into a recommendation).
 """
 
@@ -13,12 +13,12 @@ from typing import Any, Callable, TypeVar
 import numpy as np
 import xarray as xr
 
-from pipeline.bench.schema import FRONTIER
-from pipeline.bench.timing import median_time
-from pipeline.compute import ComputeOptions
-from pipeline.config import ResolvedScenario, Scenario
-from pipeline.physics.radial_grid import force_weights
-from pipeline.stages.schema import labelled
+from g2tom.bench.schema import FRONTIER
+from g2tom.bench.timing import median_time
+from g2tom.compute import ComputeOptions
+from g2tom.config import ResolvedScenario, Scenario
+from g2tom.physics.radial_grid import force_weights
+from g2tom.stages.schema import labelled
 
 __all__ = ["contact_frontier", "cube_frontier", "ensemble_frontier", "NODES", "TOLERANCES", "METHODS", "CROPS"]
 
@@ -51,7 +51,7 @@ def _replace(scenario: _S, section: str, **changes: Any) -> _S:
 
 def _force_and_area(scenario: Scenario, r: np.ndarray, sols: list) -> tuple[np.ndarray, np.ndarray]:
     """Force (N) and real contact area (m^2) of every approach."""
-    from pipeline.contact_solution import fields
+    from g2tom.contact_solution import fields
 
     f = fields(scenario, r, sols)
     return f["force"], f["area"] @ force_weights(r)
@@ -59,7 +59,7 @@ def _force_and_area(scenario: Scenario, r: np.ndarray, sols: list) -> tuple[np.n
 
 def contact_frontier(scenario: Scenario) -> list[dict[str, Any]]:
     """Every contact setting with its time (s) and largest relative force and area errors."""
-    from pipeline.before_work.domains import solve_scenario
+    from g2tom.before_work.domains import solve_scenario
 
     n_ref = 4 * scenario.contact.n_radial
     r, sols = solve_scenario(scenario, solver="newton", n_radial=n_ref, tolerance=1e-12)
@@ -100,7 +100,7 @@ def _float32(contact_ds: xr.Dataset) -> xr.Dataset:
 
 def cube_frontier(scenario: ResolvedScenario) -> list[dict[str, Any]]:
     """Every (algorithm, crop tolerance, precision) with its time and errors in R, alpha, gamma."""
-    from pipeline.stages import contact, cube, fits, oxide
+    from g2tom.stages import contact, cube, fits, oxide
 
     base = _replace(_replace(scenario, "oxide", **SUBSET, ensemble="fixed", n_realizations=CUBE_REALIZATIONS),
                     "fits", n_bootstrap=10)
@@ -131,7 +131,7 @@ def cube_frontier(scenario: ResolvedScenario) -> list[dict[str, Any]]:
 
 def ensemble_frontier(scenario: ResolvedScenario) -> xr.Dataset:
     """Interval widths of alpha and gamma and time against the number of realizations."""
-    from pipeline.stages import contact, cube, fits, oxide
+    from g2tom.stages import contact, cube, fits, oxide
 
     base = _replace(scenario, "oxide", **SUBSET, ensemble="fixed", n_realizations=ENSEMBLE_REALIZATIONS)
     quiet = ComputeOptions(progress=False)

@@ -1,8 +1,8 @@
 """The full-field reference on a GPU against the CPU: one contact load step and one punch, same inputs, same run.
 
 The GPU is g2tom's own operator and solver on CuPy, the CPU tamaas (the reference, on the threads
-the CLI allows it: one) (:mod:`pipeline.reference.devices`), on the inputs of
-:mod:`pipeline.bench.reference_step` at several grid sizes: both up to 1024^2, the GPU alone
+the CLI allows it: one) (:mod:`g2tom.reference.devices`), on the inputs of
+:mod:`g2tom.bench.reference_step` at several grid sizes: both up to 1024^2, the GPU alone
 beyond (one CPU thread takes minutes a step there). The GPU's figures are medians of
 :data:`REPEATS` after one untimed warm-up (cuFFT plans, kernel compilation), the CPU's of
 :data:`REPEATS` below :data:`CPU_ONCE_FROM` pixels a side, else one solve. Where no GPU (or no
@@ -14,9 +14,9 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from pipeline.bench.reference_step import LOAD, largest_differences, row
-from pipeline.config import Scenario
-from pipeline.reference import devices, missing_extra, scene
+from g2tom.bench.reference_step import LOAD, largest_differences, row
+from g2tom.config import Scenario
+from g2tom.reference import devices, missing_extra, scene
 
 __all__ = ["BOTH", "GPU_ONLY", "REPEATS", "CPU_ONCE_FROM", "run"]
 

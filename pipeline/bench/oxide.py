@@ -15,12 +15,12 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.compute import ComputeOptions
-from pipeline.config import ResolvedScenario
-from pipeline.physics import oxide_band, oxide_field
-from pipeline.physics.grid import cell_centres
-from pipeline.scene import FieldSource, bands
-from pipeline.stages import oxide
+from g2tom.compute import ComputeOptions
+from g2tom.config import ResolvedScenario
+from g2tom.physics import oxide_band, oxide_field
+from g2tom.physics.grid import cell_centres
+from g2tom.scene import FieldSource, bands
+from g2tom.stages import oxide
 
 __all__ = ["run"]
 

@@ -19,15 +19,15 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.bench.cube import _max_rel_error, _subset_masks
-from pipeline.compute import ComputeOptions
-from pipeline.config import ResolvedScenario, Scenario
-from pipeline.physics import constriction, point_model
-from pipeline.physics.crops import choose_crops
-from pipeline.physics.spot_geometry import SpotGeometry
-from pipeline.stages import contact as contact_stage
-from pipeline.stages import cube
-from pipeline.stages import oxide as oxide_stage
+from g2tom.bench.cube import _max_rel_error, _subset_masks
+from g2tom.compute import ComputeOptions
+from g2tom.config import ResolvedScenario, Scenario
+from g2tom.physics import constriction, point_model
+from g2tom.physics.crops import choose_crops
+from g2tom.physics.spot_geometry import SpotGeometry
+from g2tom.stages import contact as contact_stage
+from g2tom.stages import cube
+from g2tom.stages import oxide as oxide_stage
 
 __all__ = ["run"]
 

@@ -2,7 +2,7 @@
 
 Builds surrogate tables on the scenario's (lambda, xi) grid with a log-space rank-2 model and
 smooth band tables (the timing does not depend on their values), times
-:func:`pipeline.predict.predict` on 10^5 random queries inside the fitted ranges (median of
+:func:`g2tom.predict.predict` on 10^5 random queries inside the fitted ranges (median of
 repeated runs), and, as the reference in the same process, the same predictor called once per
 query on a few hundred of them; reports both, their ratio per query, and the largest relative
 difference between the two on the common queries (they must agree).
@@ -16,11 +16,11 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.bench.timing import median_time
-from pipeline.config import Scenario
-from pipeline.predict.predictor import predict
-from pipeline.stages.surrogate_file import CURVE_TABLE, GRID_TABLES, STEP_TABLES, SurrogateTables
-from pipeline.scene import scene_groups
+from g2tom.bench.timing import median_time
+from g2tom.config import Scenario
+from g2tom.predict.predictor import predict
+from g2tom.stages.surrogate_file import CURVE_TABLE, GRID_TABLES, STEP_TABLES, SurrogateTables
+from g2tom.scene import scene_groups
 
 __all__ = ["run"]
 

@@ -14,10 +14,10 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.bench.timing import median_time
-from pipeline.reference import elastic, scene
-from pipeline.reference.contact import contact_at_force
-from pipeline.reference.punch import punch_conductance
+from g2tom.bench.timing import median_time
+from g2tom.reference import elastic, scene
+from g2tom.reference.contact import contact_at_force
+from g2tom.reference.punch import punch_conductance
 
 __all__ = ["LOAD", "Setting", "row", "largest_differences"]
 

@@ -4,9 +4,9 @@ For windows of about L = 57, 113, 227 and 453 cells a side (eta = 2e8 x 1, 4, 16
 ``auto`` windows), it measures
 
 * each interaction algorithm per map (folded DFT-GEMM ~ L^3, padded FFT ~ L^2 log L), one
-  thread, and which one ``auto`` takes (:func:`pipeline.physics.interaction.auto_method`);
+  thread, and which one ``auto`` takes (:func:`g2tom.physics.interaction.auto_method`);
 * the time per simulation (one oxide mask at one load step) of the cube's kernel
-  (:func:`pipeline.physics.constriction.resistance` with the scenario's crops), on real
+  (:func:`g2tom.physics.constriction.resistance` with the scenario's crops), on real
   oxide masks, and its growth from L = 113 against L^2 log L;
 * the plan's memory and time estimates of the paper's full study on each scene;
 * the paper's scene against today's 57-cell window (the ``published`` window, 0.4 R*): the
@@ -24,17 +24,18 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.before_work import plan
-from pipeline.compute import ComputeOptions
-from pipeline.config import ResolvedScenario, Scenario, load_scenario
-from pipeline.before_work.domains import resolve
-from pipeline.physics import constriction, interaction
-from pipeline.physics.crops import choose_crops
-from pipeline.physics.spot_geometry import SpotGeometry
-from pipeline.physics import interaction_fft as fft
-from pipeline.stages import contact as contact_stage
-from pipeline.stages import cube
-from pipeline.stages import oxide as oxide_stage
+from g2tom.before_work import plan
+from g2tom.compute import ComputeOptions
+from g2tom.config import ResolvedScenario, Scenario
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.physics import constriction, interaction
+from g2tom.physics.crops import choose_crops
+from g2tom.physics.spot_geometry import SpotGeometry
+from g2tom.physics import interaction_fft as fft
+from g2tom.stages import contact as contact_stage
+from g2tom.stages import cube
+from g2tom.stages import oxide as oxide_stage
 
 __all__ = ["run", "ETAS"]
 

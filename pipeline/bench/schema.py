@@ -1,15 +1,15 @@
 """The variable schema of the benchmarks' netCDF files: each variable's dims, units and long name, once.
 
-``bench/frontier.nc`` (:mod:`pipeline.bench.frontier`: :data:`FRONTIER`, the sweep tables'
-columns by :func:`sweep_column`) and ``bench/stability.nc`` (:mod:`pipeline.bench.stability`:
-:data:`STABILITY`), in the form of the stage files' schema (:mod:`pipeline.stages.schema`).
-Their attributes are written long name first (:func:`pipeline.stages.schema.labelled`), as
+``bench/frontier.nc`` (:mod:`g2tom.bench.frontier`: :data:`FRONTIER`, the sweep tables'
+columns by :func:`sweep_column`) and ``bench/stability.nc`` (:mod:`g2tom.bench.stability`:
+:data:`STABILITY`), in the form of the stage files' schema (:mod:`g2tom.stages.schema`).
+Their attributes are written long name first (:func:`g2tom.stages.schema.labelled`), as
 they always were.
 """
 
 from __future__ import annotations
 
-from pipeline.stages.schema import Variable
+from g2tom.stages.schema import Variable
 
 __all__ = ["FRONTIER", "STABILITY", "SWEEP_UNITS", "sweep_column", "sweep_index"]
 

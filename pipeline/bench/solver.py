@@ -1,7 +1,7 @@
 """g2tom's own full-field solver on the CPU against tamaas: one contact load step and one punch, same inputs, same run.
 
 Both on NumPy / tamaas on the threads the CLI allows (one), on the inputs of
-:mod:`pipeline.bench.reference_step`: medians of :data:`REPEATS`, the ratios tamaas over ours and
+:mod:`g2tom.bench.reference_step`: medians of :data:`REPEATS`, the ratios tamaas over ours and
 our largest differences from tamaas. Where tamaas is missing the benchmark says so.
 """
 
@@ -10,9 +10,9 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from pipeline.bench.reference_step import LOAD, largest_differences, row
-from pipeline.config import Scenario
-from pipeline.reference import missing_extra
+from g2tom.bench.reference_step import LOAD, largest_differences, row
+from g2tom.config import Scenario
+from g2tom.reference import missing_extra
 
 __all__ = ["SIZES", "REPEATS", "run"]
 

@@ -6,7 +6,7 @@ grid's; a discrete scenario's own pool is checked against each surface's K in th
 ``discrete_barber_conductance``, and the report's Barber section):
 
 * **Barber**: the clean conductance of Greenwood's form, the point model and the point model
-  with the lattice self term (:func:`pipeline.stages.cube.clean_conductances`), each over
+  with the lattice self term (:func:`g2tom.stages.cube.clean_conductances`), each over
   K / (E* rho*) with K the exact linearisation of the Greenwood-Tripp system, at every load
   step (asperities: the mean over the first round's drawn surfaces);
 * **cost**: the median wall time per oxide map of one cube task (a chunk of
@@ -25,12 +25,12 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.bench.timing import median_time
-from pipeline.config import ResolvedScenario, Scenario
-from pipeline.before_work.domains import resolve
-from pipeline.physics.spot_models import DISCRETIZATIONS
-from pipeline.stages import contact, cube, cube_chunks
-from pipeline.scene import FieldSource
+from g2tom.bench.timing import median_time
+from g2tom.config import ResolvedScenario, Scenario
+from g2tom.before_work.domains import resolve
+from g2tom.physics.spot_models import DISCRETIZATIONS
+from g2tom.stages import contact, cube, cube_chunks
+from g2tom.scene import FieldSource
 
 __all__ = ["run", "TARGETS"]
 

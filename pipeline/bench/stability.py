@@ -23,7 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.config import ConfigError, Scenario, load_scenario
+from g2tom.config import ConfigError, Scenario
+from g2tom.before_work import load_scenario
 
 __all__ = ["FAST", "CASES", "Case", "evaluate", "stability_map", "write_map", "run"]
 
@@ -95,15 +96,15 @@ def evaluate(case: Case) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         ``force`` (N), ``resistance_clean`` (ohm, NaN when not computed), ``pressure``,
         ``area_fraction``, ``separation`` over (delta, r), ``converged`` over delta.
     """
-    from pipeline.physics import constriction
-    from pipeline.physics.spot_geometry import SpotGeometry
-    from pipeline.stages import contact
+    from g2tom.physics import constriction
+    from g2tom.physics.spot_geometry import SpotGeometry
+    from g2tom.stages import contact
 
     record: dict[str, Any] = {"status": "refused", "message": "", "iterations": 0, "residual": math.nan,
                               "seconds": 0.0, "finite_nonnegative": False, "force_monotone": False,
                               "resistance_falls": False, "hertz_ratio": math.nan, "roughness_parameter": math.nan,
                               "open_circuits": 0}
-    from pipeline.before_work.domains import resolve
+    from g2tom.before_work.domains import resolve
 
     try:
         scenario = resolve(load_scenario("paper_gt", {**FAST, **case.overrides}))
@@ -157,9 +158,9 @@ def write_map(results: list[tuple[Case, dict[str, Any]]], target: str | Path) ->
     """Save the map as a labelled netCDF file (dimension ``case``) atomically."""
     import xarray as xr
 
-    from pipeline.bench.schema import STABILITY
-    from pipeline.stages.schema import labelled
-    from pipeline.store import atomic_path
+    from g2tom.bench.schema import STABILITY
+    from g2tom.stages.schema import labelled
+    from g2tom.store import atomic_path
 
     def var(key: str, dtype: Any = None) -> tuple:
         return labelled(STABILITY[key], np.array([r[key] for _, r in results], dtype=dtype))

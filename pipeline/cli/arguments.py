@@ -7,9 +7,9 @@ import re
 from pathlib import Path
 from typing import Callable, NoReturn, Sequence
 
-from pipeline import __version__
-from pipeline.cli import commands
-from pipeline.config import bundled_scenarios
+from g2tom import __version__
+from g2tom.cli import commands
+from g2tom.config import bundled_scenarios
 
 __all__ = ["attach_negative_values", "build_parser", "default_config"]
 
@@ -50,7 +50,7 @@ def _compute_args(p: argparse.ArgumentParser) -> None:
 
 def _version() -> str:
     """``--version``'s line: the package version and, in a git checkout, its commit."""
-    from pipeline.store import git_commit
+    from g2tom.store import git_commit
 
     commit = git_commit()
     return f"g2tom {__version__}" + (f" (git {commit})" if commit else "")
@@ -79,7 +79,7 @@ def attach_negative_values(argv: Sequence[str]) -> list[str]:
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``g2tom`` parser: each subcommand's options, and its handler as ``handler``
-    (:mod:`pipeline.cli.commands`)."""
+    (:mod:`g2tom.cli.commands`)."""
     parser = _Parser(
         prog="g2tom",
         description="Electrical contact resistance of rough, partially oxidized sphere-on-flat contacts.",

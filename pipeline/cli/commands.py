@@ -12,30 +12,30 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from pipeline.config import STAGE_INPUTS, ConfigError, ResolvedScenario, Scenario, parameter_table
-from pipeline.errors import StaleInputError
+from g2tom.config import STAGE_INPUTS, ConfigError, ResolvedScenario, Scenario, parameter_table
+from g2tom.errors import StaleInputError
 
 if TYPE_CHECKING:
-    from pipeline.compute import ComputeOptions
-    from pipeline.reference.validate import Part2Precision
+    from g2tom.compute import ComputeOptions
+    from g2tom.reference.validate import Part2Precision
 
 __all__ = ["STAGES", "compute_options", "stage", "run", "figures", "report", "bench", "stamp", "params", "plan",
            "predict", "atlas", "roughness", "validate"]
 
 #: Stage name -> module implementing ``run(scenario, data_dir, options) -> Path``, in order.
 STAGES: dict[str, str] = {
-    "contact": "pipeline.stages.contact",
-    "oxide": "pipeline.stages.oxide",
-    "cube": "pipeline.stages.cube",
-    "fits": "pipeline.stages.fits",
-    "surrogate": "pipeline.stages.surrogate",
+    "contact": "g2tom.stages.contact",
+    "oxide": "g2tom.stages.oxide",
+    "cube": "g2tom.stages.cube",
+    "fits": "g2tom.stages.fits",
+    "surrogate": "g2tom.stages.surrogate",
 }
 
 
 def compute_options(args: argparse.Namespace) -> ComputeOptions:
     """Where dask runs, from ``--scheduler``, ``--workers`` and ``--no-progress``; a refused
     ``--workers`` is a ConfigError."""
-    from pipeline.compute import ComputeOptions  # dask only for commands that compute
+    from g2tom.compute import ComputeOptions  # dask only for commands that compute
 
     if args.workers is not None and args.workers < 1:
         raise ConfigError(f"--workers = {args.workers} is out of range: must be >= 1")
@@ -45,8 +45,8 @@ def compute_options(args: argparse.Namespace) -> ComputeOptions:
 
 
 def _preflight(args: argparse.Namespace, scenario: ResolvedScenario, scene: bool = True) -> None:
-    """Directory, scheduler and cross-stage checks before any work (pipeline.before_work.preflight)."""
-    from pipeline.before_work.preflight import preflight
+    """Directory, scheduler and cross-stage checks before any work (g2tom.before_work.preflight)."""
+    from g2tom.before_work.preflight import preflight
 
     preflight(scenario, args.data_dir, getattr(args, "scheduler", None), scene=scene)
     for note in getattr(args, "plan_notes", ()):  # the plan, once every check has passed
@@ -70,7 +70,7 @@ def _record_timing(data_dir: Path, step: str, seconds: float, config_hash: str) 
     Each entry records the configuration hash it was run with, so the report shows only the
     times of the outputs it describes.
     """
-    from pipeline.store import atomic_path
+    from g2tom.store import atomic_path
 
     path = Path(data_dir) / "timings.json"
     try:
@@ -96,8 +96,8 @@ def run(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     if args.check:
         print("run: every check before work passed (configuration, surrogate grid, plan, scene)", file=sys.stderr)
         return
-    from pipeline.config import STAGE_UPSTREAM
-    from pipeline.store import stage_path, stage_problem
+    from g2tom.config import STAGE_UPSTREAM
+    from g2tom.store import stage_path, stage_problem
 
     rebuilt: set[str] = set()
     for name in STAGES:  # as make: a stage file built from this configuration, on kept inputs, is kept
@@ -107,7 +107,7 @@ def run(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
         _run_stage(name, scenario, args)
         rebuilt.add(name)
     if not args.no_bench:  # what make run adds to the report (the Makefile's PHYSICS_BENCH)
-        from pipeline.bench import physics_benchmarks
+        from g2tom.bench import physics_benchmarks
 
         for line in physics_benchmarks(scenario, args.data_dir):
             print(line, file=sys.stderr)
@@ -117,9 +117,9 @@ def run(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
 
 def figures(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     """``g2tom figures``: the figures of current stage files (refused before any is drawn otherwise)."""
-    from analysis.figures import write_figures
+    from g2tom.analysis.figures import write_figures
 
-    from pipeline.store import stage_problem
+    from g2tom.store import stage_problem
 
     _preflight(args, scenario, scene=False)
     # checked before drawing, so that no figure is replaced by half a set
@@ -139,7 +139,7 @@ def _refuse_if(what: str, problems: list[str]) -> None:
 
 def _report_problems(data_dir: Path, scenario: Scenario) -> list[str]:
     """Why a report of ``data_dir`` would describe missing, stale or outdated results."""
-    from pipeline.store import stage_path, stage_problem
+    from g2tom.store import stage_path, stage_problem
 
     problems = [p for p in (stage_problem(data_dir, s, scenario) for s in ("fits", "surrogate")) if p]
     stages = [stage_path(data_dir, s) for s in STAGES if stage_path(data_dir, s).is_file()]
@@ -156,7 +156,7 @@ def _report_problems(data_dir: Path, scenario: Scenario) -> list[str]:
 
 def report(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     """``g2tom report``: report.md and report.html of current results and figures."""
-    from analysis.report import write_report
+    from g2tom.analysis.report import write_report
 
     _preflight(args, scenario, scene=False)
     _refuse_if("report", _report_problems(args.data_dir, scenario))
@@ -166,7 +166,7 @@ def report(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
 
 def bench(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     """``g2tom bench``: the benchmarks (all, or ``--only`` those), saved under ``<data-dir>/bench``."""
-    from pipeline.bench import run_benchmarks
+    from g2tom.bench import run_benchmarks
 
     _preflight(args, scenario, scene=False)
     run_benchmarks(scenario, args.data_dir, only=args.only, verbose=args.verbose)
@@ -179,7 +179,7 @@ def stamp(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     damaged file) or was built from another configuration (e.g. by ``g2tom fits --set
     ...``), so that make rebuilds it instead of failing on it forever.
     """
-    from pipeline.store import stage_path, stage_problem
+    from g2tom.store import stage_path, stage_problem
 
     _preflight(args, scenario, scene=False)
     stamps = args.data_dir / ".stamps"
@@ -210,16 +210,16 @@ def params(args: argparse.Namespace, scenario: Scenario) -> None:
 def plan(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     """``g2tom plan``: each stage's estimate (``--atlas``: the atlas's scenes; ``--validate``: the
     validation's cases)."""
-    from pipeline.before_work.plan import format_plan
+    from g2tom.before_work.plan import format_plan
 
     if args.validate:
-        from pipeline.reference.validate import format_validate_plan
+        from g2tom.reference.validate import format_validate_plan
 
         print("\n".join(format_validate_plan(args.config, args.workers)))
         return
 
     if args.atlas:
-        from pipeline.atlas.design import AtlasDesign, format_atlas_plan, plan_atlas
+        from g2tom.atlas.design import AtlasDesign, format_atlas_plan, plan_atlas
 
         # one single-threaded scene per worker
         parallel = max(1, args.workers or os.cpu_count() or 1)
@@ -230,8 +230,8 @@ def plan(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
 
 def predict(args: argparse.Namespace, scenario: Scenario) -> None:
     """``g2tom predict``: the surrogate's resistances (an unreadable surrogate.nc refused first)."""
-    from pipeline.cli.predict import predict_cli
-    from pipeline.store import stage_path, unreadable
+    from g2tom.cli.predict import predict_cli
+    from g2tom.store import stage_path, unreadable
 
     surrogate = args.surrogate or stage_path(args.data_dir, "surrogate")
     problem = Path(surrogate).suffix != ".json" and Path(surrogate).is_file() and unreadable(surrogate, "surrogate")
@@ -243,15 +243,15 @@ def predict(args: argparse.Namespace, scenario: Scenario) -> None:
 
 def atlas(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     """``g2tom atlas``: every scene of the atlas's design, then its surrogate and held-out errors."""
-    from pipeline.atlas.run import run_atlas
-    from pipeline.atlas.design import AtlasDesign
+    from g2tom.atlas.run import run_atlas
+    from g2tom.atlas.design import AtlasDesign
 
     _preflight(args, scenario, scene=False)
     if args.workers is None and args.scheduler is None:
         args.workers = os.cpu_count() or 1  # a local cluster, one single-threaded scene per core
     path = run_atlas(scenario, AtlasDesign.of(scenario), args.data_dir, compute_options(args))
     print(f"atlas: wrote {path}", file=sys.stderr)
-    from pipeline.atlas.fit import CURVE, curve_words, write_atlas_surrogate
+    from g2tom.atlas.fit import CURVE, curve_words, write_atlas_surrogate
 
     target, doc = write_atlas_surrogate(path)
     held, worst = doc["heldout"], doc["heldout"]["worst"]
@@ -266,7 +266,7 @@ def atlas(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
 
 def roughness(args: argparse.Namespace, scenario: Scenario) -> None:
     """``g2tom roughness``: sigma, eta and beta of a measured height map (no scenario used)."""
-    from pipeline.cli.roughness import roughness_cli
+    from g2tom.cli.roughness import roughness_cli
 
     roughness_cli(args)
 
@@ -275,7 +275,7 @@ def _steps(text: str | None) -> tuple[int, ...] | None:
     """``--steps`` as load-step numbers (ConfigError naming a value that is not a whole number)."""
     if text is None:
         return None
-    from pipeline.cli.parsing import number_list
+    from g2tom.cli.parsing import number_list
 
     values = number_list("--steps", text)
     if not all(v.is_integer() for v in values):
@@ -285,8 +285,8 @@ def _steps(text: str | None) -> tuple[int, ...] | None:
 
 def _precision(args: argparse.Namespace) -> "Part2Precision":
     """Part 2's precision from ``--standard-error`` (CLEAN[,OXIDIZED]) and the realization caps."""
-    from pipeline.cli.parsing import number_list
-    from pipeline.reference.validate import Part2Precision
+    from g2tom.cli.parsing import number_list
+    from g2tom.reference.validate import Part2Precision
 
     error = None
     if args.standard_error is not None:
@@ -300,16 +300,16 @@ def _precision(args: argparse.Namespace) -> "Part2Precision":
 
 
 def validate(args: argparse.Namespace, scenario: Scenario) -> None:
-    """The full-field reference against g2tom (pipeline.reference); the extra is checked first."""
-    from pipeline.reference import missing_extra
+    """The full-field reference against g2tom (g2tom.reference); the extra is checked first."""
+    from g2tom.reference import missing_extra
 
     if args.overrides:
         raise ConfigError("g2tom validate runs its own validation scene (the default set or --quick): --set is "
                           "not used by it; leave it out (--config names the scenario whose model part 2 validates)")
-    from pipeline.before_work.preflight import check_data_dir, check_scheduler
-    from pipeline.reference.validate import chosen_set, output_folder, plan_lines, run_validation
+    from g2tom.before_work.preflight import check_data_dir, check_scheduler
+    from g2tom.reference.validate import chosen_set, output_folder, plan_lines, run_validation
 
-    from pipeline.reference.devices import resolve, solver_for
+    from g2tom.reference.devices import resolve, solver_for
 
     vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads,
                       steps=_steps(args.steps), precision=_precision(args))
@@ -330,7 +330,7 @@ def validate(args: argparse.Namespace, scenario: Scenario) -> None:
     if args.workers is None and args.scheduler is None:
         # on the CPU a local cluster, one single-threaded case per core (as the atlas); on the GPU one case at a time
         args.workers = (os.cpu_count() or 1) if vset.device == "cpu" else 1
-    from analysis.figures_validate import figure
+    from g2tom.analysis.figures_validate import figure
 
     run_validation(vset, output_folder(args.data_dir, args.surface), progress=not args.no_progress, draw=figure,
                    config=args.config, options=compute_options(args))

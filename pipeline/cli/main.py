@@ -15,12 +15,13 @@ import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Sequence  # noqa: E402
 
-from pipeline.before_work.resources import prepare  # noqa: E402
-from pipeline.before_work.surrogate_grid import check_surrogate_grid  # noqa: E402
-from pipeline.cli.arguments import attach_negative_values, build_parser, default_config  # noqa: E402
-from pipeline.cli.commands import compute_options  # noqa: E402
-from pipeline.config import ConfigError, Scenario, load_scenario  # noqa: E402
-from pipeline.errors import StaleInputError  # noqa: E402
+from g2tom.before_work.resources import prepare  # noqa: E402
+from g2tom.before_work.surrogate_grid import check_surrogate_grid  # noqa: E402
+from g2tom.cli.arguments import attach_negative_values, build_parser, default_config  # noqa: E402
+from g2tom.cli.commands import compute_options  # noqa: E402
+from g2tom.config import ConfigError, Scenario  # noqa: E402
+from g2tom.before_work import load_scenario
+from g2tom.errors import StaleInputError  # noqa: E402
 
 __all__ = ["main"]
 
@@ -76,7 +77,7 @@ BROKEN_PIPE = 141
 def _kept(args: argparse.Namespace) -> str:
     """What an interrupted command kept, and how to go on from it (one line)."""
     if args.command == "validate":
-        from pipeline.reference.validate import output_folder
+        from g2tom.reference.validate import output_folder
 
         where = output_folder(args.data_dir, args.surface) / "cases"
         return (f"the cases finished so far are kept in {where}; run the same `g2tom validate` command again to "

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.config import ConfigError
+from g2tom.config import ConfigError
 
 __all__ = ["number_list"]
 

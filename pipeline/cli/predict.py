@@ -15,14 +15,14 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from pipeline.before_work.preflight import check_output_file
-from pipeline.config import ConfigError, Scenario, read_input_text
-from pipeline.cli.parsing import number_list
-from pipeline.predict.answer import choose_surrogate, predict_with
-from pipeline.predict.atlas import NOT_IN_ATLAS
-from pipeline.predict.domain import with_measured_roughness
-from pipeline.predict.queries import OUTPUT_COLUMNS, check_values
-from pipeline.stages.surrogate_file import SurrogateTables
+from g2tom.before_work.preflight import check_output_file
+from g2tom.config import ConfigError, Scenario, read_input_text
+from g2tom.cli.parsing import number_list
+from g2tom.predict.answer import choose_surrogate, predict_with
+from g2tom.predict.atlas import NOT_IN_ATLAS
+from g2tom.predict.domain import with_measured_roughness
+from g2tom.predict.queries import OUTPUT_COLUMNS, check_values
+from g2tom.stages.surrogate_file import SurrogateTables
 
 __all__ = ["predict_cli", "to_csv", "to_json", "to_table", "INPUT_ALIASES", "TABLE_COLUMNS"]
 
@@ -112,7 +112,7 @@ def to_csv(ds: xr.Dataset) -> str:
 def to_json(ds: xr.Dataset) -> str:
     """Prediction dataset as one JSON object: who answered, each column's unit and meaning, and one
     object per query (NaN as null, infinities as "inf")."""
-    from pipeline.stages.surrogate_file import _encode
+    from g2tom.stages.surrogate_file import _encode
 
     columns = _columns(ds)
     rows = [dict(zip(map(_label, columns), values)) for values in zip(*(_encode(c) for c in columns.values()))]
@@ -166,7 +166,7 @@ def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
     if args.output is None:
         sys.stdout.write(text)
     else:
-        from pipeline.store import atomic_path
+        from g2tom.store import atomic_path
 
         with atomic_path(args.output) as tmp:
             tmp.write_text(text)

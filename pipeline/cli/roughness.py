@@ -1,5 +1,5 @@
 """``g2tom roughness FILE``: the moments and Greenwood–Williamson parameters of a measured surface
-(:func:`pipeline.heightmap.measure`), printed as text or one JSON object."""
+(:func:`g2tom.heightmap.measure`), printed as text or one JSON object."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import json
 import warnings
 from typing import Any
 
-from pipeline.heightmap import PLAUSIBLE_SIGMA, measure
+from g2tom.heightmap import PLAUSIBLE_SIGMA, measure
 
 __all__ = ["roughness_cli"]
 

@@ -5,26 +5,26 @@ A scenario is a nested, frozen set of dataclasses, one per section (``material``
 metadata, so validation, documentation and provenance all come from one place. All values
 are SI unless a field's unit says otherwise (``loading.delta_max`` is in units of sigma).
 
-Bundled scenarios (``paper``, ``published``) live in :mod:`pipeline.scenarios` and are
+Bundled scenarios (``paper``, ``published``) live in :mod:`g2tom.scenarios` and are
 chosen by name; any other value of ``--config`` is read as a TOML file path.
 
 The package, top down: ``declare`` (how a parameter is declared; :data:`AUTO`,
 :class:`ConfigError`), ``scene_sections`` and ``study_sections`` (the sections' parameters),
 ``scenario`` (:class:`Scenario`, its derived values and config hashes; :class:`ResolvedScenario`,
 its domains resolved; :func:`odd_cells`), ``validation`` (each value against its declaration) and
-``loading`` (:func:`load_scenario`). Config imports nothing else from the package; the checks
-across parameters live before work (:mod:`pipeline.before_work.scenario_checks`) and are set by
-``pipeline/__init__.py`` (:func:`~pipeline.config.loading.use_cross_checks`).
+``loading`` (:func:`read_scenario`). Config imports nothing else from the package; the checks
+across parameters live before work, where :func:`g2tom.before_work.load_scenario` runs them on
+every scenario it reads.
 """
 
-from pipeline.config.declare import AUTO, ConfigError, format_range, parameter_key
-from pipeline.config.loading import (
-    USED_ONLY_WITH, bundled_scenarios, load_scenario, parameter_table, read_input_text, use_cross_checks)
-from pipeline.config.scenario import (
+from g2tom.config.declare import AUTO, ConfigError, format_range, parameter_key
+from g2tom.config.loading import (
+    USED_ONLY_WITH, bundled_scenarios, parameter_table, read_input_text, read_scenario)
+from g2tom.config.scenario import (
     SECTIONS, STAGE_EXCLUDED, STAGE_INPUTS, STAGE_UPSTREAM, ResolvedScenario, Scenario, odd_cells)
-from pipeline.config.scene_sections import (
+from g2tom.config.scene_sections import (
     MAX_POOL_SURFACES, POOL_CONFIDENCE, Contact, Indenter, Loading, Material, Roughness)
-from pipeline.config.study_sections import CHUNK_BYTES, KERNEL_CACHE_BYTES, Atlas, Cube, Fits, Oxide, Surrogate
+from g2tom.config.study_sections import CHUNK_BYTES, KERNEL_CACHE_BYTES, Atlas, Cube, Fits, Oxide, Surrogate
 
 __all__ = [
     "AUTO",
@@ -33,12 +33,11 @@ __all__ = [
     "Scenario",
     "ResolvedScenario",
     "odd_cells",
-    "load_scenario",
+    "read_scenario",
     "bundled_scenarios",
     "parameter_table",
     "parameter_key",
     "format_range",
-    "use_cross_checks",
     "USED_ONLY_WITH",
     "SECTIONS",
     "STAGE_INPUTS",

@@ -1,8 +1,8 @@
 """How a parameter is declared: its unit, meaning and allowed range, and the error a bad value raises.
 
-Every field of a section (:mod:`pipeline.config.scene_sections`, :mod:`pipeline.config.study_sections`)
-is made by :func:`param`, so validation (:mod:`pipeline.config.validation`), documentation
-(:func:`pipeline.config.loading.parameter_table`) and provenance all read one declaration.
+Every field of a section (:mod:`g2tom.config.scene_sections`, :mod:`g2tom.config.study_sections`)
+is made by :func:`param`, so validation (:mod:`g2tom.config.validation`), documentation
+(:func:`g2tom.config.loading.parameter_table`) and provenance all read one declaration.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ __all__ = ["AUTO", "ConfigError", "param", "parameter_key", "format_range"]
 
 
 #: The value of ``contact.r_max`` and ``contact.window`` resolved from the solution
-#: (:func:`pipeline.before_work.domains.resolve`) before any stage runs.
+#: (:func:`g2tom.before_work.domains.resolve`) before any stage runs.
 AUTO = "auto"
 
 

@@ -1,9 +1,9 @@
 """Loading a scenario: bundled or TOML file, a base, ``--set`` overrides, validation; input files' text.
 
-:func:`load_scenario` checks every value against its declaration (:mod:`pipeline.config.validation`)
-and every combination with the cross-checks set by :func:`use_cross_checks`; a bad value stops
-it with one :class:`~pipeline.config.declare.ConfigError` naming the parameter, its value and the
-allowed range.
+:func:`read_scenario` checks every value against its declaration (:mod:`g2tom.config.validation`);
+a bad value stops it with one :class:`~g2tom.config.declare.ConfigError` naming the parameter, its
+value and the allowed range. The checks across parameters run before work
+(:func:`g2tom.before_work.load_scenario`, the loader every command uses).
 """
 
 from __future__ import annotations
@@ -13,13 +13,13 @@ import tomllib
 import warnings
 from importlib import resources
 from pathlib import Path
-from typing import Any, Callable, Iterable, Mapping
+from typing import Any, Iterable, Mapping
 
-from pipeline.config.declare import ConfigError, format_range, parameter_key
-from pipeline.config.scenario import SECTIONS, Scenario
-from pipeline.config.validation import check_field, unknown
+from g2tom.config.declare import ConfigError, format_range, parameter_key
+from g2tom.config.scenario import SECTIONS, Scenario
+from g2tom.config.validation import check_field, unknown
 
-__all__ = ["read_input_text", "use_cross_checks", "bundled_scenarios", "load_scenario", "USED_ONLY_WITH",
+__all__ = ["read_input_text", "bundled_scenarios", "read_scenario", "USED_ONLY_WITH",
            "parameter_table"]
 
 
@@ -55,27 +55,6 @@ def read_input_text(option: str, path: str | Path, encoding: str = "utf-8") -> s
         raise ConfigError(f"{where} is unreadable ({exc.strerror or exc}): check its permissions") from None
 
 
-#: The checks across parameters that every scenario passes as it is built (:func:`use_cross_checks`).
-_CROSS_CHECKS: Callable[[Scenario], None] | None = None
-
-
-def use_cross_checks(check: Callable[[Scenario], None]) -> None:
-    """Set the checks across parameters that :func:`load_scenario` runs on every scenario it builds.
-
-    They live before work (:func:`pipeline.before_work.scenario_checks.check_scenario`), above
-    config, which imports nothing from the package: ``pipeline/__init__.py`` sets them as the
-    package is imported, so they run on every load whatever module loads the scenario.
-
-    Parameters
-    ----------
-    check
-        Raises :class:`ConfigError` (naming the parameter, its value and what is allowed) for a
-        scenario whose settings do not go together; may warn.
-    """
-    global _CROSS_CHECKS
-    _CROSS_CHECKS = check
-
-
 def _build(data: Mapping[str, Any], *, name: str, description: str) -> Scenario:
     """The scenario of ``data`` (``{section: {key: value}}``), every value and combination checked."""
     sections: dict[str, Any] = {}
@@ -95,16 +74,12 @@ def _build(data: Mapping[str, Any], *, name: str, description: str) -> Scenario:
             by_key[k].name: check_field(section, by_key[k], v) for k, v in given.items()
         }
         sections[section] = cls(**kwargs)
-    scenario = Scenario(name=name, description=description, **sections)
-    if _CROSS_CHECKS is None:
-        raise RuntimeError("no cross-checks set: import pipeline (its __init__ sets them) before loading a scenario")
-    _CROSS_CHECKS(scenario)
-    return scenario
+    return Scenario(name=name, description=description, **sections)
 
 
 def bundled_scenarios() -> list[str]:
     """Names of the scenarios shipped with the package."""
-    files = resources.files("pipeline.scenarios")
+    files = resources.files("g2tom.scenarios")
     return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".toml"))
 
 
@@ -118,7 +93,7 @@ def _parse_value(text: str) -> Any:
 def _read_toml(config: str | Path) -> tuple[dict[str, Any], str]:
     text_name = str(config)
     if text_name in bundled_scenarios():
-        text = resources.files("pipeline.scenarios").joinpath(f"{text_name}.toml").read_text()
+        text = resources.files("g2tom.scenarios").joinpath(f"{text_name}.toml").read_text()
         return tomllib.loads(text), text_name
     path = Path(config)
     if not path.is_file():
@@ -154,10 +129,13 @@ def _with_base(data: dict[str, Any], seen: tuple[str, ...] = ()) -> tuple[dict[s
     return merged, own or further
 
 
-def load_scenario(
+def read_scenario(
     config: str | Path = "paper", overrides: Iterable[str] | Mapping[str, Any] = ()
 ) -> Scenario:
-    """Load a bundled scenario by name or a TOML file, apply overrides and validate.
+    """Read a bundled scenario by name or a TOML file, apply overrides and check each value.
+
+    The checks across parameters are not run here: :func:`g2tom.before_work.load_scenario` runs them
+    on what this returns.
 
     Parameters
     ----------

@@ -4,7 +4,7 @@
 each stage's parameters (:data:`STAGE_INPUTS`) and those of the stages it reads
 (:data:`STAGE_UPSTREAM`), so a stage file records exactly what it was built from.
 :class:`ResolvedScenario` is a scenario whose ``contact.r_max`` and ``contact.window`` are
-resolved numbers (:func:`pipeline.before_work.domains.resolve` makes it): what the stages take,
+resolved numbers (:func:`g2tom.before_work.domains.resolve` makes it): what the stages take,
 and the only kind with a cell count (:attr:`ResolvedScenario.n_cells`).
 """
 
@@ -17,9 +17,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Self
 
-from pipeline.config.declare import parameter_key
-from pipeline.config.scene_sections import Contact, Indenter, Loading, Material, Roughness
-from pipeline.config.study_sections import Atlas, Cube, Fits, Oxide, Surrogate
+from g2tom.config.declare import parameter_key
+from g2tom.config.scene_sections import Contact, Indenter, Loading, Material, Roughness
+from g2tom.config.study_sections import Atlas, Cube, Fits, Oxide, Surrogate
 
 __all__ = ["SECTIONS", "STAGE_INPUTS", "STAGE_EXCLUDED", "STAGE_UPSTREAM", "Scenario", "ResolvedScenario",
            "odd_cells"]
@@ -132,7 +132,7 @@ class Scenario:
 
         ``dataclasses.replace`` keeps the class; this sets it: ``Scenario.of(resolved,
         contact=...)`` is a plain scenario again (its domains to be resolved anew), and
-        :func:`pipeline.before_work.domains.resolve` alone makes a :class:`ResolvedScenario`.
+        :func:`g2tom.before_work.domains.resolve` alone makes a :class:`ResolvedScenario`.
         """
         return cls(**{f.name: getattr(scenario, f.name) for f in dataclasses.fields(Scenario)} | changes)
 
@@ -191,7 +191,7 @@ class Scenario:
 @dataclass(frozen=True)
 class ResolvedScenario(Scenario):
     """A scenario whose ``contact.r_max`` and ``contact.window`` are resolved numbers, checked
-    against the contact they must hold (:func:`pipeline.before_work.domains.resolve` makes it).
+    against the contact they must hold (:func:`g2tom.before_work.domains.resolve` makes it).
 
     It has no field of its own: the type says that its domains, and so its cell grid, are
     settled. ``dataclasses.replace`` keeps the type, so a resolved scenario with a new window or

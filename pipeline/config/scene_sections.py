@@ -1,7 +1,7 @@
 """The scene's parameters and its contact: the sections ``material``, ``roughness``, ``indenter``,
 ``loading`` and ``contact`` (Table 1 of the paper and the Greenwood–Tripp solve's numerics).
 
-Each field declares its unit, meaning and allowed range (:func:`pipeline.config.declare.param`).
+Each field declares its unit, meaning and allowed range (:func:`g2tom.config.declare.param`).
 """
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from pipeline.config.declare import param
+from g2tom.config.declare import param
 
 __all__ = ["Material", "Roughness", "Indenter", "Loading", "Contact", "MAX_POOL_SURFACES", "POOL_CONFIDENCE"]
 

@@ -1,7 +1,7 @@
 """The study's parameters: the sections ``oxide`` (Table 2 and the ensemble), ``cube``, ``fits``,
 ``surrogate`` and ``atlas``.
 
-Each field declares its unit, meaning and allowed range (:func:`pipeline.config.declare.param`).
+Each field declares its unit, meaning and allowed range (:func:`g2tom.config.declare.param`).
 """
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from pipeline.config.declare import param
+from g2tom.config.declare import param
 
 __all__ = ["Oxide", "Cube", "Fits", "Surrogate", "Atlas", "CHUNK_BYTES", "KERNEL_CACHE_BYTES"]
 
@@ -155,7 +155,7 @@ class Cube:
     lattice_constant: float = param(
         0.0, "1", "point model: C of the lattice self term C / (pi dx) added to every spot's own "
         "resistance: the interaction with its own cell that the sum over the other cells misses; "
-        "3.90026 for the square lattice (pipeline.physics.lattice), 0: none", ge=0,
+        "3.90026 for the square lattice (g2tom.physics.lattice), 0: none", ge=0,
     )
 
 
@@ -254,7 +254,7 @@ class Surrogate:
 
 @dataclass(frozen=True)
 class Atlas:
-    """The atlas's design over the groups mu and Pi (``g2tom atlas``, :mod:`pipeline.atlas.design`):
+    """The atlas's design over the groups mu and Pi (``g2tom atlas``, :mod:`g2tom.atlas.design`):
     a log-spaced ``n_mu x n_pi`` grid over the box, plus held-out scenes drawn inside it."""
 
     mu_min: float = param(1.0, "1", "lowest mu = (8/3) eta sigma sqrt(2 R* beta) of the design", gt=0)

@@ -1,8 +1,8 @@
 """Each parameter's value against its declaration: type, range, choices (before any cross-check).
 
 The checks across parameters (one setting that rules out another, the window against the domain)
-run before work, in :mod:`pipeline.before_work.scenario_checks` and
-:mod:`pipeline.before_work.window_checks`.
+run before work, in :mod:`g2tom.before_work.scenario_checks` and
+:mod:`g2tom.before_work.window_checks`.
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ import difflib
 import math
 from typing import Any, Mapping
 
-from pipeline.config.declare import AUTO, ConfigError, format_range, parameter_key
-from pipeline.config.scenario import SECTIONS
+from g2tom.config.declare import AUTO, ConfigError, format_range, parameter_key
+from g2tom.config.scenario import SECTIONS
 
 __all__ = ["check_field", "unknown"]
 

@@ -4,7 +4,7 @@ One global RMS says nothing about where a surrogate is worse (light loads, much 
 of the (mu, Pi) box). The band here is one standard deviation of ln R' made of
 
 * the **regional error**: the RMS of the leave-one-scene-out residuals of the design scenes
-  (:func:`pipeline.fitting.atlas_grid.cross_validate`; the box's corner scenes left out, as a
+  (:func:`g2tom.fitting.atlas_grid.cross_validate`; the box's corner scenes left out, as a
   corner left out is extrapolated to in both groups) in the query's region, a cell of
   F' (:data:`FORCE_EDGES`) x xi (:data:`XI_EDGES`) x the groups' position (``inside`` the box, or
   at its ``edge``: closer than :data:`EDGE_STEPS` design grid steps to its boundary, where the
@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.fitting.atlas_grid import interpolation_weights, node_coordinates
+from g2tom.fitting.atlas_grid import interpolation_weights, node_coordinates
 
 __all__ = ["FORCE_EDGES", "XI_EDGES", "EDGE_STEPS", "MIN_POINTS", "RegionalBand", "fit_band", "with_heldout",
            "region_labels"]

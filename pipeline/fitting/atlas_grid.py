@@ -30,7 +30,7 @@ from typing import Any, Callable
 import numpy as np
 from numpy.polynomial import chebyshev
 
-from pipeline.fitting.atlas_surrogate import exponents
+from g2tom.fitting.atlas_surrogate import exponents
 
 __all__ = ["FRAMES", "FRAME_COORDINATES", "GridTensorModel", "group_coordinates", "node_coordinates", "group_powers",
            "fit_grid_tensor", "cross_validate", "interpolation_weights", "load_basis", "weighted_fit", "node_series_value",
@@ -38,7 +38,7 @@ __all__ = ["FRAMES", "FRAME_COORDINATES", "GridTensorModel", "group_coordinates"
 
 
 #: Coordinates of the groups the curve models are built in: ``log``, (ln mu, ln Pi); ``sheared``,
-#: (ln(mu / Pi), ln Pi). mu / Pi = (8/3) sqrt(2 beta / R*) (:mod:`pipeline.physics.groups`): the
+#: (ln(mu / Pi), ln Pi). mu / Pi = (8/3) sqrt(2 beta / R*) (:mod:`g2tom.physics.groups`): the
 #: asperities' curvature against the sphere's, which alone sets most of ln R' at light loads
 #: (the atlas's clean ln R' at F' 0.06 spans 2.0 along it, at most 0.2 across it), so a response
 #: that bends along the diagonal of (ln mu, ln Pi) is straight along one coordinate here.

@@ -1,7 +1,7 @@
 """Sampling noise of the atlas's ensembles, drawn: the parametric bootstrap behind the held-out
-verdict's noise ceiling (:func:`pipeline.atlas.fit.noise_ceiling`).
+verdict's noise ceiling (:func:`g2tom.atlas.fit.noise_ceiling`).
 
-Every scene draws its own random streams (:func:`pipeline.atlas.design.scene_seed`), so the error of
+Every scene draws its own random streams (:func:`g2tom.atlas.design.scene_seed`), so the error of
 one scene's ensemble is independent of another's; within a scene, the same fields serve every load
 step, so the error of ln R' is correlated along the load: measured on held-out scene h02 (its first
 100 fields against 3,000), 0.86 between neighbouring steps of 20, 0.65 five steps apart, 0.3 ten

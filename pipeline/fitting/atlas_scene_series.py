@@ -1,6 +1,6 @@
 """The atlas's scene-series surrogate: each design scene's own curves, interpolated across (mu, Pi).
 
-The grid surrogate (:mod:`pipeline.fitting.atlas_grid`) fits one polynomial in (ln mu, ln Pi) through
+The grid surrogate (:mod:`g2tom.fitting.atlas_grid`) fits one polynomial in (ln mu, ln Pi) through
 all design scenes at once; where the response bends more than that polynomial can, it misses the
 scenes between. This model keeps what each scene measured and interpolates only between scenes:
 
@@ -8,7 +8,7 @@ scenes between. This model keeps what each scene measured and interpolates only 
   z = 0), a Chebyshev series of order P in the mapped ln F', fitted by weighted least squares to
   the scene's steps (weights 1 / sigma^2; points that are not finite left out);
 * across scenes, each coefficient of each node interpolated over the groups' coordinates
-  (:data:`~pipeline.fitting.atlas_grid.FRAMES`: (ln mu, ln Pi) or (ln(mu / Pi), ln Pi)) by a radial basis
+  (:data:`~g2tom.fitting.atlas_grid.FRAMES`: (ln mu, ln Pi) or (ln(mu / Pi), ln Pi)) by a radial basis
   function (polyharmonic ``cubic`` r^3 or ``thin_plate_spline`` r^2 ln r with a linear polynomial
   tail, ``quintic`` -r^5 with the quadratic tail it needs: :data:`TAIL_DEGREE`; so a response linear
   in the groups' coordinates is reproduced exactly by every kernel) with a ``smoothing`` that lets
@@ -27,7 +27,7 @@ from functools import cached_property
 import numpy as np
 from scipy.interpolate import RBFInterpolator
 
-from pipeline.fitting.atlas_grid import (group_coordinates, group_powers, leave_one_scene_out, load_basis,
+from g2tom.fitting.atlas_grid import (group_coordinates, group_powers, leave_one_scene_out, load_basis,
                                          node_series_value, weighted_fit)
 
 __all__ = ["KERNELS", "TAIL_DEGREE", "SceneSeriesModel", "fit_scene_series", "cross_validate"]
@@ -61,7 +61,7 @@ class SceneSeriesModel:
         Its smoothing parameter (0: interpolation through every scene), in (ln R')^2 per unit of
         the kernel.
     frame
-        The groups' coordinates (:data:`~pipeline.fitting.atlas_grid.FRAMES`).
+        The groups' coordinates (:data:`~g2tom.fitting.atlas_grid.FRAMES`).
     """
 
     z_nodes: np.ndarray
@@ -122,7 +122,7 @@ def fit_scene_series(z_nodes: np.ndarray, w_nodes: np.ndarray, mu: np.ndarray, p
     load
         (low, high) of ln F' mapped to [-1, 1] (default: the points' own).
     frame
-        The groups' coordinates the interpolation works in (:data:`~pipeline.fitting.atlas_grid.FRAMES`).
+        The groups' coordinates the interpolation works in (:data:`~g2tom.fitting.atlas_grid.FRAMES`).
 
     Raises
     ------

@@ -2,8 +2,8 @@
 
 At each load step, realization r gives ``y_r = ln R_r`` where it conducts (``c_r = 1``; an open
 circuit has ``c_r = 0``) and its control ``x_r`` (the spots' radius-weighted clean share,
-:func:`pipeline.stages.cube_discrete.weighted_clean_share`), whose expectation ``p`` over all
-realizations is known exactly (:func:`pipeline.physics.oxide_marginal.clean_probability`). The
+:func:`g2tom.stages.cube_discrete.weighted_clean_share`), whose expectation ``p`` over all
+realizations is known exactly (:func:`g2tom.physics.oxide_marginal.clean_probability`). The
 geometric mean is over the conducting realizations, E[y | c = 1] = E[y c] / E[c], so numerator and
 denominator are each adjusted by the control:
 
@@ -15,16 +15,16 @@ variance is that of mean(y) times 1 - rho^2 (rho the correlation of x and y); wi
 share of conducting realizations, itself strongly tied to the clean share, is adjusted alike. The
 estimate is consistent, its bias O(1/n) (b and the ratio come from the same realizations).
 
-Bootstrap resamples are multiplicity tables (:func:`pipeline.fitting.powerlaw.resample_counts`):
+Bootstrap resamples are multiplicity tables (:func:`g2tom.fitting.powerlaw.resample_counts`):
 each resample's means and covariances come from weighted sums, so the whole table is a few matrix
-products, as for the plain mean (:func:`pipeline.fitting.powerlaw.bootstrap_log_mean`).
+products, as for the plain mean (:func:`g2tom.fitting.powerlaw.bootstrap_log_mean`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from pipeline.fitting.powerlaw import bootstrap_log_mean
+from g2tom.fitting.powerlaw import bootstrap_log_mean
 
 __all__ = ["controllable", "bootstrap_controlled_mean", "controlled_mean", "MIN_CONTROL_VARIANCE"]
 
@@ -54,7 +54,7 @@ def bootstrap_controlled_mean(values: np.ndarray, control: np.ndarray, expected:
     expected
         The controls' exact expectation, shape broadcasting to ``values.shape[:-1]``.
     counts
-        Multiplicities from :func:`pipeline.fitting.powerlaw.resample_counts`, shape (b, n).
+        Multiplicities from :func:`g2tom.fitting.powerlaw.resample_counts`, shape (b, n).
 
     Returns
     -------

@@ -7,9 +7,9 @@ terms,
 
 with polynomials ``P_k``, ``Q_k`` in the transformed coordinates ``w = log(lambda)`` and
 ``z = -log(1 - xi)``, coefficients in ascending powers (``c_0 + c_1 w + ...``). Two fits make
-one: the paper's SVD-then-polyfit (:mod:`pipeline.fitting.surrogate_paper`) and the joint
+one: the paper's SVD-then-polyfit (:mod:`g2tom.fitting.surrogate_paper`) and the joint
 weighted fit with cross-validated transform, rank and orders
-(:mod:`pipeline.fitting.surrogate_joint`).
+(:mod:`g2tom.fitting.surrogate_joint`).
 
 Model spec: the joint surrogate's transform string names T and, optionally, the coordinate map
 of lambda: ``"log"`` / ``"identity"`` use the paper's ``w = log(lambda)``; ``"log;w=lambda"``

@@ -1,6 +1,6 @@
 """The joint surrogate (``surrogate.method = "joint"``): all coefficients fitted at once, chosen by cross-validation.
 
-The rank-r form of :mod:`pipeline.fitting.surrogate`, written as
+The rank-r form of :mod:`g2tom.fitting.surrogate`, written as
 ``T(M)(lambda, xi) = sum_k P_k(w) Q_k(z) = a(w)^T C b(z)`` with ``a(w) = (1, w, ..., w^(p-1))``,
 ``b(z) = (1, z, ..., z^(q-1))`` and a p x q coefficient matrix ``C`` of rank <= r, where ``T``
 is ``log`` or the identity. All of ``C`` is fitted at once against the grid values by weighted
@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pipeline.fitting.surrogate import check_grid, evaluate, forward_transform, split_spec, to_w, to_z
+from g2tom.fitting.surrogate import check_grid, evaluate, forward_transform, split_spec, to_w, to_z
 
 __all__ = ["EXACT", "JointModel", "fit_joint", "free_parameters", "cross_validate", "Candidate", "select_model"]
 
@@ -49,7 +49,7 @@ class JointModel:
     coef_z
         Shape (rank, order_z + 1): ``Q_k`` in ascending powers of z = -log(1 - xi).
     transform
-        Spec of T and the lambda map (:func:`pipeline.fitting.surrogate.model_spec`), e.g. ``"log"`` or ``"log;w=lambda"``.
+        Spec of T and the lambda map (:func:`g2tom.fitting.surrogate.model_spec`), e.g. ``"log"`` or ``"log;w=lambda"``.
     iterations
         Alternating least-squares sweeps used (0: solved in closed form).
     """
@@ -156,7 +156,7 @@ def fit_joint(
     order_w, order_z
         Polynomial orders in w and z, each below the number of grid points along its axis.
     transform
-        ``"log"`` or ``"identity"``, optionally with the lambda map (:func:`pipeline.fitting.surrogate.model_spec`).
+        ``"log"`` or ``"identity"``, optionally with the lambda map (:func:`g2tom.fitting.surrogate.model_spec`).
     sigma
         Uncertainty of ``T(M)`` per cell (same shape, > 0), or None for equal weights.
 
@@ -272,9 +272,9 @@ def select_model(
     lam, xi
         The grid.
     transforms
-        Specs to try (:func:`~pipeline.fitting.surrogate.model_spec` of a transform in
-        :data:`~pipeline.fitting.surrogate.TRANSFORMS` and a map in
-        :data:`~pipeline.fitting.surrogate.W_MAPS`).
+        Specs to try (:func:`~g2tom.fitting.surrogate.model_spec` of a transform in
+        :data:`~g2tom.fitting.surrogate.TRANSFORMS` and a map in
+        :data:`~g2tom.fitting.surrogate.W_MAPS`).
     max_rank, max_order_w, max_order_z
         Scan limits.
     sigma_of

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.polynomial import polynomial as P
 from numpy.typing import ArrayLike
 
-from pipeline.fitting.surrogate import check_grid, evaluate, to_w, to_z
+from g2tom.fitting.surrogate import check_grid, evaluate, to_w, to_z
 
 __all__ = ["SurrogateModel", "fit_surrogate", "paper_loo_predictions", "loo_error", "order_scan"]
 

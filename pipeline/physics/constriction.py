@@ -12,11 +12,11 @@ No conducting spot is an open circuit (all three terms +inf); exactly one gives 
 
 The interaction sum ``Q`` is the only costly part. :func:`resistance` evaluates it for a batch
 of oxide masks and every load step with one of the exact algorithms of
-:mod:`pipeline.physics.interaction` (or the direct double sum, the reference), on a
+:mod:`g2tom.physics.interaction` (or the direct double sum, the reference), on a
 centred square crop per load step that drops spots whose effect on ``R`` is provably below a
 tolerance. Entries whose own bound exceeds the tolerance are recomputed on the whole window,
 so every entry's relative error from cropping is bounded by the tolerance (see
-:func:`pipeline.physics.crops.crop_error_bound`).
+:func:`g2tom.physics.crops.crop_error_bound`).
 """
 
 from __future__ import annotations
@@ -26,11 +26,11 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from pipeline.physics.crops import crop_error_bound, crop_slice
-from pipeline.physics.interaction import BLOCK, auto_method, block_size, interaction_sum
-from pipeline.physics.interaction_fft import fft_weights, interaction_fft_filled
-from pipeline.physics.scratch import scratch
-from pipeline.physics.spot_geometry import SpotGeometry
+from g2tom.physics.crops import crop_error_bound, crop_slice
+from g2tom.physics.interaction import BLOCK, auto_method, block_size, interaction_sum
+from g2tom.physics.interaction_fft import fft_weights, interaction_fft_filled
+from g2tom.physics.scratch import scratch
+from g2tom.physics.spot_geometry import SpotGeometry
 
 __all__ = [
     "greenwood_terms",
@@ -247,7 +247,7 @@ def resistance(
     rho
         Effective resistivity rho*, in ohm m.
     method
-        Interaction algorithm (see :func:`pipeline.physics.interaction.interaction_sum`).
+        Interaction algorithm (see :func:`g2tom.physics.interaction.interaction_sum`).
     groups
         Which set of spots each map has, int (batch,), for spots that differ between maps (the
         ``asperities`` discretization draws them per realization); None: one set for all. A

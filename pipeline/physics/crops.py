@@ -35,7 +35,7 @@ def choose_crops(radius: np.ndarray, weights: np.ndarray, pitch: float, toleranc
     mask, so the crop is safe for all of them. For other weights the ratio depends on the
     mask; the crop is sized with :data:`CROP_MARGIN` times the oxide-free ratio, and entries
     that still exceed the tolerance are recomputed uncropped by
-    :func:`pipeline.physics.constriction.resistance`.
+    :func:`g2tom.physics.constriction.resistance`.
 
     Parameters
     ----------

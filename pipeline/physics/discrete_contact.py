@@ -39,7 +39,7 @@ biased when a handful do (design note 11). This model keeps one realization's as
 * Stiffness ``K = -dF/d delta = d^T (I + C D)^-1 1`` on the contacting set (``D = diag(dP/dw) =
   diag(2 E* a_i)``), i.e. ``K = E* 1^T M^-1 1`` with ``M_ii = 1/(2 a_i)``, ``M_ij = 1/(pi
   max(d_ij, l))``: Barber's theorem holds exactly against the point-interaction conductance on
-  the same spots and kernel (:mod:`pipeline.physics.discrete_resistance`).
+  the same spots and kernel (:mod:`g2tom.physics.discrete_resistance`).
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ from typing import Callable
 
 import numpy as np
 
-from pipeline.physics import indenter
+from g2tom.physics import indenter
 
 __all__ = [
     "ASPERITIES_TAG",
@@ -89,7 +89,7 @@ STALL_TOLERANCE = 1e-6
 #: lightest) and of the atlas's scenes (2.39), whose solves this leaves as they were, bit for bit.
 #: A cold start at a heavy force is left as it was: a first step of many touching caps (the
 #: validation's F' 3.32 alone, 44) costs several times its share of the cost model
-#: (:mod:`pipeline.before_work.discrete_cost`), as the README says.
+#: (:mod:`g2tom.before_work.discrete_cost`), as the README says.
 MAX_STEP_RATIO = 2.5
 #: Proximal rounds at most where the energy is not convex (a fold of the atlas's large caps takes
 #: 170-530).
@@ -166,7 +166,7 @@ def sphere_cap_geometry(radius: float, beta: float) -> tuple[float, float]:
 def cap_gap(r: np.ndarray, shape: str, beta: float, **dimensions: float) -> np.ndarray:
     """The least gap between a paraboloidal cap (tip radius ``beta``, m) whose tip lies at distance
     ``r`` (m) from the axis and the indenter (``shape`` and its ``dimensions`` as
-    :func:`pipeline.physics.indenter.profile` takes them), above the cap's tip height:
+    :func:`g2tom.physics.indenter.profile` takes them), above the cap's tip height:
     ``min_t (t - r)^2 / (2 beta) + z(|t|)`` along the line through both axes, m. A cap's rigid
     interference is its tip height minus this minus the approach.
 

@@ -2,7 +2,7 @@
 
 Spots ``i`` of radius ``a_i`` at ``(x_i, y_i)`` all at one potential: the currents ``f`` solve
 ``M f = 1`` with ``M_ii = 1 / (2 a_i)`` and ``M_ij = 1 / (pi max(d_ij, l))`` (the coupling kernel
-of :mod:`pipeline.physics.discrete_contact`, floor ``l`` included, so that Barber's theorem
+of :mod:`g2tom.physics.discrete_contact`, floor ``l`` included, so that Barber's theorem
 ``1 / R = K / (E* rho*)`` holds exactly for the clean contact), and ``R = rho* / sum f``.
 Greenwood's closed form is the Rayleigh quotient of ``M`` at ``f`` proportional to ``a``:
 ``R_G = rho* (sum a / 2 + a^T K a) / (sum a)^2``, an upper bound on the point model's ``R``.
@@ -75,7 +75,7 @@ def resistances(kernel: np.ndarray, radius: np.ndarray, rho: float, model: str =
     ----------
     kernel
         ``1 / (pi max(d_ij, l))`` of the positions, zero diagonal, 1/m, shape (n, n)
-        (:func:`pipeline.physics.discrete_contact.interaction_kernel`).
+        (:func:`g2tom.physics.discrete_contact.interaction_kernel`).
     radius
         Spot radii, m, shape (..., n); 0 where a spot does not conduct. The point model solves
         the sets along the first axis together (e.g. the oxide fractions of one load step; the

@@ -4,7 +4,7 @@ The separation of the mean planes is h(r) = delta + z(r) + u(r): the approach de
 separation of the tip, negative = interpenetration), the indenter profile z and the elastic
 displacement u of both bodies. The asperity pressure is p(h) = (4/3) eta E* sqrt(beta) F_{3/2}(h)
 and the displacement u = M p, with the influence matrix M of the radial discretisation
-(:mod:`pipeline.physics.radial_grid`: the pressure piecewise linear on the radial nodes, Eq. 19).
+(:mod:`g2tom.physics.radial_grid`: the pressure piecewise linear on the radial nodes, Eq. 19).
 
 The contact stiffness K = -dF/d delta follows from the converged solution by linearising the
 discretised system itself (:func:`stiffness`), so it is exact for the discretisation, with no
@@ -24,8 +24,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import lu_factor, lu_solve
 
-from pipeline.physics.asperity import asperity_integral_slope, log_asperity_integral
-from pipeline.physics.radial_grid import force_weights
+from g2tom.physics.asperity import asperity_integral_slope, log_asperity_integral
+from g2tom.physics.radial_grid import force_weights
 
 __all__ = [
     "Layer",
@@ -174,7 +174,7 @@ def solve(matrix: np.ndarray, rigid_gap: np.ndarray, deltas: ArrayLike, layer: L
     Parameters
     ----------
     matrix
-        Influence matrix from :func:`pipeline.physics.radial_grid.influence_matrix`, m/Pa.
+        Influence matrix from :func:`g2tom.physics.radial_grid.influence_matrix`, m/Pa.
     rigid_gap
         Indenter profile z(r) at the nodes, m.
     deltas
@@ -221,14 +221,14 @@ def stiffness(matrix: np.ndarray, rigid_gap: np.ndarray, deltas: ArrayLike, laye
         (I + A diag(s)) y = 1 / sigma,   y = dx/d delta (1/m),   s = -f'_{3/2}(x) = 1.5 f_{1/2}(x),
 
     (the Newton Jacobian of :func:`solve_newton`), and F = P c . f_{3/2}(x), P the layer's
-    :attr:`Layer.pressure_scale` and c the :func:`~pipeline.physics.radial_grid.force_weights`, so K = P c . (s y) > 0: the
+    :attr:`Layer.pressure_scale` and c the :func:`~g2tom.physics.radial_grid.force_weights`, so K = P c . (s y) > 0: the
     force falls as the tip's separation delta grows. Exact for the discretised system at its
     solution; the error from the solve's residual is of the order of that residual.
 
     Parameters
     ----------
     matrix
-        Influence matrix from :func:`pipeline.physics.radial_grid.influence_matrix`, m/Pa.
+        Influence matrix from :func:`g2tom.physics.radial_grid.influence_matrix`, m/Pa.
     rigid_gap
         Indenter profile z(r) at the nodes, m.
     deltas

@@ -2,7 +2,7 @@
 
 The interaction sum ``Q(u) = sum_{i != j} u_i u_j / d_ij`` of a batch of weight maps on a
 regular square cell grid (:func:`interaction_sum`) by one of the exact algorithms of
-:mod:`pipeline.physics.interaction_fft` and :mod:`pipeline.physics.interaction_folded`, or by the
+:mod:`g2tom.physics.interaction_fft` and :mod:`g2tom.physics.interaction_folded`, or by the
 direct double sum (:func:`interaction_direct`, the reference). ``auto`` takes the folded DFT-GEMM
 below :data:`FFT_FROM` cells per side and the FFT from there (:func:`auto_method`);
 :func:`block_size` says how many maps a block holds within the work-memory budget.
@@ -14,8 +14,8 @@ from typing import Callable
 
 import numpy as np
 
-from pipeline.physics.interaction_fft import interaction_dft_gemm, interaction_fft, interaction_gemm, padded_length
-from pipeline.physics.interaction_folded import interaction_folded
+from g2tom.physics.interaction_fft import interaction_dft_gemm, interaction_fft, interaction_gemm, padded_length
+from g2tom.physics.interaction_folded import interaction_folded
 
 __all__ = [
     "METHODS",

@@ -6,7 +6,7 @@ quadratic form
     Q(u) = sum_{i != j} u_i u_j / d_ij = u . (K * u),   K(dx, dy) = 1 / (h sqrt(dx^2 + dy^2)),
 
 with ``K(0, 0) = 0`` (cell offsets ``dx, dy`` in cells). Four exact algorithms are offered,
-three here and the fourth in :mod:`pipeline.physics.interaction_folded`, all batched over a leading axis of independent weight maps:
+three here and the fourth in :mod:`g2tom.physics.interaction_folded`, all batched over a leading axis of independent weight maps:
 
 * :func:`interaction_gemm`: the dense ``1/d`` matrix of the block times the weight columns.
 * :func:`interaction_fft`: Parseval on a zero-padded real 2-D FFT. Only the forward transform
@@ -19,7 +19,7 @@ three here and the fourth in :mod:`pipeline.physics.interaction_folded`, all bat
   once (``c_f`` counts the mirrored half of the spectrum): ``O(L^3)`` flops per map instead
   of ``2 L^4`` (dense). The transform itself is one more GEMM with the ``2F x L`` DFT matrix,
   which at these small sizes beats an FFT (a pocketfft variant measured 15-30 % slower).
-* :func:`~pipeline.physics.interaction_folded.interaction_folded`: :func:`interaction_dft_gemm` on the four mirror-parity quarters
+* :func:`~g2tom.physics.interaction_folded.interaction_folded`: :func:`interaction_dft_gemm` on the four mirror-parity quarters
   of the block (the kernel commutes with both reflections), which halves both GEMMs.
 
 ``make bench`` measures them all against the double sum.
@@ -37,8 +37,8 @@ import ducc0
 import numpy as np
 import scipy.fft
 
-from pipeline.physics.interaction_kernel import check_blocks, dense_kernel, spectrum_2d, toeplitz_stack
-from pipeline.physics.scratch import scratch, zero_padded
+from g2tom.physics.interaction_kernel import check_blocks, dense_kernel, spectrum_2d, toeplitz_stack
+from g2tom.physics.scratch import scratch, zero_padded
 
 __all__ = [
     "padded_length",
@@ -125,7 +125,7 @@ def interaction_fft_filled(weights: np.ndarray, pitch: float) -> np.ndarray:
     if weights.base is None or weights.base is not padded.base:
         raise ValueError("interaction_fft_filled needs the view returned by fft_weights")
     # ducc0 (the successor of the pocketfft inside numpy and scipy, with wider SIMD) transforms
-    # in reused buffers (fresh large arrays cost page faults, see :func:`~pipeline.physics.scratch.scratch`). The x
+    # in reused buffers (fresh large arrays cost page faults, see :func:`~g2tom.physics.scratch.scratch`). The x
     # transform runs only over the n rows that hold weights, into the head of the spectrum
     # buffer; the y transform runs in place (out of place measured 1.6 times slower).
     uhat = scratch("fft_spectrum", (batch, length, length // 2 + 1), np.complex128)
@@ -146,7 +146,7 @@ def interaction_fft_filled(weights: np.ndarray, pitch: float) -> np.ndarray:
 
 @lru_cache(maxsize=64)
 def _interleaved_spectrum(n_cells: int, length: int) -> np.ndarray:
-    """:func:`~pipeline.physics.interaction_kernel.spectrum_2d` with each weight repeated for the real and imaginary part, flattened.
+    """:func:`~g2tom.physics.interaction_kernel.spectrum_2d` with each weight repeated for the real and imaginary part, flattened.
 
     Only this copy is cached, one per crop size.
     """

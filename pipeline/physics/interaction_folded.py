@@ -3,10 +3,10 @@
 The ``1/d`` kernel on a centred block commutes with the reflections ``x -> -x`` and ``y -> -y``,
 so the four mirror-parity components of a weight map do not interact: each is transformed along
 ``x`` and coupled along ``y`` on a quarter of the cells (:func:`interaction_folded`, the DFT-GEMM
-of :mod:`pipeline.physics.interaction_fft` with both GEMMs halved). The same quarters give the
+of :mod:`g2tom.physics.interaction_fft` with both GEMMs halved). The same quarters give the
 operator itself, ``(K * u)_i = sum_{j != i} u_j / d_ij`` (:func:`interaction_apply_columns`), which
 the point model's conjugate gradients apply; :func:`interaction_apply_dense` is its dense
-reference. Units as in :mod:`pipeline.physics.interaction_fft`.
+reference. Units as in :mod:`g2tom.physics.interaction_fft`.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from pipeline.physics.interaction_kernel import check_blocks, dense_kernel, toeplitz_stack
-from pipeline.physics.scratch import scratch
+from g2tom.physics.interaction_kernel import check_blocks, dense_kernel, toeplitz_stack
+from g2tom.physics.scratch import scratch
 
 __all__ = [
     "interaction_folded",
@@ -112,7 +112,7 @@ def _coupled_energy(rows: np.ndarray, coupling: np.ndarray, halves: np.ndarray) 
 
 
 def interaction_folded(u: np.ndarray, pitch: float) -> np.ndarray:
-    """Interaction sum by :func:`~pipeline.physics.interaction_fft.interaction_dft_gemm` with both mirror symmetries folded out.
+    """Interaction sum by :func:`~g2tom.physics.interaction_fft.interaction_dft_gemm` with both mirror symmetries folded out.
 
     The ``1/d`` kernel on a centred block commutes with the reflections ``x -> -x`` and
     ``y -> -y``, so the four parity components of ``u`` do not interact: each is transformed

@@ -4,7 +4,7 @@
 the dense ``N x N`` matrix of a block (:func:`dense_kernel`), as its half-plane spectrum on a
 zero-padded circular grid (:func:`spectrum_2d`, the FFT path) and as per-``x``-frequency
 ``y``-coupling Toeplitz matrices (:func:`toeplitz_stack`, the DFT-GEMM paths). The algorithms are
-:mod:`pipeline.physics.interaction_fft` and :mod:`pipeline.physics.interaction_folded`.
+:mod:`g2tom.physics.interaction_fft` and :mod:`g2tom.physics.interaction_folded`.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ jumps between neighbouring lambda. :func:`spectral_period` instead picks a perio
 cells with ``k1 = P / (2 lambda)`` at least ``resolution`` lattice steps, so the annulus holds
 about ``4 pi resolution^2`` half-plane modes at every lambda and samples the continuous spectrum
 Phi(k) on a lattice ``resolution`` times finer than k1. Such a field is evaluated exactly at the
-n x n cell centres by separable partial DFTs (:func:`pipeline.physics.oxide_field.centre_values`): ``psi = Re(E_y C E_x^T)``
+n x n cell centres by separable partial DFTs (:func:`g2tom.physics.oxide_field.centre_values`): ``psi = Re(E_y C E_x^T)``
 with ``C`` the half-plane coefficient table, two GEMMs whose size depends on ``resolution`` only,
 so the cost per field is about constant in lambda.
 
@@ -33,7 +33,7 @@ an infinite surface sees, and they are not normalized away.
 "
 
 The values of the fields (at the cell centres, on any grid, at any point) and their thresholds are
-:mod:`pipeline.physics.oxide_field`.
+:mod:`g2tom.physics.oxide_field`.
 """
 
 from __future__ import annotations

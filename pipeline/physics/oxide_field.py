@@ -1,7 +1,7 @@
 """Band-limited Gaussian random fields for the oxide islands (Sect. 2.6): their values and thresholds,
 pure numpy/scipy.
 
-The fields' spectrum, random coefficients and streams are :mod:`pipeline.physics.oxide_band`: a field
+The fields' spectrum, random coefficients and streams are :mod:`g2tom.physics.oxide_band`: a field
 is ``psi(x, y) = Re sum_k c_k exp(i (k_x x + k_y y))`` over the band's wave vectors, periodic over
 ``L`` (the window, or a longer spectral period). Here: its values at the cell centres
 (:func:`cell_values` for the window's period, :func:`centre_values` for any), on any grid
@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import erfcinv
 
-from pipeline.physics.oxide_band import Band, coefficients, field_stream
+from g2tom.physics.oxide_band import Band, coefficients, field_stream
 
 __all__ = [
     "cell_values",
@@ -147,7 +147,7 @@ def realize(
 
     Window-period bands (``modes.period == n_cells * cell_size``) are evaluated by folding
     (:func:`cell_values`), longer periods by :func:`centre_values`; either way realization r
-    always gets the same field, from its own stream :func:`~pipeline.physics.oxide_band.field_stream`.
+    always gets the same field, from its own stream :func:`~g2tom.physics.oxide_band.field_stream`.
     """
     coeffs = np.stack([coefficients(modes, field_stream(seed, lam, r), amplitudes) for r in realizations])
     if modes.period == n_cells * cell_size:

@@ -1,6 +1,6 @@
 """The oxide field's one-point distribution: the probability that a point is clean, exactly.
 
-With "ideal" amplitudes (:mod:`pipeline.physics.oxide_band`) the field at any point is
+With "ideal" amplitudes (:mod:`g2tom.physics.oxide_band`) the field at any point is
 ``psi = sum_k w_k cos(theta_k)``, the phases ``theta_k`` independent and uniform: a stationary
 field (a shift only adds to the phases) whose value at a point is not exactly normal. Its
 characteristic function is ``phi(u) = prod_k J0(w_k u)``, real and even, so Gil-Pelaez's inversion
@@ -10,7 +10,7 @@ gives the distribution function exactly:
 
 Every point of every realization is clean with this probability, so the spots' clean share
 averaged with any fixed weights has it as its expectation: the control variate of the fits stage
-(:mod:`pipeline.fitting.control_variate`). On bands of thousands of modes it lies within ~1e-5
+(:mod:`g2tom.fitting.control_variate`). On bands of thousands of modes it lies within ~1e-5
 of the normal 1 - xi that the theoretical threshold aims at.
 """
 

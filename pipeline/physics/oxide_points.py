@@ -1,11 +1,11 @@
 """Oxide fields at arbitrary points: the continuous field where discrete spots lie.
 
 A field is ``psi(x, y) = Re sum_k c_k exp(2 pi i (i x + j y) / L)`` over its band
-(:mod:`pipeline.physics.oxide_field`). Placing the coefficients on a (j, i) table and scaling the
+(:mod:`g2tom.physics.oxide_field`). Placing the coefficients on a (j, i) table and scaling the
 coordinates to ``2 pi x / L`` makes the sum a type-2 non-uniform FFT, which FINUFFT evaluates at
 any points to a stated relative tolerance in about ``O(M log M + P w^2)`` (``M`` table entries,
 ``P`` points, ``w`` the spreading width) instead of the ``O(M P)`` of the direct sum
-(:func:`pipeline.physics.oxide_field.field_at_points`, the slow reference). One call per field,
+(:func:`g2tom.physics.oxide_field.field_at_points`, the slow reference). One call per field,
 so a field's values never depend on which other fields or points share its task; one thread
 per call (the cube runs one task per core, and at a few thousand points FINUFFT's threads
 cost more than they save).
@@ -18,7 +18,7 @@ import threading
 import finufft
 import numpy as np
 
-from pipeline.physics.oxide_band import Band
+from g2tom.physics.oxide_band import Band
 
 __all__ = ["TOLERANCE", "values_at_points"]
 

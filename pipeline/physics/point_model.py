@@ -7,11 +7,11 @@ the far field, carry currents ``f_i`` (in m, i.e. amperes per ``V / rho*``) with
 
 where ``r_i`` is the specific resistance of a film on spot ``i`` (0 for a clean spot; an
 insulating film removes the spot) and ``C`` the optional lattice constant (default 0): with
-``C`` = :data:`~pipeline.physics.lattice.SQUARE_LATTICE_CONSTANT` the term restores the
+``C`` = :data:`~g2tom.physics.lattice.SQUARE_LATTICE_CONSTANT` the term restores the
 interaction of each spot with its own cell's neighbourhood that the lattice sum over the other
-spots misses when the spots stand for a continuous distribution (:mod:`pipeline.physics.lattice`).
+spots misses when the spots stand for a continuous distribution (:mod:`g2tom.physics.lattice`).
 Spots whose own conductance ``1 / M_ii`` is below
-:data:`~pipeline.physics.point_system.CONDUCTANCE_FLOOR` pitches are treated
+:data:`~g2tom.physics.point_system.CONDUCTANCE_FLOOR` pitches are treated
 as absent, so that no radius, however small (expected radii reach 1e-323 m, where ``1 / (2a)``
 overflows), and no film, however resistive, turns the solve into NaN.
 
@@ -23,13 +23,13 @@ Cholesky factorization). With trial currents ``t_i = 1 / M_ii`` (each spot's own
 the exact one (:func:`greenwood_resistance` takes no lattice term: see there).
 
 :func:`resistance` solves ``M f = 1`` matrix-free for a batch of oxide masks at every load step,
-with the calling convention of :func:`pipeline.physics.constriction.resistance`:
+with the calling convention of :func:`g2tom.physics.constriction.resistance`:
 ``M f = f / (2a) + film term + (K * f) / pi``, ``K * f`` from
-:func:`pipeline.physics.interaction_folded.interaction_apply`, by a Jacobi-preconditioned
+:func:`g2tom.physics.interaction_folded.interaction_apply`, by a Jacobi-preconditioned
 conjugate gradient batched over the maps, started from the previous load step's solution. The
 conductance is the variational estimate ``J(f) = 2 sum f - f^T M f``, exact to second order in
 the residual, and by default the solve stops when CG's own energy-norm record says ``J`` is
-within the tolerance (see :func:`pipeline.physics.point_solve._solve_step`); about half the iterations a residual
+within the tolerance (see :func:`g2tom.physics.point_solve._solve_step`); about half the iterations a residual
 criterion of the same tolerance needs.
 
 Cropping: forcing the currents outside a crop to zero can only lower the conductance, and
@@ -45,15 +45,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.physics.constriction import ChunkResult, _blocks
-from pipeline.physics.interaction import block_size
-from pipeline.physics.point_solve import RECORDS, solve_block
-from pipeline.physics.point_system import OPERATORS, checked_settings, spot_states, system_matrix
-from pipeline.physics.spot_geometry import SpotGeometry
+from g2tom.physics.constriction import ChunkResult, _blocks
+from g2tom.physics.interaction import block_size
+from g2tom.physics.point_solve import RECORDS, solve_block
+from g2tom.physics.point_system import OPERATORS, checked_settings, spot_states, system_matrix
+from g2tom.physics.spot_geometry import SpotGeometry
 
 __all__ = ["CRITERIA", "PointResult", "resistance_dense", "resistance", "greenwood_resistance"]
 
-#: What ``solver_tolerance`` measures (see :func:`pipeline.physics.point_solve._solve_step`).
+#: What ``solver_tolerance`` measures (see :func:`g2tom.physics.point_solve._solve_step`).
 CRITERIA = ("error", "residual")
 
 #: Maps per block of the solve (at most; fewer where :func:`block_size` bounds the memory). Its
@@ -182,12 +182,12 @@ def resistance(
     lattice_constant
         C of the lattice self term ``C / (pi pitch)`` added to every spot's ``M_ii``,
         dimensionless, finite and >= 0; 0 (default) leaves the model as published,
-        :data:`~pipeline.physics.lattice.SQUARE_LATTICE_CONSTANT` makes the spots of a smooth
+        :data:`~g2tom.physics.lattice.SQUARE_LATTICE_CONSTANT` makes the spots of a smooth
         field (one per cell) reproduce the continuum.
     groups
         Which set of spots each map has, int (batch,), ``spots.radius`` then (n_groups, n_delta, n, n)
         (the ``asperities`` discretization); None: one set for all maps (see
-        :func:`pipeline.physics.constriction.resistance`).
+        :func:`g2tom.physics.constriction.resistance`).
 
     Returns
     -------
@@ -248,7 +248,7 @@ def greenwood_resistance(
 
     ``R = rho* / sum t + rho* sum_{i != j} t_i t_j / d_ij / (pi (sum t)^2)``: Greenwood's Eqs. 11-13
     with every spot's own conductance ``t_i`` (``2 a_i`` when clean, ``a_i`` and film in series
-    when oxidized) as its weight; equal to :func:`pipeline.physics.constriction.resistance` with
+    when oxidized) as its weight; equal to :func:`g2tom.physics.constriction.resistance` with
     radius weights for an insulating film. Evaluated on the whole window (the crops of ``spots``
     must not crop; its tolerance is unused).
 
@@ -256,13 +256,13 @@ def greenwood_resistance(
     ----------
     masks, rho, method, film_resistance, groups
         As for :func:`resistance`. There is no lattice term: the form stays Greenwood's (and
-        equal to the insulating-film path of :mod:`~pipeline.physics.constriction`). With the
+        equal to the insulating-film path of :mod:`~g2tom.physics.constriction`). With the
         term it would be the Rayleigh quotient of the corrected ``M``, a lower bound of that
         model's conductance, which on the paper's scene with expected spots falls 0.01-5.1 %
         below Barber's K/(E* rho*) against -3.3 ... +1.8 % without it.
     spots
         As for :func:`resistance`, on the whole window (crops ``n`` for every load step,
-        :meth:`~pipeline.physics.spot_geometry.SpotGeometry.whole_window`).
+        :meth:`~g2tom.physics.spot_geometry.SpotGeometry.whole_window`).
 
     Returns
     -------

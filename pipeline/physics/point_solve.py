@@ -1,4 +1,4 @@
-"""The point model's batched solve of ``M f = 1`` at every load step (see :mod:`pipeline.physics.point_model`).
+"""The point model's batched solve of ``M f = 1`` at every load step (see :mod:`g2tom.physics.point_model`).
 
 A Jacobi-preconditioned conjugate gradient, matrix-free (``M f = f / (2a) + film term + (K * f) / pi``),
 batched over the maps of a block, in float32 inner rounds restarted from the float64 residual,
@@ -13,8 +13,8 @@ from typing import Callable
 
 import numpy as np
 
-from pipeline.physics.crops import crop_slice
-from pipeline.physics.point_system import OPERATORS, spot_states
+from g2tom.physics.crops import crop_slice
+from g2tom.physics.point_system import OPERATORS, spot_states
 
 __all__ = ["RECORDS", "REDO_BLOCK", "solve_block"]
 
@@ -246,7 +246,7 @@ def solve_block(
     block: np.ndarray, radius: np.ndarray, crops: np.ndarray, tolerance: float, settings: dict,
     groups: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
-    """Every load step of one block of :func:`~pipeline.physics.interaction.block_size` masks, each warm-started from the previous one.
+    """Every load step of one block of :func:`~g2tom.physics.interaction.block_size` masks, each warm-started from the previous one.
 
     Entries whose cropping bound exceeds ``tolerance`` are solved again on the whole window,
     gathered into padded blocks of exactly :data:`REDO_BLOCK` maps (a fixed shape, so results

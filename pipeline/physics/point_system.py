@@ -1,6 +1,6 @@
 """The point model's system ``M``: its diagonal (spot, film, lattice term), which spots carry
 current, its dense form, and the matrix-free interaction operators ``K * f`` by ``cube.method``
-(see :mod:`pipeline.physics.point_model` for the model)."""
+(see :mod:`g2tom.physics.point_model` for the model)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from typing import Callable
 
 import numpy as np
 
-from pipeline.physics.interaction_folded import interaction_apply_columns, interaction_apply_dense_columns
+from g2tom.physics.interaction_folded import interaction_apply_columns, interaction_apply_dense_columns
 
 __all__ = ["OPERATORS", "CONDUCTANCE_FLOOR", "film_diagonal", "system_matrix", "checked_settings", "spot_states"]
 

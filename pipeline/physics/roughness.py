@@ -1,4 +1,4 @@
-"""Height maps before their moments are taken (:mod:`pipeline.physics.surface_spectrum`):
+"""Height maps before their moments are taken (:mod:`g2tom.physics.surface_spectrum`):
 checked (:func:`validated_heights`) and detrended (:func:`detrend`, the least-squares plane)."""
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """The spots of one window at every load step, as the resistance kernels take them.
 
-Greenwood's closed form (:func:`pipeline.physics.constriction.resistance`), the exact point solve
-(:func:`pipeline.physics.point_model.resistance`) and Greenwood's form with films
-(:func:`pipeline.physics.point_model.greenwood_resistance`) take a batch of oxide masks, the
+Greenwood's closed form (:func:`g2tom.physics.constriction.resistance`), the exact point solve
+(:func:`g2tom.physics.point_model.resistance`) and Greenwood's form with films
+(:func:`g2tom.physics.point_model.greenwood_resistance`) take a batch of oxide masks, the
 resistivity and one :class:`SpotGeometry`: where the spots are, how large, how their interaction is
 weighted and how far it may be cropped.
 """
@@ -33,7 +33,7 @@ class SpotGeometry:
         Cell pitch ``h``, in m.
     crops
         Side of the centred square of cells kept per load step, shape (n_delta,)
-        (:func:`pipeline.physics.crops.choose_crops`); ``n`` everywhere keeps the whole window.
+        (:func:`g2tom.physics.crops.choose_crops`); ``n`` everywhere keeps the whole window.
     tolerance
         Relative error of ``R`` allowed from cropping, dimensionless: entries whose crop bound
         exceeds it are computed again on the whole window.

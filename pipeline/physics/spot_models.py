@@ -29,8 +29,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pipeline.physics.asperity import area_fraction, asperity_integral
-from pipeline.physics.spots import spot_areas, spot_radii
+from g2tom.physics.asperity import area_fraction, asperity_integral
+from g2tom.physics.spots import spot_areas, spot_radii
 
 __all__ = ["DISCRETIZATIONS", "HEIGHTS_TAG", "expected_radius", "cell_radius", "heights", "asperity_radius",
            "nearest_cells", "placed_radius"]

@@ -49,7 +49,7 @@ RULES = ("centre", "disc", "segment")
 #: Clean shares f of circular segments of a disc (cut by chords at x = d a, d = cos theta for 29
 #: evenly spaced theta) and their conductance over sqrt(f) times the disc's, ``h(f) / sqrt(f)``:
 #: Barber's flat punch on the segment, 80 pixels of radius on a 256^2 grid (made by
-#: ``python -m pipeline.reference.segment``; tests/test_spot_share.py recomputes a coarser table
+#: ``python -m g2tom.reference.segment``; tests/test_spot_share.py recomputes a coarser table
 #: with the reference's solver and holds these to it). Between them linear in f; 1 at f = 1.
 SEGMENT_SHARE = (0.0024, 0.0067, 0.0153, 0.0300, 0.0473, 0.0774, 0.1057, 0.1488, 0.1954, 0.2451, 0.3044, 0.3657,
                  0.4363, 0.5000, 0.5637, 0.6343, 0.6956, 0.7549, 0.8046, 0.8512, 0.8943, 0.9226, 0.9527, 0.9700,

@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
-from pipeline.physics.interaction import interaction_sum
+from g2tom.physics.interaction import interaction_sum
 
 __all__ = [
     "cell_radii",
@@ -96,7 +96,7 @@ def holm_greenwood_radius(radii: ArrayLike, cell_size: float) -> np.ndarray:
     -------
     numpy.ndarray
         Shape radii.shape[:-2]; NaN where fewer than two spots have a nonzero radius. The pair
-        sum is the exact one of the resistance stage (:func:`pipeline.physics.interaction.interaction_sum`).
+        sum is the exact one of the resistance stage (:func:`g2tom.physics.interaction.interaction_sum`).
     """
     a = np.asarray(radii, float)
     total = np.sum(a, axis=(-2, -1))

@@ -2,7 +2,7 @@
 
 :func:`psd_moments` estimates the profile moments m0, m2, m4 of an isotropic height map from its
 power spectrum up to a short-wavelength cutoff (the finite-difference estimate of
-:mod:`pipeline.physics.roughness` has no explicit cutoff); :func:`summit_parameters` turns them
+:mod:`g2tom.physics.roughness` has no explicit cutoff); :func:`summit_parameters` turns them
 into the Greenwood–Williamson summit statistics via Nayak's bandwidth parameter.
 """
 
@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pipeline.physics.roughness import detrend
+from g2tom.physics.roughness import detrend
 
 __all__ = ["SpectralMoments", "psd_moments", "SummitParameters", "summit_parameters", "BETA_RULES", "MIN_SIDE"]
 

@@ -2,7 +2,7 @@
 
 :func:`choose_surrogate` picks the surrogate that answers a surface: the one given, else the run's
 own (``<data_dir>/surrogate.json``, else ``surrogate.nc``) when it was fitted on this surface
-(equal mu, Pi: :func:`pipeline.predict.domain.check_surface`), else the atlas surrogate
+(equal mu, Pi: :func:`g2tom.predict.domain.check_surface`), else the atlas surrogate
 (``<data_dir>/atlas/surrogate.json``, else the one shipped in the package). :func:`predict_with` predicts
 with either kind, and :func:`predict_resistance` does both from a scenario, a scenario's name or
 TOML file, or a measured height map. ``g2tom predict`` calls the same functions.
@@ -15,13 +15,14 @@ from typing import Any, Mapping
 
 import xarray as xr
 
-from pipeline.compute import single_threaded
-from pipeline.config import ConfigError, Scenario, bundled_scenarios, load_scenario, read_input_text
-from pipeline.predict import atlas as atlas_file  # atlas_file.shipped_path, looked up at each call (tests patch it)
-from pipeline.predict.atlas import NOT_IN_ATLAS, AtlasSurrogate, is_atlas_document, load_atlas_surrogate, predict_atlas
-from pipeline.predict.domain import check_surface, with_measured_roughness
-from pipeline.predict.predictor import predict
-from pipeline.stages.surrogate_file import SurrogateTables, load_surrogate
+from g2tom.compute import single_threaded
+from g2tom.config import ConfigError, Scenario, bundled_scenarios, read_input_text
+from g2tom.before_work import load_scenario
+from g2tom.predict import atlas as atlas_file  # atlas_file.shipped_path, looked up at each call (tests patch it)
+from g2tom.predict.atlas import NOT_IN_ATLAS, AtlasSurrogate, is_atlas_document, load_atlas_surrogate, predict_atlas
+from g2tom.predict.domain import check_surface, with_measured_roughness
+from g2tom.predict.predictor import predict
+from g2tom.stages.surrogate_file import SurrogateTables, load_surrogate
 
 __all__ = ["choose_surrogate", "own_surrogate_path", "predict_resistance", "predict_with", "surface_scenario"]
 
@@ -87,8 +88,8 @@ def predict_with(surrogate: SurrogateTables | AtlasSurrogate, scenario: Scenario
     Parameters
     ----------
     surrogate
-        A single-scene surrogate (:func:`pipeline.predict.predictor.predict`) or the atlas's
-        (:func:`pipeline.predict.atlas.predict_atlas`).
+        A single-scene surrogate (:func:`g2tom.predict.predictor.predict`) or the atlas's
+        (:func:`g2tom.predict.atlas.predict_atlas`).
     scenario
         The surface, material and indenter.
     force, xi, lam
@@ -103,8 +104,8 @@ def predict_with(surrogate: SurrogateTables | AtlasSurrogate, scenario: Scenario
     Returns
     -------
     xarray.Dataset
-        The columns of :data:`pipeline.predict.queries.OUTPUT_COLUMNS` (from the atlas, less the
-        single-scene band's components :data:`pipeline.predict.atlas.NOT_IN_ATLAS`), with
+        The columns of :data:`g2tom.predict.queries.OUTPUT_COLUMNS` (from the atlas, less the
+        single-scene band's components :data:`g2tom.predict.atlas.NOT_IN_ATLAS`), with
         ``attrs["answered_by"]`` naming the surrogate that answered.
     """
     if isinstance(surrogate, SurrogateTables):
@@ -119,8 +120,8 @@ def surface_scenario(surface: Scenario | str | Path, overrides: Mapping[str, Any
     Parameters
     ----------
     surface
-        A :class:`~pipeline.config.Scenario` (used as it is); a bundled scenario's name or a
-        ``.toml`` file (:func:`~pipeline.config.load_scenario`); or any other existing file, read as
+        A :class:`~g2tom.config.Scenario` (used as it is); a bundled scenario's name or a
+        ``.toml`` file (:func:`~g2tom.config.load_scenario`); or any other existing file, read as
         a measured height map whose summits' sigma, eta and beta replace the ``paper`` scenario's
         (as ``g2tom predict --roughness FILE``; heights in m).
     overrides
@@ -180,7 +181,7 @@ def predict_resistance(surface: Scenario | str | Path, force: Any, xi: Any, lam:
     -------
     xarray.Dataset
         R_el (Ohm) as ``resistance``, its band ``lower`` / ``upper`` and the columns of
-        :data:`pipeline.predict.queries.OUTPUT_COLUMNS`; ``attrs["answered_by"]`` names the surrogate.
+        :data:`g2tom.predict.queries.OUTPUT_COLUMNS`; ``attrs["answered_by"]`` names the surrogate.
 
     Raises
     ------

@@ -1,12 +1,12 @@
 """Any surface inside the atlas: R' from the atlas surrogate over (xi, lambda, mu, Pi, F').
 
-The atlas surrogate (``<data>/atlas/surrogate.json``, :mod:`pipeline.atlas.fit`) gives ln R' at
-the query's (xi, lambda, F') and the surface's groups (mu, Pi) (:mod:`pipeline.physics.groups`)
+The atlas surrogate (``<data>/atlas/surrogate.json``, :mod:`g2tom.atlas.fit`) gives ln R' at
+the query's (xi, lambda, F') and the surface's groups (mu, Pi) (:mod:`g2tom.physics.groups`)
 by its curve model (the default, ``resistance``), and alpha and gamma of Eq. 27
 (``resistance_power_law`` = alpha 2 rho*/sqrt(R* sigma) F'^-gamma). Its band is where the query is:
 one standard deviation of ln R', the surrogate's leave-one-scene-out error in the query's region
 of (F', xi, the (mu, Pi) box's inside or edge) and its interpolation error between oxide nodes
-(:mod:`pipeline.fitting.atlas_band`), so ``lower`` / ``upper`` = R exp(-/+ that). A surrogate of
+(:mod:`g2tom.fitting.atlas_band`), so ``lower`` / ``upper`` = R exp(-/+ that). A surrogate of
 format 1 (the first atlas's one polynomial, e.g. an older shipped file) is still read and answers
 with its one global held-out error. The single-scene band's components (realization spread, fit
 interval, open-circuit share) are not in the atlas and are NaN. A query outside the atlas's domain (mu, Pi, xi, lambda, or F' beyond the steps fitted
@@ -23,12 +23,12 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.atlas.fit import CURVE, FORMAT, FORMAT_VERSION, curve_model
-from pipeline.config import ConfigError, Scenario
-from pipeline.fitting.atlas_band import RegionalBand
-from pipeline.fitting.atlas_surrogate import AtlasModel
-from pipeline.predict.queries import OUTPUT_COLUMNS, check_ranges, check_values, queries
-from pipeline.scene import scene_groups
+from g2tom.atlas.fit import CURVE, FORMAT, FORMAT_VERSION, curve_model
+from g2tom.config import ConfigError, Scenario
+from g2tom.fitting.atlas_band import RegionalBand
+from g2tom.fitting.atlas_surrogate import AtlasModel
+from g2tom.predict.queries import OUTPUT_COLUMNS, check_ranges, check_values, queries
+from g2tom.scene import scene_groups
 
 __all__ = ["NOT_IN_ATLAS", "AtlasSurrogate", "is_atlas_document", "load_atlas_surrogate", "predict_atlas", "shipped_path", "SHIPPED"]
 
@@ -57,8 +57,8 @@ class AtlasSurrogate:
     ----------
     models
         ``alpha``, ``gamma`` (Eq. 27) and :data:`CURVE` (ln R'): the grid surrogate
-        (:class:`~pipeline.fitting.atlas_grid.GridTensorModel`, formats 2-4), the scene series
-        (:class:`~pipeline.fitting.atlas_scene_series.SceneSeriesModel`, formats 3 and 4; format 4 names
+        (:class:`~g2tom.fitting.atlas_grid.GridTensorModel`, formats 2-4), the scene series
+        (:class:`~g2tom.fitting.atlas_scene_series.SceneSeriesModel`, formats 3 and 4; format 4 names
         the frame of the groups either is built in) or one polynomial in five logs (format 1, the
         first atlas's).
     domain
@@ -68,7 +68,7 @@ class AtlasSurrogate:
     source
         Where it was read from.
     band
-        The regional band (:class:`~pipeline.fitting.atlas_band.RegionalBand`), None for format 1.
+        The regional band (:class:`~g2tom.fitting.atlas_band.RegionalBand`), None for format 1.
     """
 
     models: dict[str, Any]
@@ -127,7 +127,7 @@ def shipped_path() -> Path | None:
     """The package's atlas surrogate, or None when this installation ships none."""
     from importlib import resources
 
-    path = Path(str(resources.files("pipeline").joinpath(SHIPPED)))
+    path = Path(str(resources.files("g2tom").joinpath(SHIPPED)))
     return path if path.is_file() else None
 
 
@@ -146,7 +146,7 @@ def _check_domain(surrogate: AtlasSurrogate, values: dict[str, np.ndarray], extr
 
 def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi: Any, lam: Any,
                   extrapolate: bool = False) -> xr.Dataset:
-    """R_el of Eq. 27 from the atlas surrogate, with the held-out band; columns of :data:`pipeline.predict.queries.OUTPUT_COLUMNS`.
+    """R_el of Eq. 27 from the atlas surrogate, with the held-out band; columns of :data:`g2tom.predict.queries.OUTPUT_COLUMNS`.
 
     Raises
     ------
@@ -178,7 +178,7 @@ def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi:
     for name, (units, long_name) in OUTPUT_COLUMNS.items():
         ds[name].attrs = {"units": units, "long_name": long_name}
     ds.attrs["band"] = ("lower, upper = R exp(-/+ e): e the atlas surrogate's cross-validated error of ln R' in the "
-                        "query's region of (F', xi, mu-Pi box) and between oxide nodes (pipeline.fitting.atlas_band)"
+                        "query's region of (F', xi, mu-Pi box) and between oxide nodes (g2tom.fitting.atlas_band)"
                         if surrogate.band is not None else
                         "held-out error of the atlas surrogate: lower, upper = R exp(-/+ rms |ln R'_surrogate - ln R'_scene|)")
     ds.attrs["surrogate_method"] = "atlas"

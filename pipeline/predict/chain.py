@@ -2,17 +2,17 @@
 predict``, against the full elastic field of that very surface.
 
 The validation's random-process surface (``g2tom validate --surface random_process``, a Gaussian
-self-affine surface whose full-field contact and resistance :mod:`pipeline.reference` solves) is
+self-affine surface whose full-field contact and resistance :mod:`g2tom.reference` solves) is
 what a profilometer would measure. For every realization of the validation set:
 
-1. its heights over the set's window (:func:`pipeline.reference.scene.rough_sphere` less the sphere,
-   :func:`pipeline.reference.surfaces.sphere`) are written as a height map (``.npy``, m) of
+1. its heights over the set's window (:func:`g2tom.reference.scene.rough_sphere` less the sphere,
+   :func:`g2tom.reference.surfaces.sphere`) are written as a height map (``.npy``, m) of
    :data:`MAP_PIXELS` pixels a side;
-2. the map is measured as ``g2tom roughness`` does (:func:`pipeline.heightmap.measure`: summit
+2. the map is measured as ``g2tom roughness`` does (:func:`g2tom.heightmap.measure`: summit
    sigma, eta, beta from its spectral moments below 4 pixels);
 3. the resistance is predicted as ``g2tom predict --roughness MAP`` does
-   (:func:`pipeline.predict.domain.with_measured_roughness` on ``paper`` with the set's sphere and
-   material, the surrogate :func:`pipeline.predict.answer.choose_surrogate` picks: the atlas's) at the
+   (:func:`g2tom.predict.domain.with_measured_roughness` on ``paper`` with the set's sphere and
+   material, the surrogate :func:`g2tom.predict.answer.choose_surrogate` picks: the atlas's) at the
    forces the full field was solved at, clean (the atlas surrogate's node xi = 0) and for every
    oxide case (xi, lambda) of the set; the same with the set's own sigma, eta, beta (the closed form
    of its spectrum: the chain without the measurement) beside it;
@@ -20,7 +20,7 @@ what a profilometer would measure. For every realization of the validation set:
 
 ``chain.nc`` (beside ``validate.nc``) holds the ratios per (case, realization, load) and their
 geometric means and standard errors of ln over the realizations per load; the report prints them
-(``analysis/report_chain.py``). Run ``python -m pipeline.predict.chain --data-dir DATA`` after
+(``analysis/report_chain.py``). Run ``python -m g2tom.predict.chain --data-dir DATA`` after
 ``g2tom validate --surface random_process`` (``--quick`` too).
 """
 
@@ -36,8 +36,9 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from pipeline.config import ConfigError, Scenario, load_scenario
-from pipeline.store import atomic_path, git_commit
+from g2tom.config import ConfigError, Scenario
+from g2tom.before_work import load_scenario
+from g2tom.store import atomic_path, git_commit
 
 __all__ = ["CHAIN_FILE", "MAP_PIXELS", "chain_dataset", "run_chain", "main"]
 
@@ -49,7 +50,7 @@ MAP_PIXELS = 1024
 
 def _validation_set(ds: xr.Dataset):
     """The validation set a ``validate.nc`` was made of (its scalar attributes, realizations, cases)."""
-    from pipeline.reference import scene
+    from g2tom.reference import scene
 
     fields = {f.name for f in dataclasses.fields(scene.ValidationSet)}
     values = {k.removeprefix("scene_"): (v.item() if hasattr(v, "item") else v) for k, v in ds.attrs.items()
@@ -63,7 +64,7 @@ def _validation_set(ds: xr.Dataset):
 
 def _height_map(vset, realization: int, folder: Path) -> tuple[Path, float]:
     """The realization's rough surface (no sphere) as a ``.npy`` height map (m) and its pixel (m)."""
-    from pipeline.reference import scene, surfaces
+    from g2tom.reference import scene, surfaces
 
     pixel = vset.side / MAP_PIXELS
     heights = scene.rough_sphere(vset, realization, MAP_PIXELS) - surfaces.sphere(MAP_PIXELS, pixel, vset.radius)
@@ -82,9 +83,9 @@ def _surface(vset) -> Scenario:
 def _predicted(surrogate, scenario: Scenario, force: np.ndarray, xi: np.ndarray, lam: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """R (ohm) clean and per oxide case (xi, lambda, load), and whether each load lies in the domain."""
-    from pipeline.predict.answer import predict_with
-    from pipeline.predict.atlas import AtlasSurrogate
-    from pipeline.scene import scene_groups
+    from g2tom.predict.answer import predict_with
+    from g2tom.predict.atlas import AtlasSurrogate
+    from g2tom.scene import scene_groups
 
     force_n = force / scenario.force_scale
     inside = np.ones(force.size, bool)
@@ -130,10 +131,10 @@ def chain_dataset(validate_nc: str | Path, data_dir: str | Path = "data", surrog
     ConfigError
         If ``validate.nc`` is missing or not of the random-process surface.
     """
-    from pipeline.heightmap import measure
-    from pipeline.predict.answer import choose_surrogate
-    from pipeline.predict.domain import with_measured_roughness
-    from pipeline.scene import scene_groups
+    from g2tom.heightmap import measure
+    from g2tom.predict.answer import choose_surrogate
+    from g2tom.predict.domain import with_measured_roughness
+    from g2tom.scene import scene_groups
 
     validate_nc = Path(validate_nc)
     if not validate_nc.is_file():
@@ -224,14 +225,14 @@ def _dataset(ds: xr.Dataset, vset, measured: dict, out: dict, ratios: dict, answ
         "answered_by": answering.describe() if hasattr(answering, "describe") else str(answering),
         "map_pixels": MAP_PIXELS, "map_pixel": vset.side / MAP_PIXELS, "set_sigma": vset.sigma, "set_eta": vset.eta,
         "set_beta": vset.beta, "set_radius": vset.radius, "g2tom_commit": git_commit() or "unknown",
-        "reference": "validate.nc of the random_process surface (pipeline.reference)",
+        "reference": "validate.nc of the random_process surface (g2tom.reference)",
     })
     return chain
 
 
 def run_chain(data_dir: str | Path, surrogate: str | Path | None = None) -> Path:
     """``chain.nc`` beside ``<data_dir>/validate_random_process/validate.nc``, written atomically."""
-    from pipeline.reference.validate import output_folder
+    from g2tom.reference.validate import output_folder
 
     folder = output_folder(Path(data_dir), "random_process")
     chain = chain_dataset(folder / "validate.nc", data_dir, surrogate)
@@ -242,9 +243,9 @@ def run_chain(data_dir: str | Path, surrogate: str | Path | None = None) -> Path
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m pipeline.predict.chain [--data-dir DATA] [--surrogate FILE]``: exit 0, or 2 with one
+    """``python -m g2tom.predict.chain [--data-dir DATA] [--surrogate FILE]``: exit 0, or 2 with one
     ``g2tom: error:`` line."""
-    parser = argparse.ArgumentParser(prog="python -m pipeline.predict.chain", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m g2tom.predict.chain", description=__doc__.splitlines()[0])
     parser.add_argument("--data-dir", default="data", help="data directory (its validate_random_process/validate.nc)")
     parser.add_argument("--surrogate", default=None, help="a surrogate file to answer with (default: the atlas's)")
     args = parser.parse_args(argv)

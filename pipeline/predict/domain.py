@@ -1,7 +1,7 @@
 """The domain of a surrogate: the surface it answers, and surfaces measured on topographies.
 
 A single-scene surrogate (``make run``'s) was fitted on one surface: its ``surrogate.json`` and
-``surrogate.nc`` record the scene's dimensionless groups (mu, Pi) (:mod:`pipeline.physics.groups`),
+``surrogate.nc`` record the scene's dimensionless groups (mu, Pi) (:mod:`g2tom.physics.groups`),
 and :func:`check_surface` refuses a query surface whose groups differ by more than
 :data:`GROUP_TOLERANCE`, unless the caller extrapolates (then a warning). E*, rho*, and the
 dimensions at equal groups only scale F and R, so such surfaces are answered.
@@ -12,10 +12,10 @@ from __future__ import annotations
 import dataclasses
 import warnings
 from pathlib import Path
-from pipeline.config import ConfigError, Scenario
-from pipeline.predict.queries import ExtrapolationWarning
-from pipeline.scene import scene_groups
-from pipeline.stages.surrogate_file import SurrogateTables
+from g2tom.config import ConfigError, Scenario
+from g2tom.predict.queries import ExtrapolationWarning
+from g2tom.scene import scene_groups
+from g2tom.stages.surrogate_file import SurrogateTables
 
 __all__ = ["GROUP_TOLERANCE", "answered_by", "check_surface", "with_measured_roughness"]
 
@@ -43,7 +43,7 @@ def check_surface(tables: "SurrogateTables", scenario: Scenario, extrapolate: bo
 
     Warns
     -----
-    pipeline.predict.ExtrapolationWarning
+    g2tom.predict.ExtrapolationWarning
         With ``extrapolate``, for the same cases.
     """
     query = scene_groups(scenario)
@@ -77,9 +77,9 @@ def with_measured_roughness(scenario: Scenario, path: Path, pixel_size: float | 
     Raises
     ------
     ConfigError
-        If the file cannot be read or measured (see :func:`pipeline.heightmap.measure`).
+        If the file cannot be read or measured (see :func:`g2tom.heightmap.measure`).
     """
-    from pipeline.heightmap import measure
+    from g2tom.heightmap import measure
 
     measured = measure(path, pixel_size)
     roughness = dataclasses.replace(scenario.roughness, sigma=measured["sigma"], eta=measured["eta"],

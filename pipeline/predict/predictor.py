@@ -29,9 +29,9 @@ total, and a warning says so. Queries outside the fitted ranges of xi, lambda or
 unless ``extrapolate=True`` (then an :class:`ExtrapolationWarning`); where the local surrogate
 error exceeds ``warn_error`` a :class:`SurrogateErrorWarning` is issued.
 
-The predictor works from ``surrogate.json`` alone (:mod:`pipeline.stages.surrogate_file`: the
+The predictor works from ``surrogate.json`` alone (:mod:`g2tom.stages.surrogate_file`: the
 coefficients, coordinate maps, scale conventions, fitted ranges and band tables) and gives the
-same numbers from ``surrogate.nc``. The command ``g2tom predict`` is :mod:`pipeline.cli.predict`.
+same numbers from ``surrogate.nc``. The command ``g2tom predict`` is :mod:`g2tom.cli.predict`.
 """
 
 from __future__ import annotations
@@ -42,9 +42,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.config import ConfigError, Scenario
-from pipeline.predict.domain import answered_by, check_surface
-from pipeline.predict.queries import (
+from g2tom.config import ConfigError, Scenario
+from g2tom.predict.domain import answered_by, check_surface
+from g2tom.predict.queries import (
     OUTPUT_COLUMNS,
     ExtrapolationWarning,
     SurrogateErrorWarning,
@@ -52,8 +52,8 @@ from pipeline.predict.queries import (
     check_values,
     queries,
 )
-from pipeline.scene import scene_groups
-from pipeline.stages.surrogate_file import GRID_TABLES, STEP_TABLES, SurrogateTables, load_surrogate
+from g2tom.scene import scene_groups
+from g2tom.stages.surrogate_file import GRID_TABLES, STEP_TABLES, SurrogateTables, load_surrogate
 
 __all__ = ["ExtrapolationWarning", "SurrogateErrorWarning", "SurrogateTables", "load_surrogate", "predict", "MODELS",
            "OUTPUT_COLUMNS"]
@@ -110,7 +110,7 @@ def predict(
         If an input is non-finite or out of range, the inputs do not broadcast, or a query lies
         outside the fitted ranges and ``extrapolate`` is False, or the surface's (mu, Pi) differ
         from the surrogate's scene by more than
-        :data:`pipeline.predict.domain.GROUP_TOLERANCE` (relative) and
+        :data:`g2tom.predict.domain.GROUP_TOLERANCE` (relative) and
         ``extrapolate`` is False.
 
     Warns

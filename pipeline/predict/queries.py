@@ -1,6 +1,6 @@
 """The predictors' queries: broadcasting (numbers, arrays or DataArrays), their allowed values,
 the fitted ranges (refused, or warned with ``extrapolate``), and the output columns both
-predictors (:mod:`pipeline.predict.predictor`, :mod:`pipeline.predict.atlas`) answer with."""
+predictors (:mod:`g2tom.predict.predictor`, :mod:`g2tom.predict.atlas`) answer with."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from typing import Any, Callable
 import numpy as np
 import xarray as xr
 
-from pipeline.config import ConfigError
+from g2tom.config import ConfigError
 
 __all__ = ["ExtrapolationWarning", "SurrogateErrorWarning", "queries", "check_values", "check_ranges",
            "OUTPUT_COLUMNS"]

@@ -1,7 +1,7 @@
 """The full-field reference: elastic contact of the actual rough sphere on a grid (issue 22).
 
 Only this package imports the optional extra ``tamaas`` (``pip install -e '.[reference]'``),
-and only :mod:`pipeline.reference.elastic` touches it: everything else calls that module's
+and only :mod:`g2tom.reference.elastic` touches it: everything else calls that module's
 free-surface operator and contact solver, so another array backend can replace them there.
 
 Modules: ``elastic`` (the non-periodic Boussinesq operator and the library's contact solver),
@@ -17,7 +17,7 @@ driver), ``variables`` and ``summary`` (validate.nc) and ``section`` (its report
 
 from __future__ import annotations
 
-from pipeline.errors import install_hint
+from g2tom.errors import install_hint
 
 __all__ = ["INSTALL_HINT", "missing_extra"]
 

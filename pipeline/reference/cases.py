@@ -20,12 +20,12 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.reference import elastic, scene, window
-from pipeline.reference.contact import ContactReachesEdge, contact_at_force
-from pipeline.reference.oxide import oxide_on_grid
-from pipeline.reference.punch import punch_conductance
-from pipeline.scene import FieldSource
-from pipeline.store import atomic_path
+from g2tom.reference import elastic, scene, window
+from g2tom.reference.contact import ContactReachesEdge, contact_at_force
+from g2tom.reference.oxide import oxide_on_grid
+from g2tom.reference.punch import punch_conductance
+from g2tom.scene import FieldSource
+from g2tom.store import atomic_path
 
 __all__ = ["Case", "plan_cases", "ensemble_cases", "pair_cases", "case_key", "load_case", "run_case"]
 
@@ -102,7 +102,7 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
 
     ``source`` is g2tom's oxide field source of the scene (the fields by seed and realization).
 
-    The case is solved on its own window (:mod:`pipeline.reference.window`: ``side``, m, fitted
+    The case is solved on its own window (:mod:`g2tom.reference.window`: ``side``, m, fitted
     to the probe's contact ``reach``, m). The record holds the force and approach of the
     full-field solution, its contact area (m^2),
     the clean resistance and, for ``case.oxide``, the resistance (xi, lambda) with oxide, in ohm

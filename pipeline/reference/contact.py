@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.reference.elastic import FreeSurface, solve_pressure
+from g2tom.reference.elastic import FreeSurface, solve_pressure
 
 __all__ = ["ContactState", "ContactReachesEdge", "contact_at_force"]
 

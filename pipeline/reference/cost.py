@@ -1,6 +1,6 @@
 """The validation's cost before work: how many cases of which grid, and how long they take.
 
-A case costs its probe (a contact solve on the probe grid, :func:`pipeline.reference.window.probe_grid`),
+A case costs its probe (a contact solve on the probe grid, :func:`g2tom.reference.window.probe_grid`),
 its contact solve(s) and its punch conductances (clean and one per oxide case; the convergence
 case solves the contact three times for Barber's check and one punch). One contact solve and one
 punch on an n x n grid at F' cost :data:`CONTACT_SECONDS` and :data:`PUNCH_SECONDS` (CPU seconds
@@ -10,10 +10,10 @@ and Polonsky-Keer iterations grow about as n, each costs ~n^2 log n). Cases run 
 processes: the wall time is their summed time over the workers (at least the longest case).
 Part 2's later rounds size the ensembles from the measured scatter: the estimate is the first
 round's (from the prior scatter of the realizations and of the pairs,
-:func:`pipeline.reference.ensemble.prior_allocation`), and ``wall_cap`` the bound with every load at
+:func:`g2tom.reference.ensemble.prior_allocation`), and ``wall_cap`` the bound with every load at
 ``max_ensemble`` proxies and ``max_pairs`` pairs (:func:`case_costs`: what a pair and a proxy cost). g2tom's side runs in the driver before the cases: part 1's
 discretizations (:data:`G2TOM_SECONDS` each), part 2's validated scenario (the project's own plan,
-:func:`pipeline.before_work.plan.estimate`, for its contact, oxide and cube stages) and, on the GW
+:func:`g2tom.before_work.plan.estimate`, for its contact, oxide and cube stages) and, on the GW
 surface, the stand-in (:data:`STAND_IN_SECONDS` per realization and load).
 
 The tables are tamaas'. g2tom's own solver on the CPU (``--solver g2tom``) takes them divided by
@@ -30,8 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.reference import cases as cases_mod
-from pipeline.reference import ensemble, scene, window
+from g2tom.reference import cases as cases_mod
+from g2tom.reference import ensemble, scene, window
 
 __all__ = ["CONTACT_SECONDS", "PUNCH_SECONDS", "G2TOM_SECONDS", "STAND_IN_SECONDS", "LIGHT_HEAVY", "Estimate", "case_costs",
            "G2TOM_CPU_SPEEDUP", "GPU_CONTACT_SECONDS", "GPU_PUNCH_SECONDS", "GPU_CASE_SECONDS", "case_seconds",
@@ -42,7 +42,7 @@ LIGHT_HEAVY = (0.07, 18.8)
 #: One full-field contact solve on a case's fitted window (its probe: on the set's window), CPU
 #: seconds of one single-threaded process, at the (lightest, heaviest) load of the default set,
 #: by surface and grid: realization 0's probe (:func:`window.fitted_side`), then
-#: :func:`window.solve_in_window` and one :func:`pipeline.reference.punch.punch_conductance` per grid, timed by
+#: :func:`window.solve_in_window` and one :func:`g2tom.reference.punch.punch_conductance` per grid, timed by
 #: ``time.process_time`` (2026-11-27, on the shared 2-core machine, whose wall time was twice the
 #: CPU time then: other work shared the cores). A 1024^2 case of the old default's three loads
 #: costs ~96 s by these tables; the quiet machine took 79 s a case on 2026-11-24 (README). The

@@ -1,8 +1,8 @@
 """Where the full-field reference computes (``cpu`` or ``gpu``) and with which solver (``tamaas`` or ``g2tom``).
 
 ``tamaas`` is tamaas' operator and solver, the reference itself, on the CPU. ``g2tom`` is g2tom's
-own operator and Polonsky-Keer solver (:mod:`pipeline.reference.fft_surface`,
-:mod:`pipeline.reference.polonsky_keer`) written against an array namespace: NumPy on the CPU
+own operator and Polonsky-Keer solver (:mod:`g2tom.reference.fft_surface`,
+:mod:`g2tom.reference.polonsky_keer`) written against an array namespace: NumPy on the CPU
 (tested against tamaas), CuPy on a GPU (tested against both). Device ``auto`` is ``gpu`` when
 CuPy imports and sees a device, else ``cpu``. The solver defaults to g2tom's on either: on the
 CPU it gives tamaas' cases within 1.3e-7 (634 of the default GW set's 635; the other differs by
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from pipeline.errors import install_hint
+from g2tom.errors import install_hint
 
 __all__ = ["DEVICES", "SOLVERS", "GPU_HINT", "gpu_missing", "resolve", "solver_for", "namespace"]
 

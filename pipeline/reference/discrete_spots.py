@@ -1,9 +1,9 @@
 """g2tom's discrete model on the GW surface's own asperities: the ``discrete`` discretization of validate.
 
 On the GW surface the reference knows every asperity. The discrete model
-(:mod:`pipeline.physics.discrete_contact`) solves those very caps, coupled through the half-space,
+(:mod:`g2tom.physics.discrete_contact`) solves those very caps, coupled through the half-space,
 at g2tom's forces (the Greenwood–Tripp forces of the set's approaches, where the reference is
-solved too), and the cube's discrete chunk (:func:`pipeline.stages.cube_discrete.discrete_chunk`)
+solved too), and the cube's discrete chunk (:func:`g2tom.stages.cube_discrete.discrete_chunk`)
 counts oxide per spot by the set's ``spot_rule`` (the validated scenario's ``disc`` or ``segment``,
 :func:`with_rule_of`) on g2tom's own fields. Against the full field it measures the discrete model
 itself, surface by surface: the caps' point-load coupling, the resistance model and the spot rule.
@@ -17,13 +17,13 @@ import functools
 import numpy as np
 import xarray as xr
 
-from pipeline.config import load_scenario
-from pipeline.physics import discrete_contact as dc
-from pipeline.reference import scene, surfaces
-from pipeline.scene import FieldSource
-from pipeline.stages import contact as contact_stage
-from pipeline.stages import cube as cube_stage
-from pipeline.stages.cube_discrete import DiscretePool, clean_pool, discrete_chunk
+from g2tom.before_work import load_scenario
+from g2tom.physics import discrete_contact as dc
+from g2tom.reference import scene, surfaces
+from g2tom.scene import FieldSource
+from g2tom.stages import contact as contact_stage
+from g2tom.stages import cube as cube_stage
+from g2tom.stages.cube_discrete import DiscretePool, clean_pool, discrete_chunk
 
 __all__ = ["DISCRETE", "RULES", "with_rule_of", "surface_pool", "g2tom_resistances"]
 
@@ -60,7 +60,7 @@ def g2tom_resistances(vset: scene.ValidationSet, model: str) -> xr.Dataset:
 
     Returns ``force`` (delta, N), ``resistance_clean`` (realization, delta) and ``resistance``
     (xi, lambda, delta, realization), ohm (+inf: open circuit), and ``contact_extent`` (delta, m)
-    as :func:`pipeline.reference.scene.g2tom_resistances`.
+    as :func:`g2tom.reference.scene.g2tom_resistances`.
     """
     scenario = scene.g2tom_scenario(vset, model, "expected")
     contact = contact_stage.build(scenario)

@@ -1,11 +1,11 @@
 """The elastic free-surface operator of a half-space on a grid (non-periodic), behind one function.
 
-Everything in :mod:`pipeline.reference` that needs elasticity calls :func:`free_surface` (the
+Everything in :mod:`g2tom.reference` that needs elasticity calls :func:`free_surface` (the
 Boussinesq operator: surface pressure on square pixels -> normal surface displacement of an
 unbounded half-space, zero at infinity) or :func:`solve_pressure` (the library's constrained
 contact solver on the same operator): ``tamaas``' (the reference, on the CPU) or g2tom's own
-operator and Polonsky-Keer solver on NumPy or CuPy (:mod:`pipeline.reference.devices`,
-:mod:`pipeline.reference.fft_surface`, :mod:`pipeline.reference.polonsky_keer`), tested against
+operator and Polonsky-Keer solver on NumPy or CuPy (:mod:`g2tom.reference.devices`,
+:mod:`g2tom.reference.fft_surface`, :mod:`g2tom.reference.polonsky_keer`), tested against
 tamaas'.
 
 The half-space has the contact modulus ``E*`` (``tamaas``' Young modulus ``E*`` with Poisson
@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.reference import devices
-from pipeline.reference.fft_surface import FftSurface, fft_surface
-from pipeline.reference.polonsky_keer import solve_at_mean_pressure
+from g2tom.reference import devices
+from g2tom.reference.fft_surface import FftSurface, fft_surface
+from g2tom.reference.polonsky_keer import solve_at_mean_pressure
 
 __all__ = ["FreeSurface", "free_surface", "solve_pressure", "SolverFailure", "MAX_ITERATIONS"]
 
@@ -68,7 +68,7 @@ def free_surface(n: int, pixel: float, e_star: float, device: str = "cpu",
                  solver: str = "tamaas") -> FreeSurface | FftSurface:
     """The free-surface operator of an ``n x n`` grid of pitch ``pixel`` (m) with modulus ``e_star`` (Pa):
     tamaas' (``solver`` tamaas, the CPU), or g2tom's on NumPy (``cpu``) or CuPy (``gpu``) (a resolved
-    device and solver, :mod:`pipeline.reference.devices`)."""
+    device and solver, :mod:`g2tom.reference.devices`)."""
     if solver == "g2tom" or device == "gpu":
         return fft_surface(n, pixel, e_star, devices.namespace(device))
     import tamaas as tm
@@ -89,7 +89,7 @@ def solve_pressure(operator: FreeSurface | FftSurface, heights: np.ndarray, forc
     Frictionless, non-adhesive: ``p >= 0``, and where ``p > 0`` the displacement equals the
     heights plus one rigid approach. Polonsky and Keer's constrained conjugate gradients on the
     free-surface operator, to the relative ``tolerance`` of the solver's error measure (tamaas',
-    or :mod:`pipeline.reference.polonsky_keer`'s on an :class:`FftSurface`).
+    or :mod:`g2tom.reference.polonsky_keer`'s on an :class:`FftSurface`).
     """
     mean_pressure = force / (operator.n * operator.pixel) ** 2
     if isinstance(operator, FftSurface):

@@ -4,7 +4,7 @@ At each load (g2tom's force, where the full field is solved too: equal force, no
 and each case (clean, every xi x lambda), the validated scenario's ensemble geometric mean of R
 (:func:`model_ensemble`: its own contact model, spot rule and resistance model, read from the
 scenario, over ``model_realizations`` realizations) is divided by the full field's ensemble
-geometric mean (:mod:`pipeline.reference.statistics`: two-phase, a proxy on N realizations
+geometric mean (:mod:`g2tom.reference.statistics`: two-phase, a proxy on N realizations
 corrected by the paired full field on the main grid on the first P). The proxy is the full field on the
 ensemble grid (part 2's ``ensemble`` cases), or on the GW surface, where part 1 shows the discrete
 solve of every surface's own caps (``discrete``, ``point``) within :data:`STAND_IN_TOLERANCE` of the
@@ -34,15 +34,16 @@ from typing import Callable
 
 import numpy as np
 
-from pipeline.config import ResolvedScenario, Scenario, load_scenario
-from pipeline.reference import discrete_spots, scene, statistics
-from pipeline.reference.cases import Case, ensemble_cases, pair_cases
-from pipeline.reference.statistics import LogMean
-from pipeline.reference.variables import variable
-from pipeline.stages import contact as contact_stage
-from pipeline.stages import cube as cube_stage
-from pipeline.stages import oxide as oxide_stage
-from pipeline.stages.cube_discrete import DiscretePool, clean_pool
+from g2tom.config import ResolvedScenario, Scenario
+from g2tom.before_work import load_scenario
+from g2tom.reference import discrete_spots, scene, statistics
+from g2tom.reference.cases import Case, ensemble_cases, pair_cases
+from g2tom.reference.statistics import LogMean
+from g2tom.reference.variables import variable
+from g2tom.stages import contact as contact_stage
+from g2tom.stages import cube as cube_stage
+from g2tom.stages import oxide as oxide_stage
+from g2tom.stages.cube_discrete import DiscretePool, clean_pool
 
 __all__ = ["STAND_IN_TOLERANCE", "STAND_IN", "MAX_ROUNDS", "ModelEnsemble", "validated_scenario", "model_ensemble",
            "model_means", "describe", "admitted", "stand_in", "Part2", "CaseCosts", "plan_round", "prior_allocation", "run_part2",
@@ -223,7 +224,7 @@ def _full_field_error(vset: scene.ValidationSet, cell: tuple[int, int] | None, m
 @dataclass(frozen=True)
 class CaseCosts:
     """What one realization costs at each load, s: a pair (the full field on the main grid), a proxy
-    on the ensemble grid, and the stand-in's (:func:`pipeline.reference.cost.case_costs`)."""
+    on the ensemble grid, and the stand-in's (:func:`g2tom.reference.cost.case_costs`)."""
 
     pair: np.ndarray
     grid: np.ndarray
@@ -261,7 +262,7 @@ def plan_round(vset: scene.ValidationSet, state: Part2, first: bool, force_norma
     ``model``: :func:`model_means`; ``stand_clean`` (load) and ``stand`` (xi, lambda, load):
     :func:`admitted`. Round 1 sizes the proxies from the prior scatter; later rounds size proxies
     and pairs together from the measured (co)variances at least cost
-    (:func:`pipeline.reference.statistics.allocation`, the pair's cost over the proxy's from ``costs``).
+    (:func:`g2tom.reference.statistics.allocation`, the pair's cost over the proxy's from ``costs``).
     """
     model_clean, model_ox = model
     if first:
@@ -338,7 +339,7 @@ def run_part2(vset: scene.ValidationSet, force_normalized: np.ndarray, exact_cle
 
 def variables(vset: scene.ValidationSet, state: Part2, model: ModelEnsemble, stand_clean: np.ndarray,
               stand: np.ndarray, force_normalized: np.ndarray) -> dict[str, tuple]:
-    """validate.nc's part 2 variables (:data:`pipeline.reference.variables.VARIABLES`, ``ensemble_*``)."""
+    """validate.nc's part 2 variables (:data:`g2tom.reference.variables.VARIABLES`, ``ensemble_*``)."""
     model_clean, model_ox = model_means(model)
     loads = len(force_normalized)
     X, A = len(vset.xi), len(vset.lambdas)

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.physics.boussinesq import influence_coefficients
+from g2tom.physics.boussinesq import influence_coefficients
 
 __all__ = ["FftSurface", "fft_surface"]
 

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.physics import oxide_band, oxide_field
-from pipeline.physics.grid import cell_centres
-from pipeline.scene import FieldSource
+from g2tom.physics import oxide_band, oxide_field
+from g2tom.physics.grid import cell_centres
+from g2tom.scene import FieldSource
 
 __all__ = ["field_on_grid", "oxide_on_grid"]
 

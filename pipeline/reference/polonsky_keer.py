@@ -22,7 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from pipeline.reference.fft_surface import FftSurface
+from g2tom.reference.fft_surface import FftSurface
 
 __all__ = ["PolonskyKeerResult", "solve_at_mean_pressure"]
 

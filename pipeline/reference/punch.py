@@ -7,7 +7,7 @@ half-space's free-surface operator ``G`` (pressure -> displacement), solve ``G p
 ``kappa = K / (E* rho*)``. A disc of radius a gives ``K = 2 a E*``, ``kappa = 2 a / rho*``.
 The system is symmetric positive definite on C, solved by conjugate gradients: SciPy's on tamaas'
 operator (the CPU reference), :func:`conjugate_gradients` on the arrays of an
-:class:`~pipeline.reference.fft_surface.FftSurface` (the GPU path), where C is a mask of the
+:class:`~g2tom.reference.fft_surface.FftSurface` (the GPU path), where C is a mask of the
 whole grid rather than a list of pixels (no gathers on the device).
 """
 
@@ -20,8 +20,8 @@ from typing import Any, Callable
 import numpy as np
 from scipy.sparse.linalg import LinearOperator, cg
 
-from pipeline.reference.elastic import FreeSurface
-from pipeline.reference.fft_surface import FftSurface
+from g2tom.reference.elastic import FreeSurface
+from g2tom.reference.fft_surface import FftSurface
 
 __all__ = ["PunchResult", "punch_conductance", "conjugate_gradients"]
 

@@ -21,12 +21,13 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from pipeline.config import ResolvedScenario, load_scenario
-from pipeline.before_work.domains import resolve
-from pipeline.reference import surfaces
-from pipeline.stages import contact as contact_stage
-from pipeline.stages import cube as cube_stage
-from pipeline.stages import oxide as oxide_stage
+from g2tom.config import ResolvedScenario
+from g2tom.before_work import load_scenario
+from g2tom.before_work.domains import resolve
+from g2tom.reference import surfaces
+from g2tom.stages import contact as contact_stage
+from g2tom.stages import cube as cube_stage
+from g2tom.stages import oxide as oxide_stage
 
 __all__ = ["ValidationSet", "DEFAULT", "QUICK", "RANDOM", "random_process_set", "surface_stream", "rough_sphere", "g2tom_scenario",
            "g2tom_resistances", "contact_extent", "scene_overrides", "scenario_of", "FLOOR_SIGMAS", "DEFAULT_LOADS"]
@@ -66,7 +67,7 @@ class ValidationSet:
         g2tom's ``cube.model`` values and spot discretizations to compare.
     spot_rule
         The oxide rule of the ``discrete`` discretization (``disc`` or ``segment``: the validated
-        scenario's, :func:`pipeline.reference.discrete_spots.with_rule_of`).
+        scenario's, :func:`g2tom.reference.discrete_spots.with_rule_of`).
     surface
         ``gw`` (asperities of the GW model with sigma, eta, beta) or ``random_process`` (a Gaussian
         self-affine surface, :func:`random_process_set`: sigma, eta, beta are then its summits').
@@ -81,7 +82,7 @@ class ValidationSet:
         Part 2's goal for the standard error of ln ratio, clean and oxidized.
     device, solver
         Where the reference's cases compute (``cpu`` or ``gpu``) and with which solver (``tamaas``,
-        CPU only, or ``g2tom``'s own: :mod:`pipeline.reference.devices`); they do not shape a
+        CPU only, or ``g2tom``'s own: :mod:`g2tom.reference.devices`); they do not shape a
         case's result beyond the solvers' tolerances, so they are not in the cases' keys.
     """
 
@@ -152,10 +153,10 @@ class ValidationSet:
 def random_process_set(base: ValidationSet, rms: float, hurst: float = 0.8, bandwidth_ratio: float = 8.0) -> ValidationSet:
     """``base`` on a Gaussian self-affine surface instead of GW asperities, with g2tom's parameters
     from its spectrum: the closed-form moments m0, m2, m4 of the band and Nayak's summit statistics
-    (:func:`pipeline.physics.surface_spectrum.summit_parameters`: summit sigma, eta, and beta by the
+    (:func:`g2tom.physics.surface_spectrum.summit_parameters`: summit sigma, eta, and beta by the
     paper's 0.737 / sqrt(m4)). The shortest wavelength is chosen so that the summit density is
     ``base.eta`` (the grid keeps its pixels per asperity spacing)."""
-    from pipeline.physics.surface_spectrum import summit_parameters
+    from g2tom.physics.surface_spectrum import summit_parameters
 
     def summits(short: float):
         q_high = 2.0 * np.pi / short
@@ -204,7 +205,7 @@ def rough_sphere(vset: ValidationSet, realization: int, n: int, side: float | No
         raise ValueError(f"side = {side:g} m is out of range: must be in (0, {vset.side:g}] (the set's window)")
     pixel = side / n
     if vset.surface == "random_process":
-        from pipeline.physics.surface_spectrum import summit_parameters
+        from g2tom.physics.surface_spectrum import summit_parameters
 
         q_high = 2.0 * np.pi / vset.short_wavelength
         q_low = q_high / vset.bandwidth_ratio

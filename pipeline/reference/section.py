@@ -1,12 +1,12 @@
-"""The validation's report section (markdown); its figure is drawn by :mod:`analysis.figures_validate`."""
+"""The validation's report section (markdown); its figure is drawn by :mod:`g2tom.analysis.figures_validate`."""
 
 from __future__ import annotations
 
 import numpy as np
 import xarray as xr
 
-from pipeline.reference.ensemble import MAX_ROUNDS, STAND_IN_TOLERANCE
-from pipeline.reference.summary import ratios
+from g2tom.reference.ensemble import MAX_ROUNDS, STAND_IN_TOLERANCE
+from g2tom.reference.summary import ratios
 
 __all__ = ["markdown", "CLEAN_LIMIT", "OXIDE_LIMIT", "MEANINGS"]
 

@@ -3,7 +3,7 @@
 An oxide edge whose correlation length is much larger than a contact spot crosses the spot as
 a nearly straight chord, so the clean part of a spot of radius ``a`` and clean share ``f`` is a
 circular segment. Its constriction conductance is that of a rigid flat punch on the segment
-(Barber's analogy, :func:`pipeline.reference.punch.punch_conductance`), here relative to the
+(Barber's analogy, :func:`g2tom.reference.punch.punch_conductance`), here relative to the
 whole disc's, ``h(f) = C(segment) / C(disc)``, on an ``n x n`` grid with the disc ``radius``
 pixels across, the segments cut by chords at ``x = d a``, ``d = cos(theta)`` for evenly spaced
 theta (thin segments included), and ``f`` the segment's share of the disc's pixels.
@@ -11,8 +11,8 @@ theta (thin segments included), and ``f`` the segment's share of the disc's pixe
 Of all plane sets of one area the disc has the least capacity (Polya and Szego), so the
 ``disc`` rule's equal-area disc ``a sqrt(f)`` understates a segment's conductance; the table
 gives the gain ``h(f) / sqrt(f)``: 1.04 at f = 0.5, 1.13 at 0.15, 1.42 at 0.002, 1 at f -> 1.
-``python -m pipeline.reference.segment`` prints it (the constants of
-:mod:`pipeline.physics.spot_share` come from the defaults: 80 pixels on 256^2, tolerance 1e-9;
+``python -m g2tom.reference.segment`` prints it (the constants of
+:mod:`g2tom.physics.spot_share` come from the defaults: 80 pixels on 256^2, tolerance 1e-9;
 on 60 pixels the gain at f = 0.5 differs by 0.04 %).
 """
 
@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.reference.elastic import free_surface
-from pipeline.reference.punch import punch_conductance
+from g2tom.reference.elastic import free_surface
+from g2tom.reference.punch import punch_conductance
 
 __all__ = ["segment_gains"]
 

@@ -3,8 +3,8 @@
 Part 1's ratios are g2tom / full field at equal force, per realization; the report gives their
 geometric mean and range over the realizations where both resistances are finite (an open
 circuit, R = +inf, is counted, not averaged). Part 2's variables come from
-:func:`pipeline.reference.ensemble.variables`; every variable's units and long name from
-:mod:`pipeline.reference.variables`.
+:func:`g2tom.reference.ensemble.variables`; every variable's units and long name from
+:mod:`g2tom.reference.variables`.
 """
 
 from __future__ import annotations
@@ -15,11 +15,11 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline import __version__
-from pipeline.fitting.ensemble import log_standard_error
-from pipeline.reference import scene
-from pipeline.reference.variables import variable
-from pipeline.store import git_commit
+from g2tom import __version__
+from g2tom.fitting.ensemble import log_standard_error
+from g2tom.reference import scene
+from g2tom.reference.variables import variable
+from g2tom.store import git_commit
 
 __all__ = ["dataset", "ratios", "reference_arrays", "part1_ratios", "REFERENCE"]
 
@@ -71,7 +71,7 @@ _MAIN = ("force", "delta", "contact_area", "resistance_clean", "side", "seconds_
 def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict[str, np.ndarray],
             default: dict[str, str], part2: dict[str, tuple] | None = None) -> xr.Dataset:
     """validate.nc: part 1 (the reference and g2tom per realization and load, ratios, convergence,
-    wall times) and part 2's variables ``part2`` (:func:`pipeline.reference.ensemble.variables`).
+    wall times) and part 2's variables ``part2`` (:func:`g2tom.reference.ensemble.variables`).
 
     ``default``: the validated scenario's ``name``, ``model`` (its words), ``discretization`` (part
     1's name for its spots: ``discrete`` for the discrete model) and ``resistance_model`` (cube.model).

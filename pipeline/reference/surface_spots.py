@@ -2,7 +2,7 @@
 
 On the GW surface the reference knows every asperity (position, height). Placing them in g2tom's
 cells (the nearest centre; several in one cell make one spot of their summed radius,
-:func:`pipeline.physics.spot_models.placed_radius`) at g2tom's Greenwood–Tripp separation gives
+:func:`g2tom.physics.spot_models.placed_radius`) at g2tom's Greenwood–Tripp separation gives
 g2tom's answer on the very surface the full field solves, realization by realization. Against the
 ``asperities`` discretization (heights drawn per cell) it removes the sampling of the surface;
 what remains against the full field is Greenwood–Tripp's averaging (the separation of the mean
@@ -15,12 +15,12 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from pipeline.physics import spot_models
-from pipeline.reference import scene, surfaces
-from pipeline.stages import contact as contact_stage
-from pipeline.stages import cube as cube_stage
-from pipeline.stages import cube_chunks
-from pipeline.scene import FieldSource
+from g2tom.physics import spot_models
+from g2tom.reference import scene, surfaces
+from g2tom.stages import contact as contact_stage
+from g2tom.stages import cube as cube_stage
+from g2tom.stages import cube_chunks
+from g2tom.scene import FieldSource
 
 __all__ = ["SURFACE_ASPERITIES", "spot_radii", "g2tom_resistances"]
 
@@ -36,7 +36,7 @@ def spot_radii(vset: scene.ValidationSet, realization: int, centres: np.ndarray,
     vset
         The validation set (a GW surface).
     realization
-        Surface realization index: the asperities are :func:`pipeline.reference.scene.rough_sphere`'s.
+        Surface realization index: the asperities are :func:`g2tom.reference.scene.rough_sphere`'s.
     centres
         g2tom's cell centres along one axis, m.
     separation
@@ -54,7 +54,7 @@ def g2tom_resistances(vset: scene.ValidationSet, model: str) -> xr.Dataset:
 
     Returns ``force`` (delta, N), ``resistance_clean`` (realization, delta) and ``resistance``
     (xi, lambda, delta, realization), ohm (+inf: open circuit), and ``contact_extent`` (delta, m)
-    as :func:`pipeline.reference.scene.g2tom_resistances`. Asperities beyond g2tom's window are
+    as :func:`g2tom.reference.scene.g2tom_resistances`. Asperities beyond g2tom's window are
     dropped: the window holds the Greenwood–Tripp contact.
     """
     scenario = scene.g2tom_scenario(vset, model, "asperities")

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pipeline.physics.grid import cell_centres
+from g2tom.physics.grid import cell_centres
 
 __all__ = ["coordinates", "sphere", "Asperities", "gw_asperities", "gw_heights", "random_process",
            "spectral_moments_closed_form"]

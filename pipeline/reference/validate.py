@@ -2,7 +2,7 @@
 
 Part 1, *exactness per surface* (paired): g2tom's discretizations and models on the very surfaces
 the full field solves, per realization. Part 2, *the default's ensemble* (unpaired,
-:mod:`pipeline.reference.ensemble`): the validated scenario's ensemble geometric mean of R against
+:mod:`g2tom.reference.ensemble`): the validated scenario's ensemble geometric mean of R against
 the full field's over as many realizations as each load needs.
 
 Prints the plan first (scene, cases, grids, estimated time), runs g2tom's sides in memory, then
@@ -26,14 +26,15 @@ from typing import Any, Callable, TextIO
 import numpy as np
 import xarray as xr
 
-from pipeline.compute import ComputeOptions
-from pipeline.config import ConfigError, load_scenario
-from pipeline.progress import format_duration
-from pipeline.reference import cases as cases_mod
-from pipeline.reference import cost, discrete_spots, ensemble, scene, section, summary, surface_spots, window
-from pipeline.scene import FieldSource
-from pipeline.stages import contact as contact_stage
-from pipeline.store import atomic_path
+from g2tom.compute import ComputeOptions
+from g2tom.config import ConfigError
+from g2tom.before_work import load_scenario
+from g2tom.progress import format_duration
+from g2tom.reference import cases as cases_mod
+from g2tom.reference import cost, discrete_spots, ensemble, scene, section, summary, surface_spots, window
+from g2tom.scene import FieldSource
+from g2tom.stages import contact as contact_stage
+from g2tom.store import atomic_path
 
 #: Largest relative difference of g2tom's forces at one delta between discretizations and models
 #: (their auto domains differ); the reference is solved at the first one's.
@@ -70,7 +71,7 @@ def _force_normalized(vset: scene.ValidationSet) -> np.ndarray:
 
 def _model_seconds(vset: scene.ValidationSet, config: str, workers: int) -> float:
     """The project's plan of the validated scenario's contact, oxide and cube stages on the scene, s."""
-    from pipeline.before_work.plan import estimate
+    from g2tom.before_work.plan import estimate
 
     stages = estimate(ensemble.validated_scenario(vset, config), workers)
     return sum(e.seconds for e in stages if e.stage in ("contact", "oxide", "cube"))
@@ -147,7 +148,7 @@ class CaseRunner:
         done = {c: cases_mod.load_case(self.case_dir / f"{c.name}.json", keys[c]) for c in cases}
         todo = [c for c in cases if done[c] is None]
         if todo and not self._made:
-            from pipeline.compute import _client
+            from g2tom.compute import _client
 
             self._client, self._made = _client(self._stack, self.options), True
         print(f"validate: {label}: {len(cases) - len(todo)} of {len(cases)} cases already stored, {len(todo)} to run "
@@ -227,7 +228,7 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
     stream, progress
         Where the plan and the lines go; ``progress``: one line per finished case.
     draw
-        ``draw(ds, path)`` draws ``validate.png``, e.g. :func:`analysis.figures_validate.figure`,
+        ``draw(ds, path)`` draws ``validate.png``, e.g. :func:`g2tom.analysis.figures_validate.figure`,
         which the CLI passes: the library draws nothing.
     config
         The validated scenario (bundled name or TOML file): part 2's model is its own.
@@ -362,7 +363,7 @@ def chosen_set(quick: bool, surface: str = "gw", realizations: int | None = None
 
 def format_validate_plan(config: str = "paper", workers: int | None = None) -> list[str]:
     """Lines of ``g2tom plan --validate``: ``g2tom validate``'s default set on both surfaces, part 2
-    validating ``config`` (cases, grids, the estimate: :mod:`pipeline.reference.cost`)."""
+    validating ``config`` (cases, grids, the estimate: :mod:`g2tom.reference.cost`)."""
     parallel = max(1, workers or os.cpu_count() or 1)
     return [line for surface in SURFACES for line in plan_lines(chosen_set(False, surface), config, parallel)]
 

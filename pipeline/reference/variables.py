@@ -1,4 +1,4 @@
-"""validate.nc's variables: each one's dims, units and long name, declared once (as :mod:`pipeline.stages.schema`).
+"""validate.nc's variables: each one's dims, units and long name, declared once (as :mod:`g2tom.stages.schema`).
 
 Part 1 (*exactness per surface*, paired): the full field and g2tom per realization and load.
 Part 2 (*the default's ensemble*, unpaired): the validated scenario's ensemble geometric mean of R
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from pipeline.stages.schema import COORDINATES, Variable
+from g2tom.stages.schema import COORDINATES, Variable
 
 __all__ = ["VARIABLES", "variable"]
 

@@ -18,9 +18,9 @@ import math
 
 import numpy as np
 
-from pipeline.physics.grid import cell_centres
-from pipeline.reference import elastic, scene
-from pipeline.reference.contact import ContactReachesEdge, ContactState, contact_at_force
+from g2tom.physics.grid import cell_centres
+from g2tom.reference import elastic, scene
+from g2tom.reference.contact import ContactReachesEdge, ContactState, contact_at_force
 
 __all__ = ["MARGIN", "PAD_SPACINGS", "GROWTH", "PROBE_MIN", "probe_grid", "fitted_side", "solve_in_window"]
 
@@ -53,7 +53,7 @@ def fitted_side(vset: scene.ValidationSet, realization: int, force: float,
 
     Raises
     ------
-    pipeline.reference.elastic.SolverFailure
+    g2tom.reference.elastic.SolverFailure
         If the probe's contact solve fails.
     """
     n = probe_grid(vset, ensemble)
@@ -77,7 +77,7 @@ def solve_in_window(vset: scene.ValidationSet, realization: int, n: int, force: 
     ------
     ContactReachesEdge
         If the contact reaches the edge of the set's own window.
-    pipeline.reference.elastic.SolverFailure
+    g2tom.reference.elastic.SolverFailure
         If the contact solve fails.
     """
     while True:

@@ -12,17 +12,17 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from pipeline.compute import ComputeOptions, single_threaded
-from pipeline.config import ConfigError, Scenario
-from pipeline.contact_solution import fields, indenter_profile, solve_with_stiffness
-from pipeline.before_work.domains import resolve
-from pipeline.physics import greenwood_tripp as gt
-from pipeline.physics import hertz, spot_models, spots
-from pipeline.physics.asperity import area_fraction
-from pipeline.physics.grid import cell_centres
-from pipeline.stages import contact_discrete
-from pipeline.stages.schema import SCHEMA, SPOT_RADIUS_LONG_NAMES, labelled
-from pipeline.store import write_dataset
+from g2tom.compute import ComputeOptions, single_threaded
+from g2tom.config import ConfigError, Scenario
+from g2tom.contact_solution import fields, indenter_profile, solve_with_stiffness
+from g2tom.before_work.domains import resolve
+from g2tom.physics import greenwood_tripp as gt
+from g2tom.physics import hertz, spot_models, spots
+from g2tom.physics.asperity import area_fraction
+from g2tom.physics.grid import cell_centres
+from g2tom.stages import contact_discrete
+from g2tom.stages.schema import SCHEMA, SPOT_RADIUS_LONG_NAMES, labelled
+from g2tom.store import write_dataset
 
 __all__ = ["build", "run"]
 
@@ -33,7 +33,7 @@ def _cell_spots(scenario: Scenario, r: np.ndarray, u: np.ndarray, nodal_area: np
 
     The separation is the spline of the displacement at the cells; the area is A* dx^2 with A*
     by ``contact.area_interpolation``; the radius by ``contact.spots``
-    (:func:`pipeline.physics.spot_models.cell_radius`; ``mean_area`` keeps ``sqrt(A / pi)`` of
+    (:func:`g2tom.physics.spot_models.cell_radius`; ``mean_area`` keeps ``sqrt(A / pi)`` of
     the interpolated area).
     """
     rough = scenario.roughness
@@ -87,9 +87,9 @@ def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=
         hertz_radius, holm_radius, roughness_parameter, iterations, residual, converged,
         stiffness (N/m) and barber_conductance (S);
         over (delta, y, x): spot_area, spot_radius (by ``contact.spots``), spot_separation; over r: profile. ``auto`` domains are
-        resolved first (:func:`pipeline.before_work.domains.resolve`). With ``contact.model = "discrete"``
+        resolved first (:func:`g2tom.before_work.domains.resolve`). With ``contact.model = "discrete"``
         also the pool of discrete surfaces at the same forces
-        (:func:`pipeline.stages.contact_discrete.variables`; its solves run where ``options`` says).
+        (:func:`g2tom.stages.contact_discrete.variables`; its solves run where ``options`` says).
     """
     scenario = resolve(scenario)
     r, sols, stiffness = solve_with_stiffness(scenario)

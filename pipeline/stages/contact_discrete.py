@@ -2,9 +2,9 @@
 
 The load steps are forces: those the Greenwood–Tripp solution gives at the scenario's approaches,
 so both models share the steps and F'. Surface ``k`` of the pool (``contact.surfaces`` of them)
-draws its own asperities (:func:`pipeline.physics.discrete_contact.draw_asperities`, stream
+draws its own asperities (:func:`g2tom.physics.discrete_contact.draw_asperities`, stream
 ``k``) on a disc that holds every asperity able to touch at the heaviest load
-(:func:`domain`); :func:`pipeline.physics.discrete_contact.solve_forces` gives its coupled caps
+(:func:`domain`); :func:`g2tom.physics.discrete_contact.solve_forces` gives its coupled caps
 at every force. The contact file keeps, per surface, the asperities that touch at some step
 (positions; radius per step, 0 off contact; padded to the largest count with ``spot_count``
 saying how many are real), its approach, stiffness K and Barber's conductance K / (E* rho*) per
@@ -14,7 +14,7 @@ each surface's result is independent of the chunking and the scheduler.
 With ``contact.pool_half_width`` > 0 the pool grows at the light steps (:func:`grow_pool`): the
 first ``contact.surfaces`` are solved at every step, further surfaces (the next streams) only up
 to the last step whose pool mean of Barber's conductance is still wider than the target, in
-rounds, until every step meets it or the pool holds :data:`pipeline.config.MAX_POOL_SURFACES`.
+rounds, until every step meets it or the pool holds :data:`g2tom.config.MAX_POOL_SURFACES`.
 Each surface is solved at a prefix of the steps (``surface_steps``: the solver warm-starts step by step, so a prefix
 gives the same numbers as a full solve), and surface ``s`` is solved at step ``i`` exactly when
 ``s`` is below the pool's size there: at each step the pool is its first surfaces.
@@ -29,12 +29,12 @@ import dask
 import numpy as np
 import xarray as xr
 
-from pipeline.compute import ComputeOptions, compute
-from pipeline import config
-from pipeline.config import POOL_CONFIDENCE, Scenario
-from pipeline.fitting.ensemble import mean_half_width, z_value
-from pipeline.physics import discrete_contact as dc
-from pipeline.stages.schema import SCHEMA
+from g2tom.compute import ComputeOptions, compute
+from g2tom import config
+from g2tom.config import POOL_CONFIDENCE, Scenario
+from g2tom.fitting.ensemble import mean_half_width, z_value
+from g2tom.physics import discrete_contact as dc
+from g2tom.stages.schema import SCHEMA
 
 __all__ = ["CHUNK", "DOMAIN_MARGIN", "cap_contact", "domain", "surface_spots", "solve_pool", "grow_pool",
            "pool_half_widths", "variables"]
@@ -51,7 +51,7 @@ DOMAIN_OUTSIDE = 1e-6
 def cap_contact(scenario: Scenario) -> tuple[Callable[[np.ndarray], np.ndarray], float]:
     """The least gap (m) above each cap's tip as a function of its distance from the axis, and the
     caps' Hertz radius (m): the cap's exact first contact with the indenter
-    (:func:`pipeline.physics.discrete_contact.cap_gap`, :func:`~pipeline.physics.discrete_contact.cap_radius`)."""
+    (:func:`g2tom.physics.discrete_contact.cap_gap`, :func:`~g2tom.physics.discrete_contact.cap_radius`)."""
     ind, beta = scenario.indenter, scenario.roughness.beta
     gap = functools.partial(dc.cap_gap, shape=ind.shape, beta=beta, radius=ind.radius, cone_angle=ind.cone_angle,
                             punch_radius=ind.punch_radius, edge_radius=ind.edge_radius)
@@ -118,7 +118,7 @@ def solve_pool(scenario: Scenario, forces: np.ndarray, lowest_delta: float,
 
 
 def pool_half_widths(pool: list[dict[str, np.ndarray]]) -> np.ndarray:
-    """Relative half-width (:data:`pipeline.config.POOL_CONFIDENCE`) of the pool's mean Barber conductance
+    """Relative half-width (:data:`g2tom.config.POOL_CONFIDENCE`) of the pool's mean Barber conductance
     at every step, over the surfaces solved there (NaN where no surface touches)."""
     width = pool[0]["delta"].size
     stiffness = np.full((len(pool), width), np.nan)
@@ -136,7 +136,7 @@ def grow_pool(pool: list[dict[str, np.ndarray]], target: float,
     pool
         The surfaces solved so far (each at every step, or at a prefix of them).
     target
-        Relative half-width (:data:`pipeline.config.POOL_CONFIDENCE`) wanted at every step.
+        Relative half-width (:data:`g2tom.config.POOL_CONFIDENCE`) wanted at every step.
     solve
         ``solve(first, stop, steps)``: surfaces ``first`` to ``stop - 1`` at the ``steps`` lightest
         forces, in :func:`surface_spots`'s form.
@@ -146,7 +146,7 @@ def grow_pool(pool: list[dict[str, np.ndarray]], target: float,
     list of dict
         The pool: each round adds the surfaces the widest short step is estimated to need
         (``n (w / target)^2``, at least :data:`CHUNK`, to at most
-        :data:`pipeline.config.MAX_POOL_SURFACES`), solved up to the last short step. Steps beyond
+        :data:`g2tom.config.MAX_POOL_SURFACES`), solved up to the last short step. Steps beyond
         it are not short and their surfaces do not change, so the solved prefixes shrink from round
         to round and the pool at every step is its first surfaces.
     """

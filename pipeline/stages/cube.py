@@ -2,22 +2,22 @@
 
 Reads the discrete spots of ``contact.nc`` and the oxide fields of ``oxide.nc``. A spot
 conducts where its cell's ``psi < threshold`` (the stored float32 values); its resistance at
-every load step follows Greenwood's Eqs. 11-15 (:mod:`pipeline.physics.constriction`), with
+every load step follows Greenwood's Eqs. 11-15 (:mod:`g2tom.physics.constriction`), with
 interaction weights ``cube.weights`` (spot radii, Eq. 13, or cell contact areas as in the
 published code). With ``cube.model = "point"`` the exact point-interaction solve
-(:mod:`pipeline.physics.point_model`) replaces the closed form, and ``oxide.film = "resistive"``
+(:mod:`g2tom.physics.point_model`) replaces the closed form, and ``oxide.film = "resistive"``
 lets oxidized spots conduct through their film. The work is split over (lambda, realization chunk) dask tasks
-(:mod:`pipeline.stages.cube_chunks`) of about
+(:mod:`g2tom.stages.cube_chunks`) of about
 ``cube.chunk`` x n_xi masks (``cube.chunk`` fields when every xi is evaluated, proportionally
 more when fewer fractions still need realizations); every entry's result is bit-identical
 whatever the chunk size or scheduler.
 
 The fields oxide.nc records (the fixed ensemble, or the adaptive ensemble's first batch) are
-served from the record when it is at most :data:`pipeline.stages.oxide.RECORD_BYTES`; every other
-field is regenerated inside its task from its seed (:class:`pipeline.scene.FieldSource`,
+served from the record when it is at most :data:`g2tom.stages.oxide.RECORD_BYTES`; every other
+field is regenerated inside its task from its seed (:class:`g2tom.scene.FieldSource`,
 bit-identical to the record), so memory stays bounded and the ensemble can grow. ``oxide.ensemble = "fixed"`` computes
 ``oxide.n_realizations`` fields per lambda. ``"adaptive"`` grows every (xi, lambda) cell in
-rounds (:mod:`pipeline.stages.cube_rounds`). The realization axis is padded to the largest count
+rounds (:mod:`g2tom.stages.cube_rounds`). The realization axis is padded to the largest count
 (NaN, ``n_conducting`` -1) and ``n_realizations`` (xi, lambda) says how many entries are real; with
 ``oxide.step_half_width`` the light steps hold more, ``step_realizations`` (xi, lambda, delta).
 """
@@ -31,21 +31,22 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline import store
-from pipeline.before_work.domains import resolved
-from pipeline.compute import ComputeOptions, single_threaded
-from pipeline.config import Scenario
-from pipeline.physics.crops import choose_crops
-from pipeline.physics.interaction import AUTO_METHOD
-from pipeline.physics import oxide_field
-from pipeline.physics.lattice import SQUARE_LATTICE_CONSTANT
-from pipeline.physics.oxide_marginal import clean_probability
-from pipeline.stages.cube_chunks import CubeSettings, asperity_spots, clean_terms, exact_terms, spots_of
-from pipeline.stages.cube_dataset import dataset
-from pipeline.stages.cube_discrete import DiscretePool, clean_pool
-from pipeline.stages.cube_rounds import compute_cells, half_widths, padded, stopping_rule
-from pipeline.scene import FieldSource, bands
-from pipeline.stages.oxide import RecordedFields
+from g2tom import store
+from g2tom.before_work.domains import resolved
+from g2tom.compute import ComputeOptions, single_threaded
+from g2tom.config import Scenario
+from g2tom.physics.crops import choose_crops
+from g2tom.physics.interaction import AUTO_METHOD
+from g2tom.physics import oxide_field
+from g2tom.physics.lattice import SQUARE_LATTICE_CONSTANT
+from g2tom.physics.oxide_marginal import clean_probability
+from g2tom.stages.cube_chunks import asperity_spots, clean_terms, exact_terms, spots_of
+from g2tom.stages.cube_settings import CubeSettings
+from g2tom.stages.cube_dataset import dataset
+from g2tom.stages.cube_discrete import DiscretePool, clean_pool
+from g2tom.stages.cube_rounds import compute_cells, half_widths, padded, stopping_rule
+from g2tom.scene import FieldSource, bands
+from g2tom.stages.oxide import RecordedFields
 
 __all__ = ["build", "run", "spot_maps", "work_settings", "clean_conductances", "CLEAN_MODELS"]
 
@@ -250,17 +251,17 @@ def build(
     scenario
         The scenario (sections ``material`` for rho*, ``cube``, ``oxide`` for the ensemble,
         ``fits.min_force`` and ``fits.confidence`` for the stopping rule; resolved first where it
-        is not: :func:`pipeline.before_work.domains.resolved`).
+        is not: :func:`g2tom.before_work.domains.resolved`).
     contact
         ``spot_radius`` and ``spot_area`` (delta, y, x), ``force``, ``force_normalized``.
     oxide
         The oxide stage's record: coordinates ``xi``, ``lambda``, ``y``, ``x``.
     options
-        Where dask runs (see :func:`pipeline.compute.compute`).
+        Where dask runs (see :func:`g2tom.compute.compute`).
     source
         Where the fields come from: anything with ``fields(lambda_index, realizations) ->
         (psi (r, y, x) float32, threshold (xi, r) float32)`` and ``lambdas``; default
-        :class:`pipeline.stages.oxide.RecordedFields` of ``scenario`` and ``oxide`` (the record
+        :class:`g2tom.stages.oxide.RecordedFields` of ``scenario`` and ``oxide`` (the record
         where it holds the field, else regenerated from its seed inside the task).
 
     Returns

@@ -1,87 +1,33 @@
 """The cube's unit of work: the resistance terms of a chunk of oxide fields at every load step.
 
 A dask task regenerates a chunk of fields of one lambda from their seeds
-(:class:`pipeline.scene.FieldSource`), thresholds them at each oxide fraction and runs
+(:class:`g2tom.scene.FieldSource`), thresholds them at each oxide fraction and runs
 the scenario's resistance model (:func:`model`) on the conducting masks: Greenwood's closed
 form, Greenwood's form with films, or the point model. With ``asperities`` spots each
 realization brings its own drawn spots (:func:`asperity_spots`); discrete spots have their own
-chunk (:mod:`pipeline.stages.cube_discrete`).
+chunk (:mod:`g2tom.stages.cube_discrete`).
 """
 
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
-from pipeline.physics import constriction, point_model, spot_models
-from pipeline.physics.spot_geometry import SpotGeometry
-from pipeline.scene import FieldSource
-from pipeline.stages.cube_discrete import discrete_chunk
+from g2tom.physics import constriction, point_model, spot_models
+from g2tom.physics.spot_geometry import SpotGeometry
+from g2tom.scene import FieldSource
+from g2tom.stages.cube_discrete import discrete_chunk
+from g2tom.stages.cube_settings import CubeSettings
 
-__all__ = ["CubeSettings", "TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "spots_of", "chunk_terms", "clean_terms",
+__all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "spots_of", "chunk_terms", "clean_terms",
            "exact_terms", "field_chunk"]
 
 TERMS = ("resistance", "resistance_self", "resistance_interaction", "n_conducting", "crop_bound")
 #: Extra terms of the point model's iterative solve.
 SOLVER_TERMS = ("iterations", "residual", "error_estimate")
-
-
-@dataclass(frozen=True, eq=False)
-class CubeSettings:
-    """What every task of the cube reads besides the fields and the spot maps (picklable).
-
-    Attributes
-    ----------
-    pitch
-        Cell pitch, m.
-    rho
-        Effective resistivity rho*, ohm m.
-    model
-        ``cube.model``: ``greenwood`` or ``point``.
-    film_resistance
-        Specific resistance of a resistive oxide film, ohm m2 (inf: insulating).
-    solver_tolerance, max_iterations, solver_criterion
-        The point model's iterative solve (``cube.*``).
-    crops
-        Side of the centred square of cells kept at each approach, (delta,).
-    tolerance
-        ``cube.crop_tolerance``: the crop's relative error bound (0: whole window).
-    method
-        ``cube.method`` as configured; ``method_used`` with ``auto`` resolved.
-    spots
-        ``contact.spots``, or ``discrete`` with ``contact.model = "discrete"``.
-    lattice_constant
-        ``cube.lattice_constant`` of the point model's self term.
-    asperities
-        ``asperities`` spots only: (oxide.seed, sigma in m, beta in m) of the drawn heights.
-    separation
-        ``asperities`` spots only: separation at the cell centres (delta, y, x), m.
-    spot_rule
-        ``oxide.spot_rule`` (discrete spots: ``centre`` or ``disc``).
-    control_variate
-        ``fits.control_variate``: discrete spots also return each realization's ``clean_share``.
-    """
-
-    pitch: float
-    rho: float
-    model: str
-    film_resistance: float
-    solver_tolerance: float
-    max_iterations: int
-    solver_criterion: str
-    crops: np.ndarray
-    tolerance: float
-    method: str
-    method_used: str
-    spots: str
-    lattice_constant: float
-    asperities: tuple[int, float, float] | None = None
-    separation: np.ndarray | None = None
-    spot_rule: str = "centre"
-    control_variate: bool = False
 
 
 def model(settings: CubeSettings) -> Any:
@@ -120,7 +66,7 @@ def asperity_spots(settings: CubeSettings, realizations: np.ndarray) -> np.ndarr
     """The ``asperities`` discretization's spot radii of ``realizations``, (realization, delta, y, x), m.
 
     Realization ``k`` draws its asperity heights from its own stream
-    (:func:`pipeline.physics.spot_models.heights`), held over every load step and shared by
+    (:func:`g2tom.physics.spot_models.heights`), held over every load step and shared by
     every (xi, lambda): the surface is one, the oxide fields vary.
     """
     seed, sigma, beta = settings.asperities
@@ -217,8 +163,8 @@ def field_chunk(
     """Regenerate the fields of ``realizations`` at lambda number ``index`` and run :func:`chunk_terms`.
 
     Only the fractions ``xi_index`` are evaluated; returns the terms shaped (xi, delta, realization).
-    Discrete spots (``radius`` a :class:`pipeline.stages.cube_discrete.DiscretePool`) go to
-    :func:`pipeline.stages.cube_discrete.discrete_chunk`, which computes only the steps below
+    Discrete spots (``radius`` a :class:`g2tom.stages.cube_discrete.DiscretePool`) go to
+    :func:`g2tom.stages.cube_discrete.discrete_chunk`, which computes only the steps below
     ``limit`` (None: every step; other spots compute every step).
     """
     if settings.spots == "discrete":

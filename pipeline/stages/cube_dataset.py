@@ -7,10 +7,10 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from pipeline.config import Scenario
-from pipeline.stages.cube_chunks import CubeSettings
-from pipeline.stages.cube_rounds import RULE_MARGIN
-from pipeline.stages.schema import RESISTANCE_LONG_NAMES, variable
+from g2tom.config import Scenario
+from g2tom.stages.cube_settings import CubeSettings
+from g2tom.stages.cube_rounds import RULE_MARGIN
+from g2tom.stages.schema import RESISTANCE_LONG_NAMES, variable
 
 __all__ = ["dataset"]
 
@@ -79,7 +79,7 @@ def dataset(
         data_vars["clean_share_expected"] = cube(
             "clean_share_expected", out["clean_share_expected"],
             method="Gil-Pelaez inversion of the random-phase field's characteristic function prod_k J0(w_k u) "
-                   "at the float32 threshold (pipeline.physics.oxide_marginal)")
+                   "at the float32 threshold (g2tom.physics.oxide_marginal)")
     if "step_realizations" in out:
         data_vars["step_realizations"] = cube("step_realizations", out["step_realizations"].astype(np.int32),
                                               comment="at least n_realizations, the lightest steps more")

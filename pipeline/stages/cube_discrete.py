@@ -5,42 +5,41 @@ in a grown pool, ``contact.pool_half_width``, ``S`` is the pool's size at each s
 may meet another surface than the heavy ones: :meth:`DiscretePool.groups`) and its own field
 (the same field as on grid spots, by seed and index, so paired comparisons stay possible). The
 field is evaluated where the spots are, exactly
-(:func:`pipeline.physics.oxide_points.values_at_points`), and each spot conducts by
+(:func:`g2tom.physics.oxide_points.values_at_points`), and each spot conducts by
 ``oxide.spot_rule``:
 
 * ``centre``: all of it where the field at its centre is clean (``psi < threshold``, float32
   values compared, as on grid spots), else nothing;
 * ``disc``: its clean share ``f`` of the contact disc, from the field at an equal-area pattern of
-  points on the disc (:class:`pipeline.physics.spot_share.DiscRule`), with radius ``a sqrt(f)``;
+  points on the disc (:class:`g2tom.physics.spot_share.DiscRule`), with radius ``a sqrt(f)``;
 * ``segment``: the same ``f``, with the radius ``a h(f)`` of the circular segment of that share's
-  conductance (:func:`pipeline.physics.spot_share.effective_radius`).
+  conductance (:func:`g2tom.physics.spot_share.effective_radius`).
   The pattern's rings follow the disc's size against the correlation length ``l_O``:
   ``min(DEFAULT_RINGS, ceil(RINGS_PER_CORRELATION a / l_O))``, at least one, so a disc of radius
   ``l_O / 2`` gets the full pattern (clean share within 0.02 of a fine image of the disc, see
-  :mod:`pipeline.physics.spot_share`) and a small one a few points.
+  :mod:`g2tom.physics.spot_share`) and a small one a few points.
 
 The resistance of each (xi, load step) is the exact point-interaction solve or Greenwood's form
-on the conducting spots (:func:`pipeline.physics.discrete_resistance.resistances`), with the
+on the conducting spots (:func:`g2tom.physics.discrete_resistance.resistances`), with the
 coupling kernel of the contact solve, so the clean surface obeys Barber's theorem exactly.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from pipeline import config
-from pipeline.physics import oxide_band
-from pipeline.physics.discrete_contact import interaction_kernel
-from pipeline.physics.discrete_resistance import resistances
-from pipeline.physics.oxide_points import values_at_points
-from pipeline.physics.spot_share import DEFAULT_RINGS, disc_points, disc_shares, effective_radius
+from g2tom import config
+from g2tom.physics import oxide_band
+from g2tom.physics.discrete_contact import interaction_kernel
+from g2tom.physics.discrete_resistance import resistances
+from g2tom.physics.oxide_points import values_at_points
+from g2tom.physics.spot_share import DEFAULT_RINGS, disc_points, disc_shares, effective_radius
 
-if TYPE_CHECKING:  # cube_chunks imports this module
-    from pipeline.stages.cube_chunks import CubeSettings
+from g2tom.stages.cube_settings import CubeSettings
 
 __all__ = ["RINGS_PER_CORRELATION", "POINT_TOLERANCE", "DiscretePool", "rings", "clean_shares", "discrete_chunk", "clean_pool",
            "weighted_clean_share"]
@@ -116,7 +115,7 @@ class DiscretePool:
 
     def kernel(self, surface: int) -> np.ndarray:
         """The coupling kernel (1/m, spot x spot) of ``surface``, made once per surface and kept while
-        the kept ones fit :data:`pipeline.config.KERNEL_CACHE_BYTES`."""
+        the kept ones fit :data:`g2tom.config.KERNEL_CACHE_BYTES`."""
         s = int(surface)
         kernel = self._kernels.get(s)
         if kernel is None:
@@ -181,7 +180,7 @@ def discrete_chunk(source: Any, index: int, realizations: np.ndarray, xi_index: 
                    pool: DiscretePool, settings: "CubeSettings", limit: int | None = None) -> dict[str, Any]:
     """The terms (xi, delta, realization) of the fields of ``realizations`` at lambda number ``index``.
 
-    ``source`` is a :class:`pipeline.scene.FieldSource` (or the record in front of one):
+    ``source`` is a :class:`g2tom.scene.FieldSource` (or the record in front of one):
     its thresholds and its fields' coefficients. ``limit``: only the steps below it are computed
     (NaN, counts -1, at the others; ``oxide.step_half_width``); None: every step.
     """
@@ -243,7 +242,7 @@ def weighted_clean_share(share: np.ndarray, radius: np.ndarray) -> np.ndarray:
     numpy.ndarray
         (xi, delta) ``sum_i a_i f_i / sum_i a_i`` (NaN at a step without contact). Its expectation
         over the fields is the probability that a point is clean
-        (:func:`pipeline.physics.oxide_marginal.clean_probability`), whatever the surface.
+        (:func:`g2tom.physics.oxide_marginal.clean_probability`), whatever the surface.
     """
     total = radius.sum(axis=-1)
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -3,8 +3,8 @@
 ``oxide.ensemble = "fixed"`` computes ``oxide.n_realizations`` fields per lambda in one round.
 ``"adaptive"`` grows every (xi, lambda) cell in rounds: first ``oxide.min_realizations``, then
 ``oxide.batch`` more while the cell's fast-rule 95 % half-width of alpha
-(:mod:`pipeline.fitting.ensemble`, exact for the geometric-mean fit on the steps with
-steps the fits stage fits, :meth:`pipeline.config.study_sections.Fits.fitted_loads`) exceeds :data:`RULE_MARGIN` x ``oxide.target_half_width``, up to
+(:mod:`g2tom.fitting.ensemble`, exact for the geometric-mean fit on the steps with
+steps the fits stage fits, :meth:`g2tom.config.study_sections.Fits.fitted_loads`) exceeds :data:`RULE_MARGIN` x ``oxide.target_half_width``, up to
 ``oxide.max_realizations``; with ``fits.control_variate = "clean_share"`` the half-width of the
 statistic adjusted by the control (its residual after the regression on the control's statistic). A cell keeps the first prefix of realizations that meets the
 target, so the result does not depend on the batch.
@@ -24,11 +24,12 @@ from typing import Any
 import dask
 import numpy as np
 
-from pipeline.compute import ComputeOptions, compute
-from pipeline.config import Scenario
-from pipeline.fitting import ensemble
-from pipeline.stages.cube_chunks import CubeSettings, field_chunk, terms
-from pipeline.scene import FieldSource
+from g2tom.compute import ComputeOptions, compute
+from g2tom.config import Scenario
+from g2tom.fitting import ensemble
+from g2tom.stages.cube_chunks import field_chunk, terms
+from g2tom.stages.cube_settings import CubeSettings
+from g2tom.scene import FieldSource
 
 __all__ = ["RULE_MARGIN", "stopping_rule", "half_widths", "compute_cells", "padded"]
 
@@ -57,7 +58,7 @@ def half_widths(resistance: np.ndarray, rule: dict[str, Any],
     clean_share
         The control variate (``fits.control_variate = "clean_share"``), shaped as ``resistance``:
         the statistics' half-widths after their regression on the same weights of it
-        (:func:`pipeline.fitting.ensemble.prefix_controlled_half_width`); None: plain.
+        (:func:`g2tom.fitting.ensemble.prefix_controlled_half_width`); None: plain.
 
     Returns
     -------

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import xarray as xr
 
-from pipeline.config import ConfigError, Scenario
+from g2tom.config import ConfigError, Scenario
 
 __all__ = ["fitted_steps", "range_label"]
 

@@ -5,7 +5,7 @@ Reads ``cube.nc``, writes ``fits.nc``. For every (xi, lambda) the chosen reducti
 over the fitted load steps, F >= ``fits.min_force`` (N) or, with ``fits.fit_range =
 "force_normalized"``, F' >= ``fits.min_force_normalized``; the clean surface is fitted the same way.
 
-Curve model (:mod:`pipeline.fitting.curve_model`): on the same steps, ln R' of the reduction is
+Curve model (:mod:`g2tom.fitting.curve_model`): on the same steps, ln R' of the reduction is
 also fitted by the lowest-order polynomial in ln F' (up to ``fits.curve_max_order``) that lies
 within ``fits.curve_tolerance`` at every fitted step or, failing that, within max(tolerance,
 the step's bootstrap interval of the reduction); the clean curve has no interval.
@@ -32,21 +32,21 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-from pipeline.compute import ComputeOptions, single_threaded
-from pipeline.config import Scenario
-from pipeline.fitting.control_variate import bootstrap_controlled_mean, controllable, controlled_mean
-from pipeline.fitting.curve_model import CurveFit, fit_curve
-from pipeline.fitting.powerlaw import (
+from g2tom.compute import ComputeOptions, single_threaded
+from g2tom.config import Scenario
+from g2tom.fitting.control_variate import bootstrap_controlled_mean, controllable, controlled_mean
+from g2tom.fitting.curve_model import CurveFit, fit_curve
+from g2tom.fitting.powerlaw import (
     bootstrap_log_mean,
     bootstrap_median,
     fit_power_law,
     percentile_interval,
     resample_counts,
 )
-from pipeline.reductions import DIM, reduce_realizations
-from pipeline.stages.fit_steps import fitted_steps, range_label
-from pipeline.stages.schema import attrs, label_coords, variable
-from pipeline.store import read_stage, write_dataset
+from g2tom.reductions import DIM, reduce_realizations
+from g2tom.stages.fit_steps import fitted_steps, range_label
+from g2tom.stages.schema import attrs, label_coords, variable
+from g2tom.store import read_stage, write_dataset
 
 __all__ = ["build", "run"]
 
@@ -170,7 +170,7 @@ def _control(cube: xr.Dataset) -> tuple[np.ndarray, np.ndarray]:
 def _controlled_reduction(ds: xr.Dataset, resistance: np.ndarray, control: tuple[np.ndarray, np.ndarray],
                           counts: np.ndarray, scale: float, step_counts: np.ndarray | None = None) -> None:
     """Replace the geometric mean (and R') of ``ds`` by its control-variate estimate
-    (:mod:`pipeline.fitting.control_variate`; the plain mean where it does not apply), each (xi,
+    (:mod:`g2tom.fitting.control_variate`; the plain mean where it does not apply), each (xi,
     lambda) over its own realizations (at each step its own, with ``step_counts``), and record where
     it applied (``control_variate_applied``)."""
     values, expected = control

@@ -1,7 +1,7 @@
 """Stage 2: oxide ensembles, thresholded Gaussian random fields over lambda and realization.
 
 One unit-variance field per (lambda, realization) is evaluated exactly at the cell centres
-(:mod:`pipeline.physics.oxide_field`) and serves every oxide fraction xi. A cell is OXIDE where
+(:mod:`g2tom.physics.oxide_field`) and serves every oxide fraction xi. A cell is OXIDE where
 ``psi >= threshold`` and CONDUCTING where ``psi < threshold``, comparing the stored float32
 values, so later stages rebuild bit-identical masks from ``psi`` and ``threshold``.
 
@@ -26,13 +26,13 @@ import dask.array as da
 import numpy as np
 import xarray as xr
 
-from pipeline import store
-from pipeline.before_work.domains import resolved
-from pipeline.compute import ComputeOptions, compute, single_threaded
-from pipeline.config import CHUNK_BYTES, ResolvedScenario, Scenario
-from pipeline.physics.grid import cell_centres
-from pipeline.scene import FieldSource, bands, threshold_block
-from pipeline.stages.schema import variable
+from g2tom import store
+from g2tom.before_work.domains import resolved
+from g2tom.compute import ComputeOptions, compute, single_threaded
+from g2tom.config import CHUNK_BYTES, ResolvedScenario, Scenario
+from g2tom.physics.grid import cell_centres
+from g2tom.scene import FieldSource, bands, threshold_block
+from g2tom.stages.schema import variable
 
 __all__ = ["build", "run", "RecordedFields", "recorded_realizations"]
 
@@ -190,9 +190,9 @@ def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=
     ----------
     scenario
         The scenario (section ``oxide``, the cell grid; resolved first where it is not:
-        :func:`pipeline.before_work.domains.resolved`).
+        :func:`g2tom.before_work.domains.resolved`).
     options
-        Where dask runs (see :func:`pipeline.compute.compute`).
+        Where dask runs (see :func:`g2tom.compute.compute`).
 
     Returns
     -------

@@ -108,7 +108,7 @@ _CONTACT: dict[str, Variable] = {
               "contact stiffness K = -dF/d delta (exact linearisation of the discretised Greenwood-Tripp system)"),
     "x": _v("x", "m", "cell centre x"),
     "y": _v("y", "m", "cell centre y"),
-    # contact.model = "discrete": the pool of surfaces (pipeline.stages.contact_discrete)
+    # contact.model = "discrete": the pool of surfaces (g2tom.stages.contact_discrete)
     "surface": _v("surface", "1", "rough surface of the pool"),
     "spot": _v("spot", "1", "touching asperity of a surface"),
     "spot_count": _v("surface", "1", "asperities of the surface that touch at some load step"),

@@ -1,7 +1,7 @@
 """Stage 5: the surrogate of alpha and gamma (Eq. 26) and the predictor's tables.
 
 Reads ``fits.nc``; writes ``surrogate.nc``, ``surrogate.json`` (everything the predictor
-needs, see :mod:`pipeline.stages.surrogate_file`), ``table3.csv`` and ``table3.md``.
+needs, see :mod:`g2tom.stages.surrogate_file`), ``table3.csv`` and ``table3.md``.
 
 Two methods (``surrogate.method``):
 
@@ -11,7 +11,7 @@ Two methods (``surrogate.method``):
   lambda or sqrt(lambda) (``surrogate.lambda_map``; the spec string ``T`` or ``T;w=<map>``), all coefficients fitted
   at once by weighted least squares (weights 1 / max(relative 95 % half-width,
   ``weight_floor``)^2 from ``fits.nc``'s ``{p}_ci``), transform, rank and orders chosen by
-  leave-one-line-out cross-validation (:func:`pipeline.fitting.surrogate_joint.select_model`).
+  leave-one-line-out cross-validation (:func:`g2tom.fitting.surrogate_joint.select_model`).
 
 ``surrogate.nc`` holds, for ``p`` in (alpha, gamma):
 
@@ -50,18 +50,18 @@ import numpy as np
 import xarray as xr
 from scipy.stats import norm
 
-from pipeline.compute import ComputeOptions, single_threaded
-from pipeline.config import ConfigError, Scenario
-from pipeline.fitting import surrogate as sg
-from pipeline.fitting import surrogate_joint as sg_joint
-from pipeline.fitting import surrogate_paper as sg_paper
-from pipeline.stages.schema import SURROGATE_COORDINATES, array
-from pipeline.stages.schema import attrs as schema_attrs
-from pipeline.stages.surrogate_file import SurrogateTables
-from pipeline.stages.surrogate_tables import band_tables, curve_tables
-from pipeline.stages.table3 import PARAMETERS, table3_csv, table3_markdown
-from pipeline.store import atomic_path, read_stage, write_dataset
-from pipeline.scene import scene_groups
+from g2tom.compute import ComputeOptions, single_threaded
+from g2tom.config import ConfigError, Scenario
+from g2tom.fitting import surrogate as sg
+from g2tom.fitting import surrogate_joint as sg_joint
+from g2tom.fitting import surrogate_paper as sg_paper
+from g2tom.stages.schema import SURROGATE_COORDINATES, array
+from g2tom.stages.schema import attrs as schema_attrs
+from g2tom.stages.surrogate_file import SurrogateTables
+from g2tom.stages.surrogate_tables import band_tables, curve_tables
+from g2tom.stages.table3 import PARAMETERS, table3_csv, table3_markdown
+from g2tom.store import atomic_path, read_stage, write_dataset
+from g2tom.scene import scene_groups
 
 __all__ = ["build", "run", "PARAMETERS"]
 

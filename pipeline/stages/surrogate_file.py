@@ -1,11 +1,11 @@
 """The fitted surrogate as the predictor reads it: :class:`SurrogateTables`, ``surrogate.json``.
 
-Everything :func:`pipeline.predict.predict` needs, as plain numpy arrays: the coefficients of
+Everything :func:`g2tom.predict.predict` needs, as plain numpy arrays: the coefficients of
 alpha(xi, lambda) and gamma(xi, lambda), each cell's curve model, the fitted ranges and the band's
 tables, read from ``surrogate.nc`` or written to and read from ``surrogate.json`` (NaN as null,
 infinities as "inf"; floats round-trip exactly), so that a prediction needs no netCDF. The
-surrogate stage (:mod:`pipeline.stages.surrogate`) writes the file, the predictor
-(:mod:`pipeline.predict`) reads it.
+surrogate stage (:mod:`g2tom.stages.surrogate`) writes the file, the predictor
+(:mod:`g2tom.predict`) reads it.
 """
 
 from __future__ import annotations
@@ -20,10 +20,10 @@ import numpy as np
 import xarray as xr
 from scipy.interpolate import RegularGridInterpolator
 
-from pipeline import __version__
-from pipeline.config import ConfigError, read_input_text
-from pipeline.fitting.curve_model import evaluate_curve
-from pipeline.fitting.surrogate import evaluate, to_w, to_z
+from g2tom import __version__
+from g2tom.config import ConfigError, read_input_text
+from g2tom.fitting.curve_model import evaluate_curve
+from g2tom.fitting.surrogate import evaluate, to_w, to_z
 
 __all__ = ["FORMAT", "VERSION", "PARAMETERS", "GRID_TABLES", "STEP_TABLES", "CURVE_TABLE", "RANGES",
            "SurrogateTables", "load_surrogate"]
@@ -113,7 +113,7 @@ class SurrogateTables:
                 },
                 "band": "ln-R half-widths (one standard deviation) combined in quadrature: "
                         "total = sqrt(spread^2 + fit_error^2 + surrogate_error^2), lower = R exp(-total_lower), "
-                        "upper = R exp(total_upper); see pipeline.predict",
+                        "upper = R exp(total_upper); see g2tom.predict",
             },
             "parameters": {
                 p: {"transform": t, "coef_w": cw.tolist(), "coef_z": cz.tolist()} for p, (cw, cz, t) in self.coef.items()

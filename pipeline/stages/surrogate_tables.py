@@ -10,10 +10,10 @@ import numpy as np
 import xarray as xr
 from scipy.stats import norm
 
-from pipeline.config import Scenario
-from pipeline.fitting import surrogate as sg
-from pipeline.fitting.curve_model import evaluate_curve, interpolation_error
-from pipeline.stages.schema import array, attrs
+from g2tom.config import Scenario
+from g2tom.fitting import surrogate as sg
+from g2tom.fitting.curve_model import evaluate_curve, interpolation_error
+from g2tom.stages.schema import array, attrs
 
 __all__ = ["band_tables", "curve_tables"]
 

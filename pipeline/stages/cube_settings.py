@@ -1,0 +1,68 @@
+"""What every task of the cube reads besides the fields and the spot maps: :class:`CubeSettings`.
+
+Its own module, below both kinds of chunk (:mod:`g2tom.stages.cube_chunks` on the cell lattice,
+:mod:`g2tom.stages.cube_discrete` on discrete spots), which both read it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["CubeSettings"]
+
+
+@dataclass(frozen=True, eq=False)
+class CubeSettings:
+    """What every task of the cube reads besides the fields and the spot maps (picklable).
+
+    Attributes
+    ----------
+    pitch
+        Cell pitch, m.
+    rho
+        Effective resistivity rho*, ohm m.
+    model
+        ``cube.model``: ``greenwood`` or ``point``.
+    film_resistance
+        Specific resistance of a resistive oxide film, ohm m2 (inf: insulating).
+    solver_tolerance, max_iterations, solver_criterion
+        The point model's iterative solve (``cube.*``).
+    crops
+        Side of the centred square of cells kept at each approach, (delta,).
+    tolerance
+        ``cube.crop_tolerance``: the crop's relative error bound (0: whole window).
+    method
+        ``cube.method`` as configured; ``method_used`` with ``auto`` resolved.
+    spots
+        ``contact.spots``, or ``discrete`` with ``contact.model = "discrete"``.
+    lattice_constant
+        ``cube.lattice_constant`` of the point model's self term.
+    asperities
+        ``asperities`` spots only: (oxide.seed, sigma in m, beta in m) of the drawn heights.
+    separation
+        ``asperities`` spots only: separation at the cell centres (delta, y, x), m.
+    spot_rule
+        ``oxide.spot_rule`` (discrete spots: ``centre`` or ``disc``).
+    control_variate
+        ``fits.control_variate``: discrete spots also return each realization's ``clean_share``.
+    """
+
+    pitch: float
+    rho: float
+    model: str
+    film_resistance: float
+    solver_tolerance: float
+    max_iterations: int
+    solver_criterion: str
+    crops: np.ndarray
+    tolerance: float
+    method: str
+    method_used: str
+    spots: str
+    lattice_constant: float
+    asperities: tuple[int, float, float] | None = None
+    separation: np.ndarray | None = None
+    spot_rule: str = "centre"
+    control_variate: bool = False
