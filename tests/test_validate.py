@@ -511,14 +511,21 @@ def test_proxies_and_pairs_are_allocated_at_least_cost() -> None:
     proxy = np.exp(rng.normal(0, 0.4, 60))
     exact = proxy[:8] * np.exp(rng.normal(0, 0.15, 8))  # the pairs disagree by 0.15 in ln R
 
-    def variance(n: int, p: int) -> float:  # the estimate's variance with n proxies and p pairs, from the same moments
-        d, e = np.log(proxy), np.log(exact) - np.log(proxy[:8])
-        return (np.var(d, ddof=1) + 2 * np.cov(np.log(proxy[:8]), e)[0, 1]) / n + np.var(e, ddof=1) / p
+    d, e = np.log(proxy), np.log(exact) - np.log(proxy[:8])
+    per_proxy, per_pair = np.var(d, ddof=1) + 2 * np.cov(np.log(proxy[:8]), e)[0, 1], np.var(e, ddof=1)
 
+    def variance(n, p):  # the estimate's variance with n proxies and p pairs, from the same moments (arrays too)
+        return per_proxy / n + per_pair / p
+
+    # every integer (N, P) with 8 <= P <= 200 and P <= N < 4000, at once (the same sums as one by one)
+    a, b = np.arange(4000.0)[None, :], np.arange(8.0, 201.0)[:, None]
     for error, pair_cost in ((0.03, 25.0), (0.03, 4.0), (0.05, 25.0), (0.02, 100.0)):
         n, p = statistics.allocation(proxy, exact, error, 10_000, 200, pair_cost)
         assert 8 <= p <= n and variance(n, p) <= error**2 * (1 + 1e-9)
-        best = min(a + pair_cost * b for b in range(8, 201) for a in range(b, 4000) if variance(a, b) <= error**2)
+        with np.errstate(divide="ignore"):
+            reaches = (a >= b) & (variance(a, b) <= error**2)
+        assert reaches.any()
+        best = float(np.min(np.where(reaches, a + pair_cost * b, np.inf)))
         assert n + pair_cost * p <= best * 1.02 + pair_cost  # the continuous optimum rounded up: within a pair
     cheap, dear = (statistics.allocation(proxy, exact, 0.03, 10_000, 200, c) for c in (4.0, 100.0))
     assert cheap[1] > dear[1] > 8 and cheap[0] < dear[0]  # cheaper pairs: more pairs, fewer proxies
