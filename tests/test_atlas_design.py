@@ -74,9 +74,13 @@ def test_every_scene_draws_its_own_streams() -> None:
     groups the same seed, whatever the scene's name or role; the base's seed moves them all."""
     base = load_scenario("atlas")
     scenes = design_scenes(AtlasDesign.of(base))
-    seeds = [scene_scenario(base, s).oxide.seed for s in scenes]
+    seeds = [scene_seed(base.oxide.seed, s) for s in scenes]
     assert len(set(seeds)) == len(scenes) and all(0 <= s < 2**32 for s in seeds)
-    assert seeds == [scene_seed(base.oxide.seed, s) for s in scenes]  # deterministic
+    # the scene's scenario takes that seed: a design scene, a held-out one and the last (the seed does not
+    # depend on the approaches, so the base's stand in for the scene's own F' search, ~1 s a scene;
+    # every scene with its own approaches: test_every_scene_scenario_takes_its_own_seed, `make stress`)
+    some = [0, next(i for i, s in enumerate(scenes) if s.heldout), len(scenes) - 1]
+    assert [scene_scenario(base, scenes[i], base.loading).oxide.seed for i in some] == [seeds[i] for i in some]
     first = scenes[0]
     assert scene_seed(base.oxide.seed, dataclasses.replace(first, name="other", heldout=True)) == seeds[0]
     assert scene_seed(base.oxide.seed + 1, first) != seeds[0]
@@ -85,6 +89,16 @@ def test_every_scene_draws_its_own_streams() -> None:
     from g2tom.physics.oxide_band import field_stream
     draws = [field_stream(s, 23.0, 0).random(4) for s in seeds[:2]]
     assert not np.allclose(*draws)
+
+
+@pytest.mark.stress
+def test_every_scene_scenario_takes_its_own_seed() -> None:
+    """The sweep behind test_every_scene_draws_its_own_streams: all 44 scenes of the bundled atlas, each
+    with its own approaches (~1 s a scene)."""
+    base = load_scenario("atlas")
+    scenes = design_scenes(AtlasDesign.of(base))
+    seeds = [scene_scenario(base, s).oxide.seed for s in scenes]
+    assert len(set(seeds)) == len(scenes) and seeds == [scene_seed(base.oxide.seed, s) for s in scenes]
 
 
 def test_heldout_scenes_are_measured_to_the_tighter_target() -> None:
