@@ -15,7 +15,6 @@ from pathlib import Path
 from typing import Any
 
 from markdown.extensions.toc import slugify, unique
-import numpy as np
 import xarray as xr
 
 from g2tom.analysis.report_appendix import (
@@ -24,10 +23,9 @@ from g2tom.analysis.report_blocks import Block
 from g2tom.analysis.report_physics import (
     atlas_blocks, barber_blocks, bias_blocks, curve_blocks, point_blocks, validation_blocks)
 from g2tom.analysis.report_render import to_html, to_markdown
+from g2tom.analysis.report_summary import summary_blocks as _summary_blocks
 from g2tom.analysis.report_results import ensemble_blocks, fit_blocks, surrogate_model_blocks, surrogate_table_blocks
-from g2tom import __version__
 from g2tom.config import Scenario
-from g2tom.stages.table3 import PARAMETERS
 from g2tom.store import StaleInputError, atomic_path, read_stage
 
 __all__ = ["Block", "build_blocks", "to_markdown", "to_html", "write_report"]
@@ -61,67 +59,6 @@ def _load(data_dir: Path, stage: str, scenario: Scenario) -> tuple[xr.Dataset | 
         return read_stage(data_dir, stage, scenario), []
     except StaleInputError as exc:
         return None, [Block("p", f"Not available: {exc}")]
-
-
-def _span(values: np.ndarray, digits: int = 4) -> str:
-    """``min-max`` of finite values as text (one value when they are equal)."""
-    lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
-    return f"{lo:.{digits}g}" if lo == hi else f"{lo:.{digits}g}-{hi:.{digits}g}"
-
-
-def _summary_blocks(scenario: Scenario, fits: xr.Dataset | None, sur: xr.Dataset | None,
-                    validation: list[Block]) -> list[Block]:
-    """Section "Summary": what was computed, the key numbers and how right they are.
-
-    Parameters
-    ----------
-    scenario : Scenario
-        The run's configuration (name, description, models).
-    fits, sur : xarray.Dataset or None
-        The fits and surrogate stages' outputs, None where not available.
-    validation : list of Block
-        The validation section's blocks; its bold paragraphs are the comparison's flag lines.
-
-    Returns
-    -------
-    list of Block
-        The heading and a list of statements, read from the stages' outputs (nothing recomputed).
-    """
-    spots = (f"a pool of {scenario.contact.surfaces} surfaces' own asperities, oxide spot rule "
-             f"{scenario.oxide.spot_rule}" if scenario.contact.model == "discrete" else f"{scenario.contact.spots} spots")
-    items = [f"**Computed:** scenario '{scenario.name}': {scenario.description} (g2tom {__version__}, "
-             f"configuration hash {scenario.config_hash()}); contact model {scenario.contact.model} with "
-             f"{spots}, resistance model {scenario.cube.model}."]
-    if fits is None:
-        items.append("**Not available:** the fits stage's output (run `g2tom fits`).")
-    else:
-        xi, lam = fits["xi"].values, fits["lambda"].values
-        grid = f"{xi.size} xi ({_span(xi)}) x {lam.size} lambda ({_span(lam)})"
-        if "force" in fits.coords and "force_normalized" in fits.coords:
-            grid += (f"; {fits.sizes['delta']} load steps, F = {_span(fits['force'].values)} N, "
-                     f"F' = {_span(fits['force_normalized'].values)}")
-        if "n_realizations" in fits:
-            grid += f"; realizations used per cell {_span(fits['n_realizations'].values)}"
-        items.append(f"**Grid:** {grid}.")
-        ci = {k: fits[f"{k}_clean_ci"].values for k in ("alpha", "gamma")}
-        items.append(f"**Clean fit:** alpha = {float(fits['alpha_clean']):.4g} [{ci['alpha'][0]:.4g}, "
-                     f"{ci['alpha'][1]:.4g}], gamma = {float(fits['gamma_clean']):.4g} [{ci['gamma'][0]:.4g}, "
-                     f"{ci['gamma'][1]:.4g}] ({100 * scenario.fits.confidence:g} % intervals).")
-        if "flagged" in fits:
-            items.append(f"**Flagged cells** (stopped at the cap short of the confidence target): "
-                         f"{int(fits['flagged'].sum())} of {fits['flagged'].size}.")
-    if sur is not None:
-        worst = ", ".join(f"{p} {100 * float(np.nanmax(np.abs(sur[f'{p}_relative_error'].values))):.2f} %"
-                          for p in PARAMETERS)
-        items.append(f"**Surrogate (Eq. 26):** worst relative error on the grid: {worst}.")
-    label, flags = "", []
-    for b in validation:
-        if b.kind == "h3":
-            label = b.text
-        elif b.kind == "p" and b.text.startswith("**"):
-            flags.append(f"Against the full elastic contact ({label}): {b.text}")
-    items += flags or ["Against the full elastic contact: not run (`make validate`)."]
-    return [Block("h2", "Summary"), Block("list", rows=tuple((0, item) for item in items))]
 
 
 def _contents_blocks(before: list[Block], after: list[Block]) -> list[Block]:
@@ -163,7 +100,7 @@ def _demote(blocks: list[Block]) -> list[Block]:
 def build_blocks(scenario: Scenario, data_dir: str | Path, started: float | None = None) -> list[Block]:
     """The whole report as blocks, in reading order (figures linked relative to ``data_dir``).
 
-    Title, Summary (what was computed, the key numbers, how right they are), Contents, Figures,
+    Title, Summary (the answer in ohm, how right, how long, the predict command), Contents, Figures,
     the physics sections, then an Appendix with the long tables and the list of raw benchmark
     records.
 
@@ -205,7 +142,7 @@ def build_blocks(scenario: Scenario, data_dir: str | Path, started: float | None
     body += physics + [Block("h2", "Appendix"), Block("p", "The long tables and the raw records.")]
     body += _demote(appendix)
     head = [Block("h1", f"g2tom report: scenario '{scenario.name}'")]
-    head += _summary_blocks(scenario, fits, sur, validation)
+    head += _summary_blocks(scenario, fits, sur, validation, data_dir)
     return head + _contents_blocks(head, body) + body
 
 

@@ -151,17 +151,12 @@ def timing_blocks(scenario: Scenario, data_dir: Path, report_seconds: float) -> 
     ``timings.json`` keeps the last time of every step with the configuration hash it ran
     with; steps run with another configuration (an earlier or a different run) are left out.
     """
+    from g2tom.analysis.report_summary import recorded_timings
+
     blocks = [Block("h2", "Timings")]
-    path = data_dir / "timings.json"
-    try:
-        recorded = json.loads(path.read_text()) if path.is_file() else {}
-    except (OSError, ValueError):
-        recorded = {}
     expected = {stage: scenario.config_hash(stage) for stage in STAGE_INPUTS}
     expected["figures"] = scenario.config_hash()
-    rows = [[step, float(recorded[step]["seconds"]), recorded[step].get("finished", "")]
-            for step in expected
-            if isinstance(recorded.get(step), dict) and recorded[step].get("config_hash") == expected[step]]
+    rows = [list(row) for row in recorded_timings(scenario, data_dir)]
     rows.append(["report", round(report_seconds, 3), "(this page)"])
     rows.append(["total", round(sum(r[1] for r in rows), 3), ""])
     blocks.append(_table(["step", "wall time (s)", "finished (UTC)"], rows))
