@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import fcntl
 import os
+from pathlib import Path
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 # One BLAS/OpenMP thread, as the CLI sets: small dense solves are far slower oversubscribed.
@@ -48,3 +50,22 @@ def small() -> ResolvedScenario:
     machinery most tests exercise (the default's discrete scenes are in test_discrete_stages.py
     and test_pipeline_end_to_end.py)."""
     return resolve(load_scenario("paper_gt", SMALL_OVERRIDES))
+
+
+@pytest.fixture(scope="session")
+def small_atlas(tmp_path_factory) -> Path:
+    """``atlas.nc`` of the small atlas (tests/test_atlas.py's ``BASE`` on ``paper_gt``, its ``DESIGN``:
+    5 scenes and the invariance twin), computed once for the whole run, whichever pytest-xdist worker
+    asks first (the others wait on a lock and read it). Read it only: copy it to change it."""
+    from g2tom.atlas import run as atlas
+    from tests.test_atlas import BASE, DESIGN
+
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):  # the workers' temporary folders share this parent
+        root = root.parent
+    with open(root / "small_atlas.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        path = root / "small_atlas" / "atlas" / atlas.ATLAS_FILE
+        if not path.is_file():
+            path = atlas.run_atlas(load_scenario("paper_gt", BASE), DESIGN, root / "small_atlas")
+        return path

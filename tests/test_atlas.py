@@ -40,8 +40,18 @@ def base():
 
 
 @pytest.fixture(scope="module")
-def uninterrupted(tmp_path_factory, base):
-    return _load(atlas.run_atlas(base, DESIGN, tmp_path_factory.mktemp("atlas")))
+def uninterrupted(small_atlas):
+    """The small atlas run in one go (conftest's ``small_atlas``: run_atlas on ``base`` and ``DESIGN``)."""
+    return _load(small_atlas)
+
+
+def _copy_of(uninterrupted, data_dir) -> "Path":
+    """The uninterrupted run's atlas folder (scenes and atlas.nc) copied into ``data_dir``; its atlas.nc."""
+    import shutil
+    from pathlib import Path
+
+    shutil.copytree(Path(uninterrupted.encoding["source"]).parent, data_dir / "atlas")
+    return data_dir / "atlas" / atlas.ATLAS_FILE
 
 
 def test_atlas_holds_every_scene_labelled(uninterrupted, base) -> None:
@@ -155,11 +165,13 @@ def test_the_schedule_runs_a_scene_alone_only_where_it_saves_time() -> None:
     assert first == 2 and wall == pytest.approx(8000.0 / 1.9 + 500.0, rel=1e-12)
 
 
-def test_another_configuration_reruns_its_scenes(tmp_path, base) -> None:
-    atlas.run_atlas(base, DESIGN, tmp_path)
+def test_another_configuration_reruns_its_scenes(base, uninterrupted) -> None:
+    from pathlib import Path
+
+    data_dir = Path(uninterrupted.encoding["source"]).parents[1]  # run_atlas(base, DESIGN, data_dir)
     other = load_scenario("paper_gt", {**BASE, "oxide.seed": 3})
-    assert not atlas._done(other, design_scenes(DESIGN)[0], tmp_path)
-    assert atlas._done(base, design_scenes(DESIGN)[0], tmp_path)
+    assert not atlas._done(other, design_scenes(DESIGN)[0], data_dir)
+    assert atlas._done(base, design_scenes(DESIGN)[0], data_dir)
 
 
 def test_two_worker_cluster_gives_the_same_bits(tmp_path, base, uninterrupted) -> None:
@@ -239,12 +251,12 @@ def test_the_noise_ceiling_is_the_verdict_on_noisy_copies_of_the_fit(uninterrupt
     assert at(30.0) == loud
 
 
-def test_surrogate_json_and_heldout_csv_are_written(tmp_path, base) -> None:
+def test_surrogate_json_and_heldout_csv_are_written(tmp_path, uninterrupted) -> None:
     import json
 
     from g2tom.atlas.fit import CURVE, FORMAT, write_atlas_surrogate
 
-    target, doc = write_atlas_surrogate(atlas.run_atlas(base, DESIGN, tmp_path))
+    target, doc = write_atlas_surrogate(_copy_of(uninterrupted, tmp_path))  # run_atlas(base, DESIGN, tmp_path)'s
     def strict(name: str) -> None:
         raise AssertionError(f"{name} is not JSON")
 

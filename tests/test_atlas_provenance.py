@@ -4,6 +4,7 @@ fitted small atlas, and on the one shipped in the package (once it is of the cur
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 from pathlib import Path
 
@@ -18,9 +19,10 @@ from g2tom.store import git_commit
 from tests.test_atlas import BASE, DESIGN
 
 
-def test_a_fitted_surrogate_records_the_code_and_configuration_that_made_it(tmp_path) -> None:
-    base = load_scenario("paper", BASE)
-    _, doc = write_atlas_surrogate(atlas.run_atlas(base, DESIGN, tmp_path))
+def test_a_fitted_surrogate_records_the_code_and_configuration_that_made_it(tmp_path, small_atlas) -> None:
+    base = load_scenario("paper_gt", BASE)  # the small atlas's (conftest's small_atlas: run_atlas(base, DESIGN))
+    (tmp_path / "atlas").mkdir()
+    _, doc = write_atlas_surrogate(shutil.copy(small_atlas, tmp_path / "atlas" / atlas.ATLAS_FILE))
     prov = doc["provenance"]
     assert doc["format_version"] == FORMAT_VERSION
     assert prov["code_hash"] == code_hash() and prov["g2tom_commit"] == git_commit()
