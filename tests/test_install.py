@@ -33,6 +33,7 @@ def test_every_source_module_and_data_file_is_in_the_wheel(wheel) -> None:
     expected = {"g2tom/" + p.relative_to(ROOT / "pipeline").as_posix() for p in (ROOT / "pipeline").rglob("*.py")}
     expected |= {"g2tom/analysis/" + p.relative_to(ROOT / "analysis").as_posix() for p in (ROOT / "analysis").rglob("*.py")}
     expected |= {"g2tom/scenarios/" + p.name for p in (ROOT / "pipeline" / "scenarios").glob("*.toml")}
+    expected.add("g2tom/variables.toml")
     if (ROOT / "pipeline" / "atlas_surrogate.json").exists():
         expected.add("g2tom/atlas_surrogate.json")
     assert not expected - names, sorted(expected - names)

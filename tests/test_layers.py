@@ -20,9 +20,10 @@ ROOT = Path(__file__).resolve().parents[1]
 #: Packages (and top-level modules) and their floors, bottom (0) to top: a unit may import only
 #: units of its own floor or lower. ``g2tom`` is the facade, ``pipeline/__init__.py``.
 FLOORS = {
-    # 0: leaves (configuration, errors, progress lines, where dask work runs; the bundled TOML scenarios)
+    # 0: leaves (configuration, errors, progress lines, where dask work runs; the bundled TOML scenarios;
+    # the metadata registry of every written variable)
     "g2tom.config": 0, "g2tom.errors": 0, "g2tom.progress": 0, "g2tom.compute": 0,
-    "g2tom.scenarios": 0,
+    "g2tom.scenarios": 0, "g2tom.variables": 0,
     # 1: pure numpy/scipy
     "g2tom.physics": 1, "g2tom.fitting": 1,
     # 2: a scenario's solve, scene, measured height maps, stage files and reductions

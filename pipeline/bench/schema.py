@@ -1,4 +1,5 @@
-"""The variable schema of the benchmarks' netCDF files: each variable's dims, units and long name, once.
+"""The variable schema of the benchmarks' netCDF files: each variable's dims, units and long name, read
+from the metadata registry (:mod:`g2tom.variables`, namespaces ``bench.*``, where each is declared once).
 
 ``bench/frontier.nc`` (:mod:`g2tom.bench.frontier`: :data:`FRONTIER`, the sweep tables'
 columns by :func:`sweep_column`) and ``bench/stability.nc`` (:mod:`g2tom.bench.stability`:
@@ -9,69 +10,37 @@ they always were.
 
 from __future__ import annotations
 
-from g2tom.stages.schema import Variable
+from g2tom.variables import Variable, namespace, texts
 
 __all__ = ["FRONTIER", "STABILITY", "SWEEP_UNITS", "sweep_column", "sweep_index"]
 
 
-_v = Variable.of
-
-
-_ENSEMBLE = "n_realizations xi lambda"
-_PREFIX = "cube_xi cube_lambda prefix_step"
-
 #: frontier.nc: the ensemble sweep and the adaptive cube's prefix curve (the sweep tables: :func:`sweep_column`).
-FRONTIER: dict[str, Variable] = {
-    "alpha_halfwidth": _v(_ENSEMBLE, "1", "relative half-width of the alpha interval"),
-    "gamma_halfwidth": _v(_ENSEMBLE, "1", "relative half-width of the gamma interval"),
-    "alpha": _v(_ENSEMBLE, "1", "fitted alpha"),
-    "gamma": _v(_ENSEMBLE, "1", "fitted gamma"),
-    "ensemble_seconds": _v("n_realizations", "s", "oxide + cube time prorated to n, plus the fits time"),
-    "n_realizations": _v("n_realizations", "1", "realizations fitted"),
-    "xi": _v("xi", "1", "oxide fraction"),
-    "lambda": _v("lambda", "1", "normalized correlation length"),
-    "prefix_n": _v(_PREFIX, "1", "realizations in the prefix of the adaptive cube's cell"),
-    "prefix_alpha_halfwidth": _v(_PREFIX, "1",
-                                 "fast-rule relative half-width of alpha with the first prefix_n realizations"),
-    "prefix_gamma_halfwidth": _v(_PREFIX, "1",
-                                 "fast-rule absolute half-width of gamma with the first prefix_n realizations"),
-    "prefix_seconds": _v(_PREFIX, "s", "cube stage time prorated to prefix_n realizations of the cell"),
-    "prefix_count": _v("cube_xi cube_lambda", "1", "realizations of the adaptive cube's cell"),
-    "cube_xi": _v("cube_xi", "1", "oxide fraction (adaptive cube)"),
-    "cube_lambda": _v("cube_lambda", "1", "normalized correlation length (adaptive cube)"),
-    "prefix_step": _v("prefix_step", "1", "prefix index"),
-}
+FRONTIER: dict[str, Variable] = namespace("bench.frontier")
 
-#: Units of the sweep tables' columns that have one; every other column is dimensionless.
-SWEEP_UNITS = {"seconds": "s", "n_radial": "1"}
+#: The sweep tables' column and index, ``{table}`` (and ``{key}``) slots in their dims and long names.
+_SWEEP: dict[str, Variable] = namespace("bench.sweep")
+
+#: Units of the sweep tables' columns that have one; every other column takes ``_SWEEP["column"]``'s.
+SWEEP_UNITS: dict[str, str] = texts("sweep_units")
+
+
+def _filled(var: Variable, units: str, **fields: str) -> Variable:
+    """``var`` with the slots of its dims and long name filled from ``fields`` and the given units."""
+    return Variable(tuple(d.format(**fields) for d in var.dims), units, var.long_name.format(**fields))
 
 
 def sweep_column(table: str, key: str) -> Variable:
     """Column ``key`` of the sweep ``table`` (``contact`` or ``cube``) of frontier.nc: ``<table>_<key>``."""
-    return Variable((table,), SWEEP_UNITS.get(key, "1"), f"{table} sweep: {key.replace('_', ' ')}")
+    column = _SWEEP["column"]
+    return _filled(column, SWEEP_UNITS.get(key, column.units), table=table, key=key.replace("_", " "))
 
 
 def sweep_index(table: str) -> Variable:
     """The coordinate of the sweep ``table``: one index per setting."""
-    return Variable((table,), "1", f"{table} setting")
+    index = _SWEEP["index"]
+    return _filled(index, index.units, table=table)
 
 
 #: stability.nc: one entry per case of the stability map.
-STABILITY: dict[str, Variable] = {
-    "status": _v("case", "1", "converged, unconverged, refused (by validation) or failed"),
-    "message": _v("case", "1", "why a case was refused, failed or did not converge"),
-    "converged": _v("case", "1", "1 if every approach converged"),
-    "iterations": _v("case", "1", "largest solver iteration count over the approaches"),
-    "residual": _v("case", "1", "worst final relative residual over the approaches"),
-    "seconds": _v("case", "s", "wall time of the contact build and clean resistance"),
-    "finite_nonnegative": _v("case", "1", "1 if no NaN or negative value anywhere"),
-    "force_monotone": _v("case", "1", "1 if the force grows with every approach step"),
-    "resistance_falls": _v("case", "1", "1 if the clean resistance falls with load"),
-    "open_circuits": _v("case", "1", "approaches with no touching spot (R = +inf)"),
-    "hertz_ratio": _v("case", "1",
-                      "central pressure / Hertz central pressure at the heaviest load (sphere; 1 in the smooth limit)"),
-    "roughness_parameter": _v("case", "1", "sigma R* / a_Hertz^2 at the heaviest load (sphere)"),
-    "case": _v("case", "1", "case number"),
-    "parameter": _v("case", "1", "parameter pushed to an extreme"),
-    "value": _v("case", "1", "its value"),
-}
+STABILITY: dict[str, Variable] = namespace("bench.stability")
