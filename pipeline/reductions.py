@@ -23,6 +23,7 @@ import numpy as np
 import xarray as xr
 
 from g2tom.fitting.powerlaw import quantile_with_inf
+from g2tom.variables import namespace
 
 __all__ = [
     "DIM",
@@ -103,7 +104,8 @@ def reduce_realizations(resistance: xr.DataArray, scale: float) -> xr.Dataset:
     xarray.Dataset
         ``geometric_mean``, ``arithmetic_mean``, ``median``, ``resistance_quantile``
         (ohm; dimension ``quantile``), their
-        ``*_normalized`` counterparts R' = R / scale, and ``open_probability``.
+        ``*_normalized`` counterparts R' = R / scale, and ``open_probability``; their units
+        and long names are fits.nc's (registry namespace ``stages.fits``, :mod:`g2tom.variables`).
     """
     reductions = {
         "geometric_mean": geometric_mean(resistance),
@@ -111,16 +113,12 @@ def reduce_realizations(resistance: xr.DataArray, scale: float) -> xr.Dataset:
         "median": median(resistance),
         "resistance_quantile": quantiles(resistance),
     }
+    declared = namespace("stages.fits")
     ds = xr.Dataset()
     for name, value in reductions.items():
-        label = name.replace("_", " ")
-        ds[name] = value.assign_attrs(units="ohm", long_name=f"{label} of R over realizations")
-        ds[f"{name}_normalized"] = (value / scale).assign_attrs(
-            units="1", long_name=f"{label} of R' = R sqrt(R* sigma)/(2 rho*)"
-        )
-    ds["open_probability"] = open_probability(resistance).assign_attrs(
-        units="1", long_name="share of realizations with no conducting spot (R = inf)"
-    )
+        ds[name] = value.assign_attrs(declared[name].attrs())
+        ds[f"{name}_normalized"] = (value / scale).assign_attrs(declared[f"{name}_normalized"].attrs())
+    ds["open_probability"] = open_probability(resistance).assign_attrs(declared["open_probability"].attrs())
     ds["resistance_quantile"].attrs["policy"] = "over all realizations, open circuits as +inf"
     ds["geometric_mean"].attrs["policy"] = "over conducting realizations only"
     ds["arithmetic_mean"].attrs["policy"] = "over conducting realizations only"

@@ -54,6 +54,7 @@ from g2tom.predict.queries import (
 )
 from g2tom.scene import scene_groups
 from g2tom.stages.surrogate_file import GRID_TABLES, STEP_TABLES, SurrogateTables, load_surrogate
+from g2tom.variables import namespace
 
 __all__ = ["ExtrapolationWarning", "SurrogateErrorWarning", "SurrogateTables", "load_surrogate", "predict", "MODELS",
            "OUTPUT_COLUMNS"]
@@ -159,8 +160,8 @@ def predict(
         "mu": np.full(f.size, scene_groups(scenario).mu), "Pi": np.full(f.size, scene_groups(scenario).Pi),
     }
     ds = xr.Dataset({name: label(values) for name, values in columns.items()})
-    for name, (units, long_name) in OUTPUT_COLUMNS.items():
-        ds[name].attrs = {"units": units, "long_name": long_name}
+    for name, var in namespace("predict").items():
+        ds[name].attrs = var.attrs()
     ds.attrs["band"] = "total = sqrt(spread^2 + fit_error^2 + surrogate_error^2) per side; lower = R exp(-total_lower), upper = R exp(total_upper)"
     ds.attrs["surrogate_method"] = str(tables.info.get("method", "unknown"))
     ds.attrs["model"] = model
