@@ -23,11 +23,12 @@ extensions = [
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
     "g2tom_docs",  # docs/_ext: the parameter, variable and CLI references, generated at build time
+    "g2tom_examples",  # docs/_ext: docs/examples/*.py run at build time, their pages in _generated/examples
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
-exclude_patterns = ["_build", "_generated", "_ext", "Thumbs.db", ".DS_Store"]
+exclude_patterns = ["_build", "_generated/*.md", "_ext", "Thumbs.db", ".DS_Store"]
 templates_path: list[str] = []
 
 # MyST: $...$ and $$...$$ maths, ::: fences, anchors on headings for cross-page links.

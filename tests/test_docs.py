@@ -74,3 +74,32 @@ def test_readme_g2tom_commands_name_existing_subcommands(command: str) -> None:
 
 def test_readme_has_g2tom_commands() -> None:
     assert any(c.startswith("g2tom ") for c in _shell_commands(README.read_text()))
+
+
+def test_example_pages_hold_code_output_and_figures(tmp_path) -> None:
+    """docs/_ext/g2tom_examples.py: a script runs in its own folder; its page shows code, output, figures."""
+    import g2tom_examples
+
+    examples = tmp_path / "examples"
+    examples.mkdir()
+    (examples / "tiny.py").write_text('"""A tiny example\n\nIt prints and draws.\n"""\n\n'
+                                      'from pathlib import Path\n\nprint("R_el = 1.5 mOhm")\n'
+                                      'Path("plot.png").write_bytes(b"\\x89PNG")\n')
+    times = g2tom_examples.write_examples(examples, tmp_path / "out")
+    page = (tmp_path / "out" / "tiny.md").read_text()
+    assert set(times) == {"tiny.py"}
+    assert page.startswith("# A tiny example\n") and "It prints and draws." in page
+    assert "```{literalinclude} ../examples/tiny.py" in page and ":lines: 6-" in page
+    assert "R_el = 1.5 mOhm" in page and "```{image} tiny/plot.png" in page
+    assert (tmp_path / "out" / "tiny" / "plot.png").read_bytes() == b"\x89PNG"
+    assert not (examples / "plot.png").exists()  # written in a temporary folder, not beside the script
+
+
+def test_every_example_has_a_title_and_an_introduction() -> None:
+    import g2tom_examples
+
+    scripts = sorted((ROOT / "docs" / "examples").glob("*.py"))
+    assert len(scripts) >= 3
+    for script in scripts:
+        title, intro = g2tom_examples._docstring(script)
+        assert title and len(title) < 40 and intro, script.name
