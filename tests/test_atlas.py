@@ -301,7 +301,10 @@ def test_cli_runs_fits_and_summarizes(tmp_path, capsys) -> None:
     small = {"atlas.mu_min": DESIGN.mu[0], "atlas.mu_max": DESIGN.mu[1], "atlas.pi_min": DESIGN.Pi[0],
              "atlas.pi_max": DESIGN.Pi[1], "atlas.n_mu": DESIGN.n_mu, "atlas.n_pi": DESIGN.n_pi,
              "atlas.n_heldout": DESIGN.n_heldout}  # the small design, not the default
-    sets = [a for k, v in {**BASE, **small}.items() for a in ("--set", f"{k}={v}")]
+    # the bundled atlas's discrete pools small and fixed, as test_the_atlas_runs_on_discrete_asperities's: grown
+    # to 2 % (tests/test_pool_growth.py) they took most of this test's minute
+    fixed_pools = {"contact.pool_half_width": 0.0, "atlas.heldout_pool_half_width": 0.0, "contact.surfaces": 8}
+    sets = [a for k, v in {**BASE, **small, **fixed_pools}.items() for a in ("--set", f"{k}={v}")]
     assert main(["atlas", "--data-dir", str(tmp_path), "--workers", "1", "--no-progress", *sets]) == 0
     err = capsys.readouterr().err
     assert err.count("atlas: scene ") == 6 and "held out: " in err and "cells within max(5 %, interval)" in err
