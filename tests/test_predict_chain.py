@@ -28,8 +28,9 @@ def validated(tmp_path_factory):
 @pytest.fixture(scope="module")
 def surrogate(tmp_path_factory):
     design = DESIGN.__class__(mu=(2.0, 8.0), Pi=(10.0, 40.0), n_mu=2, n_pi=2, n_heldout=1)
-    target, _ = write_atlas_surrogate(atlas.run_atlas(load_scenario("paper", BASE), design,
-                                                      tmp_path_factory.mktemp("atlas")))
+    # a small fixed pool of discrete surfaces (the default's 256 solved at every scene cost most of this fixture)
+    base = load_scenario("paper", {**BASE, "contact.surfaces": 8})
+    target, _ = write_atlas_surrogate(atlas.run_atlas(base, design, tmp_path_factory.mktemp("atlas")))
     return target
 
 
