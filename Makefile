@@ -118,9 +118,9 @@ test-gpu: | $(VENV)/.installed
 	$(VENV)/bin/python -m pytest -m gpu -rs tests/test_reference_fft.py
 	$(G2TOM) bench --only gpu --verbose
 
-# Long numerical-stability sweeps (pytest marker `stress`; a fast subset runs in `make test`).
+# Long sweeps (pytest marker `stress`, in any test file; a fast variant of each runs in `make test`).
 stress: | $(VENV)/.installed
-	$(VENV)/bin/python -m pytest -m stress tests/test_stability.py
+	$(VENV)/bin/python -m pytest -n auto --dist loadfile -m stress
 
 # The documentation (docs/, Sphinx with the `docs` extra) into docs/_build/html; warnings are errors.
 docs: | $(VENV)/.installed
