@@ -109,7 +109,8 @@ def ensemble_blocks(fits: xr.Dataset, scenario: Scenario) -> list[Block]:
     used = fits["n_realizations"].max("xi").values
     flagged = fits["flagged"].values.astype(bool)
     if ox.ensemble == "adaptive":
-        how = (f"adaptive: per (xi, lambda) from {ox.min_realizations} realizations in batches of {ox.batch} until "
+        how = (f"adaptive: per (xi, lambda) from {ox.min_realizations} realizations in batches of "
+               f"{scenario.compute.oxide_batch} until "
                f"the 95 % half-width of alpha (fast rule, exact for the geometric-mean fit) is within "
                f"{100 * ox.target_half_width:g} %, at most {ox.max_realizations}")
     else:

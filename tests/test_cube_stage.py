@@ -68,7 +68,8 @@ def _scenario(**cube_overrides):
     fixed = {"oxide.ensemble": "fixed", "oxide.n_realizations": N_REAL}
     if cube_overrides.get("weights") == "area":  # the published convention of mean-area spots
         fixed["contact.spots"] = "mean_area"
-    return load_scenario("paper_gt", {**fixed, **{f"cube.{k}": v for k, v in cube_overrides.items()}})
+    compute = {"chunk": "compute.cube_chunk", "method": "compute.interaction_sum"}
+    return load_scenario("paper_gt", {**fixed, **{compute.get(k, f"cube.{k}"): v for k, v in cube_overrides.items()}})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -190,7 +191,7 @@ def test_threshold_ties_are_oxide_as_in_the_oxide_stage(inputs):
 
 
 def test_resistance_scales_with_rho(inputs, built):
-    scaled = _build(load_scenario("paper_gt", {"material.rho": 2 * 7.2e-7, "cube.chunk": 3, "oxide.ensemble": "fixed", "oxide.n_realizations": N_REAL}), *inputs)
+    scaled = _build(load_scenario("paper_gt", {"material.rho": 2 * 7.2e-7, "compute.cube_chunk": 3, "oxide.ensemble": "fixed", "oxide.n_realizations": N_REAL}), *inputs)
     np.testing.assert_allclose(scaled["resistance"], 2 * built["resistance"], rtol=1e-14)
 
 
@@ -260,7 +261,7 @@ def test_asperity_spots_independent_of_chunks_and_workers(asperity_inputs):
     scenario, contact_ds, oxide_ds = asperity_inputs
     base = cube.build(scenario, contact_ds, oxide_ds)
     for chunk, workers in ((1, None), (8, 2)):
-        other_scenario = dataclasses.replace(scenario, cube=dataclasses.replace(scenario.cube, chunk=chunk))
+        other_scenario = dataclasses.replace(scenario, compute=dataclasses.replace(scenario.compute, cube_chunk=chunk))
         other = cube.build(other_scenario, contact_ds, oxide_ds, ComputeOptions(progress=False, workers=workers))
         for name in ("resistance", "n_conducting", "resistance_clean"):
             np.testing.assert_array_equal(other[name].values, base[name].values)

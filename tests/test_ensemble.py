@@ -56,11 +56,12 @@ def test_z_value_is_1_96_at_95_percent() -> None:
 
 # ------------------------------------------------------------------ the adaptive cube
 def _adaptive(small: ResolvedScenario, **changes) -> ResolvedScenario:
-    ox = dict(ensemble="adaptive", min_realizations=12, batch=7, max_realizations=60,
+    ox = dict(ensemble="adaptive", min_realizations=12, max_realizations=60,
               target_half_width=0.03, lambda_=[1.0, 13.0], xi=[0.3, 0.8], period="spectral",
               spectral_resolution=6.0)
     ox.update(changes)
-    return dataclasses.replace(small, oxide=dataclasses.replace(small.oxide, **ox))
+    return dataclasses.replace(small, oxide=dataclasses.replace(small.oxide, **ox),
+                               compute=dataclasses.replace(small.compute, oxide_batch=7))
 
 
 @pytest.fixture(scope="module")
@@ -103,8 +104,7 @@ def test_adaptive_cube_does_not_depend_on_batch_chunk_or_workers(
         pytest.importorskip("distributed")
     other = dataclasses.replace(
         scenario,
-        oxide=dataclasses.replace(scenario.oxide, batch=batch),
-        cube=dataclasses.replace(scenario.cube, chunk=chunk),
+        compute=dataclasses.replace(scenario.compute, oxide_batch=batch, cube_chunk=chunk),
     )
     ds = cube.build(other, contact, oxide, ComputeOptions(workers=workers, progress=False))
     np.testing.assert_array_equal(ds["n_realizations"], adaptive_cube["n_realizations"])

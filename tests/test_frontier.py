@@ -49,9 +49,9 @@ def test_recommendation_is_the_fastest_setting_meeting_each_target() -> None:
     rec = frontier.recommend(CONTACT, CUBE, _ensemble([0.2, 0.09, 0.04, 0.02]))
     quick, paper, publication = (rec[u] for u in frontier.USES)
     assert quick["contact"] == "n_radial=120 tolerance=1e-07"  # the fixed point is fast but too far off
-    assert quick["cube"] == "method=folded crop_tolerance=0.01" and quick["n_realizations"] == 50
+    assert quick["cube"] == "interaction_sum=folded crop_tolerance=0.01" and quick["n_realizations"] == 50
     assert paper["contact"] == "n_radial=720 tolerance=1e-10" and paper["force_error"] == 3e-6
-    assert paper["cube"] == "method=folded crop_tolerance=1e-06"  # float32 is not a stage setting
+    assert paper["cube"] == "interaction_sum=folded crop_tolerance=1e-06"  # float32 is not a stage setting
     assert paper["n_realizations"] == 100 and paper["interval_halfwidth"] == pytest.approx(0.04)
     assert quick["targets_met"] and paper["targets_met"]
     # nothing meets 1e-7 in force: the most accurate setting is shown and flagged
@@ -113,7 +113,7 @@ def test_report_sections_show_the_frontier_and_the_stability_map(tmp_path) -> No
     assert "## How fast, how accurate" in md and "## Stability map" in md
     for use in frontier.USES:
         assert f"| {use} |" in md
-    assert "| quick look | n_radial=120 tolerance=1e-07 | 0.05 | 0.0004 | 0.0006 | method=folded crop_tolerance=0.01 |" in md
+    assert "| quick look | n_radial=120 tolerance=1e-07 | 0.05 | 0.0004 | 0.0006 | interaction_sum=folded crop_tolerance=0.01 |" in md
     for stem in ("frontier_contact", "frontier_cube", "frontier_ensemble"):
         assert f"(figures/{stem}.png)" in md
     assert "3 parameter sets" in md and "2 converged" in md and "1 refused" in md and "4 open circuits" in md

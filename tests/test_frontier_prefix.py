@@ -13,7 +13,7 @@ from g2tom.cli.main import main
 from g2tom.before_work import load_scenario
 
 SETS = {"oxide.xi": "[0.3, 0.7]", "oxide.lambda": "[3.0, 9.0]", "oxide.min_realizations": 60,
-        "oxide.batch": 40, "oxide.max_realizations": 260, "oxide.target_half_width": 0.02,
+        "compute.oxide_batch": 40, "oxide.max_realizations": 260, "oxide.target_half_width": 0.02,
         "loading.n_delta": 6, "contact.n_radial": 160}
 
 

@@ -25,7 +25,9 @@ from g2tom.stages import oxide
 
 
 def _with(scenario: ResolvedScenario, **changes) -> ResolvedScenario:
-    return dataclasses.replace(scenario, oxide=dataclasses.replace(scenario.oxide, **changes))
+    compute = {k: changes.pop(k) for k in ("oxide_chunk",) if k in changes}
+    return dataclasses.replace(scenario, oxide=dataclasses.replace(scenario.oxide, **changes),
+                               compute=dataclasses.replace(scenario.compute, **compute))
 
 
 @pytest.fixture(scope="module")
@@ -71,8 +73,8 @@ def test_stage_fields_are_the_physics_fields(small: ResolvedScenario, built: xr.
 
 @pytest.mark.parametrize("chunk", [1, 8])
 def test_psi_does_not_depend_on_chunking(small: ResolvedScenario, built: xr.Dataset, chunk: int) -> None:
-    other = oxide.build(_with(small, chunk=chunk))
-    assert small.oxide.chunk == 3
+    other = oxide.build(_with(small, oxide_chunk=chunk))
+    assert small.compute.oxide_chunk == 3
     np.testing.assert_array_equal(other["psi"], built["psi"])
     np.testing.assert_array_equal(other["oxide_fraction"], built["oxide_fraction"])
 
@@ -93,7 +95,7 @@ def test_adding_a_lambda_leaves_the_other_fields_unchanged(small: ResolvedScenar
 
 
 def test_mean_realized_fraction_is_xi_within_its_standard_error(small: ResolvedScenario) -> None:
-    scenario = _with(small, lambda_=[1.0, 3.0, 7.0], xi=[0.1, 0.3, 0.5, 0.9], n_realizations=150, chunk=50)
+    scenario = _with(small, lambda_=[1.0, 3.0, 7.0], xi=[0.1, 0.3, 0.5, 0.9], n_realizations=150, oxide_chunk=50)
     fraction = oxide.build(scenario)["oxide_fraction"]
     mean = fraction.mean("realization")
     standard_error = fraction.std("realization", ddof=1) / np.sqrt(fraction.sizes["realization"])
@@ -179,7 +181,8 @@ def test_spectral_period_has_modes_at_any_lambda() -> None:
 
 def test_adaptive_record_is_the_first_batch_and_cube_regenerates_it(small: ResolvedScenario) -> None:
     scenario = dataclasses.replace(
-        small, oxide=dataclasses.replace(small.oxide, ensemble="adaptive", min_realizations=5, chunk=2,
+        small, compute=dataclasses.replace(small.compute, oxide_chunk=2),
+        oxide=dataclasses.replace(small.oxide, ensemble="adaptive", min_realizations=5,
                                          period="spectral", threshold="empirical")
     )
     record = oxide.build(scenario)

@@ -258,7 +258,7 @@ def _scenario(**overrides):
 
 
 def test_stage_point_model_matches_dense_and_records_the_solver(inputs):
-    ds = _build(_scenario(**{"cube.model": "point", "cube.chunk": 3}), *inputs)
+    ds = _build(_scenario(**{"cube.model": "point", "compute.cube_chunk": 3}), *inputs)
     assert ds.attrs["model"] == "point" and ds.attrs["n_not_converged"] == 0
     for name in ("iterations", "residual", "error_estimate"):
         assert ds[name].dims == ("xi", "lambda", "delta", "realization") and "units" in ds[name].attrs
@@ -278,10 +278,10 @@ def test_stage_point_model_matches_dense_and_records_the_solver(inputs):
 
 
 def test_stage_point_model_invariant_under_chunking_and_scheduler(inputs):
-    base = _build(_scenario(**{"cube.model": "point", "cube.chunk": 3}), *inputs)
+    base = _build(_scenario(**{"cube.model": "point", "compute.cube_chunk": 3}), *inputs)
     for chunk, workers in ((1, 1), (N_REAL, None), (4, 2)):  # one thread, threads, local cluster
         options = ComputeOptions(progress=False, workers=workers)
-        other = _build(_scenario(**{"cube.model": "point", "cube.chunk": chunk}), *inputs, options)
+        other = _build(_scenario(**{"cube.model": "point", "compute.cube_chunk": chunk}), *inputs, options)
         for name in ("resistance", "iterations", "residual", "error_estimate", "n_conducting"):
             np.testing.assert_array_equal(other[name].values, base[name].values)
 
@@ -318,8 +318,8 @@ def test_bad_settings_are_config_errors(override, message):
 def test_point_model_needs_radius_weights_and_an_applicable_operator():
     with pytest.raises(ConfigError, match="cube.weights = 'area'"):
         load_scenario("published", ["cube.model=point"])
-    with pytest.raises(ConfigError, match="cube.method = 'fft'"):
-        load_scenario("paper_gt", ["cube.model=point", "cube.method=fft"])
+    with pytest.raises(ConfigError, match="compute.interaction_sum = 'fft'"):
+        load_scenario("paper_gt", ["cube.model=point", "compute.interaction_sum=fft"])
 
 
 def test_cli_exits_2_on_bad_solver_settings(tmp_path, capsys):

@@ -258,5 +258,5 @@ def test_cube_labels_each_round_with_the_cells_still_open(monkeypatch, small) ->
     assert labels[0] == f"cube round 1 ({cells} cells, {ox.min_realizations} realizations each)"
     assert len(labels) > 2  # the scenario really needs several rounds
     for r, label in enumerate(labels[1:], start=2):
-        still_open = int(np.sum(counts > ox.min_realizations + (r - 2) * ox.batch))
+        still_open = int(np.sum(counts > ox.min_realizations + (r - 2) * scenario.compute.oxide_batch))
         assert label == f"cube round {r} (adaptive: {still_open} of {cells} cells still open)"

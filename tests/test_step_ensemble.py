@@ -22,7 +22,7 @@ from tests.test_discrete_stages import DISCRETE
 QUIET = ComputeOptions(progress=False)
 STEP_TARGET = 0.06
 ADAPTIVE = {**DISCRETE, "oxide.spot_rule": "disc", "oxide.ensemble": "adaptive", "oxide.min_realizations": 20,
-            "oxide.batch": 7, "oxide.max_realizations": 600, "oxide.target_half_width": 0.3,
+            "compute.oxide_batch": 7, "oxide.max_realizations": 600, "oxide.target_half_width": 0.3,
             "fits.control_variate": "clean_share"}
 
 
@@ -91,7 +91,7 @@ def test_the_extra_realizations_are_those_of_a_full_ensemble(scene, inputs, step
 
 
 def test_the_batch_changes_nothing(scene, inputs, stepped):
-    other = dataclasses.replace(scene, oxide=dataclasses.replace(scene.oxide, batch=50))
+    other = dataclasses.replace(scene, compute=dataclasses.replace(scene.compute, oxide_batch=50))
     again = cube.build(other, *inputs, QUIET)
     for name in stepped.data_vars:
         np.testing.assert_array_equal(again[name].values, stepped[name].values, err_msg=name)

@@ -271,7 +271,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     # fields and the complex spectra of their synthesis; the band's lattice and coefficients.
     psi = 4.0 * n_lam * n_real * cells
     modes = _max_modes(scenario, n)
-    chunk = min(ox.chunk, n_real, max(1, int(CHUNK_BYTES // (4.0 * n_lam * cells))))
+    chunk = min(scenario.compute.oxide_chunk, n_real, max(1, int(CHUNK_BYTES // (4.0 * n_lam * cells))))
     task_ox = chunk * cells * (4.0 * n_lam + 24.0) + 64.0 * modes
     oxide_mem = psi + t * task_ox + 48.0 * modes
     oxide_s = OXIDE_CALIBRATION * n_lam * n_real * (_MODE_S * modes + _CELL_FFT_S * cells * math.log2(max(n, 2))) / t
@@ -283,7 +283,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
 
     results = results_of(n_cube)
     block = block_size(n)
-    task_cube = n_xi * n_lam * min(scenario.cube.chunk, n_cube) * cells * 1.0 + block * (
+    task_cube = n_xi * n_lam * min(scenario.compute.cube_chunk, n_cube) * cells * 1.0 + block * (
         work_bytes_per_map(n) + 9.0 * cells)
     if n < FFT_FROM:
         operators = min(n_delta, 32) * 4.0 * n**3

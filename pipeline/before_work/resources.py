@@ -32,7 +32,7 @@ _DRIVERS: tuple[str, ...] = (
     "roughness.eta", "contact.window", "oxide.lambda", "oxide.ks_ratio", "oxide.n_realizations",
     "oxide.max_realizations", "oxide.target_half_width", "oxide.min_realizations", "oxide.ensemble",
     "oxide.spectral_resolution", "oxide.period",
-    "oxide.xi", "loading.n_delta", "contact.n_radial", "oxide.chunk", "cube.chunk",
+    "oxide.xi", "loading.n_delta", "contact.n_radial", "compute.oxide_chunk", "compute.cube_chunk",
     "fits.n_bootstrap", "indenter.radius", "indenter.shape", "roughness.sigma",
 )
 

@@ -30,9 +30,9 @@ def _check_point_model(s: Scenario) -> None:
             f"cube.lattice_constant = {s.cube.lattice_constant!r} is not allowed with cube.model = "
             f"{s.cube.model!r}: the lattice self term belongs to cube.model = 'point' (must be 0 otherwise)"
         )
-    if s.cube.model == "point" and s.cube.method not in ("auto", "folded", "gemm", "direct"):
+    if s.cube.model == "point" and s.compute.interaction_sum not in ("auto", "folded", "gemm", "direct"):
         raise ConfigError(
-            f"cube.method = {s.cube.method!r} is not allowed with cube.model = 'point': must be one of "
+            f"compute.interaction_sum = {s.compute.interaction_sum!r} is not allowed with cube.model = 'point': must be one of "
             "'auto', 'folded', 'gemm', 'direct'"
         )
     needs_radius = "cube.model = 'point'" if s.cube.model == "point" else (

@@ -99,7 +99,7 @@ def _check_ensemble(s: Scenario, n_cells: int) -> None:
     if ox.period != "spectral":
         return
     top = math.floor(ox.ks_ratio * max(ox.spectral_resolution, n_cells / (2.0 * min(ox.lambda_))))
-    fields = max(ox.chunk, s.cube.chunk)
+    fields = max(s.compute.oxide_chunk, s.compute.cube_chunk)
     need = FIELD_BYTES_PER_ENTRY * fields * (top + 1) * (2 * top + 1)
     have = _physical_memory()
     if need > have:

@@ -145,7 +145,7 @@ def run(scenario: Scenario) -> dict[str, Any]:
             comparison["direct_seconds_per_simulation"] * n_sims / t_cube
         ),
         "default_path": f"{ds.attrs['method']}_{cropped}",
-        "chunk": scenario.cube.chunk,
+        "chunk": scenario.compute.cube_chunk,
         "crop_tolerance": ds.attrs["crop_tolerance"],
         "crop_error_bound": ds.attrs["crop_error_bound"],
         "crop_error_measured": ds.attrs["crop_error_measured"],

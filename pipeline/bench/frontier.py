@@ -76,7 +76,7 @@ def recommend(contact_rows: list[dict[str, Any]], cube_rows: list[dict[str, Any]
         out[use] = {
             "contact": f"n_radial={c['n_radial']} tolerance={c['tolerance']:g}",
             "contact_seconds": c["seconds"], "force_error": c["force_error"], "area_error": c["area_error"],
-            "cube": f"method={k['method']} crop_tolerance={k['crop_tolerance']:g}",
+            "cube": f"interaction_sum={k['method']} crop_tolerance={k['crop_tolerance']:g}",
             "cube_seconds": k["seconds"], "resistance_error": k["resistance_error"],
             "alpha_error": k["alpha_error"], "gamma_error": k["gamma_error"],
             "n_realizations": n, "ensemble_seconds": float(ensemble["ensemble_seconds"].sel(n_realizations=n)),

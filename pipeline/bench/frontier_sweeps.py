@@ -108,7 +108,7 @@ def cube_frontier(scenario: ResolvedScenario) -> list[dict[str, Any]]:
     contact_ds, oxide_ds = contact.build(base), oxide.build(base, quiet)
 
     def build(method: str, crop: float, spots: xr.Dataset) -> tuple[float, xr.Dataset, xr.Dataset]:
-        s = _replace(base, "cube", method=method, crop_tolerance=crop)
+        s = _replace(_replace(base, "cube", crop_tolerance=crop), "compute", interaction_sum=method)
         seconds, ds = _median_time(lambda: cube.build(s, spots, oxide_ds, quiet))
         return seconds, ds, fits.build(s, ds)
 

@@ -56,7 +56,7 @@ def _timed(func: Any, *args: Any) -> float:
 
 def _scene(eta: float) -> ResolvedScenario:
     return resolve(load_scenario("paper_gt", {"roughness.eta": eta, "oxide.xi": [0.5], "oxide.lambda": [5.0, 13.0],
-                                           "oxide.n_realizations": N_MASKS // 2, "oxide.chunk": N_MASKS}))
+                                           "oxide.n_realizations": N_MASKS // 2, "compute.oxide_chunk": N_MASKS}))
 
 
 def _kernel_inputs(s: ResolvedScenario) -> tuple:

@@ -122,7 +122,7 @@ def evaluate(case: Case) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     pitch = float(np.diff(ds["x"].values)[0])
     n = radius.shape[-1]
     clean = constriction.resistance(np.ones((1, n, n), bool), SpotGeometry.whole_window(radius, radius, pitch),
-                                    scenario.material.rho, scenario.cube.method).resistance[:, 0]
+                                    scenario.material.rho, scenario.compute.interaction_sum).resistance[:, 0]
     record["seconds"] = round(time.perf_counter() - start, 4)
     arrays = {"force": ds["force"].values, "resistance_clean": np.asarray(clean, float),
               "converged": ds["converged"].values.astype(bool)}

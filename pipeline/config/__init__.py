@@ -19,12 +19,12 @@ every scenario it reads.
 
 from g2tom.config.declare import AUTO, ConfigError, format_range, parameter_key
 from g2tom.config.loading import (
-    USED_ONLY_WITH, bundled_scenarios, parameter_table, read_input_text, read_scenario)
+    RENAMED, USED_ONLY_WITH, bundled_scenarios, parameter_table, read_input_text, read_scenario)
 from g2tom.config.scenario import (
-    SECTIONS, STAGE_EXCLUDED, STAGE_INPUTS, STAGE_UPSTREAM, ResolvedScenario, Scenario, odd_cells)
+    COMPUTE_SECTION, SECTIONS, STAGE_EXCLUDED, STAGE_INPUTS, STAGE_UPSTREAM, ResolvedScenario, Scenario, odd_cells)
 from g2tom.config.scene_sections import (
     MAX_POOL_SURFACES, POOL_CONFIDENCE, Contact, Indenter, Loading, Material, Roughness)
-from g2tom.config.study_sections import CHUNK_BYTES, KERNEL_CACHE_BYTES, Atlas, Cube, Fits, Oxide, Surrogate
+from g2tom.config.study_sections import CHUNK_BYTES, KERNEL_CACHE_BYTES, Atlas, Compute, Cube, Fits, Oxide, Surrogate
 
 __all__ = [
     "AUTO",
@@ -39,7 +39,9 @@ __all__ = [
     "parameter_key",
     "format_range",
     "USED_ONLY_WITH",
+    "RENAMED",
     "SECTIONS",
+    "COMPUTE_SECTION",
     "STAGE_INPUTS",
     "STAGE_EXCLUDED",
     "STAGE_UPSTREAM",
@@ -53,6 +55,7 @@ __all__ = [
     "Fits",
     "Surrogate",
     "Atlas",
+    "Compute",
     "CHUNK_BYTES",
     "KERNEL_CACHE_BYTES",
     "MAX_POOL_SURFACES",

@@ -19,7 +19,7 @@ from g2tom.config.declare import ConfigError, format_range, parameter_key
 from g2tom.config.scenario import SECTIONS, Scenario
 from g2tom.config.validation import check_field, unknown
 
-__all__ = ["read_input_text", "bundled_scenarios", "read_scenario", "USED_ONLY_WITH",
+__all__ = ["read_input_text", "bundled_scenarios", "read_scenario", "USED_ONLY_WITH", "RENAMED",
            "parameter_table"]
 
 
@@ -102,9 +102,10 @@ def _read_toml(config: str | Path) -> tuple[dict[str, Any], str]:
             f"({', '.join(bundled_scenarios())}) nor a TOML file"
         )
     try:
-        return tomllib.loads(path.read_text()), path.stem
+        data = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"--config {text_name!r}: not valid TOML ({exc})") from None
+    return _with_new_names(data), path.stem
 
 
 def _with_base(data: dict[str, Any], seen: tuple[str, ...] = ()) -> tuple[dict[str, Any], str]:
@@ -164,12 +165,36 @@ def read_scenario(
         _split_override(o) for o in overrides
     )
     for dotted, value in items:
+        dotted = RENAMED.get(dotted, dotted)
         section, _, key = dotted.partition(".")
         if section not in SECTIONS or not key:
             raise unknown(dotted)
         data.setdefault(section, {})[key] = value
         explicit.add(dotted)
     return _settle(_build(data, name=name, description=description), explicit)
+
+
+#: Parameters that moved, by their old key: the compute options that left the science sections.
+RENAMED: dict[str, str] = {
+    "cube.method": "compute.interaction_sum",
+    "cube.chunk": "compute.cube_chunk",
+    "oxide.chunk": "compute.oxide_chunk",
+    "oxide.batch": "compute.oxide_batch",
+}
+
+
+def _with_new_names(data: dict[str, Any]) -> dict[str, Any]:
+    """A scenario file's ``data`` with each old key of :data:`RENAMED` moved to its new key, with a
+    warning naming both (an old key given with ``--set`` is moved as it is read)."""
+    for old, new in RENAMED.items():
+        section, _, key = old.partition(".")
+        table = data.get(section)
+        if isinstance(table, dict) and key in table:
+            new_section, _, new_key = new.partition(".")
+            warnings.warn(f"{old} is now {new} (a compute option, in no configuration hash): read as {new}; "
+                          f"rename it in the scenario file", stacklevel=5)
+            data.setdefault(new_section, {}).setdefault(new_key, table.pop(key))
+    return data
 
 
 #: Settings used only under another setting's value: key -> (that setting, its value, what is used instead).

@@ -19,10 +19,10 @@ from typing import Any, Self
 
 from g2tom.config.declare import parameter_key
 from g2tom.config.scene_sections import Contact, Indenter, Loading, Material, Roughness
-from g2tom.config.study_sections import Atlas, Cube, Fits, Oxide, Surrogate
+from g2tom.config.study_sections import Atlas, Compute, Cube, Fits, Oxide, Surrogate
 
-__all__ = ["SECTIONS", "STAGE_INPUTS", "STAGE_EXCLUDED", "STAGE_UPSTREAM", "Scenario", "ResolvedScenario",
-           "odd_cells"]
+__all__ = ["SECTIONS", "COMPUTE_SECTION", "STAGE_INPUTS", "STAGE_EXCLUDED", "STAGE_UPSTREAM", "Scenario",
+           "ResolvedScenario", "odd_cells"]
 
 
 SECTIONS: dict[str, type] = {
@@ -36,7 +36,10 @@ SECTIONS: dict[str, type] = {
     "fits": Fits,
     "surrogate": Surrogate,
     "atlas": Atlas,
+    "compute": Compute,
 }
+#: The section of compute options (:class:`~g2tom.config.study_sections.Compute`): in no hash.
+COMPUTE_SECTION = "compute"
 
 #: Parameters each stage depends on (whole sections or single ``section.key`` entries);
 #: a stage's config hash covers these and the hashes of the stages it reads.
@@ -100,6 +103,7 @@ class Scenario:
     fits: Fits = field(default_factory=Fits)
     surrogate: Surrogate = field(default_factory=Surrogate)
     atlas: Atlas = field(default_factory=Atlas)
+    compute: Compute = field(default_factory=Compute)
 
     # ----------------------------------------------------------------- derived values
     @property
@@ -174,10 +178,12 @@ class Scenario:
     def config_hash(self, stage: str | None = None) -> str:
         """SHA-256 (16 hex digits) of a stage's parameters and its upstream stages' hashes.
 
-        With ``stage=None`` the hash covers the whole scenario (name and description aside).
+        With ``stage=None`` the hash covers the whole scenario (name, description and the compute
+        options aside).
         """
         if stage is None:
-            payload: Any = {k: v for k, v in self.flat().items() if not (k in HASH_NEUTRAL and v == HASH_NEUTRAL[k])}
+            payload: Any = {k: v for k, v in self.flat().items() if not (k in HASH_NEUTRAL and v == HASH_NEUTRAL[k])
+                            and not k.startswith(COMPUTE_SECTION + ".")}
         else:
             payload = {
                 "stage": stage,

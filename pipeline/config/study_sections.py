@@ -1,5 +1,6 @@
 """The study's parameters: the sections ``oxide`` (Table 2 and the ensemble), ``cube``, ``fits``,
-``surrogate`` and ``atlas``.
+``surrogate`` and ``atlas``; and ``compute``, how the work is cut up, which changes no result and so
+enters no configuration hash.
 
 Each field declares its unit, meaning and allowed range (:func:`g2tom.config.declare.param`).
 """
@@ -11,9 +12,9 @@ from typing import Any
 
 from g2tom.config.declare import param
 
-__all__ = ["Oxide", "Cube", "Fits", "Surrogate", "Atlas", "CHUNK_BYTES", "KERNEL_CACHE_BYTES"]
+__all__ = ["Oxide", "Cube", "Fits", "Surrogate", "Atlas", "Compute", "CHUNK_BYTES", "KERNEL_CACHE_BYTES"]
 
-#: Largest float32 fields of one oxide chunk (all lambdas), bytes: ``oxide.chunk`` realizations a
+#: Largest float32 fields of one oxide chunk (all lambdas), bytes: ``compute.oxide_chunk`` realizations a
 #: chunk, fewer where their fields would pass it; bounds the oxide stage's peak on large grids (and
 #: its estimate before work).
 CHUNK_BYTES = 64 * 2**20
@@ -52,10 +53,6 @@ class Oxide:
     min_realizations: int = param(
         400, "1", "adaptive: first batch, the fewest realizations any (xi, lambda) uses", ge=2
     )
-    batch: int = param(
-        1000, "1", "adaptive: realizations added per round to a cell still short of the target "
-        "(compute granularity only: results do not depend on it)", ge=1
-    )
     max_realizations: int = param(30000, "1", "adaptive: cap on the realizations per (xi, lambda)", ge=2)
     target_half_width: float = param(
         0.025, "1", "adaptive: target relative 95 % half-width of alpha in every cell", gt=0, lt=1
@@ -87,7 +84,6 @@ class Oxide:
         "threshold rule: Gaussian quantile sqrt(2) erfcinv(2 xi), or each realization's own quantile",
         choices=("theoretical", "empirical"),
     )
-    chunk: int = param(50, "1", "realizations per dask chunk", ge=1)
     film: str = param(
         "insulating",
         "1",
@@ -123,16 +119,6 @@ class Cube:
     crop_tolerance: float = param(
         1e-6, "1", "spots are cropped while their bounded effect on R stays below this", ge=0, lt=1
     )
-    method: str = param(
-        "auto",
-        "1",
-        "interaction sum algorithm: auto (the fastest, folded), folded (dft_gemm on the four "
-        "mirror-parity quarters), dft_gemm (real DFT along x as a GEMM, "
-        "then Toeplitz GEMM along y), fft (2-D real FFT, Parseval), gemm (dense 1/d), "
-        "direct (double sum)",
-        choices=("auto", "folded", "dft_gemm", "fft", "gemm", "direct"),
-    )
-    chunk: int = param(25, "1", "realizations per dask chunk", ge=1)
     model: str = param(
         "greenwood",
         "1",
@@ -277,4 +263,30 @@ class Atlas:
     heldout_pool_half_width: float = param(
         0.0, "1", "discrete: contact.pool_half_width of the held-out scenes (the smaller of the two where both "
         "are set; 0: as the design's): a pool grown at the light steps, whose error no interval shows", ge=0, lt=1
+    )
+
+
+@dataclass(frozen=True)
+class Compute:
+    """How the work is cut up and which exact algorithm runs: no setting here changes a result, so
+    none enters a configuration hash, and changing one re-runs no stage.
+
+    The workers, a cluster's address and the device are the command line's (``--workers``,
+    ``--scheduler``, ``--device``).
+    """
+
+    interaction_sum: str = param(
+        "auto",
+        "1",
+        "interaction sum algorithm (equal results): auto (the fastest, folded), folded (dft_gemm on the four "
+        "mirror-parity quarters), dft_gemm (real DFT along x as a GEMM, "
+        "then Toeplitz GEMM along y), fft (2-D real FFT, Parseval), gemm (dense 1/d), "
+        "direct (double sum)",
+        choices=("auto", "folded", "dft_gemm", "fft", "gemm", "direct"),
+    )
+    cube_chunk: int = param(25, "1", "cube: realizations per dask task", ge=1)
+    oxide_chunk: int = param(50, "1", "oxide: realizations per dask chunk", ge=1)
+    oxide_batch: int = param(
+        1000, "1", "adaptive ensemble: realizations added per round to a cell still short of its target "
+        "(an xi's count is the first prefix meeting it, whatever the batch)", ge=1
     )

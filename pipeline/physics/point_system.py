@@ -1,5 +1,5 @@
 """The point model's system ``M``: its diagonal (spot, film, lattice term), which spots carry
-current, its dense form, and the matrix-free interaction operators ``K * f`` by ``cube.method``
+current, its dense form, and the matrix-free interaction operators ``K * f`` by ``compute.interaction_sum``
 (see :mod:`g2tom.physics.point_model` for the model)."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from g2tom.physics.interaction_folded import interaction_apply_columns, interact
 
 __all__ = ["OPERATORS", "CONDUCTANCE_FLOOR", "film_diagonal", "system_matrix", "checked_settings", "spot_states"]
 
-#: Interaction operators ``K * f`` by ``cube.method``: the folded DFT-GEMM or the dense matrix.
+#: Interaction operators ``K * f`` by ``compute.interaction_sum``: the folded DFT-GEMM or the dense matrix.
 OPERATORS: dict[str, Callable[[np.ndarray, float], np.ndarray]] = {
     "auto": interaction_apply_columns,
     "folded": interaction_apply_columns,

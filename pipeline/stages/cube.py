@@ -8,7 +8,7 @@ published code). With ``cube.model = "point"`` the exact point-interaction solve
 (:mod:`g2tom.physics.point_model`) replaces the closed form, and ``oxide.film = "resistive"``
 lets oxidized spots conduct through their film. The work is split over (lambda, realization chunk) dask tasks
 (:mod:`g2tom.stages.cube_chunks`) of about
-``cube.chunk`` x n_xi masks (``cube.chunk`` fields when every xi is evaluated, proportionally
+``compute.cube_chunk`` x n_xi masks (``compute.cube_chunk`` fields when every xi is evaluated, proportionally
 more when fewer fractions still need realizations); every entry's result is bit-identical
 whatever the chunk size or scheduler.
 
@@ -199,8 +199,8 @@ def work_settings(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, 
         solver_criterion=cube.solver_criterion,
         crops=choose_crops(radius, weights, pitch, 0.0 if whole_window else cube.crop_tolerance),
         tolerance=cube.crop_tolerance,
-        method=cube.method,
-        method_used=AUTO_METHOD if cube.method == "auto" else cube.method,
+        method=scenario.compute.interaction_sum,
+        method_used=AUTO_METHOD if scenario.compute.interaction_sum == "auto" else scenario.compute.interaction_sum,
         spots=scenario.contact.spots,
         lattice_constant=cube.lattice_constant,
         asperities=asperities,

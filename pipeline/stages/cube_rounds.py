@@ -2,7 +2,7 @@
 
 ``oxide.ensemble = "fixed"`` computes ``oxide.n_realizations`` fields per lambda in one round.
 ``"adaptive"`` grows every (xi, lambda) cell in rounds: first ``oxide.min_realizations``, then
-``oxide.batch`` more while the cell's fast-rule 95 % half-width of alpha
+``compute.oxide_batch`` more while the cell's fast-rule 95 % half-width of alpha
 (:mod:`g2tom.fitting.ensemble`, exact for the geometric-mean fit on the steps with
 steps the fits stage fits, :meth:`g2tom.config.study_sections.Fits.fitted_loads`) exceeds :data:`RULE_MARGIN` x ``oxide.target_half_width``, up to
 ``oxide.max_realizations``; with ``fits.control_variate = "clean_share"`` the half-width of the
@@ -169,7 +169,7 @@ def compute_cells(
     """Rounds of dask tasks over (lambda, realization chunk) until every (xi, lambda) has its count.
 
     Round one computes the first batch of every lambda (the fixed count, or
-    ``oxide.min_realizations``); each further round adds ``oxide.batch`` realizations (at most up
+    ``oxide.min_realizations``); each further round adds ``compute.oxide_batch`` realizations (at most up
     to the cap) to every lambda, for the fractions xi whose count is not decided yet (a field
     serves every xi, but an xi that reached its target costs nothing more). Realization r of a
     lambda always gets the same field, and an xi's count is the first prefix meeting the target,
@@ -213,9 +213,9 @@ def compute_cells(
                     limits.setdefault(_limit(kept[a][z], steps[a][z], n_delta), []).append(z)
             for limit, members in sorted(limits.items(), reverse=True):
                 active = np.array(members, int)
-                # About cube.chunk * n_xi masks per task whatever the number of active fractions: the
+                # About compute.cube_chunk * n_xi masks per task whatever the number of active fractions: the
                 # resistance kernel works in fixed blocks of masks, so small tasks would waste them.
-                chunk = scenario.cube.chunk * -(-n_xi // active.size)
+                chunk = scenario.compute.cube_chunk * -(-n_xi // active.size)
                 below = () if limit == n_delta else (limit,)
                 for start in range(done[a], want[a], chunk):
                     block = np.arange(start, min(start + chunk, want[a]))
@@ -240,7 +240,7 @@ def compute_cells(
                 if per_step and kept[a][z] is not None:
                     share = _joined(pieces[a], z, "clean_share") if settings.control_variate else None
                     steps[a][z] = _decide_steps(scenario, _joined(pieces[a], z, "resistance"), rule, kept[a][z], share)
-            want[a] = min(done[a] + ox.batch, ox.max_realizations)
+            want[a] = min(done[a] + scenario.compute.oxide_batch, ox.max_realizations)
     counts = np.array(kept, int).T
     if not per_step:
         out = [[{name: _joined(pieces[a], z, name)[..., : kept[a][z]] for name in terms(settings)}

@@ -34,7 +34,7 @@ class CubeSettings:
     tolerance
         ``cube.crop_tolerance``: the crop's relative error bound (0: whole window).
     method
-        ``cube.method`` as configured; ``method_used`` with ``auto`` resolved.
+        ``compute.interaction_sum`` as configured; ``method_used`` with ``auto`` resolved.
     spots
         ``contact.spots``, or ``discrete`` with ``contact.model = "discrete"``.
     lattice_constant

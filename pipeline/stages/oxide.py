@@ -118,8 +118,8 @@ def _lazy(scenario: ResolvedScenario) -> tuple[da.Array, da.Array, da.Array]:
     ox = scenario.oxide
     n = scenario.n_cells
     xi = np.asarray(ox.xi, dtype=float)
-    # at most oxide.chunk realizations per chunk, fewer where a chunk's fields would pass CHUNK_BYTES
-    chunk = min(ox.chunk, max(1, CHUNK_BYTES // (4 * len(ox.lambda_) * n * n)))
+    # at most compute.oxide_chunk realizations per chunk, fewer where a chunk's fields would pass CHUNK_BYTES
+    chunk = min(scenario.compute.oxide_chunk, max(1, CHUNK_BYTES // (4 * len(ox.lambda_) * n * n)))
     realization = da.arange(recorded_realizations(scenario), chunks=chunk)
     psi = da.map_blocks(
         _psi_block,
