@@ -1,7 +1,7 @@
 """Discrete asperities with elastic interaction: a rough sphere's own caps solved at a given force.
 
 Greenwood–Tripp replaces the asperities by their mean, which is right when hundreds touch and
-biased when a handful do (design note 11). This model keeps one realization's asperities:
+biased when a handful do. This model keeps one realization's asperities:
 
 * Asperities: Poisson positions of density ``eta`` over a disc that holds every asperity able to
   touch (:func:`domain_radius`), heights ``z_i ~ N(0, sigma^2)``, spherical caps of radius
@@ -29,7 +29,7 @@ biased when a handful do (design note 11). This model keeps one realization's as
   ``4 sigma / 9``, and caps that large closer than ``l`` make ``D^-1 + C`` indefinite (the atlas's
   large ``beta sigma eta``: caps wider than their spacing). There the load path can reach a fold,
   where no solution on its branch carries more force, and Newton stalls on an indefinite system.
-  The solve then minimises the energy by proximal rounds (:func:`_proximal`): each adds
+  The solve then minimises the energy by proximal rounds (``_proximal``): each adds
   ``c |P - P_k|^2 / 2`` with ``c`` large enough to make the energy convex and is solved by the same
   Newton; their fixed point solves the original equations. The path jumps to the next branch,
   as a loaded structure snaps through; Newton's answer is used wherever it converges.
@@ -79,17 +79,17 @@ TOLERANCE = 1e-10
 MAX_ITERATIONS = 100
 #: A solve whose line search can no longer lower the residual is accepted up to this relative
 #: residual (1e-6 of a micrometre interference is 1e-12 m, of the force 1e-6); a larger stalled
-#: residual is not converged (unless the energy is not convex there: see :func:`_proximal`).
+#: residual is not converged (unless the energy is not convex there: see ``_proximal``).
 STALL_TOLERANCE = 1e-6
 #: Largest ratio of consecutive forces a surface is solved at: farther requested forces are
-#: reached through intermediate ones, geometrically spaced (:meth:`_Walker.climb`). A jump's
+#: reached through intermediate ones, geometrically spaced (``_Walker.climb``). A jump's
 #: candidates come from the previous stiffness's linear extrapolation, which far overshoots over
 #: a large jump: on the paper's pool the 2 steps F' 0.075 and 18.8 cost 1.34 s a surface against
 #: 74 ms for its 20 steps (now 46 ms). Above the largest ratio of the paper's steps (2.08, at its
 #: lightest) and of the atlas's scenes (2.39), whose solves this leaves as they were, bit for bit.
 #: A cold start at a heavy force is left as it was: a first step of many touching caps (the
 #: validation's F' 3.32 alone, 44) costs several times its share of the cost model
-#: (:mod:`g2tom.before_work.discrete_cost`), as the README says.
+#: (:mod:`g2tom.models.discrete_cost`), as the README says.
 MAX_STEP_RATIO = 2.5
 #: Proximal rounds at most where the energy is not convex (a fold of the atlas's large caps takes
 #: 170-530).

@@ -55,7 +55,7 @@ CORNER = 1e300
 #: conjugate gradients on every set at once (large unions).
 NONE, NESTED, WHOLE, INDEFINITE, ITERATIVE = 0, 1, 2, 3, 4
 
-#: Union size from which a step's sets are solved by conjugate gradients (:func:`_iterative`)
+#: Union size from which a step's sets are solved by conjugate gradients (``_iterative``)
 #: rather than factorized: O(m^2) a sweep against O(m^3). Measured on the atlas's d22 scene
 #: (mu 7.07, Pi 320, up to 1,990 touching spots, five oxide fractions, lambda 1 and 23): the
 #: preconditioned condition number stays near 10 and 16 sweeps reach the tolerance; with 5 sets the
@@ -120,14 +120,14 @@ def currents(kernel: np.ndarray, radius: np.ndarray,
         Radii, m, shape (sets, steps, n); 0 where a spot does not conduct.
     iterative_from
         Union size (conducting spots of a step, any set) from which the step is solved by
-        conjugate gradients (default :data:`ITERATIVE_FROM`; the factorizations below it).
+        conjugate gradients (default ``ITERATIVE_FROM``; the factorizations below it).
 
     Returns
     -------
     tuple of numpy.ndarray
         ``1^T M^-1 1`` over each set's conducting spots, m, shape (sets, steps) (0 where none
-        conducts), and the path each step took, shape (steps,): :data:`NONE`, :data:`NESTED`,
-        :data:`WHOLE`, :data:`INDEFINITE` or :data:`ITERATIVE`.
+        conducts), and the path each step took, shape (steps,): ``NONE``, ``NESTED``,
+        ``WHOLE``, ``INDEFINITE`` or ``ITERATIVE``.
     """
     kernel = np.ascontiguousarray(kernel, dtype=np.float64)
     radius = np.ascontiguousarray(radius, dtype=np.float64)

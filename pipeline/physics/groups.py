@@ -1,4 +1,4 @@
-"""The dimensionless groups of a rough sphere-on-flat contact (design notes, Sect. 9).
+"""The dimensionless groups mu and Pi of a rough sphere-on-flat contact.
 
 With in-plane lengths in units of sqrt(R* sigma) and heights in units of sigma, the
 Greenwood–Tripp problem depends on one group (Greenwood and Tripp's own),

@@ -1,4 +1,4 @@
-"""Measured height maps with undefined pixels (issue 31): filling, and masked moments.
+"""Measured height maps with undefined pixels: filling, and masked moments.
 
 Optical profilometers leave pixels undefined (NaN) where the light did not come back: steep
 flanks, dark or glossy spots. :func:`fill_gaps` gives every NaN pixel a value from the defined

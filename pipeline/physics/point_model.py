@@ -29,7 +29,7 @@ with the calling convention of :func:`g2tom.physics.constriction.resistance`:
 conjugate gradient batched over the maps, started from the previous load step's solution. The
 conductance is the variational estimate ``J(f) = 2 sum f - f^T M f``, exact to second order in
 the residual, and by default the solve stops when CG's own energy-norm record says ``J`` is
-within the tolerance (see :func:`g2tom.physics.point_solve._solve_step`); about half the iterations a residual
+within the tolerance (see ``g2tom.physics.point_solve._solve_step``); about half the iterations a residual
 criterion of the same tolerance needs.
 
 Cropping: forcing the currents outside a crop to zero can only lower the conductance, and
@@ -53,10 +53,10 @@ from g2tom.physics.spot_geometry import SpotGeometry
 
 __all__ = ["CRITERIA", "PointResult", "resistance_dense", "resistance", "greenwood_resistance"]
 
-#: What ``solver_tolerance`` measures (see :func:`g2tom.physics.point_solve._solve_step`).
+#: What ``solver_tolerance`` measures (see ``g2tom.physics.point_solve._solve_step``).
 CRITERIA = ("error", "residual")
 
-#: Maps per block of the solve (at most; fewer where :func:`block_size` bounds the memory). Its
+#: Maps per block of the solve (at most; fewer where :func:`~g2tom.physics.interaction.block_size` bounds the memory). Its
 #: vectors then stay in the core's cache: on the paper's scene with two dask threads, blocks of
 #: 32 made the point cube 1.4 times faster than blocks of 128 (16: 1.2 times).
 POINT_BLOCK = 32
@@ -64,7 +64,7 @@ POINT_BLOCK = 32
 
 @dataclass
 class PointResult(ChunkResult):
-    """:class:`ChunkResult` of the point model plus the solver's record, shape (batch, n_delta).
+    """:class:`~g2tom.physics.constriction.ChunkResult` of the point model plus the solver's record, shape (batch, n_delta).
 
     ``resistance_self`` is ``rho* / sum t`` (the spots in parallel without interaction) and
     ``resistance_interaction`` is ``R - resistance_self``.

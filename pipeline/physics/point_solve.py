@@ -18,7 +18,7 @@ from g2tom.physics.point_system import OPERATORS, spot_states
 
 __all__ = ["RECORDS", "REDO_BLOCK", "solve_block"]
 
-#: Maps per block of entries solved again on the whole window (see :func:`_solve_block`).
+#: Maps per block of entries solved again on the whole window (see ``_solve_block``).
 REDO_BLOCK = 8
 
 

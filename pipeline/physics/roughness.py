@@ -1,5 +1,5 @@
 """Height maps before their moments are taken (:mod:`g2tom.physics.surface_spectrum`):
-checked (:func:`validated_heights`) and detrended (:func:`detrend`, the least-squares plane)."""
+checked (:func:`~g2tom.physics.roughness.validated_heights`) and detrended (:func:`~g2tom.physics.roughness.detrend`, the least-squares plane)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Clean share of contact spots cut by oxide edges: the ``disc`` spot rule (design note 11).
+"""Clean share of contact spots cut by oxide edges: the ``disc`` spot rule of the discrete model.
 
 A contact spot is a disc of centre ``(x_i, y_i)`` and radius ``a_i`` (m). The oxide covers the
 surface where the Gaussian field reaches its threshold, ``psi >= psi0``; the rest is clean.
@@ -12,7 +12,7 @@ clean area; f = 0: the spot does not conduct). The ``centre`` rule (on/off at th
 centre, f in {0, 1}) is the pattern with no ring. The ``segment`` rule counts f as ``disc`` does
 but takes the clean part for the circular segment of that share (an oxide edge much longer than
 the spot crosses it as a chord): effective radius ``a h(f)`` with ``h`` the segment's conductance
-relative to the whole disc's, tabulated (:data:`SEGMENT_SHARE`, :data:`SEGMENT_GAIN`). The disc
+relative to the whole disc's, tabulated (:data:`SEGMENT_SHARE`, ``SEGMENT_GAIN``). The disc
 has the least capacity of all plane sets of its area (Polya and Szego), so ``h(f) >= sqrt(f)``:
 ``disc`` understates a cut spot's conductance, by 4 % at f = 0.5 and 13 % at f = 0.15.
 
