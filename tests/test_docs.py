@@ -103,3 +103,10 @@ def test_every_example_has_a_title_and_an_introduction() -> None:
     for script in scripts:
         title, intro = g2tom_examples._docstring(script)
         assert title and len(title) < 40 and intro, script.name
+
+
+def test_ci_builds_the_docs_after_the_tests() -> None:
+    lines = [line.strip() for line in (ROOT / ".ci" / "run").read_text().splitlines()]
+    assert lines.index("make test") < lines.index("make docs")
+    conf = (ROOT / "docs" / "conf.py").read_text()
+    assert "nitpicky = True" in conf and "sphinx-mathjax-offline" in conf
