@@ -13,6 +13,7 @@ from pathlib import Path
 import matplotlib
 
 from g2tom.config import Scenario
+from g2tom.store import check_writable
 
 matplotlib.use("Agg")
 
@@ -29,9 +30,16 @@ FAMILIES: tuple[str, ...] = (
 
 
 def write_figures(scenario: Scenario, data_dir: str | Path) -> list[Path]:
-    """Write every figure family and return the files written."""
+    """Write every figure family and return the files written.
+
+    Raises
+    ------
+    WriteError
+        Before any figure is drawn, if ``<data_dir>/figures`` cannot be written (every figure
+        there kept); while drawing, if one figure cannot (that one kept).
+    """
     out_dir = Path(data_dir) / "figures"
-    out_dir.mkdir(parents=True, exist_ok=True)
+    check_writable(out_dir, "no figure was drawn; those already there are kept")
     written: list[Path] = []
     for name in FAMILIES:
         written += importlib.import_module(name).write(scenario, Path(data_dir), out_dir)

@@ -17,6 +17,8 @@ from cycler import cycler
 from matplotlib.axis import Axis
 from matplotlib.ticker import Formatter, FuncFormatter, LogLocator
 
+from g2tom.store import atomic_path
+
 __all__ = ["ONE_COLUMN", "TWO_COLUMNS", "COLORS", "RC", "LABELS", "context", "equals", "size", "save", "plain_log_ticks", "grey_level"]
 
 #: Widths of one and of two paper columns, in inches.
@@ -120,10 +122,18 @@ def size(columns: int, height: float) -> tuple[float, float]:
 
 
 def save(fig: plt.Figure, path: Path) -> Path:
-    """Write ``fig`` to ``path`` with the style's resolution and margins, close it, return ``path``."""
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    """Write ``fig`` to ``path`` with the style's resolution and margins, close it, return ``path``.
+
+    Written atomically (:func:`g2tom.store.atomic_path`): a failed write raises
+    :class:`~g2tom.errors.WriteError`, the previous figure kept.
+    """
+    path = Path(path)
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format=path.suffix.lstrip(".") or None)
+    finally:
+        plt.close(fig)
+    return path
 
 
 class _MinorLogLabels(Formatter):

@@ -9,9 +9,13 @@ every dask thread also starts one BLAS thread per core).
 from __future__ import annotations
 
 import functools
+import logging
 import os
-from contextlib import ExitStack
+import signal
+import threading
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
+from multiprocessing import resource_tracker
 from typing import Any, Callable, Iterator, TypeVar
 
 import dask
@@ -19,7 +23,7 @@ from threadpoolctl import threadpool_limits
 
 from g2tom.progress import DaskProgress, ProgressLine, watch_futures
 
-__all__ = ["ComputeOptions", "compute", "in_turn", "single_threaded"]
+__all__ = ["ComputeOptions", "children_ignore_interrupts", "compute", "in_turn", "single_threaded"]
 
 #: Runs shorter than this (s) show no progress line.
 PROGRESS_AFTER = 3.0
@@ -77,8 +81,50 @@ def _distributed_available() -> bool:
     return True
 
 
+@contextmanager
+def children_ignore_interrupts() -> Iterator[None]:
+    """Threads started inside, and every process they start, never receive SIGINT.
+
+    Ctrl-C in a terminal signals every process of the group: each worker process of a local
+    cluster would print its own ``KeyboardInterrupt`` traceback (most often while still importing)
+    beside the one line the main process writes. SIGINT is blocked in this (the main) thread
+    meanwhile: a thread inherits the signal mask of the thread that starts it and a process that of
+    the thread that forks it, and ``exec`` keeps it, so the cluster's event-loop thread, the threads
+    it starts the workers from, and the workers keep SIGINT blocked for good; the main process stops
+    the workers when it unwinds. The main thread's mask is back after, and a Ctrl-C meanwhile is
+    not lost (pending, or taken by another thread for Python's handler), so this process still
+    stops on it. Outside the main thread nothing is done.
+
+    multiprocessing's resource tracker is started first: starting it unblocks SIGINT in the
+    thread that does (the cluster's event loop otherwise), and with it in every thread that one
+    starts.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    resource_tracker.ensure_running()
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+def _quiet_when_interrupted(kind: type[BaseException] | None, *_: object) -> None:
+    """Exit callback of a local cluster: after Ctrl-C (or SIGTERM), asyncio's log is silenced before
+    the cluster closes.
+
+    The interrupted ``gather`` leaves tasks whose ``AllExit`` nobody retrieves, and asyncio logs
+    each with a traceback when it is collected, after the one line the command prints. The level
+    stays raised: the process is on its way out.
+    """
+    if kind is not None and issubclass(kind, KeyboardInterrupt):
+        logging.getLogger("asyncio").setLevel(logging.CRITICAL)
+
+
 def _client(stack: ExitStack, options: ComputeOptions) -> Any:
-    """A ``distributed.Client`` for ``options``, or None for the local threaded scheduler."""
+    """A ``distributed.Client`` for ``options``, or None for the local threaded scheduler (the workers
+    of a local cluster never receive SIGINT: :func:`children_ignore_interrupts`)."""
     if options.scheduler:
         from distributed import Client  # optional dependency: g2tom[distributed]
 
@@ -86,11 +132,13 @@ def _client(stack: ExitStack, options: ComputeOptions) -> Any:
     if options.workers is not None and options.workers > 1 and _distributed_available():
         from distributed import Client, LocalCluster
 
-        cluster = stack.enter_context(
-            LocalCluster(n_workers=options.workers, threads_per_worker=1, processes=True,
-                         dashboard_address=None)
-        )
-        return stack.enter_context(Client(cluster))
+        with children_ignore_interrupts():
+            cluster = LocalCluster(n_workers=options.workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=":0", silence_logs=logging.CRITICAL)
+        stack.enter_context(cluster)
+        client = stack.enter_context(Client(cluster))
+        stack.push(_quiet_when_interrupted)
+        return client
     return None
 
 

@@ -5,11 +5,19 @@ from __future__ import annotations
 import shlex
 import sys
 
-__all__ = ["StaleInputError", "install_hint"]
+__all__ = ["StaleInputError", "WriteError", "install_hint"]
 
 
 class StaleInputError(RuntimeError):
     """A stage input is missing or was built from a different configuration."""
+
+
+class WriteError(Exception):
+    """An output could not be written (a full disk, no permission, a read-only file system).
+
+    The message names the file, the reason and what was kept (the previous file, untouched);
+    the CLI prints it as one line, exit status 1.
+    """
 
 
 def install_hint(extra: str, *packages: str) -> str:

@@ -12,8 +12,11 @@ import datetime
 import functools
 import json
 import os
+import shutil
+import signal
 import subprocess
 import tempfile
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Iterator
@@ -23,7 +26,7 @@ import xarray as xr
 
 from g2tom import __version__
 from g2tom.config import STAGE_UPSTREAM, Scenario
-from g2tom.errors import StaleInputError
+from g2tom.errors import StaleInputError, WriteError
 
 __all__ = [
     "StaleInputError",
@@ -32,11 +35,18 @@ __all__ = [
     "write_dataset",
     "read_stage",
     "atomic_path",
+    "check_writable",
+    "signals_deferred",
+    "write_errors",
     "stage_problem",
     "unreadable",
     "shaping_parameters",
     "git_commit",
 ]
+
+
+#: The signals :func:`signals_deferred` holds.
+_HELD = (signal.SIGINT, signal.SIGTERM)
 
 
 def stage_path(data_dir: str | Path, stage: str) -> Path:
@@ -102,24 +112,115 @@ def provenance(scenario: Scenario, stage: str) -> dict[str, Any]:
 
 
 @contextmanager
-def atomic_path(target: str | Path) -> Iterator[Path]:
-    """Yield a temporary path beside ``target``; rename it over ``target`` on success only."""
-    target = Path(target)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    os.close(fd)
-    tmp_path = Path(tmp)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp_path, 0o666 & ~umask)  # mkstemp creates 0600; outputs are ordinary files
+def signals_deferred() -> Iterator[None]:
+    """SIGINT and SIGTERM held while the block runs, then raised again as they came.
+
+    A Ctrl-C inside a netCDF write can stop it between taking xarray's HDF5 lock and the block
+    that releases it: closing the file then waits on that lock for ever. Held here, the signal
+    is raised again (to whatever handler was there before) once the block has finished and
+    cleaned up. Outside the main thread (where no signal handler runs) nothing is done.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    previous = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s in _HELD}
     try:
-        yield tmp_path
-        with open(tmp_path, "rb") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp_path, target)
+        yield
     finally:
-        if tmp_path.exists():
-            tmp_path.unlink()
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+        for s in dict.fromkeys(caught):
+            signal.raise_signal(s)
+
+
+def _size(n: int) -> str:
+    """A byte count in words (``12 kB``, ``3.4 GB``)."""
+    for unit in ("B", "kB", "MB", "GB"):
+        if n < 1000:
+            return f"{n:.3g} {unit}"
+        n /= 1000
+    return f"{n:.3g} TB"
+
+
+def _free(folder: Path) -> str:
+    """`` (N free there)`` for the disk of ``folder`` (its nearest existing parent), or ''."""
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    try:
+        return f" ({_size(shutil.disk_usage(folder).free)} free there)"
+    except OSError:
+        return ""
+
+
+@contextmanager
+def write_errors(target: str | Path, kept: str | None = None) -> Iterator[None]:
+    """A failed write inside, as :class:`~g2tom.errors.WriteError` naming ``target``, why, and what was kept.
+
+    Caught: every ``OSError`` (ENOSPC, EACCES, EROFS, EDQUOT ...) and the ``RuntimeError`` netCDF
+    raises for a failed HDF5 write (``NetCDF: HDF error`` on a full disk).
+
+    Parameters
+    ----------
+    target
+        The file (or folder) being written.
+    kept
+        What the failure left as it was; default: the previous ``target`` if there is one.
+    """
+    target = Path(target)
+    if kept is None:
+        kept = f"the previous {target} is kept unchanged" if target.exists() else "nothing was written there"
+    try:
+        yield
+    except (OSError, RuntimeError) as exc:
+        if isinstance(exc, OSError):
+            reason = exc.strerror or str(exc)
+        elif str(exc).startswith("NetCDF"):
+            reason = str(exc).splitlines()[0]
+        else:
+            raise
+        raise WriteError(f"cannot write {target}: {reason}{_free(target.parent)}; {kept}") from exc
+
+
+def check_writable(folder: str | Path, kept: str) -> None:
+    """Make ``folder`` if needed and prove it writable with a throw-away file, before any work.
+
+    Raises
+    ------
+    WriteError
+        Naming the folder, the reason and ``kept`` (what stays as it was).
+    """
+    folder = Path(folder)
+    with write_errors(folder, kept):
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder, prefix=".g2tom-write-check."):
+            pass
+
+
+@contextmanager
+def atomic_path(target: str | Path) -> Iterator[Path]:
+    """Yield a temporary path beside ``target``; rename it over ``target`` on success only.
+
+    Ctrl-C and SIGTERM wait until it is done (:func:`signals_deferred`); a failed write
+    (:func:`write_errors`) raises :class:`~g2tom.errors.WriteError`, the previous ``target`` untouched.
+    """
+    target = Path(target)
+    with signals_deferred(), write_errors(target):
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+        os.close(fd)
+        tmp_path = Path(tmp)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp_path, 0o666 & ~umask)  # mkstemp creates 0600; outputs are ordinary files
+        try:
+            yield tmp_path
+            with open(tmp_path, "rb") as fh:
+                os.fsync(fh.fileno())
+            os.replace(tmp_path, target)
+        finally:
+            if tmp_path.exists():
+                tmp_path.unlink()
 
 
 def write_dataset(ds: xr.Dataset, data_dir: str | Path, stage: str, scenario: Scenario) -> Path:

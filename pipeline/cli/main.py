@@ -1,5 +1,8 @@
 """The ``g2tom`` entry point: one BLAS thread, then the arguments, the scenario, the checks before
-work, the command, and its exit status (errors as one line)."""
+work, the command, and its exit status, every failure as one line: 2 for a refused argument or
+configuration, 1 for a missing or stale input or an output that could not be written (a full disk,
+no permission: the previous file kept), 130 after Ctrl-C, 143 after SIGTERM, 141 when the reader
+of standard output has gone."""
 
 from __future__ import annotations
 
@@ -10,6 +13,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import argparse  # noqa: E402
+import signal  # noqa: E402
 import sys  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -21,7 +25,7 @@ from g2tom.cli.arguments import attach_negative_values, build_parser, default_co
 from g2tom.cli.commands import compute_options  # noqa: E402
 from g2tom.config import ConfigError, Scenario  # noqa: E402
 from g2tom.before_work import load_scenario
-from g2tom.errors import StaleInputError  # noqa: E402
+from g2tom.errors import StaleInputError, WriteError  # noqa: E402
 
 __all__ = ["main"]
 
@@ -70,6 +74,17 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:  #
 
 #: Exit status after Ctrl-C (128 + SIGINT, as a shell reports a command killed by it).
 INTERRUPTED = 130
+#: Exit status after SIGTERM (128 + SIGTERM), reported as Ctrl-C is.
+TERMINATED = 143
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the main thread is, to unwind (and clean up) as Ctrl-C does."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    """The SIGTERM handler: :class:`Terminated`."""
+    raise Terminated
 #: Exit status when standard output's reader has gone (128 + SIGPIPE, as a shell reports it).
 BROKEN_PIPE = 141
 
@@ -94,6 +109,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args.config = default_config(args)
     formatwarning = warnings.formatwarning
     warnings.formatwarning = _one_line_warning
+    on_term = signal.signal(signal.SIGTERM, _terminate)
     try:
         scenario = _load(args)
         if args.command in _REACH_SURROGATE:
@@ -107,12 +123,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ConfigError as exc:
         print(f"g2tom: error: {exc}", file=sys.stderr)
         return 2
-    except StaleInputError as exc:
+    except (StaleInputError, WriteError) as exc:  # an input to rebuild, an output that could not be written
         print(f"g2tom: error: {exc}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print(f"g2tom: interrupted: {_kept(args)}", file=sys.stderr)
-        return INTERRUPTED
+    except KeyboardInterrupt as exc:
+        terminated = isinstance(exc, Terminated)
+        print(f"g2tom: {'terminated' if terminated else 'interrupted'}: {_kept(args)}", file=sys.stderr)
+        return TERMINATED if terminated else INTERRUPTED
     except BrokenPipeError:
         # the reader of standard output went away (`g2tom plan | head`): no traceback, and none
         # again when Python flushes the closed pipe at exit
@@ -120,6 +137,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return BROKEN_PIPE
     finally:
         warnings.formatwarning = formatwarning
+        signal.signal(signal.SIGTERM, on_term)
     return 0
 
 
