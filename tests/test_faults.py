@@ -1,4 +1,5 @@
-"""Faults of the machine, not of the input: a full disk, no permission, a read-only file system.
+"""Faults of the machine, not of the input: a full disk, no permission, a read-only file system or
+installation, an environment numba refuses.
 
 Every writer goes through :func:`g2tom.store.atomic_path` (stage files, figures, ``predict
 --output``): a failed write is one ``g2tom: error:`` line naming the file and what was kept, exit
@@ -11,7 +12,10 @@ from __future__ import annotations
 import errno
 import os
 import signal
+import subprocess
+import sys
 import tempfile
+from pathlib import Path
 
 import matplotlib.pyplot as plt
 import pytest
@@ -20,7 +24,7 @@ import xarray as xr
 from g2tom.analysis import style
 from g2tom.analysis.figures import write_figures
 from g2tom.before_work import load_scenario
-from g2tom.cli.main import main
+from g2tom.cli.main import main, numba_cache_dir
 from g2tom.errors import WriteError
 from g2tom.store import atomic_path, signals_deferred, stage_path, write_dataset
 
@@ -101,3 +105,25 @@ def test_ctrl_c_waits_until_the_write_is_done(tmp_path) -> None:
     with signals_deferred():
         pass
     assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL
+
+
+def test_numba_cache_goes_where_it_can_be_written(tmp_path) -> None:
+    home = tmp_path / "home"
+    home.write_text("")  # a HOME under which nothing can be made
+    installed = home / "physics"  # a read-only installation: nothing can be written beside the sources
+    fallback = str(Path(tempfile.gettempdir()) / f"g2tom-numba-{os.getuid()}")
+    assert numba_cache_dir({"HOME": str(home)}, installed) == fallback
+    assert numba_cache_dir({"HOME": str(home), "XDG_CACHE_HOME": str(tmp_path / "xdg")}, installed) == str(
+        tmp_path / "xdg" / "g2tom" / "numba")
+    assert numba_cache_dir({"HOME": str(home), "NUMBA_CACHE_DIR": "/chosen"}, installed) is None  # the user's
+    assert numba_cache_dir({"HOME": str(home)}, tmp_path) is None  # numba's own, beside the sources
+
+
+@pytest.mark.parametrize("value", ["0", "-2", "two"])
+def test_an_invalid_numba_thread_count_is_one_line(value) -> None:
+    env = {**os.environ, "NUMBA_NUM_THREADS": value}
+    done = subprocess.run([sys.executable, "-m", "g2tom.cli.main", "params"], capture_output=True, text=True,
+                          env=env, timeout=60)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert done.stderr.startswith(f"g2tom: error: NUMBA_NUM_THREADS = {value!r} is not allowed: must be a whole "
+                                  "number >= 1")

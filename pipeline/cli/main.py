@@ -7,17 +7,72 @@ of standard output has gone."""
 from __future__ import annotations
 
 import os
+import tempfile
+from pathlib import Path
+from typing import Mapping, Sequence
 
-# One BLAS/OpenMP thread per dask worker thread: set before numpy is imported anywhere.
+
+def numba_cache_dir(environ: Mapping[str, str], package: Path) -> str | None:
+    """Where numba should keep the compiled code of g2tom's ``cache=True`` functions, or None to leave
+    numba's own choice.
+
+    numba caches beside each source (``__pycache__``), else under the user's cache folder; on a
+    read-only installation with an unwritable HOME (a container's read-only root) it has neither and
+    refuses to import the module. None when the user has set ``NUMBA_CACHE_DIR`` or the package's
+    folder is writable; otherwise the first folder that can be made and written of
+    ``$XDG_CACHE_HOME/g2tom/numba``, ``$HOME/.cache/g2tom/numba`` and ``<temp>/g2tom-numba-<uid>``.
+
+    Parameters
+    ----------
+    environ
+        The environment (``os.environ``).
+    package
+        The folder of the sources with cached functions (``g2tom/physics``).
+    """
+    if "NUMBA_CACHE_DIR" in environ:
+        return None
+    beside = package / "__pycache__" if (package / "__pycache__").exists() else package
+    if beside.is_dir() and os.access(beside, os.W_OK):
+        return None
+    candidates = [Path(environ[v]) / (".cache" if v == "HOME" else "") / "g2tom" / "numba"
+                  for v in ("XDG_CACHE_HOME", "HOME") if environ.get(v)]
+    candidates.append(Path(tempfile.gettempdir()) / f"g2tom-numba-{os.getuid()}")
+    for folder in candidates:
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError:
+            continue
+        if os.access(folder, os.W_OK):
+            return str(folder)
+    return None
+
+
+def numba_threads_problem(environ: Mapping[str, str]) -> str | None:
+    """Why numba would fail on ``NUMBA_NUM_THREADS`` (with a traceback, on import) or ignore it; None if it
+    is unset or allowed."""
+    text = environ.get("NUMBA_NUM_THREADS")
+    if text is None or (text.strip().isdigit() and int(text) >= 1):
+        return None
+    return (f"NUMBA_NUM_THREADS = {text!r} is not allowed: must be a whole number >= 1 (this machine has "
+            f"{os.cpu_count() or 1} cores); unset it for one numba thread per core")
+
+
+# One BLAS/OpenMP thread per dask worker thread, and numba's cache where it can be written: set before
+# numpy and numba are imported anywhere (workers inherit them). A NUMBA_NUM_THREADS numba would fail on
+# is set aside so that the imports below succeed; main refuses it as one line.
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
+_numba_cache = numba_cache_dir(os.environ, Path(__file__).resolve().parent.parent / "physics")
+if _numba_cache:
+    os.environ["NUMBA_CACHE_DIR"] = _numba_cache
+_NUMBA_THREADS = numba_threads_problem(os.environ)
+if _NUMBA_THREADS:
+    del os.environ["NUMBA_NUM_THREADS"]
 
 import argparse  # noqa: E402
 import signal  # noqa: E402
 import sys  # noqa: E402
 import warnings  # noqa: E402
-from pathlib import Path  # noqa: E402
-from typing import Sequence  # noqa: E402
 
 from g2tom.before_work.resources import prepare  # noqa: E402
 from g2tom.before_work.surrogate_grid import check_surrogate_grid  # noqa: E402
@@ -111,6 +166,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning
     on_term = signal.signal(signal.SIGTERM, _terminate)
     try:
+        if _NUMBA_THREADS:
+            raise ConfigError(_NUMBA_THREADS)
         scenario = _load(args)
         if args.command in _REACH_SURROGATE:
             check_surrogate_grid(scenario)
