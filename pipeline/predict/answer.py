@@ -10,9 +10,12 @@ TOML file, or a measured height map. ``g2tom predict`` calls the same functions.
 
 from __future__ import annotations
 
+import numbers
+import os
 from pathlib import Path
 from typing import Any, Mapping
 
+import numpy as np
 import xarray as xr
 
 from g2tom.compute import single_threaded
@@ -24,7 +27,11 @@ from g2tom.predict.domain import check_surface, with_measured_roughness
 from g2tom.predict.predictor import predict
 from g2tom.stages.surrogate_file import SurrogateTables, load_surrogate
 
-__all__ = ["choose_surrogate", "own_surrogate_path", "predict_resistance", "predict_with", "surface_scenario"]
+__all__ = ["MODELS", "choose_surrogate", "own_surrogate_path", "predict_resistance", "predict_with",
+           "surface_scenario"]
+
+#: The models a prediction answers with: each cell's ln R'(ln F') curve, or Eq. 27.
+MODELS = ("curve", "power_law")
 
 
 def own_surrogate_path(data_dir: str | Path) -> Path:
@@ -97,7 +104,8 @@ def predict_with(surrogate: SurrogateTables | AtlasSurrogate, scenario: Scenario
         that broadcast together, or xarray.DataArrays.
     model
         ``curve`` (default) or ``power_law`` (Eq. 27), for a single-scene surrogate; the atlas
-        answers with its curve model and reports Eq. 27 as ``resistance_power_law``.
+        answers with its curve model only (its band is that model's) and reports Eq. 27 as
+        ``resistance_power_law``: ``power_law`` is refused there.
     extrapolate
         Answer outside the surrogate's ranges (with an ExtrapolationWarning) instead of refusing.
 
@@ -108,8 +116,14 @@ def predict_with(surrogate: SurrogateTables | AtlasSurrogate, scenario: Scenario
         single-scene band's components :data:`g2tom.predict.atlas.NOT_IN_ATLAS`), with
         ``attrs["answered_by"]`` naming the surrogate that answered.
     """
+    _check_model(model)
     if isinstance(surrogate, SurrogateTables):
         return predict(surrogate, scenario, force, xi, lam, extrapolate=extrapolate, model=model)
+    if model != "curve":
+        raise ConfigError(f"model = {model!r} cannot be answered by the atlas surrogate {surrogate.source}: its band "
+                          "is that of its curve model, so it answers with model = 'curve' (Eq. 27's value is its "
+                          "column resistance_power_law); or give a run's own surrogate fitted on this surface "
+                          "(--surrogate, surrogate=)")
     return predict_atlas(surrogate, scenario, force, xi, lam, extrapolate=extrapolate).drop_vars(NOT_IN_ATLAS)
 
 
@@ -146,6 +160,61 @@ def surface_scenario(surface: Scenario | str | Path, overrides: Mapping[str, Any
             raise ConfigError("pixel_size is only used with a height map file as the surface")
         return load_scenario(surface, overrides or {})
     return with_measured_roughness(load_scenario("paper", overrides or {}), path, pixel_size)
+
+
+def _refuse(name: str, value: Any, allowed: str) -> ConfigError:
+    """The refusal of argument ``name``: its value and what is allowed."""
+    shown = repr(value) if len(repr(value)) <= 60 else f"{repr(value)[:57]}..."
+    return ConfigError(f"{name} = {shown} is not allowed: must be {allowed}")
+
+
+def _check_model(model: Any) -> None:
+    """Refuse a ``model`` not in :data:`MODELS`."""
+    if model not in MODELS:
+        raise _refuse("model", model, f"one of {', '.join(map(repr, MODELS))}")
+
+
+def _is_path(value: Any) -> bool:
+    return isinstance(value, (str, os.PathLike))
+
+
+def _numbers(value: Any) -> bool:
+    """A number, or an array or DataArray of numbers (not text, not booleans)."""
+    data = value.values if isinstance(value, xr.DataArray) else value
+    try:
+        kind = np.asarray(data).dtype.kind
+    except (TypeError, ValueError):  # ragged nested lists
+        return False
+    return kind in "iuf"
+
+
+def _check_arguments(**given: Any) -> None:
+    """:func:`predict_resistance`'s arguments checked at its entry, each refusal naming the argument.
+
+    Raises
+    ------
+    ConfigError
+        Naming the first argument of the wrong kind, its value and what is allowed.
+    """
+    surface = given["surface"]
+    if not (isinstance(surface, Scenario) or _is_path(surface)):
+        raise _refuse("surface", surface, "a Scenario, a bundled scenario's name "
+                      f"({', '.join(bundled_scenarios())}), a TOML file or a height map file")
+    for name, unit in (("force", "N, > 0"), ("xi", "in (0, 1)"), ("lam", "> 0")):
+        if not _numbers(given[name]):
+            raise _refuse(name, given[name], f"a number ({unit}), an array of numbers or an xarray.DataArray")
+    if not _is_path(given["data_dir"]):
+        raise _refuse("data_dir", given["data_dir"], "a folder (a str or pathlib.Path)")
+    if not (given["surrogate"] is None or _is_path(given["surrogate"])):
+        raise _refuse("surrogate", given["surrogate"], "None or a surrogate file (a str or pathlib.Path)")
+    _check_model(given["model"])
+    if not isinstance(given["extrapolate"], (bool, np.bool_)):
+        raise _refuse("extrapolate", given["extrapolate"], "True or False")
+    if not (given["overrides"] is None or isinstance(given["overrides"], Mapping)):
+        raise _refuse("overrides", given["overrides"], 'None or a mapping {"section.key": value}')
+    pixel = given["pixel_size"]
+    if not (pixel is None or (isinstance(pixel, numbers.Real) and not isinstance(pixel, bool) and pixel > 0)):
+        raise _refuse("pixel_size", pixel, "None or a number > 0 (m)")
 
 
 @single_threaded
@@ -186,9 +255,12 @@ def predict_resistance(surface: Scenario | str | Path, force: Any, xi: Any, lam:
     Raises
     ------
     ConfigError
-        If an input is out of range, or the query or surface lies outside the chosen surrogate's
-        domain and ``extrapolate`` is False.
+        If an argument is of the wrong kind (naming it and its value: :func:`_check_arguments`) or
+        out of range, or the query or surface lies outside the chosen surrogate's domain and
+        ``extrapolate`` is False.
     """
+    _check_arguments(surface=surface, force=force, xi=xi, lam=lam, data_dir=data_dir, surrogate=surrogate,
+                     model=model, extrapolate=extrapolate, overrides=overrides, pixel_size=pixel_size)
     scenario = surface_scenario(surface, overrides, pixel_size)
     chosen = choose_surrogate(scenario, data_dir, surrogate)
     return predict_with(chosen, scenario, force, xi, lam, model=model, extrapolate=extrapolate)
