@@ -1,5 +1,7 @@
-"""``g2tom.predict_resistance``'s arguments checked at its entry, each refusal naming the argument and its
-value; ``model`` honoured by the surrogate that can and refused by the one that cannot (the atlas)."""
+"""Arguments at the edges: ``g2tom.predict_resistance``'s checked at its entry, each refusal naming the
+argument and its value; ``model`` honoured by the surrogate that can and refused by the one that cannot
+(the atlas); extreme but allowed-looking counts given a range; refusals that name what is refused;
+a benchmark that cannot run saying so; a scheduler address where no dask scheduler answers."""
 
 from __future__ import annotations
 
@@ -45,3 +47,61 @@ def test_the_atlas_refuses_the_power_law_it_cannot_answer(tmp_path, capsys) -> N
     err = capsys.readouterr().err
     assert rc == 2 and err.count("\n") == 1 and err.startswith(
         "g2tom: error: model = 'power_law' cannot be answered by the atlas surrogate"), err
+
+
+@pytest.mark.parametrize("argv, refusal", [
+    (["--standard-error", "1e-300"], "--standard-error = 1e-300 is out of range: must be in [0.0001, 0.5]"),
+    (["--max-realizations", "100000000"], "--max-realizations = 100000000 is out of range: must be 2 .. 10000"),
+    (["--loads", "1000000"], "--loads = 1000000 is out of range: must be 2 .. 100"),
+    (["--realizations", "100000"], "--realizations = 100000 is out of range: must be 2 .. 1000"),
+])
+def test_extreme_validate_counts_are_refused_with_their_range(tmp_path, capsys, argv, refusal) -> None:
+    assert main(["validate", "--plan", "--data-dir", str(tmp_path), *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"g2tom: error: {refusal}") and err.count("\n") == 1, err
+
+
+def test_a_refused_validated_scenario_is_named(tmp_path, capsys) -> None:
+    assert main(["validate", "--plan", "--config", "published", "--data-dir", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("g2tom: error: --config 'published' (the scenario part 2 validates) cannot run on the "
+                          "validation scene: contact.window") and err.count("\n") == 1, err
+
+
+def test_a_benchmark_that_cannot_run_says_it_skipped(tmp_path, capsys) -> None:
+    from g2tom.reference.devices import gpu_missing
+
+    if gpu_missing() is None:
+        pytest.skip("CuPy sees a GPU here")
+    assert main(["bench", "--only", "gpu", "--data-dir", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("bench gpu: skipped (no GPU: ") and "figures" not in out, out
+
+
+def test_a_scheduler_address_where_http_answers_is_refused_quickly() -> None:
+    import socket
+    import subprocess
+    import sys
+    import time
+
+    from g2tom.before_work.preflight import check_scheduler
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    http = subprocess.Popen([sys.executable, "-m", "http.server", str(port), "--bind", "127.0.0.1"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        for _ in range(100):  # until it listens
+            with socket.socket() as probe:
+                if probe.connect_ex(("127.0.0.1", port)) == 0:
+                    break
+            time.sleep(0.05)
+        start = time.perf_counter()
+        with pytest.raises(ConfigError, match=f"--scheduler 'tcp://127.0.0.1:{port}': no dask scheduler reachable "
+                                              r"at .* \(something accepts connections there but"):
+            check_scheduler(f"tcp://127.0.0.1:{port}")
+        assert time.perf_counter() - start < 10
+    finally:
+        http.kill()
+        http.wait()

@@ -364,13 +364,13 @@ def test_steps_and_part2_precision_reach_the_set_and_bad_values_exit_2(tmp_path,
            (["--steps", "1,1"], "--steps = 1,1 is out of range"),
            (["--steps", "2.5"], "--steps = '2.5' is not allowed: must be whole load-step numbers"),
            (["--steps", "two"], "--steps = 'two' is not a number"),
-           (["--standard-error", "0"], "--standard-error = 0.0 is out of range: must be in (0, 0.5]"),
+           (["--standard-error", "0"], "--standard-error = 0.0 is out of range: must be in [0.0001, 0.5]"),
            (["--standard-error", "nan"], "--standard-error = nan is out of range"),
            (["--standard-error", "0.01,0.6"], "--standard-error = 0.6 is out of range"),
            (["--standard-error", "0.1,0.1,0.1"], "must be CLEAN or CLEAN,OXIDIZED"),
-           (["--max-realizations", "1"], "--max-realizations = 1 is out of range: must be >= 2"),
-           (["--max-pairs", "1"], "--max-pairs = 1 is out of range: must be >= 2"),
-           (["--model-realizations", "8"], "--model-realizations = 8 is out of range: must be >= 16"))
+           (["--max-realizations", "1"], "--max-realizations = 1 is out of range: must be 2 .. 10000"),
+           (["--max-pairs", "1"], "--max-pairs = 1 is out of range: must be 2 .. 10000"),
+           (["--model-realizations", "8"], "--model-realizations = 8 is out of range: must be 16 .. 100000"))
     for argv, expect in bad:
         assert main(["validate", "--data-dir", str(tmp_path), *argv]) == 2
         err = capsys.readouterr().err

@@ -1,7 +1,8 @@
 """Checks run before the first stage starts, so bad input fails in a second, not after work.
 
 * the data directory exists (or can be made) and is writable;
-* a ``--scheduler`` address is well formed and something answers there quickly;
+* a ``--scheduler`` address is well formed and a dask scheduler answers there quickly (distributed's
+  handshake, not only an accepted connection);
 * the cross-stage constraints that need physics (config.py is a leaf and checks only what
   needs no computation): the fit's ``fits.min_force`` (or ``fits.min_force_normalized``, by
   ``fits.fit_range``) must be reached by at least two load
@@ -16,6 +17,7 @@ what is allowed; the CLI turns it into one line and exit status 2.
 
 from __future__ import annotations
 
+import asyncio
 import dataclasses
 import errno
 import os
@@ -120,13 +122,36 @@ def check_scheduler(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
     try:
         with socket.create_connection((host, int(port_text)), timeout=timeout):
             pass
+        reason = _not_dask(address if "://" in address else f"tcp://{address}", timeout) if scheme == "tcp" else None
     except OSError as exc:
         if isinstance(exc, socket.timeout):
             reason = f"no answer within {timeout:g} s"
         else:
             reason = os.strerror(exc.errno) if exc.errno and exc.errno in errno.errorcode else str(exc)
+    if reason:
         raise ConfigError(f"--scheduler {address!r}: no dask scheduler reachable at {host}:{port_text} "
-                          f"({reason}); start one with `dask scheduler` or drop --scheduler") from None
+                          f"({reason}); start one with `dask scheduler` or drop --scheduler")
+
+
+def _not_dask(address: str, timeout: float) -> str | None:
+    """Why what accepts connections at ``address`` is not a dask scheduler (no distributed handshake
+    within ``timeout`` s: an HTTP server, say, on which a client would wait for ever), or None."""
+    try:
+        from distributed.comm import connect
+    except ImportError:  # the client names the missing extra
+        return None
+
+    async def handshake() -> None:
+        comm = await connect(address, timeout=timeout)
+        await comm.close()
+
+    try:
+        asyncio.run(asyncio.wait_for(handshake(), timeout))
+    except (asyncio.TimeoutError, TimeoutError):
+        return f"something accepts connections there but gave no dask handshake within {timeout:g} s"
+    except Exception as exc:  # whatever the other end sent instead: garbage, an HTTP reply, a closed stream
+        return f"something accepts connections there but does not speak dask's protocol ({type(exc).__name__})"
+    return None
 
 
 def scene_forces(scenario: ResolvedScenario, data_dir: str | Path | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

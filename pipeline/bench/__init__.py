@@ -65,7 +65,8 @@ def summary_lines(result: Mapping[str, Any], prefix: str = "") -> list[str]:
 def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str] | None = None,
                    verbose: bool = False) -> dict[str, Path]:
     """Run the benchmarks (all, or ``only`` those named) and save each as JSON: one line per
-    benchmark naming its file, or with ``verbose`` every figure (:func:`summary_lines`).
+    benchmark naming its file, or with ``verbose`` every figure (:func:`summary_lines`); a benchmark
+    that could not run (its result's ``skipped``: why) says so instead.
 
     Returns
     -------
@@ -93,7 +94,9 @@ def run_benchmarks(scenario: Scenario, data_dir: str | Path, only: Iterable[str]
         with atomic_path(target) as tmp:
             tmp.write_text(text + "\n")
         lines = summary_lines(result)
-        if verbose:
+        if "skipped" in result:  # e.g. the GPU benchmark without a GPU: its file holds only why
+            print(f"bench {name}: skipped ({result['skipped']}); {target} says so")
+        elif verbose:
             print(f"== bench {name} ==")
             print("\n".join(lines))
         else:

@@ -27,7 +27,8 @@ import numpy as np
 import xarray as xr
 
 from g2tom.compute import ComputeOptions
-from g2tom.config import ConfigError
+from g2tom.models import contact_model
+from g2tom.config import ConfigError, Scenario
 from g2tom.before_work import load_scenario
 from g2tom.progress import format_duration
 from g2tom.reference import cases as cases_mod
@@ -60,7 +61,7 @@ def default_of(config: str, model: ensemble.ModelEnsemble) -> dict[str, str]:
     discrete model) and ``resistance_model`` (its cube.model)."""
     s = load_scenario(config)
     return {"name": s.name, "model": model.description, "resistance_model": s.cube.model,
-            "discretization": discrete_spots.DISCRETE if s.contact.model == "discrete" else s.contact.spots}
+            "discretization": contact_model(s).discretization(s)}
 
 
 def _force_normalized(vset: scene.ValidationSet) -> np.ndarray:
@@ -69,18 +70,30 @@ def _force_normalized(vset: scene.ValidationSet) -> np.ndarray:
     return contact["force_normalized"].values
 
 
-def _model_seconds(vset: scene.ValidationSet, config: str, workers: int) -> float:
+def _model_seconds(validated: Scenario, workers: int) -> float:
     """The project's plan of the validated scenario's contact, oxide and cube stages on the scene, s."""
     from g2tom.before_work.plan import estimate
 
-    stages = estimate(ensemble.validated_scenario(vset, config), workers)
+    stages = estimate(validated, workers)
     return sum(e.seconds for e in stages if e.stage in ("contact", "oxide", "cube"))
+
+
+def _validated(vset: scene.ValidationSet, config: str) -> Scenario:
+    """The scenario part 2 validates (:func:`g2tom.reference.ensemble.validated_scenario`); a refusal
+    names it, since its settings meet the validation scene's (not the user's) surface here."""
+    try:
+        return ensemble.validated_scenario(vset, config)
+    except ConfigError as exc:
+        raise ConfigError(f"--config {config!r} (the scenario part 2 validates) cannot run on the validation "
+                          f"scene: {exc}; choose another --config, or a TOML file of it with that setting "
+                          "changed") from None
 
 
 def plan_lines(vset: scene.ValidationSet, config: str = "paper", workers: int = 1) -> list[str]:
     """The plan printed before any work: scene, both parts' cases and grids, the estimate (no case stored)."""
     f = _force_normalized(vset)
-    est = cost.estimate(vset, f, workers, _model_seconds(vset, config, workers))
+    validated = _validated(vset, config)
+    est = cost.estimate(vset, f, workers, _model_seconds(validated, workers))
     oxide = ", ".join(f"xi {x:g}/lambda {lam:g}" for x in vset.xi for lam in vset.lambdas)
     stand = (f"on the GW surface the discrete solve of each surface's own caps stands in where part 1 shows it "
              f"within {100 * ensemble.STAND_IN_TOLERANCE:g} % at every realization" if vset.surface == "gw"
@@ -98,7 +111,7 @@ def plan_lines(vset: scene.ValidationSet, config: str = "paper", workers: int = 
         f"the set's {vset.side * 1e3:.3g} mm); convergence grid "
         + (f"{vset.convergence_grid}^2" if vset.convergence_grid else "none")
         + f"; g2tom {list(vset.discretizations)} x {list(vset.models)}: {est.part1} + {est.convergence} cases",
-        f"validate: part 2 (the default's ensemble, unpaired): {ensemble.describe(ensemble.validated_scenario(vset, config))} "
+        f"validate: part 2 (the default's ensemble, unpaired): {ensemble.describe(validated)} "
         f"against the full field on {vset.ensemble_grid}^2 (probe {window.probe_grid(vset, True)}^2), "
         f"standard error of ln R <= {vset.clean_error:g} clean, {vset.oxide_error:g} oxidized; full-field "
         f"realizations per load from the prior scatter {est.ensemble_counts.tolist()} (at most {vset.max_ensemble}), "
@@ -277,6 +290,29 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
 SURFACES = ("gw", "random_process")
 
 
+#: The smallest ``--standard-error`` (of ln R): the realizations it asks for grow as its inverse square,
+#: and below it they overflow every cap.
+LEAST_ERROR = 1e-4
+#: Each count option's range, and why its least (the most keeps the plan and the run's arrays small:
+#: one full-field case takes seconds to minutes).
+COUNTS: dict[str, tuple[int, int, str]] = {
+    "--realizations": (2, 1000, "part 2 corrects its ensembles by part 1's paired realizations"),
+    "--loads": (2, 100, "the lightest and the heaviest"),
+    "--max-realizations": (2, 10_000, "a load's ensemble needs two"),
+    "--max-pairs": (2, 10_000, "a load's pairs need two"),
+    "--model-realizations": (16, 100_000, "the validated scenario's ensemble"),
+}
+
+
+def _count(option: str, value: int) -> int:
+    """``value`` of a count option if inside its range (:data:`COUNTS`), else ConfigError naming the
+    option, the value and the range."""
+    least, most, why = COUNTS[option]
+    if not least <= value <= most:
+        raise ConfigError(f"{option} = {value} is out of range: must be {least} .. {most} (at least {least}: {why})")
+    return value
+
+
 @dataclasses.dataclass(frozen=True)
 class Part2Precision:
     """Part 2's precision, where the set's defaults are not enough (``--standard-error``,
@@ -285,11 +321,11 @@ class Part2Precision:
     Attributes
     ----------
     standard_error
-        Goal of the standard error of ln ratio, (clean, oxidized), each in (0, 0.5].
+        Goal of the standard error of ln ratio, (clean, oxidized), each in [:data:`LEAST_ERROR`, 0.5].
     max_ensemble, max_pairs
-        Most full-field realizations (proxies) and most main-grid pairs a load, >= 2.
+        Most full-field realizations (proxies) and most main-grid pairs a load (ranges: :data:`COUNTS`).
     model_realizations
-        The validated scenario's surfaces and oxide realizations, >= 16.
+        The validated scenario's surfaces and oxide realizations (range: :data:`COUNTS`).
     """
 
     standard_error: tuple[float, float] | None = None
@@ -302,18 +338,15 @@ class Part2Precision:
         out: dict[str, Any] = {}
         if self.standard_error is not None:
             for value in self.standard_error:
-                if not (isinstance(value, float) and 0.0 < value <= 0.5):
-                    raise ConfigError(f"--standard-error = {value!r} is out of range: must be in (0, 0.5] "
-                                      "(the standard error of ln R, clean[,oxidized])")
+                if not (isinstance(value, float) and LEAST_ERROR <= value <= 0.5):
+                    raise ConfigError(f"--standard-error = {value!r} is out of range: must be in [{LEAST_ERROR:g}, "
+                                      "0.5] (the standard error of ln R, clean[,oxidized])")
             out["clean_error"], out["oxide_error"] = self.standard_error
-        for option, field, value, least in (("--max-realizations", "max_ensemble", self.max_ensemble, 2),
-                                            ("--max-pairs", "max_pairs", self.max_pairs, 2),
-                                            ("--model-realizations", "model_realizations", self.model_realizations, 16)):
-            if value is None:
-                continue
-            if value < least:
-                raise ConfigError(f"{option} = {value} is out of range: must be >= {least}")
-            out[field] = value
+        for option, field, value in (("--max-realizations", "max_ensemble", self.max_ensemble),
+                                     ("--max-pairs", "max_pairs", self.max_pairs),
+                                     ("--model-realizations", "model_realizations", self.model_realizations)):
+            if value is not None:
+                out[field] = _count(option, value)
         return out
 
 
@@ -335,11 +368,9 @@ def chosen_set(quick: bool, surface: str = "gw", realizations: int | None = None
     """
     if surface not in SURFACES:
         raise ConfigError(f"--surface {surface!r} is not allowed: must be one of {', '.join(SURFACES)}")
-    if realizations is not None and realizations < 2:
-        raise ConfigError(f"--realizations = {realizations} is out of range: must be >= 2 (part 2 corrects its "
-                          "ensembles by part 1's paired realizations)")
-    if loads is not None and loads < 2:
-        raise ConfigError(f"--loads = {loads} is out of range: must be >= 2 (the lightest and the heaviest)")
+    for option, value in (("--realizations", realizations), ("--loads", loads)):
+        if value is not None:
+            _count(option, value)
     base = scene.QUICK if quick else scene.DEFAULT
     if surface == "random_process":
         base = scene.random_process_set(base, rms=scene.RANDOM.rms)
