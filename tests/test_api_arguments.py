@@ -105,3 +105,21 @@ def test_a_scheduler_address_where_http_answers_is_refused_quickly() -> None:
     finally:
         http.kill()
         http.wait()
+
+
+def test_help_texts_describe_what_users_have(tmp_path, capsys) -> None:
+    import re
+
+    from g2tom.cli.arguments import build_parser
+
+    parser = build_parser()
+    top = parser.format_help()
+    assert "stamp" not in top and "with the surrogate (Eq. 27)" not in top
+    assert re.search(r"predict\s+predict R_el .* each cell's ln R'\(ln F'\) curve", top, re.S)
+    texts = [top, *(p.format_help() for p in parser._subparsers._group_actions[0].choices.values())]
+    assert main(["params", "--data-dir", str(tmp_path)]) == 0
+    texts.append(capsys.readouterr().out)
+    for text in texts:
+        assert not re.search(r"design note|issue \d|session|shared/", text, re.I), text
+    assert main(["stamp", "--data-dir", str(tmp_path)]) == 0  # make's own command still runs
+    assert (tmp_path / ".stamps" / "cube.json").is_file()

@@ -87,8 +87,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=_version())
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
-    def add(name: str, handler: Callable, help_text: str, compute: bool = False) -> argparse.ArgumentParser:
-        p = sub.add_parser(name, help=help_text)
+    def add(name: str, handler: Callable, help_text: str | None, compute: bool = False) -> argparse.ArgumentParser:
+        """Subcommand ``name``; without ``help_text`` it is left out of ``g2tom --help`` (still runs)."""
+        p = sub.add_parser(name, **({"help": help_text} if help_text else {}))
         _scenario_args(p)
         if compute:
             _compute_args(p)
@@ -107,7 +108,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench = add("bench", commands.bench, "benchmarks: run time against error, printed and saved")
     bench.add_argument("--only", action="append", default=None, help="run only this benchmark")
     bench.add_argument("--verbose", action="store_true", help="print every figure, not only where it was saved")
-    add("stamp", commands.stamp, "update per-stage configuration stamps (used by make)")
+    add("stamp", commands.stamp, None)  # make's own: per-stage configuration stamps
     plan = add("plan", commands.plan, "estimate each stage's peak memory and run time; refuse what cannot fit",
                compute=True)
     plan.add_argument("--atlas", action="store_true",
@@ -117,7 +118,9 @@ def build_parser() -> argparse.ArgumentParser:
     add("atlas", commands.atlas, "run the chain on every scene of the atlas's design over (mu, Pi), one scene per "
         "task, resumable (<data-dir>/atlas/)", compute=True)
     add("params", commands.params, "list every parameter with its value, unit and range")
-    predict = add("predict", commands.predict, "predict R_el with the surrogate (Eq. 27)")
+    predict = add("predict", commands.predict, "predict R_el at forces, oxide fractions and lambdas: the run's own "
+                  "surrogate on its surface, else the atlas's; each cell's ln R'(ln F') curve (--model power_law: "
+                  "Eq. 27, a run's own surrogate only)")
     predict.add_argument("--force", default=None, help="normal force F, N: a number or a comma-separated list")
     predict.add_argument("--xi", default=None, help="oxide fraction in (0, 1): a number or a comma-separated list")
     predict.add_argument("--lambda", dest="lam", default=None, help="l_O sqrt(eta) > 0: a number or a comma-separated list")
@@ -127,7 +130,8 @@ def build_parser() -> argparse.ArgumentParser:
     predict.add_argument("--json", action="store_true", help="the result as one JSON object (SI units)")
     predict.add_argument("--extrapolate", action="store_true", help="allow queries outside the fitted ranges (with a warning)")
     predict.add_argument("--model", choices=("curve", "power_law"), default="curve",
-                         help="curve: each cell's ln R'(ln F') curve, interpolated (default); power_law: Eq. 27")
+                         help="curve: each cell's ln R'(ln F') curve, interpolated (default); power_law: Eq. 27 "
+                              "(a run's own surrogate only: the atlas answers with its curve model)")
     predict.add_argument("--roughness", type=Path, default=None,
                          help="a measured topography (see `g2tom roughness`): its summit sigma, eta and beta "
                               "replace roughness.*")
@@ -179,4 +183,5 @@ def build_parser() -> argparse.ArgumentParser:
     rough.add_argument("--beta-rule", choices=("paper", "nayak"), default="paper",
                        help="beta = 0.737/sqrt(m4) (paper, default) or 0.375 sqrt(pi/m4) (nayak)")
     rough.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
+    sub.metavar = "{" + ",".join(name for name, p in sub.choices.items() if name != "stamp") + "}"
     return parser
