@@ -18,6 +18,7 @@ import xarray as xr
 from g2tom import __version__
 from g2tom.analysis.report_blocks import Block
 from g2tom.config import STAGE_INPUTS, Scenario
+from g2tom.models import contact_model
 from g2tom.stages.table3 import PARAMETERS
 
 __all__ = ["summary_blocks", "recorded_timings", "predict_command", "law_forces", "shown_cells"]
@@ -182,7 +183,7 @@ def summary_blocks(scenario: Scenario, fits: xr.Dataset | None, sur: xr.Dataset 
     """
     data_dir = Path("data") if data_dir is None else Path(data_dir)
     spots = (f"a pool of {scenario.contact.surfaces} surfaces' own asperities, oxide spot rule "
-             f"{scenario.oxide.spot_rule}" if scenario.contact.model == "discrete" else f"{scenario.contact.spots} spots")
+             f"{scenario.oxide.spot_rule}" if contact_model(scenario).pooled else f"{scenario.contact.spots} spots")
     computed = (f"**Computed:** scenario '{scenario.name}': {scenario.description} (g2tom {__version__}, "
                 f"configuration hash {scenario.config_hash()}); contact model {scenario.contact.model} with "
                 f"{spots}, resistance model {scenario.cube.model}.")

@@ -96,7 +96,7 @@ NITPICK_OWN = [
     ("py:data", "AUTO"),
     ("py:data", "CONTROL_VARIATE_REALIZATIONS"),
     ("py:data", "CURVE"),
-    ("py:data", "DISCRETE_MIN_TOUCHING"),
+    ("py:data", "MIN_TOUCHING"),
     ("py:data", "EXTENT_FRACTION"),
     ("py:data", "FIELD_PREFIX_S"),
     ("py:data", "FRAMES"),

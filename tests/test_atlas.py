@@ -342,16 +342,16 @@ def test_a_scene_computes_on_one_thread_as_the_plan_assumes(monkeypatch) -> None
     """Each worker runs one scene single-threaded: the discrete contact pool too (two threads per scene on two
     workers oversubscribed the cores and the plan's one-thread seconds)."""
     from g2tom.atlas.design import Scene
-    from g2tom.stages import contact_discrete
+    from g2tom.models import discrete_pool
 
     seen = []
-    real = contact_discrete.compute
+    real = discrete_pool.compute
 
     def spy(*collections, options, **kwargs):
         seen.append(options.workers)
         return real(*collections, options=options, **kwargs)
 
-    monkeypatch.setattr(contact_discrete, "compute", spy)
+    monkeypatch.setattr(discrete_pool, "compute", spy)
     discrete = load_scenario("paper", {**BASE, "contact.model": "discrete", "cube.model": "point", "contact.surfaces": 4})
     ds = atlas.scene_dataset(discrete, Scene("s", 2.0, 20.0, False))
     assert seen == [1] and np.all(np.isfinite(ds["resistance_clean_normalized"].values))

@@ -11,7 +11,7 @@ import pytest
 from g2tom.atlas import cost, loads
 from g2tom.atlas.design import (BUDGET_SECONDS, MIN_POOL, POOL_TOUCHING, AtlasDesign, Scene, design_scenes,
                                    format_atlas_plan, scene_scenario, wall_seconds)
-from g2tom.before_work import discrete_cost
+from g2tom.models import discrete_cost
 from g2tom.before_work.domains import resolve
 from g2tom.before_work.plan import CONTROL_VARIATE_REALIZATIONS
 from g2tom.before_work import load_scenario
@@ -89,7 +89,7 @@ def test_the_discrete_pool_shrinks_with_the_touching_count() -> None:
 
 
 #: Measured one-thread CPU seconds on this machine (2026-11-27; the constants' sources in
-#: pipeline/before_work/discrete_cost.py): (scene, per surface of the pool, per oxide field); d22,
+#: pipeline/models/discrete_cost.py): (scene, per surface of the pool, per oxide field); d22,
 #: d21 and d20 (up to 1,993, 3,676 and 6,084 touching asperities) solve their large unions by
 #: conjugate gradients. The names are the 5 x 5 design's (the atlas's before it became 6 x 6).
 MEASURED = [("d12", 0.085, 0.0123), ("d24", 1.94, 0.0586), ("d22", 10.1, 0.456), ("d21", 29.1, 2.09),
@@ -144,7 +144,7 @@ def test_fields_of_an_adaptive_discrete_scene() -> None:
         sum(max(max(f, 100) * share, 100) for f in cost.REFERENCE_FIELDS for share in (0.14 / 0.17, 1.0)) / 2, rel=1e-12)
     fixed = dataclasses.replace(s, oxide=dataclasses.replace(s.oxide, ensemble="fixed", n_realizations=64))
     assert cost.discrete_xi_fields(fixed, n) == cost.discrete_fields(fixed, n) == 64 * 6
-    from g2tom.before_work.discrete_cost import expected_counts, field_seconds
+    from g2tom.models.discrete_cost import expected_counts, field_seconds
 
     touching, candidates = expected_counts(s)
     assert cost.scene_cost(s).cube == pytest.approx(

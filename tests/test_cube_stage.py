@@ -15,6 +15,7 @@ from g2tom.before_work import load_scenario
 from g2tom.physics import constriction, oxide_field, point_model, spot_models
 from g2tom.physics.interaction import AUTO_METHOD
 from g2tom.physics.spot_geometry import SpotGeometry
+from g2tom.scene import FieldSource
 from g2tom.stages import contact, cube
 from g2tom.stages import oxide as oxide_stage
 
@@ -228,7 +229,7 @@ def test_run_writes_atomically_and_keeps_the_old_file(tmp_path, inputs, monkeypa
     contact, oxide = inputs
     store.write_dataset(contact, tmp_path, "contact", scenario)
     store.write_dataset(oxide, tmp_path, "oxide", scenario)
-    monkeypatch.setattr(cube.FieldSource, "of", classmethod(lambda cls, s: StoredFields(oxide)))
+    monkeypatch.setattr(FieldSource, "of", classmethod(lambda cls, s: StoredFields(oxide)))
     path = cube.run(scenario, tmp_path, OPTIONS)
     before = path.read_bytes()
     written = store.read_stage(tmp_path, "cube", scenario)

@@ -371,7 +371,7 @@ def test_the_stage_places_caps_by_their_first_contact_with_every_indenter() -> N
     """The stage's gap and Hertz radius are the physics' closed forms for the scenario's indenter:
     a cone of slope s lowers every flank cap's gap by s^2 beta / 2, a sphere's radius is beta R / (beta + R)."""
     from g2tom.before_work import load_scenario
-    from g2tom.stages.contact_discrete import cap_contact
+    from g2tom.models.discrete_pool import cap_contact
 
     cone = load_scenario("paper", {"indenter.shape": "cone", "indenter.cone_angle": 0.2})
     gap, radius = cap_contact(cone)

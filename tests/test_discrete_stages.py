@@ -14,7 +14,8 @@ from g2tom.physics.discrete_contact import interaction_kernel
 from g2tom.physics.discrete_resistance import resistances
 from g2tom.physics.spot_share import DEFAULT_RINGS
 from g2tom.scene import bands
-from g2tom.stages import contact, contact_discrete, cube, cube_discrete, oxide
+from g2tom.models import discrete_cube, discrete_pool
+from g2tom.stages import contact, cube, oxide
 from tests.conftest import SMALL_OVERRIDES
 
 QUIET = ComputeOptions(progress=False)
@@ -48,7 +49,7 @@ def test_pool_holds_each_surface_at_the_forces_with_barber_exact(scene, pool):
 
 
 def test_pool_is_independent_of_the_chunking(scene, pool, monkeypatch):
-    monkeypatch.setattr(contact_discrete, "CHUNK", 2)
+    monkeypatch.setattr(discrete_pool, "CHUNK", 2)
     again = contact.build(scene, ComputeOptions(progress=False, workers=1))
     for name in ("asperity_x", "asperity_radius", "discrete_approach", "discrete_stiffness"):
         np.testing.assert_array_equal(again[name].values, pool[name].values)
@@ -62,13 +63,13 @@ def test_disc_with_every_spot_clean_equals_centre():
     radius = np.array([[1e-5, 0.0, 2e-5], [3e-5, 1e-5, 4e-5]])
     clean = np.array([np.inf], np.float32)
     for rule in ("centre", "disc"):
-        share = cube_discrete.clean_shares(modes, coeffs, x, y, radius, clean, rule, scene.cell_size)
+        share = discrete_cube.clean_shares(modes, coeffs, x, y, radius, clean, rule, scene.cell_size)
         np.testing.assert_array_equal(share[0], radius > 0)
 
 
 def test_disc_rings_follow_the_spot_size():
     l_o = 1e-4
-    np.testing.assert_array_equal(cube_discrete.rings(np.array([1e-9, l_o / 16, l_o / 2, 5 * l_o]), l_o),
+    np.testing.assert_array_equal(discrete_cube.rings(np.array([1e-9, l_o / 16, l_o / 2, 5 * l_o]), l_o),
                                   [1, 1, DEFAULT_RINGS, DEFAULT_RINGS])
 
 
@@ -81,7 +82,7 @@ def test_cube_on_discrete_spots(scene, pool):
     finite = np.isfinite(r)
     assert finite.any() and np.all(r[finite] > 0)
     # oxide removes conductance: every oxidized entry is at least its surface's clean resistance
-    pool_clean = cube_discrete.clean_pool(cube_discrete.DiscretePool.of(pool), scene.material.rho, "point")
+    pool_clean = discrete_cube.clean_pool(discrete_cube.DiscretePool.of(pool), scene.material.rho, "point")
     surface_clean = pool_clean["resistance"][np.arange(r.shape[-1]) % 5]  # (realization, delta)
     assert np.all(r[finite] >= np.broadcast_to(surface_clean.T, r.shape)[finite] * (1 - 1e-9))
     # Barber on the pool: the clean point model against K / (E* rho*), surface by surface on average
@@ -130,17 +131,17 @@ def test_pool_variables_are_the_schemas(pool):
 
 
 def test_pool_kernels_are_made_once_per_surface_and_exact(pool):
-    surfaces = cube_discrete.DiscretePool.of(pool)
+    surfaces = discrete_cube.DiscretePool.of(pool)
     first = surfaces.kernel(3)
     x, y, _ = surfaces.spots(3)
     np.testing.assert_array_equal(first, interaction_kernel(x, y, surfaces.floor))
     assert surfaces.groups(3 + surfaces.size) == [(3, None)]  # realization k + S meets surface k again
     assert surfaces.kernel(3) is first
-    assert surfaces == cube_discrete.DiscretePool.of(pool)  # the cache is not part of the pool's value
+    assert surfaces == discrete_cube.DiscretePool.of(pool)  # the cache is not part of the pool's value
 
 
 def test_pool_kernels_beyond_the_cache_budget_are_made_again_equal(pool, monkeypatch):
-    surfaces = cube_discrete.DiscretePool.of(pool)
+    surfaces = discrete_cube.DiscretePool.of(pool)
     one = surfaces.kernel(0).nbytes
     monkeypatch.setattr(config, "KERNEL_CACHE_BYTES", one + surfaces.kernel(1).nbytes)
     kept = [surfaces.kernel(k) for k in range(surfaces.size)]

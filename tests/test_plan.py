@@ -182,7 +182,7 @@ def test_plan_of_the_discrete_model_counts_its_pool_and_maps() -> None:
     # 188,200 computed (xi, field) pairs on two workers: the default make run's measured 92.05 s
     assert discrete["cube"].seconds == pytest.approx(92.05, rel=1e-9)
     # a pool grown at the light steps adds its modelled surfaces' seconds, shared by the workers
-    from g2tom.before_work.discrete_cost import expected_counts, grown_pool
+    from g2tom.models.discrete_cost import expected_counts, grown_pool
 
     grown_scene = load_scenario("paper", {"contact.pool_half_width": 0.01})
     grown = {e.stage: e for e in plan.estimate(grown_scene, workers=2)}
@@ -221,19 +221,21 @@ def test_every_stage_time_within_1_5x_of_the_measured_default_run(name):
 def test_the_default_scene_s_discrete_models_are_the_recorded_ones() -> None:
     """plan scales the default's measured discrete costs by the cost models' ratio; the ratio is 1 on
     the default scene only if the recorded model values are the models' own there."""
-    from g2tom.before_work.discrete_cost import expected_counts, field_seconds, surface_seconds
+    from g2tom.models import discrete_cost
+    from g2tom.models.discrete_cost import expected_counts, field_seconds, surface_seconds
 
     touching, candidates = expected_counts(load_scenario("paper"))
-    assert surface_seconds(touching, candidates) == pytest.approx(plan.DEFAULT_SURFACE_MODEL_S, rel=1e-12)
-    assert field_seconds(touching, candidates) == pytest.approx(plan.DEFAULT_FIELD_MODEL_S, rel=1e-12)
-    assert touching.size == plan.DEFAULT_STEPS
+    assert surface_seconds(touching, candidates) == pytest.approx(discrete_cost.DEFAULT_SURFACE_MODEL_S, rel=1e-12)
+    assert field_seconds(touching, candidates) == pytest.approx(discrete_cost.DEFAULT_FIELD_MODEL_S, rel=1e-12)
+    assert touching.size == discrete_cost.DEFAULT_STEPS
 
 
 def test_a_scene_with_more_touching_asperities_is_planned_dearer_by_the_models_ratio() -> None:
     """sigma 100 um instead of 20 um: ~2x the touching asperities and 5x the candidates at the
     heaviest step; the pool's and the cube's estimates grow by the discrete cost models' ratios (the
     previous plan kept the default's 10.8 s and 92 s whatever the scene)."""
-    from g2tom.before_work.discrete_cost import expected_counts, field_seconds, surface_seconds
+    from g2tom.models import discrete_cost
+    from g2tom.models.discrete_cost import expected_counts, field_seconds, surface_seconds
 
     default, rough = load_scenario("paper"), load_scenario("paper", {"roughness.sigma": 1e-4})
     grid = {e.stage: e.seconds for e in plan.estimate(load_scenario("paper_gt", {"roughness.sigma": 1e-4}), workers=2)}
@@ -241,9 +243,9 @@ def test_a_scene_with_more_touching_asperities_is_planned_dearer_by_the_models_r
     est = {e.stage: e.seconds for e in plan.estimate(rough, workers=2)}
     touching, candidates = expected_counts(rough)
     assert touching[-1] > 1.5 * expected_counts(default)[0][-1]
-    pool = 256 * 20 * plan.DISCRETE_SOLVE_S / 2 * surface_seconds(touching, candidates) / plan.DEFAULT_SURFACE_MODEL_S
+    pool = 256 * 20 * discrete_cost.DISCRETE_SOLVE_S / 2 * surface_seconds(touching, candidates) / discrete_cost.DEFAULT_SURFACE_MODEL_S
     assert est["contact"] - grid["contact"] == pytest.approx(pool, rel=1e-9)
-    ratio = field_seconds(touching, candidates) / plan.DEFAULT_FIELD_MODEL_S
+    ratio = field_seconds(touching, candidates) / discrete_cost.DEFAULT_FIELD_MODEL_S
     assert ratio > 3
     assert est["cube"] == pytest.approx(base["cube"] * ratio, rel=1e-9)
     lines = plan.format_plan(resolve(rough), workers=2)

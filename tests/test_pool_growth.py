@@ -16,7 +16,8 @@ from g2tom.config.scenario import HASH_NEUTRAL
 from g2tom.config.scene_sections import Contact
 from g2tom.fitting.ensemble import mean_half_width, z_value
 from g2tom.scene import FieldSource
-from g2tom.stages import contact, contact_discrete, cube, cube_discrete, oxide
+from g2tom.models import discrete_cube, discrete_pool
+from g2tom.stages import contact, cube, oxide
 from tests.test_discrete_stages import DISCRETE
 
 QUIET = ComputeOptions(progress=False)
@@ -85,7 +86,7 @@ def test_growth_stops_at_the_cap_and_adds_whole_rounds(monkeypatch):
         calls.append((first, stop, steps))
         return [surface(steps) for _ in range(first, stop)]
 
-    pool = contact_discrete.grow_pool([surface(3) for _ in range(4)], 0.05, solve)
+    pool = discrete_pool.grow_pool([surface(3) for _ in range(4)], 0.05, solve)
     assert len(pool) == 40 and calls[0][0] == 4
     assert all(steps == 1 for _, _, steps in calls)  # only the scattered first step is short
     assert all(b == c for (_, b, _), (c, _, _) in zip(calls, calls[1:]))
@@ -94,24 +95,24 @@ def test_growth_stops_at_the_cap_and_adds_whole_rounds(monkeypatch):
 def test_the_cube_meets_surface_k_mod_the_pool_size_at_each_step(scene, grown, full):
     ox = oxide.build(scene, QUIET)
     out = cube.build(scene, grown, ox, QUIET)
-    sizes = cube_discrete.DiscretePool.of(grown).sizes()
-    pool = cube_discrete.DiscretePool.of(full)
+    sizes = discrete_cube.DiscretePool.of(grown).sizes()
+    pool = discrete_cube.DiscretePool.of(full)
     # the clean surface: at each step the mean conductance over the surfaces solved there
     rho = scene.material.rho
-    clean = cube_discrete.clean_pool(pool, rho, scene.cube.model)["resistance"]
+    clean = discrete_cube.clean_pool(pool, rho, scene.cube.model)["resistance"]
     expected = [rho / np.mean(rho / clean[: sizes[i], i]) for i in range(sizes.size)]
     np.testing.assert_allclose(out["resistance_clean"].values, expected, rtol=1e-12)
     # an oxidized realization: the same resistance as on the fixed pool of the step's size
     source = FieldSource.of(scene)
     settings = cube.work_settings(scene, grown)[2]
-    grown_pool = cube_discrete.DiscretePool.of(grown)
+    grown_pool = discrete_cube.DiscretePool.of(grown)
     for k in (0, 3, sizes[0] - 1, sizes[0] + 2):
-        got = cube_discrete.discrete_chunk(source, 0, np.array([k]), np.array([0]), grown_pool,
+        got = discrete_cube.discrete_chunk(source, 0, np.array([k]), np.array([0]), grown_pool,
                                            settings)["resistance"][0, :, 0]
         for i, size in enumerate(sizes):
             prefix = dataclasses.replace(pool, x=pool.x[:size], y=pool.y[:size], radius=pool.radius[:size],
                                          count=pool.count[:size], _kernels={})
-            want = cube_discrete.discrete_chunk(source, 0, np.array([k]), np.array([0]), prefix, settings)["resistance"]
+            want = discrete_cube.discrete_chunk(source, 0, np.array([k]), np.array([0]), prefix, settings)["resistance"]
             np.testing.assert_allclose(got[i], want[0, i, 0], rtol=1e-9)
 
 
@@ -120,9 +121,9 @@ def test_the_fixed_pool_leaves_every_hash_as_it_was():
 
 
 def test_the_plan_models_the_grown_pool_within_a_factor_of_three():
-    """``g2tom plan``'s model of a grown pool (g2tom.before_work.discrete_cost.grown_pool) against
+    """``g2tom plan``'s model of a grown pool (g2tom.models.discrete_cost.grown_pool) against
     the contact stage at the lightest step; off, it adds nothing."""
-    from g2tom.before_work.discrete_cost import expected_counts, grown_pool
+    from g2tom.models.discrete_cost import expected_counts, grown_pool
 
     scene = resolve(load_scenario("paper", {**DISCRETE, "contact.pool_half_width": 0.1}))
     counts = expected_counts(scene)

@@ -156,9 +156,9 @@ def test_heldout_atlas_scenes_take_the_tighter_step_target():
 
 @pytest.mark.parametrize("targets", [(0.1, 0.1), (0.06, 0.08)])
 def test_the_plan_models_the_light_steps_realizations_within_a_factor_of_two(targets):
-    """``g2tom plan``'s model (g2tom.before_work.discrete_cost.step_fields) from the stage's own
+    """``g2tom plan``'s model (g2tom.models.discrete_cost.step_fields) from the stage's own
     alpha counts, against the counts the stage reached at the lightest fitted step; off, it adds nothing."""
-    from g2tom.before_work.discrete_cost import expected_counts, step_fields
+    from g2tom.models.discrete_cost import expected_counts, step_fields
 
     alpha_target, step_target = targets
     scene = resolve(load_scenario("paper", {**ADAPTIVE, "oxide.min_realizations": 10, "oxide.max_realizations": 3000,

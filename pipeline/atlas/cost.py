@@ -1,8 +1,8 @@
 """What an atlas scene costs, before any work: the model behind ``g2tom plan --atlas``.
 
 On Greenwood–Tripp's grid spots a scene costs what :func:`g2tom.before_work.plan.estimate` says
-for its cell grid. On discrete asperities (``contact.model = "discrete"``) the pool and every oxide
-field cost what :mod:`g2tom.before_work.discrete_cost` models from Greenwood–Tripp's expected
+for its cell grid. On discrete asperities (a pooled contact model) the pool and every oxide
+field cost what :mod:`g2tom.models.discrete_cost` models from Greenwood–Tripp's expected
 counts of touching asperities N_s and candidates C_s per load step, and the fields are counted here:
 
 * fields: per lambda the realizations of its slowest xi: the measured counts of the adaptive
@@ -13,11 +13,11 @@ counts of touching asperities N_s and candidates C_s per load step, and the fiel
 * the cube: a field computes every xi in the first round, but later rounds only the xi whose
   interval is still open, so each xi costs its own realizations: the slowest xi's count times
   its share :data:`XI_SHARE` (relative to the scenario's largest xi), between the same bounds,
-  each a 1 / (number of xi) part of :func:`~g2tom.before_work.discrete_cost.field_seconds`.
+  each a 1 / (number of xi) part of :func:`~g2tom.models.discrete_cost.field_seconds`.
   Without the shares the plan over-predicted the full atlas's 33 scenes 1.7x (median of
   measured / planned 0.59, 0.47-1.37); with them 0.96 (0.67-1.75; interquartile 0.86-1.14);
 * a per-step target (``oxide.step_half_width``): every cell's further realizations at its light
-  steps (:func:`g2tom.before_work.discrete_cost.step_fields`, from what alpha's target asks of
+  steps (:func:`g2tom.models.discrete_cost.step_fields`, from what alpha's target asks of
   the cell before the ensemble's bounds), in the cube and in the fits' bootstrap.
 
 The constants are one thread's CPU seconds or counts measured on this 2-core machine (2026-11-27,
@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from g2tom.config import Scenario
+from g2tom.models import contact_model
 
 __all__ = ["SceneCost", "scene_cost", "discrete_fields", "discrete_xi_fields", "cell_fields"]
 
@@ -138,10 +139,10 @@ def scene_cost(scenario: Scenario) -> SceneCost:
     """The modelled CPU seconds of one atlas scene (its scenario as :func:`g2tom.atlas.design.scene_scenario`
     makes it), single-threaded."""
     from g2tom.before_work import plan
-    from g2tom.before_work.discrete_cost import (expected_counts, field_seconds, grown_pool, step_fields,
+    from g2tom.models.discrete_cost import (expected_counts, field_seconds, grown_pool, step_fields,
                                                     surface_seconds)
 
-    if scenario.contact.model != "discrete":
+    if not contact_model(scenario).pooled:  # the lattice's costs, as g2tom plan has them
         estimates = {e.stage: e.seconds for e in plan.estimate(scenario, 1)}
         counts = plan.realizations(scenario)
         return SceneCost(None, 0, 0, counts.fields * len(scenario.oxide.lambda_), estimates["contact"],

@@ -29,6 +29,7 @@ import numpy as np
 
 from g2tom.atlas.cost import SceneCost
 from g2tom.config import AUTO, ConfigError, Loading, Scenario
+from g2tom.models import contact_model, step_target_conflicts
 from g2tom.physics.groups import surface_from_groups
 
 __all__ = ["AtlasDesign", "Scene", "SceneEstimate", "design_scenes", "scene_seed", "scene_scenario", "plan_atlas",
@@ -177,7 +178,6 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
         If the scene's approaches cannot be found (naming the scene).
     """
     from g2tom.atlas.loads import END_MARGIN, FORCE_RANGE, loading_for_range
-    from g2tom.before_work.discrete_cost import expected_touching
 
     surface = surface_from_groups(scene.mu, scene.Pi, base.roughness.sigma, base.indenter.radius)
     roughness = dataclasses.replace(base.roughness, eta=surface.eta, beta=surface.beta)
@@ -185,7 +185,7 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
     if scene.heldout:  # measured closer than the design, so the verdict judges the surrogate
         oxide = dataclasses.replace(oxide, target_half_width=min(oxide.target_half_width,
                                                                  base.atlas.heldout_half_width))
-        if not base.step_target_conflicts():
+        if not step_target_conflicts(base):
             oxide = dataclasses.replace(oxide, step_half_width=_tighter(oxide.step_half_width,
                                                                         base.atlas.heldout_step_half_width))
     contact = dataclasses.replace(base.contact, window=AUTO, r_max=AUTO)
@@ -199,11 +199,8 @@ def scene_scenario(base: Scenario, scene: Scene, loading: Loading | None = None)
                            oxide=oxide, fits=fits)
     try:
         scenario = loading_for_range(scenario) if loading is None else dataclasses.replace(scenario, loading=loading)
-        if scenario.contact.model == "discrete":  # as many touching caps in the pool as the paper's
-            heaviest = float(expected_touching(scenario)[-1])
-            surfaces = min(base.contact.surfaces, max(MIN_POOL, math.ceil(POOL_TOUCHING / max(heaviest, 1.0))))
-            scenario = dataclasses.replace(scenario, contact=dataclasses.replace(scenario.contact, surfaces=surfaces))
-        return scenario
+        # a pool (the discrete model's) as many touching caps as the paper's
+        return contact_model(scenario).atlas_scenario(scenario, base.contact.surfaces, MIN_POOL, POOL_TOUCHING)
     except ValueError as exc:
         raise ConfigError(f"atlas scene {scene.name} (mu {scene.mu:.4g}, Pi {scene.Pi:.4g}): {exc}") from None
 

@@ -7,8 +7,8 @@ atlas spanned F' 0.67-10.3 in all of them). Here each scene gets its own approac
 are the approaches at which Greenwood–Tripp's force is F' = :data:`FORCE_RANGE` widened by
 :data:`END_MARGIN` (the root of ln F'(delta) on a fast solve, :func:`approaches_at`), and ``loading.n_delta`` steps lie evenly in delta between them. The
 discrete model solves its surfaces at the Greenwood–Tripp forces of the same approaches
-(``contact.model = "discrete"``), so both models get the same F' steps. The fast solve
-(:func:`g2tom.before_work.discrete_cost.probe`: 400 graded nodes, its own radial domain) and the stage's (``contact.n_radial`` nodes, the resolved
+(the discrete model, :class:`g2tom.models.Discrete`), so both models get the same F' steps. The fast solve
+(:func:`g2tom.models.discrete_cost.probe`: 400 graded nodes, its own radial domain) and the stage's (``contact.n_radial`` nodes, the resolved
 ``r_max``) differ by far less than the margin, so every scene's steps span FORCE_RANGE.
 
 Only the range is chosen in F': steps in between follow the even spacing in delta (exact F'
@@ -25,7 +25,7 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from g2tom.before_work.discrete_cost import probe
+from g2tom.models.discrete_cost import probe
 from g2tom.compute import single_threaded
 from g2tom.config import Scenario
 

@@ -17,7 +17,7 @@ import math
 import os
 from dataclasses import dataclass
 
-from g2tom.config import AUTO, CHUNK_BYTES, KERNEL_CACHE_BYTES, ResolvedScenario, Scenario, odd_cells
+from g2tom.config import AUTO, CHUNK_BYTES, ResolvedScenario, Scenario, odd_cells
 
 __all__ = ["StageEstimate", "Realizations", "realizations", "estimate", "format_plan", "available_memory", "BASE_BYTES"]
 
@@ -33,55 +33,11 @@ _MAP_S = 2.0e-9       # per cell of one map (masking, sums), any path
 _LU_S = 5.0e-11       # per n_radial^3 and approach (Newton factorizations and solves)
 _MODE_S = 4.0e-8      # per mode and realization of the oxide coefficients
 _CELL_FFT_S = 5.0e-9  # per n^2 log2 n of one oxide field
-#: Mean realizations per (xi, lambda) of the adaptive ensemble on the paper's scene, measured
-#: (expected spots, fit range F' >= 0.4, 49^2 cells): 361,115 over 9 xi x 12 lambda at
-#: target_half_width 0.025 (min 400, cap 30,000, batch 1000).
-TYPICAL_REALIZATIONS = 361_115 / 108
 TYPICAL_TARGET = 0.025
-#: What the same cube computed: a cell still open gets a whole batch, so 386,200 realizations
-#: (batches included) over the 108 cells, and it regenerated 171,200 fields over the 12 lambdas (a
-#: lambda's fields serve all its open fractions; 56 % of the cells stopped at the first batch).
-TYPICAL_COMPUTED = 386_200 / 108
-TYPICAL_FIELDS = 171_200 / 12
-#: The largest count over the 108 cells of the default run (its padded realization axis): a cell
-#: reached the cap (make run from a fresh clone, 2026-11-25, cube.nc: 30,000; 361,115 in all).
-TYPICAL_LARGEST = 30_000
-#: The same for the discrete model with the disc rule and the point model (contact.model =
-#: "discrete", the default), estimated from a fixed 64-realization cube of the discrete study: per cell
-#: 64 (w / (0.9 x 0.025))^2 from its fast-rule half-widths w, clipped to [400, 30,000]: 146,587
-#: realizations over the 108 cells, 188,200 computed in whole batches, 39,800 fields.
-DISCRETE_TYPICAL_REALIZATIONS = 146_587 / 108
-DISCRETE_TYPICAL_COMPUTED = 188_200 / 108
-DISCRETE_TYPICAL_FIELDS = 39_800 / 12
 #: Realizations the adaptive ensemble needs with ``fits.control_variate = "clean_share"``, as a share
 #: of the plain rule's: measured on the atlas's held-out scene h02 (mu 22.4, Pi 28.6; 5 xi x 6
 #: lambda), the fields over lambda summed: 1,224 / 4,234 at target 5 % and 4,847 / 15,868 at 2.5 %.
 CONTROL_VARIATE_REALIZATIONS = 0.3
-#: The largest count over the cells of the adaptive discrete cube (2026-11-25 and 2026-11-27,
-#: cube.nc's realization axis at lambda 23, xi 0.9; 175,096 realizations kept in all).
-DISCRETE_TYPICAL_LARGEST = 9_569
-#: One thread's time per discrete surface and load step of the contact solve (s): the median of
-#: `g2tom bench --only discrete` on the paper's scene, 3.85 ms.
-DISCRETE_SOLVE_S = 3.85e-3
-#: Load steps of the default scene, on which DISCRETE_SOLVE_S and DISCRETE_XI_MAP_S were measured.
-DEFAULT_STEPS = 20
-#: One thread's time per (xi, field) of the cube on discrete spots (s) by (oxide.spot_rule,
-#: cube.model): (disc, point) from the default `make run` from a fresh clone (2026-11-27, 2 cores,
-#: compiled point solves and disc shares: the cube took 92.05 s, 2 x 92.05 / 188,200); the
-#: (centre, point) pair scaled by the same ratio to the previous code's 5.5 ms (not measured); the
-#: Greenwood pairs are the previous code's, whose Greenwood form did not change (not remeasured).
-DISCRETE_XI_MAP_S = {("disc", "point"): 2 * 92.05 / 188_200, ("centre", "point"): 3.0e-3 * 2 * 92.05 / 188_200 / 5.5e-3,
-                     ("disc", "greenwood"): 2.8e-3, ("centre", "greenwood"): 0.75e-3}
-# the segment rule counts shares as disc does (its table lookup is a few % of a field's work)
-DISCRETE_XI_MAP_S.update({("segment", model): DISCRETE_XI_MAP_S[("disc", model)] for model in ("point", "greenwood")})
-#: The discrete cost models (:mod:`g2tom.before_work.discrete_cost`) on the default scene (its
-#: 20 steps' expected counts: at most 210 touching asperities and 754 candidates), CPU seconds of
-#: one thread: one surface of the pool, one oxide field's point solves (every xi). Another scene's
-#: discrete pool and cube are estimated as the default's measured constants above times the
-#: models' ratio, so the cost follows the touching count (dense solves: N^2.5 to N^3 at large N).
-DEFAULT_SURFACE_MODEL_S = 0.07436773256159718
-DEFAULT_HEAVIEST_TOUCHING = 210
-DEFAULT_FIELD_MODEL_S = 0.008316928707799072
 #: Stage times of the two default studies measured on 2026-11-27 (2 cores; each stage run by
 #: `g2tom STAGE --no-progress` in a fresh data directory, the seconds it reports) over what the
 #: models below give for them: contact 0.95 s (paper_gt) over 0.604 s, the discrete pool's part
@@ -152,7 +108,7 @@ def realizations(scenario: Scenario) -> Realizations:
 
     A fixed ensemble uses ``oxide.n_realizations``. An adaptive one uses between
     ``oxide.min_realizations`` and ``oxide.max_realizations``; the central value is
-    :data:`TYPICAL_REALIZATIONS` (measured on the paper's scene) scaled by
+    the contact model's typical count (:attr:`g2tom.models.ContactModel.typical`, measured on the paper's scene) scaled by
     ``(TYPICAL_TARGET / oxide.target_half_width)^2`` (a half-width falls like n^-1/2) and by the
     control variate's share (:func:`control_variate_share`), clipped to that range. It is a typical value on the paper's scene, not a prediction for any scene.
     """
@@ -165,12 +121,11 @@ def realizations(scenario: Scenario) -> Realizations:
     def clip(value: float) -> float:
         return min(max(value * scale, ox.min_realizations), ox.max_realizations)
 
-    if scenario.contact.model == "discrete":
-        return Realizations(ox.min_realizations, clip(DISCRETE_TYPICAL_REALIZATIONS), ox.max_realizations, True,
-                            clip(DISCRETE_TYPICAL_COMPUTED), clip(DISCRETE_TYPICAL_FIELDS),
-                            clip(DISCRETE_TYPICAL_LARGEST))
-    return Realizations(ox.min_realizations, clip(TYPICAL_REALIZATIONS), ox.max_realizations, True,
-                        clip(TYPICAL_COMPUTED), clip(TYPICAL_FIELDS), clip(TYPICAL_LARGEST))
+    from g2tom.models import contact_model  # here: the command line imports this module before numpy
+
+    typical = contact_model(scenario).typical
+    return Realizations(ox.min_realizations, clip(typical.realizations), ox.max_realizations, True,
+                        clip(typical.computed), clip(typical.fields), clip(typical.largest))
 
 
 def available_memory() -> float:
@@ -254,6 +209,7 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     list of StageEstimate
         contact, oxide, cube, fits, surrogate, in order.
     """
+    from g2tom.models import PlanWork, contact_model
     from g2tom.physics.interaction import FFT_FROM, block_size, work_bytes_per_map
     from g2tom.physics.interaction_fft import padded_length
 
@@ -281,7 +237,6 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     def results_of(n_axis: float) -> float:
         return 8.0 * 5 * n_xi * n_lam * n_delta * n_axis
 
-    results = results_of(n_cube)
     block = block_size(n)
     task_cube = n_xi * n_lam * min(scenario.compute.cube_chunk, n_cube) * cells * 1.0 + block * (
         work_bytes_per_map(n) + 9.0 * cells)
@@ -293,36 +248,19 @@ def estimate(scenario: Scenario, workers: int | None = None) -> list[StageEstima
     # contact's spot maps: read (radius, area) and as float64 maps, and three per-task copies
     spot_maps = 8.0 * n_delta * cells
     cube_fixed = psi + t * (task_cube + 3 * spot_maps) + 4 * spot_maps + operators
-    cube_mem = cube_fixed + CUBE_RESULT_COPIES * results
     # the maps of every computed realization (whole batches) and the fields regenerated per lambda
     speedup = _map_speedup(n, workers, ox.ensemble)
     per_map = n_xi * n_lam * n_delta * _per_map_seconds(n) / speedup
     per_field = _field_seconds(scenario, n) / speedup
     per_realization = per_map + per_field
     cube_s = per_map * counts.computed + per_field * counts.fields
-    if scenario.contact.model == "discrete":  # the pool's solves; one dense solve set per (xi, field)
-        from g2tom.before_work.discrete_cost import (expected_counts, field_seconds, grown_pool, step_fields,
-                                                        surface_seconds)
-
-        touching, candidates = expected_counts(scenario)
-        surface_scale = surface_seconds(touching, candidates) / DEFAULT_SURFACE_MODEL_S
-        field_scale = field_seconds(touching, candidates) / DEFAULT_FIELD_MODEL_S
-        contact_s += DISCRETE_SOLVE_S * DEFAULT_STEPS * surface_scale * scenario.contact.surfaces / t
-        contact_s += grown_pool(scenario, touching, candidates)[1] / t  # the light steps' added surfaces
-        per_realization = n_xi * n_lam * DISCRETE_XI_MAP_S[(ox.spot_rule, scenario.cube.model)] * field_scale / t
-        # a per-step target's realizations at the light steps, and the cube's longer realization axis
-        steps, light_s = step_fields(scenario, touching, candidates, [[counts.typical] * n_lam] * n_xi)
-        cube_s = per_realization * counts.computed + light_s / t
-        n_cube = min(float(ox.max_realizations), n_cube * float(steps[0, 0, 0]) / counts.typical)
-        results = results_of(n_cube)
-        # dense matrices per thread: the contact's coupling over the candidates and its Newton
-        # copies over the touching caps; the cube's kept kernels (one per surface, bounded), a
-        # kernel made in a task and the conjugate gradients' union coupling
-        spots = float(touching[-1])
-        contact_mem += t * 8.0 * (float(candidates[-1]) ** 2 + 3.0 * spots**2)
-        kept = min(KERNEL_CACHE_BYTES, scenario.contact.surfaces * 8.0 * spots**2)
-        cube_fixed += kept + t * 2.0 * 8.0 * spots**2
-        cube_mem = cube_fixed + CUBE_RESULT_COPIES * results
+    # the contact model's own terms (the discrete model's pool and dense solves)
+    work = contact_model(scenario).plan_work(scenario, t, counts.typical, counts.computed, PlanWork(
+        contact_s, contact_mem, per_realization, cube_s, cube_fixed, n_cube))
+    contact_s, contact_mem, per_realization = work.contact_seconds, work.contact_bytes, work.realization_seconds
+    cube_s, cube_fixed, n_cube = work.cube_seconds, work.cube_fixed_bytes, work.cube_realizations
+    results = results_of(n_cube)
+    cube_mem = cube_fixed + CUBE_RESULT_COPIES * results
     # fits: the cube's terms, the bootstrap's resample counts and means.
     boot = scenario.fits.n_bootstrap
     def fits_mem_of(n_axis: float) -> float:
@@ -358,6 +296,9 @@ def format_plan(scenario: ResolvedScenario, workers: int | None = None) -> list[
                     f"typical {counts.typical:.0f}")
     else:
         ensemble = f"{counts.typical:.0f} realizations"
+    from g2tom.models import contact_model  # here: the command line imports this module before numpy
+
+    model = contact_model(scenario)
     lines = [
         f"scenario {scenario.name}: {n} x {n} cells of {scenario.cell_size * 1e6:.4g} um, "
         f"window {scenario.contact.window:.4g} R*, r_max {scenario.contact.r_max:.4g} R*",
@@ -368,20 +309,12 @@ def format_plan(scenario: ResolvedScenario, workers: int | None = None) -> list[
         lines.append(
             f"adaptive ensemble: {counts.low * n_cells} .. {counts.high * n_cells} realizations in all, typical "
             f"{counts.typical * n_cells:.0f} (the paper's scene: "
-            f"{(DISCRETE_TYPICAL_REALIZATIONS if scenario.contact.model == 'discrete' else TYPICAL_REALIZATIONS) * 108:.0f} at "
+            f"{model.typical.realizations * 108:.0f} at "
             f"target_half_width {TYPICAL_TARGET:g}, scaled by (target ratio)^2), computed in whole batches: "
             f"typical {counts.computed * n_cells:.0f}; times below are typical "
             f"(range: every cell at oxide.min_realizations .. at oxide.max_realizations); so is memory "
             f"(in brackets: a cell at oxide.max_realizations)")
-    if scenario.contact.model == "discrete":
-        from g2tom.before_work.discrete_cost import expected_counts
-
-        touching, candidates = expected_counts(scenario)
-        lines.append(
-            f"discrete asperities: {scenario.contact.surfaces} surfaces; Greenwood-Tripp expects "
-            f"{touching[-1]:.0f} touching and {candidates[-1]:.0f} candidates at the heaviest step (the default "
-            f"scene: {DEFAULT_HEAVIEST_TOUCHING}); the pool's and the cube's times scale from the default's by the "
-            f"discrete cost models (dense solves, ~N^3 at large N)")
+    lines += model.plan_lines(scenario)
     lines.append(f"{'stage':10s} {'peak memory':>14s} {'time':>12s}")
     total, low, high = 0.0, 0.0, 0.0
     for e in estimate(scenario, workers):

@@ -28,9 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
-from g2tom.config import ConfigError, ResolvedScenario, Scenario
+from g2tom.config import ConfigError, ResolvedScenario
 
-__all__ = ["check_data_dir", "check_output_file", "check_scheduler", "check_scene", "check_discrete_reach",
+__all__ = ["check_data_dir", "check_output_file", "check_scheduler", "check_scene",
            "scene_forces", "preflight"]
 
 #: Seconds a scheduler has to accept a TCP connection.
@@ -196,25 +196,6 @@ def scene_forces(scenario: ResolvedScenario, data_dir: str | Path | None = None)
     return f["force"], np.searchsorted(r_cells, edge, side="right"), asperities(r, f["h"])
 
 
-#: Fewest asperities Greenwood-Tripp expects to touch at the heaviest approach for the discrete
-#: model: below, a surface of the pool often has none within reach of the sphere (P = e^-5 for
-#: none at all), and its solve would need approaches beyond the asperity disc it was drawn on.
-DISCRETE_MIN_TOUCHING = 5.0
-
-
-def check_discrete_reach(scenario: Scenario, expected: float) -> None:
-    """Refuse ``contact.model = "discrete"`` on a scene where fewer than :data:`DISCRETE_MIN_TOUCHING`
-    asperities are expected to touch at the heaviest approach (``expected``, from :func:`scene_forces`)."""
-    if not expected >= DISCRETE_MIN_TOUCHING:
-        rough = scenario.roughness
-        raise ConfigError(
-            f"contact.model = 'discrete' is out of range for this scene: about {expected:.3g} asperities are expected "
-            f"to touch at the heaviest approach (roughness.sigma = {rough.sigma!r} m, roughness.eta = {rough.eta!r} "
-            f"m^-2, loading.delta_min = {scenario.loading.delta_min!r} sigma); it needs at least "
-            f"{DISCRETE_MIN_TOUCHING:g} (fewer leave surfaces with no asperity in reach): use contact.model = "
-            f"'greenwood_tripp' (the scenario paper_gt)")
-
-
 def check_scene(scenario: ResolvedScenario, data_dir: str | Path | None = None) -> None:
     """The cross-stage constraints that need the contact solution (see the module docstring).
 
@@ -225,8 +206,9 @@ def check_scene(scenario: ResolvedScenario, data_dir: str | Path | None = None) 
     """
     force, touching, expected = scene_forces(scenario, data_dir)
     heaviest = int(np.argmin(scenario.deltas))
-    if scenario.contact.model == "discrete":
-        check_discrete_reach(scenario, float(expected[heaviest]))
+    from g2tom.models import contact_model  # here: the command line imports this module before numpy
+
+    contact_model(scenario).check_reach(scenario, float(expected[heaviest]))
     rough, loading = scenario.roughness, scenario.loading
     if not np.isfinite(force).all():
         raise ConfigError(

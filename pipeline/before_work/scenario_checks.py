@@ -3,7 +3,8 @@
 :func:`load_scenario` reads a scenario (:func:`g2tom.config.read_scenario`: each value against
 its own declared range) and runs :func:`check_scenario` on it: a combination that cannot work stops
 the run before any work, with one :class:`~g2tom.config.ConfigError` naming the parameter, its value
-and what is allowed (exit status 2 from the CLI). This module imports no numpy at the top.
+and what is allowed (exit status 2 from the CLI). This module imports no numpy at the top: the contact
+models (:mod:`g2tom.models`) are imported where their checks run.
 """
 
 from __future__ import annotations
@@ -61,36 +62,18 @@ def _check_spots(s: Scenario) -> None:
         )
 
 
-def _check_discrete(s: Scenario) -> None:
-    """The disc and segment rules need discrete spots; discrete spots take radius weights, no
-    lattice term and insulating films."""
-    if s.oxide.spot_rule != "centre" and s.contact.model != "discrete":
-        raise ConfigError(
-            f"oxide.spot_rule = {s.oxide.spot_rule!r} is not allowed with contact.model = {s.contact.model!r}: "
-            f"must be 'centre' (a grid spot stands for a cell's asperities, not one contact disc; the "
-            f"{s.oxide.spot_rule} rule needs contact.model = 'discrete')"
-        )
-    if s.contact.model != "discrete":
-        return
-    for name, value, allowed, why in (
-        ("cube.weights", s.cube.weights, "radius", "Greenwood's form on discrete spots weights by radii"),
-        ("oxide.film", s.oxide.film, "insulating", "resistive films are not implemented on discrete spots"),
-    ):
-        if value != allowed:
-            raise ConfigError(f"{name} = {value!r} is not allowed with contact.model = 'discrete': must be "
-                              f"{allowed!r} ({why})")
-    if s.cube.lattice_constant != 0:
-        raise ConfigError(f"cube.lattice_constant = {s.cube.lattice_constant!r} is not allowed with contact.model "
-                          "= 'discrete': must be 0 (discrete spots have no lattice to complete)")
-
-
 def _check_control_variate(s: Scenario) -> None:
     """The control variate's expectation is exact for discrete spots, the theoretical threshold
     and ideal amplitudes only, and it adjusts the geometric mean."""
     if s.fits.control_variate == "none":
         return
+    from g2tom.models import contact_model, models_that  # here: the command line imports this module before numpy
+
+    if not contact_model(s).has_clean_share:
+        raise ConfigError(f"contact.model = {s.contact.model!r} is not allowed with fits.control_variate = "
+                          f"{s.fits.control_variate!r}: must be {models_that(lambda m: m.has_clean_share)} "
+                          f"(the control is the discrete spots' clean share)")
     for name, value, allowed, why in (
-        ("contact.model", s.contact.model, "discrete", "the control is the discrete spots' clean share"),
         ("oxide.threshold", s.oxide.threshold, "theoretical", "its expectation needs one threshold for every field"),
         ("oxide.amplitudes", s.oxide.amplitudes, "ideal",
          "its expectation is exact for the random-phase field of fixed amplitudes"),
@@ -104,7 +87,9 @@ def _check_control_variate(s: Scenario) -> None:
 
 def _check_step_target(s: Scenario) -> None:
     """A per-step target grows an adaptive ensemble on discrete spots, for the geometric mean."""
-    conflicts = s.step_target_conflicts()
+    from g2tom.models import step_target_conflicts  # here: the command line imports this module before numpy
+
+    conflicts = step_target_conflicts(s)
     if s.oxide.step_half_width == 0 or not conflicts:
         return
     name, value, allowed, why = conflicts[0]
@@ -116,7 +101,7 @@ def check_scenario(s: Scenario) -> None:
     """Every check across parameters of a scenario, run as it is loaded (before any work).
 
     The settings that rule each other out (:func:`_check_point_model`, :func:`_check_spots`,
-    :func:`_check_discrete`, :func:`_check_control_variate`, :func:`_check_step_target`), integers a netCDF attribute cannot hold, the approaches' order,
+    :func:`g2tom.models.check_contact_model`, :func:`_check_control_variate`, :func:`_check_step_target`), integers a netCDF attribute cannot hold, the approaches' order,
     the atlas's box and, once ``contact.window`` and ``contact.r_max`` are both numbers, the
     window against the radial domain and the oxide band
     (:func:`g2tom.before_work.window_checks.check_domains`).
@@ -128,7 +113,9 @@ def check_scenario(s: Scenario) -> None:
     """
     _check_point_model(s)
     _check_spots(s)
-    _check_discrete(s)
+    from g2tom.models import check_contact_model  # here: the command line imports this module before numpy
+
+    check_contact_model(s)
     _check_control_variate(s)
     _check_step_target(s)
     for section in SECTIONS:

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from g2tom.compute import ComputeOptions
+from g2tom.models import Discrete
 from g2tom.config import ResolvedScenario, Scenario
 from g2tom.before_work import load_scenario
 from g2tom.before_work.domains import resolve
@@ -47,7 +48,7 @@ STEPS: tuple[tuple[str, dict[str, Any]], ...] = (
     ("spectral period (field lattice)", {"oxide.period": "spectral"}),
     ("expected spots (Barber; paper_gt)", {"contact.spots": "expected"}),
     ("point model (Greenwood's bound)", {"cube.model": "point"}),
-    ("discrete asperities (coupled caps)", {"contact.model": "discrete"}),
+    ("discrete asperities (coupled caps)", {"contact.model": Discrete.name}),
     ("disc spot rule (a sqrt(f))", {"oxide.spot_rule": "disc"}),
     ("segment spot rule (a h(f); the default)", {"oxide.spot_rule": "segment"}),
 )

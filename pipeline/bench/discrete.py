@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from g2tom.compute import ComputeOptions
+from g2tom.models import Discrete
 from g2tom.config import ResolvedScenario, Scenario
 from g2tom.before_work.domains import resolve, solve_scenario
 from g2tom.contact_solution import fields
@@ -34,7 +35,8 @@ from g2tom.physics import oxide_band
 from g2tom.physics.discrete_resistance import ITERATIVE, currents, resistances
 from g2tom.physics.spot_share import RULES, effective_radius
 from g2tom.scene import FieldSource
-from g2tom.stages import contact, contact_discrete, cube, cube_discrete
+from g2tom.models import discrete_cube, discrete_pool
+from g2tom.stages import contact, cube
 
 __all__ = ["run"]
 
@@ -50,7 +52,7 @@ LARGE_REPEATS = 3
 
 def _discrete(scenario: Scenario) -> ResolvedScenario:
     return resolve(dataclasses.replace(
-        scenario, contact=dataclasses.replace(scenario.contact, model="discrete", surfaces=SURFACES)))
+        scenario, contact=dataclasses.replace(scenario.contact, model=Discrete.name, surfaces=SURFACES)))
 
 
 def _solve(settings: dict[str, Any], k: int, all_candidates: bool = False) -> tuple[float, dc.DiscreteContact, Any]:
@@ -64,9 +66,9 @@ def _solve(settings: dict[str, Any], k: int, all_candidates: bool = False) -> tu
 def _contact(scenario: Scenario) -> tuple[dict[str, Any], np.ndarray]:
     r, sols = solve_scenario(scenario)
     forces = fields(scenario, r, sols)["force"]
-    radius, served = contact_discrete.domain(scenario, min(scenario.deltas))
+    radius, served = discrete_pool.domain(scenario, min(scenario.deltas))
     rough = scenario.roughness
-    cap_profile, cap_radius = contact_discrete.cap_contact(scenario)
+    cap_profile, cap_radius = discrete_pool.cap_contact(scenario)
     settings = {"seed": scenario.oxide.seed, "radius": radius, "eta": rough.eta, "sigma": rough.sigma,
                 "beta": cap_radius, "e_star": scenario.material.E_star, "profile": cap_profile,
                 "forces": forces, "floor": dc.coupling_floor(rough.beta, rough.sigma)}
@@ -120,7 +122,7 @@ def _maps(scenario: ResolvedScenario) -> list[dict[str, Any]]:
                 times = []
                 for k in range(MAPS):
                     start = time.perf_counter()
-                    cube_discrete.discrete_chunk(source, index, np.array([k]), xi, pool, settings)
+                    discrete_cube.discrete_chunk(source, index, np.array([k]), xi, pool, settings)
                     times.append(time.perf_counter() - start)
                 out.append({"spot_rule": rule, "model": model, "lambda": lam, "xi_values": int(xi.size),
                             "median_seconds_per_map": round(statistics.median(times), 5)})
@@ -147,7 +149,7 @@ def _large_unions(scenario: ResolvedScenario) -> list[dict[str, Any]]:
             continue
         modes = source.modes[index]
         coeffs = oxide_band.coefficients(modes, oxide_band.field_stream(source.seed, lam, 0), source.amplitudes)
-        share = cube_discrete.clean_shares(modes, coeffs, x, y, radius, source.thresholds(index, np.array([0]))[:, 0],
+        share = discrete_cube.clean_shares(modes, coeffs, x, y, radius, source.thresholds(index, np.array([0]))[:, 0],
                                            big.oxide.spot_rule, lam * source.cell_size)
         radii = effective_radius(radius[None], share, big.oxide.spot_rule)  # (xi, delta, spot)
         unions = (radii > 0).any(axis=0).sum(axis=-1)

@@ -29,7 +29,8 @@ from g2tom.bench.timing import median_time
 from g2tom.config import ResolvedScenario, Scenario
 from g2tom.before_work.domains import resolve
 from g2tom.physics.spot_models import DISCRETIZATIONS
-from g2tom.stages import contact, cube, cube_chunks
+from g2tom.models import lattice_cube
+from g2tom.stages import contact, cube
 from g2tom.scene import FieldSource
 
 __all__ = ["run", "TARGETS"]
@@ -57,7 +58,7 @@ def _per_map_seconds(scenario: ResolvedScenario, contact_ds: Any) -> float:
     index = min(LAMBDA_INDEX, len(source.lambdas) - 1)
     realizations, xi = np.arange(N_REALIZATIONS), np.arange(len(greenwood.oxide.xi))
     seconds, _ = median_time(
-        lambda: cube_chunks.field_chunk(source, index, realizations, xi, radius, weights, settings), REPEATS)
+        lambda: lattice_cube.field_chunk(source, index, realizations, xi, radius, weights, settings), REPEATS)
     return seconds / (realizations.size * xi.size)
 
 

@@ -140,15 +140,6 @@ class Scenario:
         """
         return cls(**{f.name: getattr(scenario, f.name) for f in dataclasses.fields(Scenario)} | changes)
 
-    def step_target_conflicts(self) -> list[tuple[str, Any, str, str]]:
-        """The settings that keep a per-step ensemble target (``oxide.step_half_width``) from
-        applying: (parameter, its value, the value it needs, why) each; empty where one applies."""
-        needs = (("oxide.ensemble", self.oxide.ensemble, "adaptive", "a fixed ensemble has no target"),
-                 ("contact.model", self.contact.model, "discrete",
-                  "only discrete spots compute a field at some steps alone"),
-                 ("fits.reduction", self.fits.reduction, "geometric_mean", "the target is the geometric mean's"))
-        return [need for need in needs if need[1] != need[2]]
-
     # ----------------------------------------------------------------- provenance
     def to_dict(self) -> dict[str, Any]:
         """Nested plain dict ``{section: {key: value}}`` plus name and description."""

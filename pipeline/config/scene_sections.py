@@ -115,7 +115,7 @@ class Contact:
         "1",
         "contact model: greenwood_tripp (the asperities' mean, Sect. 2.5, discretized by contact.spots) "
         "or discrete (each surface's own Poisson asperities, Hertzian caps coupled through the "
-        "half-space, solved at the Greenwood-Tripp forces of the approaches; design note 11)",
+        "half-space, solved at the Greenwood-Tripp forces of the approaches)",
         choices=("greenwood_tripp", "discrete"),
     )
     surfaces: int = param(

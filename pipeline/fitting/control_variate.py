@@ -2,7 +2,7 @@
 
 At each load step, realization r gives ``y_r = ln R_r`` where it conducts (``c_r = 1``; an open
 circuit has ``c_r = 0``) and its control ``x_r`` (the spots' radius-weighted clean share,
-:func:`g2tom.stages.cube_discrete.weighted_clean_share`), whose expectation ``p`` over all
+:func:`g2tom.models.discrete_cube.weighted_clean_share`), whose expectation ``p`` over all
 realizations is known exactly (:func:`g2tom.physics.oxide_marginal.clean_probability`). The
 geometric mean is over the conducting realizations, E[y | c = 1] = E[y c] / E[c], so numerator and
 denominator are each adjusted by the control:

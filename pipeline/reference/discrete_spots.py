@@ -3,7 +3,7 @@
 On the GW surface the reference knows every asperity. The discrete model
 (:mod:`g2tom.physics.discrete_contact`) solves those very caps, coupled through the half-space,
 at g2tom's forces (the Greenwood–Tripp forces of the set's approaches, where the reference is
-solved too), and the cube's discrete chunk (:func:`g2tom.stages.cube_discrete.discrete_chunk`)
+solved too), and the cube's discrete chunk (:func:`g2tom.models.discrete_cube.discrete_chunk`)
 counts oxide per spot by the set's ``spot_rule`` (the validated scenario's ``disc`` or ``segment``,
 :func:`with_rule_of`) on g2tom's own fields. Against the full field it measures the discrete model
 itself, surface by surface: the caps' point-load coupling, the resistance model and the spot rule.
@@ -23,12 +23,13 @@ from g2tom.reference import scene, surfaces
 from g2tom.scene import FieldSource
 from g2tom.stages import contact as contact_stage
 from g2tom.stages import cube as cube_stage
-from g2tom.stages.cube_discrete import DiscretePool, clean_pool, discrete_chunk
+from g2tom.models import Discrete
+from g2tom.models.discrete_cube import DiscretePool, clean_pool, discrete_chunk
 
 __all__ = ["DISCRETE", "RULES", "with_rule_of", "surface_pool", "g2tom_resistances"]
 
-#: The discretization's name in validate.nc.
-DISCRETE = "discrete"
+#: The discretization's name in validate.nc: the discrete model's.
+DISCRETE = Discrete.name
 #: The oxide rules the discretization takes (a spot's share of its contact disc); the set's own
 #: is the validated scenario's where that is one of them, else ``disc``.
 RULES = ("disc", "segment")
@@ -66,7 +67,7 @@ def g2tom_resistances(vset: scene.ValidationSet, model: str) -> xr.Dataset:
     contact = contact_stage.build(scenario)
     forces = contact["force"].values
     _, _, settings = cube_stage.work_settings(scenario, contact)
-    settings = dataclasses.replace(settings, spots="discrete", spot_rule=vset.spot_rule, model=model)
+    settings = dataclasses.replace(settings, spot_rule=vset.spot_rule, model=model, contact_model=Discrete())
     source = FieldSource.of(scenario)
     xi_all = np.arange(len(vset.xi))
     clean, oxidized = [], []

@@ -43,7 +43,8 @@ from g2tom.reference.variables import variable
 from g2tom.stages import contact as contact_stage
 from g2tom.stages import cube as cube_stage
 from g2tom.stages import oxide as oxide_stage
-from g2tom.stages.cube_discrete import DiscretePool, clean_pool
+from g2tom.models import contact_model
+from g2tom.models.discrete_cube import DiscretePool, clean_pool
 
 __all__ = ["STAND_IN_TOLERANCE", "STAND_IN", "MAX_ROUNDS", "ModelEnsemble", "validated_scenario", "model_ensemble",
            "model_means", "describe", "admitted", "stand_in", "Part2", "CaseCosts", "plan_round", "prior_allocation", "run_part2",
@@ -88,22 +89,18 @@ class ModelEnsemble:
 
 def validated_scenario(vset: scene.ValidationSet, config: str) -> ResolvedScenario:
     """``config`` on the validation scene with a fixed ensemble of ``vset.model_realizations`` oxide
-    fields (and, for ``contact.model = "discrete"``, a pool of at least as many surfaces): its
+    fields (and, for a pooled contact model, a pool of at least as many surfaces): its
     contact model, spots, spot rule and resistance model are its own."""
     base = load_scenario(config)
     overrides = scene.scene_overrides(vset, vset.model_realizations)
-    if base.contact.model == "discrete":
+    if contact_model(base).pooled:
         overrides["contact.surfaces"] = max(base.contact.surfaces, vset.model_realizations)
     return scene.scenario_of(vset, config, overrides)
 
 
 def describe(scenario: Scenario) -> str:
     """The validated scenario's model in words (its name and the settings that make the model)."""
-    words = [f"contact.model {scenario.contact.model}"]
-    if scenario.contact.model == "discrete":
-        words.append(f"contact.surfaces {scenario.contact.surfaces}")
-    else:
-        words.append(f"contact.spots {scenario.contact.spots}")
+    words = contact_model(scenario).words(scenario)
     words += [f"oxide.spot_rule {scenario.oxide.spot_rule}", f"cube.model {scenario.cube.model}",
               f"{scenario.oxide.n_realizations} oxide realizations"]
     return f"{scenario.name} ({', '.join(words)})"
@@ -115,7 +112,7 @@ def model_ensemble(vset: scene.ValidationSet, config: str) -> ModelEnsemble:
     contact = contact_stage.build(scenario)
     oxide = oxide_stage.build(scenario)
     cube = cube_stage.build(scenario, contact, oxide)
-    if scenario.contact.model == "discrete":  # each surface of the pool its own clean resistance
+    if contact_model(scenario).pooled:  # each surface of the pool its own clean resistance
         clean, deterministic = clean_pool(DiscretePool.of(contact), scenario.material.rho,
                                           scenario.cube.model)["resistance"], False
     else:  # Greenwood-Tripp's spots: one clean answer

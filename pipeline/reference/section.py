@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from g2tom.reference.discrete_spots import DISCRETE
 from g2tom.reference.ensemble import MAX_ROUNDS, STAND_IN_TOLERANCE
 from g2tom.reference.summary import ratios
 
@@ -18,7 +19,7 @@ MEANINGS = {
     "surface_asperities": "the GW surface's own asperities in g2tom's cells at Greenwood-Tripp's separation: "
                           "against the full field, what remains is Greenwood-Tripp's averaging and the "
                           "resistance model",
-    "discrete": "the discrete model on the GW surface's own asperities: the caps coupled through the half-space "
+    DISCRETE: "the discrete model on the GW surface's own asperities: the caps coupled through the half-space "
                 "at g2tom's forces, oxide counted per spot (the validated scenario's rule: disc or segment); against "
                 "the full field it measures the "
                 "discrete model itself",
@@ -163,11 +164,11 @@ def _ensemble_table(ds: xr.Dataset) -> list[str]:
 
 def _stand_in_notes(ds: xr.Dataset) -> list[str]:
     """Where the discrete solve stood in for the full field, with part 1's numbers beside it."""
-    if "discrete" not in ds["discretization"].values or "point" not in ds["model"].values:
+    if DISCRETE not in ds["discretization"].values or "point" not in ds["model"].values:
         return []
     used = []
     f = ds["force_normalized"].values
-    part1 = ds.sel(discretization="discrete", model="point")
+    part1 = ds.sel(discretization=DISCRETE, model="point")
     for label, sel in _ensemble_cells(ds):
         flag = ds["ensemble_stand_in_clean"] if not sel else ds["ensemble_stand_in"].sel(sel)
         ratio = part1["ratio_clean"] if not sel else part1["ratio"].sel(sel)

@@ -19,7 +19,7 @@ from g2tom.physics import spot_models
 from g2tom.reference import scene, surfaces
 from g2tom.stages import contact as contact_stage
 from g2tom.stages import cube as cube_stage
-from g2tom.stages import cube_chunks
+from g2tom.models import lattice_cube
 from g2tom.scene import FieldSource
 
 __all__ = ["SURFACE_ASPERITIES", "spot_radii", "g2tom_resistances"]
@@ -62,8 +62,8 @@ def g2tom_resistances(vset: scene.ValidationSet, model: str) -> xr.Dataset:
     _, _, settings = cube_stage.work_settings(scenario, contact)
     realizations = np.asarray(vset.realizations)
     radius = np.stack([spot_radii(vset, int(k), contact["x"].values, settings.separation) for k in realizations])
-    clean = cube_chunks.clean_terms(radius, radius, settings).resistance  # (realization, delta)
-    oxidized = cube_chunks.exact_terms(FieldSource.of(scenario), realizations, radius, radius, settings)["resistance"]
+    clean = lattice_cube.clean_terms(radius, radius, settings).resistance  # (realization, delta)
+    oxidized = lattice_cube.exact_terms(FieldSource.of(scenario), realizations, radius, radius, settings)["resistance"]
     return xr.Dataset({
         "force": contact["force"],
         "resistance_clean": (("realization", "delta"), clean, {"units": "ohm", "long_name": "clean resistance"}),

@@ -20,7 +20,7 @@ from g2tom.physics import greenwood_tripp as gt
 from g2tom.physics import hertz, spot_models, spots
 from g2tom.physics.asperity import area_fraction
 from g2tom.physics.grid import cell_centres
-from g2tom.stages import contact_discrete
+from g2tom.models import contact_model
 from g2tom.stages.schema import SCHEMA, SPOT_RADIUS_LONG_NAMES, labelled
 from g2tom.store import write_dataset
 
@@ -87,9 +87,9 @@ def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=
         hertz_radius, holm_radius, roughness_parameter, iterations, residual, converged,
         stiffness (N/m) and barber_conductance (S);
         over (delta, y, x): spot_area, spot_radius (by ``contact.spots``), spot_separation; over r: profile. ``auto`` domains are
-        resolved first (:func:`g2tom.before_work.domains.resolve`). With ``contact.model = "discrete"``
-        also the pool of discrete surfaces at the same forces
-        (:func:`g2tom.stages.contact_discrete.variables`; its solves run where ``options`` says).
+        resolved first (:func:`g2tom.before_work.domains.resolve`). And what the contact model adds at
+        the same forces (:meth:`g2tom.models.ContactModel.contact_pool`: the discrete model's pool of
+        surfaces, its solves run where ``options`` says).
     """
     scenario = resolve(scenario)
     r, sols, stiffness = solve_with_stiffness(scenario)
@@ -120,12 +120,11 @@ def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=
     }
     attrs = {"cell_size": scenario.cell_size, "hertz_reference": "sphere only (NaN otherwise)",
              "spots": scenario.contact.spots, "model": scenario.contact.model}
-    if scenario.contact.model == "discrete":
-        pool, radius = contact_discrete.solve_pool(scenario, f["force"], float(deltas.min()), options)
-        pool_vars, pool_coords, pool_attrs = contact_discrete.variables(scenario, pool, radius)
-        data_vars.update(pool_vars)
-        coords.update(pool_coords)
-        attrs.update(pool_attrs)
+    pool_vars, pool_coords, pool_attrs = contact_model(scenario).contact_pool(scenario, f["force"], float(deltas.min()),
+                                                                             options)
+    data_vars.update(pool_vars)
+    coords.update(pool_coords)
+    attrs.update(pool_attrs)
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 

@@ -7,7 +7,7 @@ interaction weights ``cube.weights`` (spot radii, Eq. 13, or cell contact areas 
 published code). With ``cube.model = "point"`` the exact point-interaction solve
 (:mod:`g2tom.physics.point_model`) replaces the closed form, and ``oxide.film = "resistive"``
 lets oxidized spots conduct through their film. The work is split over (lambda, realization chunk) dask tasks
-(:mod:`g2tom.stages.cube_chunks`) of about
+(the contact model's unit of work, :meth:`g2tom.models.ContactModel.chunk`) of about
 ``compute.cube_chunk`` x n_xi masks (``compute.cube_chunk`` fields when every xi is evaluated, proportionally
 more when fewer fractions still need realizations); every entry's result is bit-identical
 whatever the chunk size or scheduler.
@@ -24,7 +24,6 @@ rounds (:mod:`g2tom.stages.cube_rounds`). The realization axis is padded to the 
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -40,12 +39,11 @@ from g2tom.physics.interaction import AUTO_METHOD
 from g2tom.physics import oxide_field
 from g2tom.physics.lattice import SQUARE_LATTICE_CONSTANT
 from g2tom.physics.oxide_marginal import clean_probability
-from g2tom.stages.cube_chunks import asperity_spots, clean_terms, exact_terms, spots_of
-from g2tom.stages.cube_settings import CubeSettings
+from g2tom.models import contact_model
+from g2tom.models.cube_settings import CubeSettings
 from g2tom.stages.cube_dataset import dataset
-from g2tom.stages.cube_discrete import DiscretePool, clean_pool
 from g2tom.stages.cube_rounds import compute_cells, half_widths, padded, stopping_rule
-from g2tom.scene import FieldSource, bands
+from g2tom.scene import bands
 from g2tom.stages.oxide import RecordedFields
 
 __all__ = ["build", "run", "spot_maps", "work_settings", "clean_conductances", "CLEAN_MODELS"]
@@ -90,96 +88,26 @@ def _check_grids(contact: xr.Dataset, oxide: xr.Dataset) -> None:
         raise ValueError("contact.nc: the cell grid must be square (x and y identical)")
 
 
-def _clean(radius: np.ndarray, weights: np.ndarray, settings: CubeSettings, n_drawn: int) -> dict[str, np.ndarray]:
-    """The oxide-free surface, every spot conducting, on the whole window (exact), over delta.
-
-    For ``asperities`` spots, over the first ``n_drawn`` realizations of the heights: the
-    resistance of the mean conductance (open circuits conduct nothing), the self term of the
-    mean self-conductance, and the probability of an open circuit.
-    """
-    if settings.spots == "discrete":
-        return _clean_discrete(radius, settings.rho, settings.model)
-    n_delta = radius.shape[0]
-    if settings.spots != "asperities":
-        res = clean_terms(radius, weights, settings)
-        return {"resistance": res.resistance[0], "self": res.resistance_self[0],
-                "interaction": res.resistance_interaction[0], "open": np.zeros(n_delta), "n_drawn": 0}
-    drawn = asperity_spots(settings, np.arange(n_drawn))
-    res = clean_terms(drawn, drawn, settings)
-    rho = settings.rho
-    with np.errstate(divide="ignore"):
-        total = rho / np.mean(rho / res.resistance, axis=0)
-        own = rho / np.mean(rho / res.resistance_self, axis=0)
-    return {"resistance": total, "self": own, "interaction": total - own,
-            "open": np.mean(np.isinf(res.resistance), axis=0), "n_drawn": n_drawn}
-
-
-def _clean_discrete(pool: DiscretePool, rho: float, model: str) -> dict[str, np.ndarray]:
-    """:func:`_clean` on discrete spots: over the pool's surfaces (at each step, those solved there),
-    the resistance of the mean conductance, the self term of the mean self-conductance, the
-    probability of an open circuit."""
-    terms = clean_pool(pool, rho, model)
-    resistance = terms["resistance"]
-    if pool.steps is None:
-        mean, is_open = np.mean, np.isinf(resistance)
-    else:  # NaN where a surface was not solved
-        mean, is_open = np.nanmean, np.where(np.isnan(resistance), np.nan, np.isinf(resistance))
-    with np.errstate(divide="ignore"):
-        total = rho / mean(rho / resistance, axis=0)
-        own = rho / mean(rho / terms["resistance_self"], axis=0)
-    open_ = mean(is_open, axis=0)
-    return {"resistance": total, "self": own, "interaction": total - own, "open": open_, "n_drawn": pool.size}
-
-
 #: The clean surface's conductance by each model, for Barber's check: (name, model, lattice constant).
 CLEAN_MODELS = (("greenwood", "greenwood", 0.0), ("point", "point", 0.0),
                 ("point_lattice", "point", SQUARE_LATTICE_CONSTANT))
 
 
-def _clean_models(radius: np.ndarray, weights: np.ndarray, settings: CubeSettings, n_drawn: int,
+def _clean_models(radius: Any, weights: Any, settings: CubeSettings, n_drawn: int,
                   known: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """The oxide-free conductance (S, over delta) of every model of :data:`CLEAN_MODELS` with the
-    run's spots, solved tightly (NaN where the model does not apply: the point model needs radius
-    weights, the lattice term spots that stand for a continuum, not drawn asperities); the
-    models in ``known`` are taken from it."""
+    run's spots, solved tightly (NaN where the model does not apply:
+    :meth:`g2tom.models.ContactModel.clean_conductance`); the models in ``known`` are taken from it."""
     out = dict(known)
     for name, kind, constant in CLEAN_MODELS:
-        if name in out:
-            continue
-        if settings.spots == "discrete":  # no lattice on discrete spots
-            out[name] = (np.full(len(settings.crops), np.nan) if constant > 0 else
-                         1.0 / _clean_discrete(radius, settings.rho, kind)["resistance"])
-            continue
-        # the lattice term completes expected spots' continuum; drawn asperities have none to complete
-        lattice_off = constant > 0 and settings.spots == "asperities"
-        if lattice_off or kind == "point" and weights is not radius and not np.array_equal(weights, radius):
-            out[name] = np.full(radius.shape[0], np.nan)
-            continue
-        chosen = dataclasses.replace(settings, model=kind, lattice_constant=constant, film_resistance=np.inf,
-                                     solver_tolerance=1e-12, solver_criterion="error", max_iterations=200)
-        out[name] = 1.0 / _clean(radius, weights, chosen, n_drawn)["resistance"]
+        if name not in out:
+            out[name] = settings.contact_model.clean_conductance(radius, weights, settings, n_drawn, kind, constant)
     return out
-
-
-def _measured_crop_error(
-    source: FieldSource, radius: np.ndarray, weights: np.ndarray, settings: CubeSettings,
-    cropped: np.ndarray,
-) -> float:
-    """Largest relative change of ``R`` from cropping, over the first realization's entries
-    (0 on discrete spots: they are never cropped)."""
-    if settings.spots == "discrete":
-        return 0.0
-    first = np.arange(1)
-    exact = exact_terms(source, first, *spots_of(settings, first, radius, weights), settings)["resistance"]
-    finite = np.isfinite(exact)
-    if not finite.any():
-        return 0.0
-    return float(np.max(np.abs(cropped[..., :1][finite] / exact[finite] - 1.0)))
 
 
 def work_settings(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, np.ndarray, CubeSettings]:
     """Spot radii and weights (delta, y, x) of ``contact`` and the settings every task of the cube reads
-    (with ``contact.model = "discrete"`` the pool of surfaces, :class:`DiscretePool`, for both)."""
+    (as the contact model takes them: :meth:`g2tom.models.ContactModel.cube_spots`)."""
     radius, weights, pitch = spot_maps(scenario, contact)
     cube = scenario.cube
     film = scenario.oxide.film_resistance if scenario.oxide.film == "resistive" else np.inf
@@ -207,11 +135,9 @@ def work_settings(scenario: Scenario, contact: xr.Dataset) -> tuple[np.ndarray, 
         separation=separation,
         spot_rule=scenario.oxide.spot_rule,
         control_variate=scenario.fits.control_variate == "clean_share",
+        contact_model=contact_model(scenario),
     )
-    if scenario.contact.model == "discrete":
-        pool = DiscretePool.of(contact)
-        return pool, pool, dataclasses.replace(settings, spots="discrete")
-    return radius, weights, settings
+    return settings.contact_model.cube_spots(contact, radius, weights, settings)
 
 
 def _clean_draws(scenario: Scenario) -> int:
@@ -287,11 +213,11 @@ def build(
         out["step_realizations"] = step_counts
     if "clean_share" in out:
         out["clean_share_expected"] = expected_clean_share(scenario)
-    clean = _clean(radius, weights, settings, _clean_draws(scenario))
+    clean = settings.contact_model.clean(radius, weights, settings, _clean_draws(scenario))
     insulating_greenwood = scenario.cube.model == "greenwood" and scenario.oxide.film == "insulating"
     clean["models"] = clean_conductances(
         scenario, contact, {"greenwood": 1.0 / clean["resistance"]} if insulating_greenwood else None)
-    measured = _measured_crop_error(source, radius, weights, settings, out["resistance"])
+    measured = settings.contact_model.crop_error(source, radius, weights, settings, out["resistance"])
     return dataset(scenario, contact, oxide, out, clean, settings, measured, counts, last)
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import xarray as xr
 
 from g2tom.config import Scenario
-from g2tom.stages.cube_settings import CubeSettings
+from g2tom.models.cube_settings import CubeSettings
 from g2tom.stages.cube_rounds import RULE_MARGIN
 from g2tom.stages.schema import RESISTANCE_LONG_NAMES, variable
 
@@ -37,14 +37,8 @@ def dataset(
         "force_normalized": cube("force_normalized", contact["force_normalized"].values),
     }
     is_open = np.isposinf(out["resistance"])
-    discrete = scenario.contact.model == "discrete"
-    clean_comment = ("the mean conductance (self-conductance) over the "
-                     f"{clean['n_drawn']} discrete surfaces of contact.nc"
-                     + (" (at each step those solved there: a grown pool)" if scenario.contact.pool_half_width > 0 else "")
-                     if discrete else
-                     "the mean conductance (self-conductance) over the first "
-                     f"{clean['n_drawn']} realizations of the asperity heights"
-                     if scenario.contact.spots == "asperities" else "exact, every spot conducting")
+    clean_comment = settings.contact_model.clean_comment(scenario, clean["n_drawn"])
+    rule = settings.contact_model.conducting_rule(scenario)
     counted = ("step_realizations(xi, lambda, delta)" if "step_realizations" in out
                else "n_realizations(xi, lambda)")
     padding = f"NaN beyond {counted}"
@@ -97,19 +91,13 @@ def dataset(
         "crop_error_measured_on": "all entries of the first realization, against the whole window",
         "n_uncropped": out["n_uncropped"],
         "n_open_total": int(is_open.sum()),
-        "conducting_rule": "a spot conducts where spot_radius > 0 and psi < threshold (float32)",
+        "conducting_rule": rule.pop("conducting_rule"),
         "fields": "regenerated in every task from SeedSequence(oxide.seed, spawn_key=(round(lambda * 1e6), realization))",
         "ensemble": ox.ensemble,
         "model": scenario.cube.model,
         "film": ox.film,
     }
-    if discrete:
-        attrs["conducting_rule"] = (
-            "realization k meets discrete surface k mod contact.surfaces; a spot conducts with radius a where the "
-            "field at its centre is below the threshold (spot_rule centre), or with a sqrt(f), f its clean share of "
-            "the contact disc (spot_rule disc), or with a h(f) >= a sqrt(f), the conductance of the circular segment "
-            "of share f (spot_rule segment)")
-        attrs["spot_rule"] = ox.spot_rule
+    attrs.update(rule)
     if ox.film == "resistive":
         attrs["film_resistance"] = ox.film_resistance
         attrs["conducting_rule"] = "every spot conducts; where psi >= threshold through the film"

@@ -27,8 +27,7 @@ import numpy as np
 from g2tom.compute import ComputeOptions, compute
 from g2tom.config import Scenario
 from g2tom.fitting import ensemble
-from g2tom.stages.cube_chunks import field_chunk, terms
-from g2tom.stages.cube_settings import CubeSettings
+from g2tom.models.cube_settings import CubeSettings
 from g2tom.scene import FieldSource
 
 __all__ = ["RULE_MARGIN", "stopping_rule", "half_widths", "compute_cells", "padded"]
@@ -162,6 +161,12 @@ def _limit(alpha: int | None, steps: np.ndarray | None, n_delta: int) -> int:
     return int(np.flatnonzero(steps < 0).max()) + 1
 
 
+def _chunk(source: FieldSource, index: int, realizations: np.ndarray, xi_index: np.ndarray, radius: Any,
+           weights: Any, settings: CubeSettings, *limit: int) -> dict[str, Any]:
+    """A dask task of the cube: the contact model's unit of work (:meth:`g2tom.models.ContactModel.chunk`)."""
+    return settings.contact_model.chunk(source, index, realizations, xi_index, radius, weights, settings, *limit)
+
+
 def compute_cells(
     scenario: Scenario, source: FieldSource, radius: np.ndarray, weights: np.ndarray,
     settings: CubeSettings, rule: dict[str, Any], options: ComputeOptions,
@@ -219,7 +224,7 @@ def compute_cells(
                 below = () if limit == n_delta else (limit,)
                 for start in range(done[a], want[a], chunk):
                     block = np.arange(start, min(start + chunk, want[a]))
-                    tasks.append(dask.delayed(field_chunk, pure=True)(source_key, a, block, active, *shared, *below))
+                    tasks.append(dask.delayed(_chunk, pure=True)(source_key, a, block, active, *shared, *below))
                     owner.append((a, active))
         for (a, active), piece in zip(owner, compute(*tasks, options=options, label=label)):
             pieces[a].append((active, piece))
@@ -243,11 +248,11 @@ def compute_cells(
             want[a] = min(done[a] + scenario.compute.oxide_batch, ox.max_realizations)
     counts = np.array(kept, int).T
     if not per_step:
-        out = [[{name: _joined(pieces[a], z, name)[..., : kept[a][z]] for name in terms(settings)}
+        out = [[{name: _joined(pieces[a], z, name)[..., : kept[a][z]] for name in settings.contact_model.terms(settings)}
                 for a in range(n_lam)] for z in range(n_xi)]
         return out, counts, None, uncropped
     step_counts = np.array(steps, int).transpose(1, 0, 2)
-    out = [[_kept_steps({name: _joined(pieces[a], z, name) for name in terms(settings)}, step_counts[z, a])
+    out = [[_kept_steps({name: _joined(pieces[a], z, name) for name in settings.contact_model.terms(settings)}, step_counts[z, a])
             for a in range(n_lam)] for z in range(n_xi)]
     return out, counts, step_counts, uncropped
 

@@ -39,7 +39,7 @@ from g2tom.physics.discrete_resistance import resistances
 from g2tom.physics.oxide_points import values_at_points
 from g2tom.physics.spot_share import DEFAULT_RINGS, disc_points, disc_shares, effective_radius
 
-from g2tom.stages.cube_settings import CubeSettings
+from g2tom.models.cube_settings import CubeSettings
 
 __all__ = ["RINGS_PER_CORRELATION", "POINT_TOLERANCE", "DiscretePool", "rings", "clean_shares", "discrete_chunk", "clean_pool",
            "weighted_clean_share"]

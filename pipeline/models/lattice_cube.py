@@ -1,11 +1,12 @@
-"""The cube's unit of work: the resistance terms of a chunk of oxide fields at every load step.
+"""The Greenwood–Tripp model's cube (:class:`g2tom.models.GreenwoodTripp`): the resistance terms of a
+chunk of oxide fields at every load step, on the spots of the cell lattice.
 
 A dask task regenerates a chunk of fields of one lambda from their seeds
 (:class:`g2tom.scene.FieldSource`), thresholds them at each oxide fraction and runs
 the scenario's resistance model (:func:`model`) on the conducting masks: Greenwood's closed
 form, Greenwood's form with films, or the point model. With ``asperities`` spots each
-realization brings its own drawn spots (:func:`asperity_spots`); discrete spots have their own
-chunk (:mod:`g2tom.stages.cube_discrete`).
+realization brings its own drawn spots (:func:`asperity_spots`). Discrete spots have their own
+chunk (:mod:`g2tom.models.discrete_cube`).
 """
 
 from __future__ import annotations
@@ -19,8 +20,7 @@ import numpy as np
 from g2tom.physics import constriction, point_model, spot_models
 from g2tom.physics.spot_geometry import SpotGeometry
 from g2tom.scene import FieldSource
-from g2tom.stages.cube_discrete import discrete_chunk
-from g2tom.stages.cube_settings import CubeSettings
+from g2tom.models.cube_settings import CubeSettings
 
 __all__ = ["TERMS", "SOLVER_TERMS", "model", "terms", "asperity_spots", "spots_of", "chunk_terms", "clean_terms",
            "exact_terms", "field_chunk"]
@@ -46,10 +46,8 @@ def model(settings: CubeSettings) -> Any:
 
 
 def terms(settings: CubeSettings) -> tuple[str, ...]:
-    """The per-entry terms the model of ``settings`` returns (discrete spots: a direct solve, no solver
-    terms; with the control variate also the spots' ``clean_share``)."""
-    if settings.spots == "discrete":
-        return TERMS + ("clean_share",) if settings.control_variate else TERMS
+    """The per-entry terms the resistance model of ``settings`` returns on the lattice's spots (the point
+    model's also its solver's)."""
     return TERMS + SOLVER_TERMS if settings.model == "point" else TERMS
 
 
@@ -162,13 +160,9 @@ def field_chunk(
 ) -> dict[str, Any]:
     """Regenerate the fields of ``realizations`` at lambda number ``index`` and run :func:`chunk_terms`.
 
-    Only the fractions ``xi_index`` are evaluated; returns the terms shaped (xi, delta, realization).
-    Discrete spots (``radius`` a :class:`g2tom.stages.cube_discrete.DiscretePool`) go to
-    :func:`g2tom.stages.cube_discrete.discrete_chunk`, which computes only the steps below
-    ``limit`` (None: every step; other spots compute every step).
+    Only the fractions ``xi_index`` are evaluated; returns the terms shaped (xi, delta, realization),
+    at every step (``limit`` is the discrete model's: unused here).
     """
-    if settings.spots == "discrete":
-        return discrete_chunk(source, index, realizations, xi_index, radius, settings, limit)
     psi, threshold = source.fields(index, realizations)
     radius, weights = spots_of(settings, realizations, radius, weights)
     out = chunk_terms(psi[None], threshold[xi_index][:, None], radius, weights, settings)

@@ -21,7 +21,7 @@ fast solve, :func:`probe`; within a few % of the discrete pool's at the heavy st
 The constants are one thread's CPU seconds measured on a 2-core machine (2026-11-27, small fixed
 ensembles of atlas design scenes d02, d12, d22, d24: mu 7.07 at Pi 5, 40, 320, and mu 50 at Pi 320;
 d21 and d20, mu 2.66 and 1 at Pi 320, for the large unions; see each constant). ``g2tom plan`` scales its estimates of the default scene by these models'
-ratio (:mod:`g2tom.before_work.plan`); ``g2tom plan --atlas`` adds them up per scene
+ratio (:meth:`g2tom.models.Discrete.plan_work`); ``g2tom plan --atlas`` adds them up per scene
 (:mod:`g2tom.atlas.cost`).
 """
 
@@ -36,8 +36,31 @@ import numpy as np
 from g2tom.config import Scenario
 
 __all__ = ["probe", "expected_counts", "expected_touching", "expected_force_normalized", "surface_seconds",
-           "field_seconds", "grown_pool", "step_fields"]
+           "field_seconds", "grown_pool", "step_fields", "DISCRETE_SOLVE_S", "DEFAULT_STEPS", "DISCRETE_XI_MAP_S",
+           "DEFAULT_SURFACE_MODEL_S", "DEFAULT_HEAVIEST_TOUCHING", "DEFAULT_FIELD_MODEL_S"]
 
+#: One thread's time per discrete surface and load step of the contact solve (s): the median of
+#: `g2tom bench --only discrete` on the paper's scene, 3.85 ms.
+DISCRETE_SOLVE_S = 3.85e-3
+#: Load steps of the default scene, on which DISCRETE_SOLVE_S and DISCRETE_XI_MAP_S were measured.
+DEFAULT_STEPS = 20
+#: One thread's time per (xi, field) of the cube on discrete spots (s) by (oxide.spot_rule,
+#: cube.model): (disc, point) from the default `make run` from a fresh clone (2026-11-27, 2 cores,
+#: compiled point solves and disc shares: the cube took 92.05 s, 2 x 92.05 / 188,200); the
+#: (centre, point) pair scaled by the same ratio to the previous code's 5.5 ms (not measured); the
+#: Greenwood pairs are the previous code's, whose Greenwood form did not change (not remeasured).
+DISCRETE_XI_MAP_S = {("disc", "point"): 2 * 92.05 / 188_200, ("centre", "point"): 3.0e-3 * 2 * 92.05 / 188_200 / 5.5e-3,
+                     ("disc", "greenwood"): 2.8e-3, ("centre", "greenwood"): 0.75e-3}
+# the segment rule counts shares as disc does (its table lookup is a few % of a field's work)
+DISCRETE_XI_MAP_S.update({("segment", model): DISCRETE_XI_MAP_S[("disc", model)] for model in ("point", "greenwood")})
+#: The discrete cost models (this module) on the default scene (its
+#: 20 steps' expected counts: at most 210 touching asperities and 754 candidates), CPU seconds of
+#: one thread: one surface of the pool, one oxide field's point solves (every xi). Another scene's
+#: discrete pool and cube are estimated as the default's measured constants above times the
+#: models' ratio, so the cost follows the touching count (dense solves: N^2.5 to N^3 at large N).
+DEFAULT_SURFACE_MODEL_S = 0.07436773256159718
+DEFAULT_HEAVIEST_TOUCHING = 210
+DEFAULT_FIELD_MODEL_S = 0.008316928707799072
 #: Radial nodes of the fast solve.
 _N_RADIAL = 400
 #: Rigid gap (units of sigma) at the fast solve's outer radius: f_{3/2}(12) ~ 1e-33 of the peak.

@@ -1,4 +1,5 @@
-"""Stage 1 with ``contact.model = "discrete"``: a pool of rough surfaces, each solved at the load steps' forces.
+"""The discrete model's contact (:class:`g2tom.models.Discrete`): a pool of rough surfaces, each solved at the
+load steps' forces.
 
 The load steps are forces: those the Greenwood–Tripp solution gives at the scenario's approaches,
 so both models share the steps and F'. Surface ``k`` of the pool (``contact.surfaces`` of them)
@@ -27,14 +28,13 @@ from typing import Any, Callable
 
 import dask
 import numpy as np
-import xarray as xr
 
 from g2tom.compute import ComputeOptions, compute
 from g2tom import config
 from g2tom.config import POOL_CONFIDENCE, Scenario
 from g2tom.fitting.ensemble import mean_half_width, z_value
 from g2tom.physics import discrete_contact as dc
-from g2tom.stages.schema import SCHEMA
+from g2tom.variables import entry
 
 __all__ = ["CHUNK", "DOMAIN_MARGIN", "cap_contact", "domain", "surface_spots", "solve_pool", "grow_pool",
            "pool_half_widths", "variables"]
@@ -165,7 +165,7 @@ def grow_pool(pool: list[dict[str, np.ndarray]], target: float,
 
 def _var(name: str, data: np.ndarray) -> tuple:
     """A variable of contact.nc's pool: dims, units and long name from the schema."""
-    var = SCHEMA["contact"][name]
+    var = entry(f"stages.contact.{name}")
     return (var.dims, np.asarray(data), var.attrs())
 
 

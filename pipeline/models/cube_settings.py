@@ -1,12 +1,13 @@
 """What every task of the cube reads besides the fields and the spot maps: :class:`CubeSettings`.
 
-Its own module, below both kinds of chunk (:mod:`g2tom.stages.cube_chunks` on the cell lattice,
-:mod:`g2tom.stages.cube_discrete` on discrete spots), which both read it.
+Its own module, below both kinds of chunk (:mod:`g2tom.models.lattice_cube` on the cell lattice,
+:mod:`g2tom.models.discrete_cube` on discrete spots), which both read it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -36,7 +37,7 @@ class CubeSettings:
     method
         ``compute.interaction_sum`` as configured; ``method_used`` with ``auto`` resolved.
     spots
-        ``contact.spots``, or ``discrete`` with ``contact.model = "discrete"``.
+        ``contact.spots`` (the Greenwood–Tripp model's spots on the cell lattice).
     lattice_constant
         ``cube.lattice_constant`` of the point model's self term.
     asperities
@@ -47,6 +48,9 @@ class CubeSettings:
         ``oxide.spot_rule`` (discrete spots: ``centre`` or ``disc``).
     control_variate
         ``fits.control_variate``: discrete spots also return each realization's ``clean_share``.
+    contact_model
+        The run's contact model, a :class:`g2tom.models.base.ContactModel` (:func:`g2tom.models.contact_model`):
+        its cube chunks and clean terms.
     """
 
     pitch: float
@@ -66,3 +70,4 @@ class CubeSettings:
     separation: np.ndarray | None = None
     spot_rule: str = "centre"
     control_variate: bool = False
+    contact_model: Any = None
