@@ -255,7 +255,7 @@ def predict_resistance(surface: Scenario | str | Path, force: Any, xi: Any, lam:
     Raises
     ------
     ConfigError
-        If an argument is of the wrong kind (naming it and its value: :func:`_check_arguments`) or
+        If an argument is of the wrong kind (naming it and its value) or
         out of range, or the query or surface lies outside the chosen surrogate's domain and
         ``extrapolate`` is False.
     """

@@ -44,7 +44,7 @@ FORCE_AGREEMENT = 1e-4
 SERIAL = ComputeOptions(workers=1, progress=False)
 
 __all__ = ["available_discretizations", "default_of", "plan_lines", "format_validate_plan", "run_validation",
-           "chosen_set", "Part2Precision", "output_folder", "SURFACES", "CaseRunner", "SERIAL"]
+           "chosen_set", "Part2Precision", "output_folder", "SURFACES", "CaseRunner", "SERIAL", "COUNTS", "LEAST_ERROR"]
 
 
 def available_discretizations(surface: str = "gw") -> tuple[str, ...]:
