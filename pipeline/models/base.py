@@ -66,7 +66,8 @@ class PlanWork:
 
 class ContactModel(ABC):
     """A contact model (``contact.model``): one stateless object per run, chosen from the registry
-    (:data:`g2tom.models.CONTACT_MODELS`); a new model is one subclass and one registry line."""
+    (:data:`g2tom.models.CONTACT_MODELS`); a new model is one subclass (a frozen dataclass, so that
+    equal models compare and hash equal, as dask's task keys need) and one registry line."""
 
     #: The value of ``contact.model`` that selects it.
     name: ClassVar[str]
@@ -75,6 +76,8 @@ class ContactModel(ABC):
     pooled: ClassVar[bool]
     #: ``oxide.spot_rule`` values its spots take.
     spot_rules: ClassVar[tuple[str, ...]]
+    #: Why those are all the rules its spots take (for the check's message).
+    spot_rule_reason: ClassVar[str] = ""
     #: Its cube can compute a field at some load steps alone (a per-step ensemble target).
     computes_steps_alone: ClassVar[bool]
     #: Its cube returns each realization's clean share (the control variate's control).
@@ -82,23 +85,11 @@ class ContactModel(ABC):
     #: The adaptive ensemble's typical counts on the default scene (``g2tom plan``).
     typical: ClassVar[TypicalEnsemble]
 
-    def __eq__(self, other: object) -> bool:
-        return type(self) is type(other)
-
-    def __hash__(self) -> int:
-        return hash(self.name)
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}()"
-
     # ------------------------------------------------------------------ before work
     def check(self, s: Scenario) -> None:
         """The settings this model rules out besides its spot rules (raises
         :class:`~g2tom.config.ConfigError`, naming the parameter, its value and what is allowed); none by
         default."""
-
-    #: Why :attr:`spot_rules` are all the rules this model's spots take (for the check's message).
-    spot_rule_reason: ClassVar[str] = ""
 
     def check_reach(self, s: Scenario, expected_touching: float) -> None:
         """Refuse a scene this model cannot solve, given the asperities Greenwood–Tripp expects to touch at

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -28,6 +29,7 @@ __all__ = ["Discrete", "MIN_TOUCHING"]
 MIN_TOUCHING = 5.0
 
 
+@dataclass(frozen=True)
 class Discrete(ContactModel):
     """Discrete asperities with elastic interaction: a pool of drawn surfaces, each its own clean answer."""
 

@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -18,6 +19,7 @@ from g2tom.scene import FieldSource
 __all__ = ["GreenwoodTripp"]
 
 
+@dataclass(frozen=True)
 class GreenwoodTripp(ContactModel):
     """Greenwood–Tripp's mean contact, its spots on the lattice of cells (one deterministic clean answer)."""
 
