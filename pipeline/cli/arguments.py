@@ -117,7 +117,10 @@ def build_parser() -> argparse.ArgumentParser:
                       help="plan `g2tom validate`'s default set on both surfaces, part 2 validating this scenario")
     add("atlas", commands.atlas, "run the chain on every scene of the atlas's design over (mu, Pi), one scene per "
         "task, resumable (<data-dir>/atlas/)", compute=True)
-    add("params", commands.params, "list every parameter with its value, unit and range")
+    params = add("params", commands.params, "list every parameter with its value, unit and range")
+    params.add_argument("--resolved", action="store_true",
+                        help="the values a run uses: 'auto' domains (contact.window, contact.r_max) resolved from "
+                             "the solution, and the cell grid they give")
     predict = add("predict", commands.predict, "predict R_el at forces, oxide fractions and lambdas: the run's own "
                   "surrogate on its surface, else the atlas's; each cell's ln R'(ln F') curve (--model power_law: "
                   "Eq. 27, a run's own surrogate only)")

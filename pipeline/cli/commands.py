@@ -201,10 +201,18 @@ def stamp(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
 
 
 def params(args: argparse.Namespace, scenario: Scenario) -> None:
-    """``g2tom params``: every parameter with its value, unit, range and meaning."""
+    """``g2tom params``: every parameter with its value, unit, range and meaning (``--resolved``: as a run
+    uses them, ``auto`` domains resolved, and the cell grid they give)."""
+    if args.resolved:
+        from g2tom.before_work.domains import resolve
+
+        scenario = resolve(scenario)
     flat = scenario.flat()
     for key, _default, unit, allowed, doc in parameter_table():
         print(f"{key:32s} {flat[key]!s:>24}  [{unit}]  {allowed}: {doc}")
+    if args.resolved:
+        print(f"{'cells':32s} {f'{scenario.n_cells} x {scenario.n_cells}':>24}  [1]  of pitch 1/sqrt(eta) = "
+              f"{scenario.cell_size:.4g} m over the window")
 
 
 def plan(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
