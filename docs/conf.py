@@ -55,7 +55,8 @@ numpydoc_xref_param_type = False
 nitpicky = True
 
 
-def _outside_all(packages: tuple[str, ...] = ("g2tom.config", "g2tom.before_work", "g2tom.stages", "g2tom.physics",
+def _outside_all(packages: tuple[str, ...] = ("g2tom.config", "g2tom.models", "g2tom.before_work", "g2tom.stages",
+                                              "g2tom.physics",
                                               "g2tom.fitting", "g2tom.predict", "g2tom.reference")) -> list[tuple[str, str]]:
     """``("py:obj", name)`` for each public name a module keeps out of its ``__all__``: autosummary's
     tables list it, autodoc (which follows ``__all__``) gives it no entry to link to."""
@@ -168,7 +169,7 @@ nitpick_ignore_regex = [
     # other projects' objects and the standard library
     (r"py:.*", r"(numpy|np|xarray|xr|scipy|pandas|pd|matplotlib|mpl|plt|dask|distributed|numba|cupy|tamaas"
                r"|SurfaceTopography|markdown|pathlib|typing|typing_extensions|collections|argparse|concurrent"
-               r"|os|io|json|datetime|enum|dataclasses|subprocess|threading|multiprocessing|logging)(\..*)?"),
+               r"|os|io|json|datetime|enum|dataclasses|subprocess|threading|multiprocessing|logging|abc)(\..*)?"),
     (r"py:class", r"(Path|PathLike|Any|Callable|Iterable|Iterator|Sequence|Mapping|MutableMapping|Self|Literal"
                   r"|NDArray|ArrayLike|DTypeLike|Dataset|DataArray|ndarray|Figure|Axes|Client|Future|Namespace"
                   r"|ArgumentParser|TextIO|Generator|Hashable|ClassVar|Protocol|TypeVar|Enum|Number)"),

@@ -5,7 +5,7 @@ stage, the cube's spots and unit of work, the clean surface, its costs and its w
 :class:`GreenwoodTripp` (the asperities' mean on the lattice of cells, :mod:`g2tom.models.lattice_cube`)
 and :class:`Discrete` (each surface's own coupled caps, :mod:`g2tom.models.discrete_pool`,
 :mod:`g2tom.models.discrete_cube`, :mod:`g2tom.models.discrete_cost`) are the two;
-:func:`contact_model` picks one (:data:`CONTACT_MODELS`). A new model is one subclass and one registry
+:func:`contact_model` picks one (:data:`~g2tom.models.registry.CONTACT_MODELS`). A new model is one subclass and one registry
 line (:mod:`g2tom.models.registry`).
 """
 

@@ -66,7 +66,7 @@ class PlanWork:
 
 class ContactModel(ABC):
     """A contact model (``contact.model``): one stateless object per run, chosen from the registry
-    (:data:`g2tom.models.CONTACT_MODELS`); a new model is one subclass (a frozen dataclass, so that
+    (:data:`g2tom.models.registry.CONTACT_MODELS`); a new model is one subclass (a frozen dataclass, so that
     equal models compare and hash equal, as dask's task keys need) and one registry line."""
 
     #: The value of ``contact.model`` that selects it.

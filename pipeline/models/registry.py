@@ -1,4 +1,4 @@
-"""The contact models by name (:data:`CONTACT_MODELS`), the one place ``contact.model`` is read
+"""The contact models by name (:data:`~g2tom.models.registry.CONTACT_MODELS`), the one place ``contact.model`` is read
 (:func:`contact_model`), and the checks across parameters that follow from a model's capabilities."""
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ def models_that(can: Callable[[type[ContactModel]], bool]) -> str:
 
 
 def check_contact_model(s: Scenario) -> None:
-    """The model's spot rules and its own checks (:meth:`ContactModel.check`).
+    """The model's spot rules and its own checks (:meth:`g2tom.models.ContactModel.check`).
 
     Raises
     ------
