@@ -133,9 +133,9 @@ def test_one_cell_run_answers_with_its_cell(tmp_path, capsys, small) -> None:
     out = capsys.readouterr()
     assert "the surrogate holds one cell (xi = 0.5, lambda = 5)" in out.err and "without interpolation" in out.err
     header, *rows = [line.split(",") for line in out.out.strip().splitlines()]
-    values = [dict(zip(header, map(float, row))) for row in rows]
+    values = [{k: float(v) for k, v in zip(header, row) if k != "outside_domain"} for row in rows]
     assert len(values) == 2 and all(v["surrogate_error"] == 0 for v in values)
-    assert all(v["lower_ohm"] < v["resistance_ohm"] < v["upper_ohm"] for v in values)
+    assert all(v["resistance_mean_lower_ohm"] < v["resistance_ohm"] < v["resistance_mean_upper_ohm"] for v in values)
     assert values[0]["resistance_ohm"] > values[1]["resistance_ohm"]  # the cell's curve, falling with the load
 
 
@@ -267,8 +267,9 @@ def test_json_and_the_terminal_table(capsys, small, data_dir, monkeypatch) -> No
     assert main(_predict(data_dir, small, *query)) == 0
     out = capsys.readouterr()
     table = out.out.splitlines()
-    assert table[0].split() == ["force_N", "xi", "lambda", "resistance_ohm", "lower_ohm", "upper_ohm", "open_probability"]
-    assert len({len(line) for line in table}) == 1 and len(table) == 3  # aligned, one line per query
+    assert table[0].split() == ["force_N", "xi", "lambda", "resistance_ohm", "resistance_mean_lower_ohm",
+                                "resistance_mean_upper_ohm", "resistance_spread_p16_ohm", "resistance_spread_p84_ohm"]
+    assert len({len(line) for line in table[:3]}) == 1 and len(table) == 4  # aligned, one line per query, the bands
     assert all(len(cell.replace(".", "").replace("e-0", "").lstrip("0")) <= 4 for cell in table[1].split())
     assert "g2tom: note: the main columns" in out.err
 
@@ -283,6 +284,7 @@ def test_atlas_answer_leaves_out_what_the_atlas_lacks(capsys, small, data_dir) -
                          "--surrogate", str(shipped))) == 0
     out = capsys.readouterr()
     header = out.out.splitlines()[0].split(",")
-    assert not [c for c in header if c.startswith(NOT_IN_ATLAS)] and "nan" not in out.out
-    assert "resistance_ohm" in header and "upper_ohm" in header
+    assert not [c for c in header if c.startswith(NOT_IN_ATLAS)]
+    assert "resistance_ohm" in header and "resistance_mean_upper_ohm" in header
+    assert out.out.splitlines()[1].split(",")[header.index("resistance_spread_p84_ohm")] == "nan"
     assert "g2tom: note: the atlas surrogate holds no realization spread" in out.err

@@ -66,7 +66,7 @@ def test_equals_eq27_by_hand(small: ResolvedScenario, surrogate_ds: xr.Dataset) 
     assert float(result["resistance"]) == pytest.approx(by_hand, rel=1e-12)
     assert float(result["resistance_power_law"]) == pytest.approx(by_hand, rel=1e-12)
     assert float(result["alpha"]) == pytest.approx(alpha, rel=1e-14)
-    assert result["lower"] < result["resistance"] < result["upper"]
+    assert result["resistance_mean_lower"] < result["resistance"] < result["resistance_mean_upper"]
     assert result["resistance"].attrs["units"] == "ohm"
 
 
@@ -78,16 +78,13 @@ def test_band_components_add_up(small: ResolvedScenario, surrogate_ds: xr.Datase
     lam = rng.uniform(1.0, 13.0, 200)
     r = _quiet(surrogate_ds, small, force, xi, lam)
     assert r["resistance"].dims == ("query",)
-    for side in ("lower", "upper"):
-        expected = np.sqrt(r[f"spread_{side}"] ** 2 + r["fit_error"] ** 2 + r["surrogate_error"] ** 2)
-        np.testing.assert_allclose(r[f"total_{side}"], expected, rtol=1e-13)
-    np.testing.assert_allclose(r["lower"], r["resistance"] * np.exp(-r["total_lower"]), rtol=1e-13)
-    np.testing.assert_allclose(r["upper"], r["resistance"] * np.exp(r["total_upper"]), rtol=1e-13)
-    np.testing.assert_allclose(r["realization_lower"], r["resistance"] * np.exp(-r["spread_lower"]), rtol=1e-13)
+    mean = 1.959963984540054 * np.sqrt(r["fit_error"] ** 2 + r["surrogate_error"] ** 2)
+    np.testing.assert_allclose(r["resistance_mean_lower"], r["resistance"] * np.exp(-mean), rtol=1e-13)
+    np.testing.assert_allclose(r["resistance_mean_upper"], r["resistance"] * np.exp(mean), rtol=1e-13)
+    np.testing.assert_allclose(r["resistance_spread_p16"], r["resistance"] * np.exp(-r["spread_lower"]), rtol=1e-13)
+    np.testing.assert_allclose(r["resistance_spread_p84"], r["resistance"] * np.exp(r["spread_upper"]), rtol=1e-13)
     for name in ("spread_lower", "spread_upper", "fit_error", "surrogate_error"):
         assert (r[name] > 0).all(), name
-    # every component widens the band beyond the realization spread alone
-    assert (r["lower"] < r["realization_lower"]).all() and (r["upper"] > r["realization_upper"]).all()
 
 
 def test_band_components_match_the_tables_on_the_grid(small: ResolvedScenario, surrogate_ds: xr.Dataset) -> None:
@@ -97,7 +94,7 @@ def test_band_components_match_the_tables_on_the_grid(small: ResolvedScenario, s
     ln_f = math.log(float(surrogate_ds["force_normalized"][step]))
     r = _quiet(surrogate_ds, small, f, xi, lam, model="power_law")
     ratio = float(surrogate_ds["band_ratio_lower"].sel(cell)[step])
-    assert float(r["realization_lower"] / r["resistance"]) == pytest.approx(ratio, rel=1e-9)
+    assert float(r["resistance_spread_p16"] / r["resistance"]) == pytest.approx(ratio, rel=1e-9)
     s_a, s_g = (float(surrogate_ds[f"{p}_fit_sigma"].sel(cell)) for p in ("alpha", "gamma"))
     e_a, e_g = (float(surrogate_ds[f"{p}_cv_error"].sel(cell)) for p in ("alpha", "gamma"))
     assert float(r["fit_error"]) == pytest.approx(math.hypot(s_a, ln_f * s_g), rel=1e-9)
@@ -114,7 +111,7 @@ def test_vectorized_xarray_queries(small: ResolvedScenario, surrogate_ds: xr.Dat
     assert r["resistance"].dims == ("force", "xi") and r["resistance"].shape == (3, 2)
     one = _quiet(surrogate_ds, small, 2000.0, 0.5, 5.0)
     assert float(r["resistance"].sel(force=2000.0)[1]) == pytest.approx(float(one["resistance"]), rel=1e-14)
-    assert float(r["upper"][1, 1]) == pytest.approx(float(one["upper"]), rel=1e-12)
+    assert float(r["resistance_mean_upper"][1, 1]) == pytest.approx(float(one["resistance_mean_upper"]), rel=1e-12)
     grid = _quiet(surrogate_ds, small, np.array([[1000.0], [2000.0]]), np.array([0.3, 0.5, 0.7]), 5.0)
     assert grid["resistance"].shape == (2, 3)
 
@@ -165,7 +162,8 @@ def test_json_gives_the_same_predictions_as_netcdf(small: ResolvedScenario, data
 def test_band_is_unbounded_with_many_open_circuits(small: ResolvedScenario) -> None:
     ds = _build(small, noise=0.2, open_share=0.25)
     result = _quiet(ds, small, 1500.0, 0.4, 4.0)
-    assert float(result["upper"]) == math.inf and 0 < float(result["lower"]) < float(result["resistance"])
+    assert float(result["resistance_spread_p84"]) == math.inf
+    assert 0 < float(result["resistance_spread_p16"]) < float(result["resistance"])
     assert float(result["open_probability"]) == pytest.approx(0.25)
 
 
@@ -173,7 +171,7 @@ def test_band_is_unbounded_with_many_open_circuits(small: ResolvedScenario) -> N
 def _rows(text: str) -> list[dict[str, float]]:
     header, *lines = text.strip().splitlines()
     keys = header.split(",")
-    return [dict(zip(keys, map(float, line.split(",")))) for line in lines]
+    return [{k: float(v) for k, v in zip(keys, line.split(",")) if k != "outside_domain"} for line in lines]
 
 
 def test_cli_lists_csv_and_output(tmp_path, capsys, small: ResolvedScenario, data_dir) -> None:
@@ -183,7 +181,7 @@ def test_cli_lists_csv_and_output(tmp_path, capsys, small: ResolvedScenario, dat
     assert len(rows) == 2 and rows[1]["force_N"] == 2500 and rows[1]["lambda"] == 6
     expected = _quiet(load_surrogate(data_dir / "surrogate.json"), small, [1500.0, 2500.0], 0.4, [4.0, 6.0])
     np.testing.assert_allclose([r["resistance_ohm"] for r in rows], expected["resistance"], rtol=1e-9)
-    np.testing.assert_allclose([r["upper_ohm"] for r in rows], expected["upper"], rtol=1e-9)
+    np.testing.assert_allclose([r["resistance_mean_upper_ohm"] for r in rows], expected["resistance_mean_upper"], rtol=1e-9)
     # material from the scenario, overridable with --set
     assert main(base + ["--set", "material.rho=1.44e-6", "--force", "1500", "--xi", "0.4", "--lambda", "4"]) == 0
     doubled = _rows(capsys.readouterr().out)[0]["resistance_ohm"]

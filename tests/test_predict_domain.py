@@ -54,7 +54,7 @@ def test_extrapolate_accepts_it_with_a_warning(data_dir, small: ResolvedScenario
     expected = groups(small.roughness.sigma, 1e9, small.roughness.beta, small.indenter.radius)
     assert row["mu"] == pytest.approx(expected.mu, rel=1e-9) and row["Pi"] == pytest.approx(expected.Pi, rel=1e-9)
     header = out.splitlines()[0].split(",")
-    assert header[:2] == ["force_N", "xi"] and header[-2:] == ["mu", "Pi"]  # new columns after today's
+    assert header[:2] == ["force_N", "xi"] and header[-3:] == ["mu", "Pi", "outside_domain"]  # new columns last
 
 
 def test_same_groups_other_dimensions_scale_exactly(data_dir, small: ResolvedScenario, capsys) -> None:

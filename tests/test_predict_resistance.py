@@ -57,7 +57,7 @@ def test_readme_case_other_sigma_is_answered_by_the_atlas(run_dir) -> None:
     assert float(result["mu"][0]) == pytest.approx(scene_groups(scenario).mu, rel=1e-12)
     # heavier load, lower resistance; the band holds the answer
     r = np.asarray(result["resistance"])
-    assert r[1] < r[0] and np.all(result["lower"] < r) and np.all(r < result["upper"])
+    assert r[1] < r[0] and np.all(result["resistance_mean_lower"] < r) and np.all(r < result["resistance_mean_upper"])
     # the same call by the scenario's name and overrides, through g2tom.predict
     from g2tom.predict import predict_resistance
 

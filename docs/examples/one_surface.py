@@ -23,12 +23,14 @@ answer = g2tom.predict_resistance("paper", force=force, xi=0.3, lam=5.0,
                                   overrides={"roughness.sigma": 15e-6})
 package = str(Path(g2tom.__file__).parent)  # the install's folder, shortened in the print-out
 print("answered by:", answer.attrs["answered_by"].replace(package, "<g2tom>"))
-print(f"{'F (N)':>8}  {'R_el (mOhm)':>11}  {'band (mOhm)':>17}")
-for f, r, lo, hi in zip(force, answer["resistance"].values, answer["lower"].values, answer["upper"].values):
+print(f"{'F (N)':>8}  {'R_el (mOhm)':>11}  {'95 % of the mean (mOhm)':>17}")
+for f, r, lo, hi in zip(force, answer["resistance"].values, answer["resistance_mean_lower"].values,
+                        answer["resistance_mean_upper"].values):
     print(f"{f:8.0f}  {1e3 * r:11.3f}  [{1e3 * lo:6.3f}, {1e3 * hi:6.3f}]")
 
 fig, ax = plt.subplots(figsize=(5, 3.4), layout="constrained")
-ax.fill_between(force, 1e3 * answer["lower"], 1e3 * answer["upper"], alpha=0.3, label="band")
+ax.fill_between(force, 1e3 * answer["resistance_mean_lower"], 1e3 * answer["resistance_mean_upper"], alpha=0.3,
+                label="95 % of the mean")
 ax.loglog(force, 1e3 * answer["resistance"], "o-", label="R_el")
 ax.set(xlabel="force F (N)", ylabel="R_el (mOhm)", title="xi = 0.3, lambda = 5, sigma = 15 um")
 ax.legend()

@@ -8,6 +8,7 @@ import argparse
 import csv
 import io
 import json
+import shlex
 import sys
 import warnings
 from pathlib import Path
@@ -21,10 +22,10 @@ from g2tom.cli.parsing import number_list
 from g2tom.predict.answer import choose_surrogate, predict_with
 from g2tom.predict.atlas import NOT_IN_ATLAS
 from g2tom.predict.domain import with_measured_roughness
-from g2tom.predict.queries import OUTPUT_COLUMNS, check_values
+from g2tom.predict.queries import OUTPUT_COLUMNS, OutsideDomainError, PartlyAnsweredWarning, check_values
 from g2tom.stages.surrogate_file import SurrogateTables
 
-__all__ = ["predict_cli", "to_csv", "to_json", "to_table", "INPUT_ALIASES", "TABLE_COLUMNS"]
+__all__ = ["predict_cli", "run_instead", "to_csv", "to_json", "to_table", "INPUT_ALIASES", "TABLE_COLUMNS"]
 
 
 def _cli_queries(args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -82,8 +83,10 @@ def _read_csv(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return out[0], out[1], out[2]
 
 
-#: The columns of the table printed on a terminal (every column: CSV or --json).
-TABLE_COLUMNS = ("force", "xi", "lambda", "resistance", "lower", "upper", "open_probability")
+#: The columns of the table printed on a terminal (every column: CSV or --json); outside_domain
+#: only when a query is not answered.
+TABLE_COLUMNS = ("force", "xi", "lambda", "resistance", "resistance_mean_lower", "resistance_mean_upper",
+                 "resistance_spread_p16", "resistance_spread_p84", "outside_domain")
 #: Significant digits in that table.
 TABLE_DIGITS = 4
 
@@ -96,17 +99,24 @@ def _label(name: str) -> str:
 
 def _columns(ds: xr.Dataset, names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
     """The output's columns (flat), in the order of :data:`OUTPUT_COLUMNS`: ``names`` of them, or all
-    that ``ds`` holds."""
+    that ``ds`` holds (numbers as float, ``outside_domain`` as text)."""
     chosen = [n for n in OUTPUT_COLUMNS if n in ds and (names is None or n in names)]
-    return {n: np.asarray(ds[n].values, dtype=float).ravel() for n in chosen}
+    return {n: np.asarray(ds[n].values, dtype=str if ds[n].dtype.kind == "U" else float).ravel() for n in chosen}
+
+
+def _cell(value: float | str, digits: int) -> str:
+    """A number with ``digits`` significant digits; text as it is."""
+    return value if isinstance(value, str) else f"{value:.{digits}g}"
 
 
 def to_csv(ds: xr.Dataset) -> str:
     """Prediction dataset as CSV text, one query per line, columns :data:`OUTPUT_COLUMNS` that it holds."""
     columns = _columns(ds)
-    lines = [",".join(_label(n) for n in columns)]
-    lines += [",".join(f"{v:.10g}" for v in row) for row in zip(*columns.values())]
-    return "\n".join(lines) + "\n"
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(_label(n) for n in columns)
+    writer.writerows([_cell(v, 10) for v in row] for row in zip(*(c.tolist() for c in columns.values())))
+    return out.getvalue()
 
 
 def to_json(ds: xr.Dataset) -> str:
@@ -115,8 +125,10 @@ def to_json(ds: xr.Dataset) -> str:
     from g2tom.stages.surrogate_file import _encode
 
     columns = _columns(ds)
-    rows = [dict(zip(map(_label, columns), values)) for values in zip(*(_encode(c) for c in columns.values()))]
+    encoded = (c.tolist() if c.dtype.kind == "U" else _encode(c) for c in columns.values())
+    rows = [dict(zip(map(_label, columns), values)) for values in zip(*encoded)]
     doc = {"answered_by": ds.attrs.get("answered_by", ""), "band": ds.attrs.get("band", ""),
+           "spread": ds.attrs.get("spread", ""),
            "columns": {_label(n): {"units": OUTPUT_COLUMNS[n][0], "long_name": OUTPUT_COLUMNS[n][1]} for n in columns},
            "queries": rows}
     return json.dumps(doc, indent=1) + "\n"
@@ -124,12 +136,44 @@ def to_json(ds: xr.Dataset) -> str:
 
 def to_table(ds: xr.Dataset) -> str:
     """The main columns (:data:`TABLE_COLUMNS`) as an aligned table of :data:`TABLE_DIGITS`
-    significant digits, for a terminal."""
+    significant digits, for a terminal, under it what each band is (and that the spread over
+    contacts is unknown, where it is)."""
     columns = _columns(ds, TABLE_COLUMNS)
+    if not any(columns.get("outside_domain", [])):
+        columns.pop("outside_domain", None)
     cells = [[_label(n) for n in columns]]
-    cells += [[f"{v:.{TABLE_DIGITS}g}" for v in row] for row in zip(*columns.values())]
+    cells += [[_cell(v, TABLE_DIGITS) for v in row] for row in zip(*(c.tolist() for c in columns.values()))]
     widths = [max(len(row[k]) for row in cells) for k in range(len(columns))]
-    return "\n".join("  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells) + "\n"
+    lines = ["  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells]
+    lines.append("resistance_mean_*: 95 % interval of the predicted mean R; resistance_spread_*: 16-84 % of R over "
+                 "contacts")
+    if "comment" in ds["resistance_spread_p16"].attrs:
+        lines.append(ds["resistance_spread_p16"].attrs["comment"])
+    return "\n".join(lines) + "\n"
+
+
+def run_instead(args: argparse.Namespace, scenario: Scenario) -> str:
+    """The ``g2tom run`` command that computes this surface directly, with its stages' planned time.
+
+    The command repeats ``--config``, the ``--set`` overrides (and, for ``--roughness``, the
+    measured sigma, eta and beta) and ``--data-dir``, so that this same ``g2tom predict`` then
+    answers from the run's own surrogate. The time is the sum of the stages' seconds of
+    :func:`g2tom.before_work.plan.estimate` (about 1 s to compute), or a pointer to ``g2tom plan``
+    where the plan refuses the scene.
+    """
+    from g2tom.before_work.plan import estimate
+
+    sets = [item for pair in zip(["--set"] * len(args.overrides), args.overrides) for item in pair]
+    if args.roughness is not None:
+        rough = scenario.roughness
+        sets += [a for key in ("sigma", "eta", "beta") for a in ("--set", f"roughness.{key}={getattr(rough, key):.6g}")]
+    command = shlex.join(["g2tom", "run", "--config", args.config, *sets, "--data-dir", str(args.data_dir)])
+    try:
+        planned = f"its stages planned at {sum(s.seconds for s in estimate(scenario)):.3g} s"
+    except ConfigError:
+        planned = "see `g2tom plan` with the same options for its time"
+    return (f"`{command}` computes this surface directly ({planned}, plus its checks and report); this same "
+            "`g2tom predict` then answers from that run's own surrogate")
 
 
 def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
@@ -146,14 +190,19 @@ def predict_cli(args: argparse.Namespace, scenario: Scenario) -> None:
     chosen = choose_surrogate(scenario, args.data_dir, args.surrogate, option="--surrogate")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
-        result = predict_with(chosen, scenario, force, xi, lam, model=args.model, extrapolate=args.extrapolate)
+        try:
+            result = predict_with(chosen, scenario, force, xi, lam, model=args.model, extrapolate=args.extrapolate)
+        except OutsideDomainError as exc:
+            raise OutsideDomainError(f"{exc}; or {run_instead(args, scenario)}") from None
     if not isinstance(chosen, SurrogateTables):
         print(f"g2tom: note: the atlas surrogate holds no realization spread, fit interval or open-circuit share: "
-              f"columns {', '.join(NOT_IN_ATLAS)} left out; its band is its "
+              f"columns {', '.join(NOT_IN_ATLAS)} left out (resistance_spread_p16, _p84 NaN); its band is its "
               f"{'cross-validated and held-out error where the query is' if chosen.band is not None else 'held-out error'}",
               file=sys.stderr)
     for w in caught:
         print(f"g2tom: warning: {w.message}", file=sys.stderr)
+        if issubclass(w.category, PartlyAnsweredWarning):
+            print(f"g2tom: note: exit status 0 with NaN answers; {run_instead(args, scenario)}", file=sys.stderr)
     print(f"g2tom: answered by {result.attrs['answered_by']}", file=sys.stderr)
     if args.json:
         text = to_json(result)

@@ -6,11 +6,15 @@ by its curve model (the default, ``resistance``), and alpha and gamma of Eq. 27
 (``resistance_power_law`` = alpha 2 rho*/sqrt(R* sigma) F'^-gamma). Its band is where the query is:
 one standard deviation of ln R', the surrogate's leave-one-scene-out error in the query's region
 of (F', xi, the (mu, Pi) box's inside or edge) and its interpolation error between oxide nodes
-(:mod:`g2tom.fitting.atlas_band`), so ``lower`` / ``upper`` = R exp(-/+ that). A surrogate of
-format 1 (the first atlas's one polynomial, e.g. an older shipped file) is still read and answers
-with its one global held-out error. The single-scene band's components (realization spread, fit
-interval, open-circuit share) are not in the atlas and are NaN. A query outside the atlas's domain (mu, Pi, xi, lambda, or F' beyond the steps fitted
-in every scene) is refused unless ``extrapolate`` (then an ExtrapolationWarning).
+(:mod:`g2tom.fitting.atlas_band`), so the 95 % interval of the predicted mean,
+``resistance_mean_lower`` / ``_upper`` = R exp(-/+ 1.96 that). A surrogate of format 1 (the first
+atlas's one polynomial, e.g. an older shipped file) is still read and answers with its one global
+held-out error. The spread over contacts (``resistance_spread_p16`` / ``_p84``) is not in the
+atlas: NaN, and the answer says so; the single-scene band's components (realization spread, fit
+interval, open-circuit share) are NaN too. A surface whose mu or Pi lies outside the atlas's
+domain is refused, naming the inputs that set them; a query outside it (xi, lambda, or F' beyond
+the steps fitted in every scene) is NaN and the others answered; unless ``extrapolate`` (then an
+ExtrapolationWarning).
 """
 
 from __future__ import annotations
@@ -27,18 +31,21 @@ from g2tom.atlas.fit import CURVE, FORMAT, FORMAT_VERSION, curve_model
 from g2tom.config import ConfigError, Scenario
 from g2tom.fitting.atlas_band import RegionalBand
 from g2tom.fitting.atlas_surrogate import AtlasModel
-from g2tom.predict.queries import OUTPUT_COLUMNS, check_ranges, check_values, queries
+from g2tom.predict.domain import group_problems
+from g2tom.predict.queries import OUTPUT_COLUMNS, Z95, check_values, outside_ranges, queries, settle_domain
 from g2tom.scene import scene_groups
 
-__all__ = ["NOT_IN_ATLAS", "AtlasSurrogate", "is_atlas_document", "load_atlas_surrogate", "predict_atlas", "shipped_path", "SHIPPED"]
+__all__ = ["NOT_IN_ATLAS", "SPREAD_UNKNOWN", "AtlasSurrogate", "is_atlas_document", "load_atlas_surrogate", "predict_atlas", "shipped_path", "SHIPPED"]
 
 #: The atlas surrogate shipped inside the package (``make atlas`` regenerates it), so that
 #: ``g2tom predict`` answers other surfaces on a fresh install.
 SHIPPED = "atlas_surrogate.json"
 _DOMAIN = ("mu", "Pi", "xi", "lambda", "force_normalized")
 #: The single-scene band's components the atlas does not hold: NaN in its answers.
-NOT_IN_ATLAS = ("realization_lower", "realization_upper", "spread_lower", "spread_upper", "fit_error",
-                "open_probability")
+NOT_IN_ATLAS = ("spread_lower", "spread_upper", "fit_error", "open_probability")
+#: What the atlas's answer says of the spread over contacts (its NaN columns resistance_spread_p16, _p84).
+SPREAD_UNKNOWN = ("spread over contacts: not known to the atlas surrogate (it holds the mean R of each scene, not the "
+                  "realizations' spread); `g2tom run` on this surface computes it")
 
 
 def is_atlas_document(text: str) -> bool:
@@ -139,20 +146,22 @@ def load_atlas_surrogate(path: str | Path) -> AtlasSurrogate:
     return AtlasSurrogate.from_json(path.read_text(), str(path))
 
 
-def _check_domain(surrogate: AtlasSurrogate, values: dict[str, np.ndarray], extrapolate: bool) -> None:
-
-    check_ranges(surrogate.domain, values, extrapolate, "the domain", f" of {surrogate.describe()}")
-
-
 def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi: Any, lam: Any,
                   extrapolate: bool = False) -> xr.Dataset:
-    """R_el of Eq. 27 from the atlas surrogate, with the held-out band; columns of :data:`g2tom.predict.queries.OUTPUT_COLUMNS`.
+    """R_el from the atlas surrogate, with the 95 % interval of its mean; columns of :data:`g2tom.predict.queries.OUTPUT_COLUMNS`.
+
+    Queries outside the atlas's ranges of xi, lambda or F' are NaN (``outside_domain`` says why)
+    and the others answered; the spread over contacts is not in the atlas: NaN, and
+    ``attrs["spread"]`` says so.
 
     Raises
     ------
     ConfigError
-        If an input is out of range, or a query (or the surface's mu, Pi) lies outside the
-        atlas's domain and ``extrapolate`` is False.
+        If an input is out of range.
+    OutsideDomainError
+        Unless ``extrapolate``: if the surface's mu or Pi lies outside the atlas's domain, or
+        every query does, naming every group and query variable outside, the inputs that set
+        each group and the forces answered (N).
     """
 
     (f, x, lm), label = queries(force, xi, lam)
@@ -160,27 +169,41 @@ def predict_atlas(surrogate: AtlasSurrogate, scenario: Scenario, force: Any, xi:
     groups = scene_groups(scenario)
     mu, pi = np.full(f.size, groups.mu), np.full(f.size, groups.Pi)
     force_n = f / scenario.force_scale
-    _check_domain(surrogate, {"mu": mu[:1], "Pi": pi[:1], "xi": x, "lambda": lm, "force_normalized": force_n},
-                  extrapolate)
+    span = "the domain"
+    problems, why = outside_ranges(surrogate.domain, {"xi": x, "lambda": lm, "force_normalized": force_n}, span,
+                                   scenario.force_scale)
+    surface = group_problems(scenario, surrogate.domain, span)
+    if surface:
+        why = np.full(f.size, "; ".join(text for text, _ in surface))
+    answered = settle_domain(surface + problems, why, extrapolate, f" of {surrogate.describe()}")
     alpha = surrogate.models["alpha"](x, lm, mu, pi)
     gamma = surrogate.models["gamma"](x, lm, mu, pi)
     power_law = alpha * scenario.resistance_scale * np.exp(-gamma * np.log(force_n))
     resistance = np.exp(surrogate.log_resistance(x, lm, mu, pi, force_n)) * scenario.resistance_scale
     error = surrogate.error_at(x, lm, mu, pi, force_n)
+    unknown = np.full(f.size, np.nan)
     columns = {
         "force": f, "xi": x, "lambda": lm, "force_normalized": force_n, "alpha": alpha, "gamma": gamma,
-        "resistance": resistance, "lower": resistance * np.exp(-error), "upper": resistance * np.exp(error),
-        **{name: np.full(f.size, np.nan) for name in NOT_IN_ATLAS}, "surrogate_error": error,
-        "total_lower": error, "total_upper": error, "resistance_curve": resistance,
-        "resistance_power_law": power_law, "mu": mu, "Pi": pi,
+        "resistance": resistance, "resistance_mean_lower": resistance * np.exp(-Z95 * error),
+        "resistance_mean_upper": resistance * np.exp(Z95 * error), "resistance_spread_p16": unknown,
+        "resistance_spread_p84": unknown, **{name: unknown for name in NOT_IN_ATLAS}, "surrogate_error": error,
+        "resistance_curve": resistance, "resistance_power_law": power_law,
     }
+    columns = {name: np.where(answered, values, np.nan) for name, values in columns.items()}
+    columns.update(force=f, xi=x, **{"lambda": lm}, force_normalized=force_n, mu=mu, Pi=pi,
+                   outside_domain=np.where(answered, "", why))
     ds = xr.Dataset({name: label(values) for name, values in columns.items()})
     for name, (units, long_name) in OUTPUT_COLUMNS.items():
         ds[name].attrs = {"units": units, "long_name": long_name}
-    ds.attrs["band"] = ("lower, upper = R exp(-/+ e): e the atlas surrogate's cross-validated error of ln R' in the "
-                        "query's region of (F', xi, mu-Pi box) and between oxide nodes (g2tom.fitting.atlas_band)"
+    for name in ("resistance_spread_p16", "resistance_spread_p84"):
+        ds[name].attrs["comment"] = SPREAD_UNKNOWN
+    ds.attrs["band"] = ("resistance_mean_lower, resistance_mean_upper = R exp(-/+ 1.96 e), the 95 % interval of the "
+                        "predicted mean R: e the atlas surrogate's cross-validated error of ln R' in the query's region of "
+                        "(F', xi, mu-Pi box) and between oxide nodes (g2tom.fitting.atlas_band)"
                         if surrogate.band is not None else
-                        "held-out error of the atlas surrogate: lower, upper = R exp(-/+ rms |ln R'_surrogate - ln R'_scene|)")
+                        "resistance_mean_lower, resistance_mean_upper = R exp(-/+ 1.96 e), the 95 % interval of the "
+                        "predicted mean R: e the held-out rms |ln R'_surrogate - ln R'_scene| of the atlas surrogate")
+    ds.attrs["spread"] = SPREAD_UNKNOWN
     ds.attrs["surrogate_method"] = "atlas"
     ds.attrs["model"] = "curve"  # ln R' over (xi, lambda, mu, Pi, F'); the power law beside it
     ds.attrs["answered_by"] = surrogate.describe()

@@ -17,7 +17,14 @@ from g2tom.predict.queries import ExtrapolationWarning
 from g2tom.scene import scene_groups
 from g2tom.stages.surrogate_file import SurrogateTables
 
-__all__ = ["GROUP_TOLERANCE", "answered_by", "check_surface", "with_measured_roughness"]
+__all__ = ["GROUP_INPUTS", "GROUP_TOLERANCE", "answered_by", "check_surface", "group_problems", "with_measured_roughness"]
+
+#: The inputs that set each group, each raising it: (parameter, its unit), largest exponent first
+#: (mu = (8/3) eta sigma sqrt(2 R* beta), Pi = eta R* sigma).
+GROUP_INPUTS = {
+    "mu": (("roughness.eta", "m^-2"), ("roughness.sigma", "m"), ("indenter.radius", "m"), ("roughness.beta", "m")),
+    "Pi": (("roughness.eta", "m^-2"), ("indenter.radius", "m"), ("roughness.sigma", "m")),
+}
 
 #: Relative difference of mu or Pi within which a single-scene surrogate answers a surface.
 GROUP_TOLERANCE = 1e-3
@@ -30,6 +37,45 @@ def answered_by(tables: "SurrogateTables") -> str:
     groups = (f"mu = {info['mu']:.6g}, Pi = {info['Pi']:.6g}" if info.get("mu") is not None and info.get("Pi") is not None
               else "groups not recorded")
     return f"the run's own single-scene surrogate ({scene}{groups})"
+
+
+def group_problems(scenario: Scenario, ranges: dict[str, tuple[float, float]], span: str) -> list[tuple[str, str]]:
+    """The surface's groups outside ``ranges``, each with the inputs that bring it in.
+
+    Parameters
+    ----------
+    scenario
+        The surface: its roughness (sigma, eta, beta, m and m^-2) and sphere radius R* (m).
+    ranges
+        (low, high) of ``mu`` and ``Pi``.
+    span
+        What the ranges are, for the texts ("the domain").
+
+    Returns
+    -------
+    list of (str, str)
+        Per group outside: ``"<group> = <value> lies outside <span> [lo, hi]"`` and which way to
+        move which inputs (:data:`GROUP_INPUTS`, with their values now) and by what factor at least.
+    """
+    values = dataclasses.asdict(scene_groups(scenario))
+    problems = []
+    for name, inputs in GROUP_INPUTS.items():
+        lo, hi = ranges[name]
+        value = values[name]
+        if lo * (1 - 1e-12) <= value <= hi * (1 + 1e-12):
+            continue
+        verb, factor = ("raise", lo / value) if value < lo else ("lower", value / hi)
+        named = [f"{key} ({_parameter(scenario, key):.3g} {unit} now)" for key, unit in inputs]
+        problems.append((f"{name} = {value:.6g} lies outside {span} [{lo:.6g}, {hi:.6g}]",
+                         f"{name} must {'rise' if verb == 'raise' else 'fall'} {factor:.3g}-fold at least: {verb} "
+                         f"{', '.join(named[:-1])} or {named[-1]}"))
+    return problems
+
+
+def _parameter(scenario: Scenario, key: str) -> float:
+    """The scenario's value of a ``section.name`` parameter."""
+    section, name = key.split(".")
+    return float(getattr(getattr(scenario, section), name))
 
 
 def check_surface(tables: "SurrogateTables", scenario: Scenario, extrapolate: bool) -> None:

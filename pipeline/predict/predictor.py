@@ -7,9 +7,9 @@ with ``T(p) = sum_k P_k(w) Q_k(z)``, w = log(lambda), z = -log(1 - xi), T = log 
 (the surrogate stage's model). Material (E, nu, rho*), roughness (sigma) and indenter (R*)
 come from the scenario.
 
-The band carries three errors, each as a one-standard-deviation half-width in ln R (a
-relative error), interpolated linearly in (w, z[, ln F']) from the grid tables of the
-surrogate stage and clamped to the grid:
+Two bands, each in ohm, each with one meaning, are built from three errors, each a
+one-standard-deviation half-width in ln R (a relative error), interpolated linearly in
+(w, z[, ln F']) from the grid tables of the surrogate stage and clamped to the grid:
 
 * ``spread_lower`` = -ln(R'_16 / R'_c), ``spread_upper`` = ln(R'_84 / R'_c): the spread of
   single realizations (16-84 %, +inf above when more than 16 % are open circuits);
@@ -18,16 +18,19 @@ surrogate stage and clamped to the grid:
 * ``surrogate_error`` = sqrt(e_a^2 + (ln F' e_g)^2), e_a and e_g the local leave-one-line-out
   RMS errors of ln alpha and gamma.
 
-The errors are taken as independent (the fits stage stores no covariance of alpha and gamma)
-and combined in quadrature, on each side:
+The uncertainty of the predicted mean R takes the last two as independent (the fits stage
+stores no covariance of alpha and gamma), combined in quadrature, as a 95 % interval:
 
-    total_lower = sqrt(spread_lower^2 + fit_error^2 + surrogate_error^2),
-    lower = R exp(-total_lower),  upper = R exp(+total_upper).
+    resistance_mean_lower, resistance_mean_upper = R exp(-/+ 1.96 sqrt(fit_error^2 + surrogate_error^2));
+
+the spread over contacts is the first, ``resistance_spread_p16`` = R exp(-spread_lower),
+``resistance_spread_p84`` = R exp(spread_upper).
 
 A component that is unknown (NaN: e.g. a grid too small to cross-validate) is left out of the
-total, and a warning says so. Queries outside the fitted ranges of xi, lambda or F' are refused
-unless ``extrapolate=True`` (then an :class:`ExtrapolationWarning`); where the local surrogate
-error exceeds ``warn_error`` a :class:`SurrogateErrorWarning` is issued.
+mean's band, and a warning says so. Queries outside the fitted ranges of xi, lambda or F' are
+NaN (``outside_domain`` says why) and the others answered; none inside is refused; all are
+answered with ``extrapolate=True`` (then an :class:`ExtrapolationWarning`). Where the local
+surrogate error exceeds ``warn_error`` a :class:`SurrogateErrorWarning` is issued.
 
 The predictor works from ``surrogate.json`` alone (:mod:`g2tom.stages.surrogate_file`: the
 coefficients, coordinate maps, scale conventions, fitted ranges and band tables) and gives the
@@ -48,9 +51,11 @@ from g2tom.predict.queries import (
     OUTPUT_COLUMNS,
     ExtrapolationWarning,
     SurrogateErrorWarning,
-    check_ranges,
+    Z95,
     check_values,
+    outside_ranges,
     queries,
+    settle_domain,
 )
 from g2tom.scene import scene_groups
 from g2tom.stages.surrogate_file import GRID_TABLES, STEP_TABLES, SurrogateTables, load_surrogate
@@ -125,7 +130,9 @@ def predict(
     check_values(f, x, lm)
     check_surface(tables, scenario, extrapolate)
     force_n = f / scenario.force_scale
-    check_ranges(tables.ranges, {"xi": x, "lambda": lm, "force_normalized": force_n}, extrapolate)
+    problems, why = outside_ranges(tables.ranges, {"xi": x, "lambda": lm, "force_normalized": force_n},
+                                   "the fitted range", scenario.force_scale)
+    answered = settle_domain(problems, why, extrapolate, "")
     alpha = tables.parameter("alpha", lm, x)
     gamma = tables.parameter("gamma", lm, x)
     if np.any(~(alpha > 0)):
@@ -148,21 +155,29 @@ def predict(
     _warn_components(fit_error, surrogate_error, lm, x)
     threshold = scenario.surrogate.warn_error if warn_error is None else warn_error
     _warn_surrogate_error(surrogate_error, threshold, lm, x, force_n)
-    total_lower = _quadrature(spread_lower, fit_error, surrogate_error)
-    total_upper = _quadrature(spread_upper, fit_error, surrogate_error)
+    mean_error = Z95 * _quadrature(fit_error, surrogate_error)
     columns = {
-        "force": f, "xi": x, "lambda": lm, "force_normalized": force_n, "alpha": alpha, "gamma": gamma,
-        "resistance": resistance, "lower": resistance * np.exp(-total_lower), "upper": resistance * np.exp(total_upper),
-        "realization_lower": resistance * np.exp(-spread_lower), "realization_upper": resistance * np.exp(spread_upper),
+        "alpha": alpha, "gamma": gamma, "resistance": resistance,
+        "resistance_mean_lower": resistance * np.exp(-mean_error), "resistance_mean_upper": resistance * np.exp(mean_error),
+        "resistance_spread_p16": resistance * np.exp(-spread_lower),
+        "resistance_spread_p84": resistance * np.exp(spread_upper),
         "spread_lower": spread_lower, "spread_upper": spread_upper, "fit_error": fit_error,
-        "surrogate_error": surrogate_error, "total_lower": total_lower, "total_upper": total_upper,
-        "open_probability": open_p, "resistance_curve": curve, "resistance_power_law": power_law,
-        "mu": np.full(f.size, scene_groups(scenario).mu), "Pi": np.full(f.size, scene_groups(scenario).Pi),
+        "surrogate_error": surrogate_error, "open_probability": open_p, "resistance_curve": curve,
+        "resistance_power_law": power_law,
     }
+    groups = scene_groups(scenario)
+    columns = {"force": f, "xi": x, "lambda": lm, "force_normalized": force_n,
+               **{name: np.where(answered, values, np.nan) for name, values in columns.items()},
+               "mu": np.full(f.size, groups.mu), "Pi": np.full(f.size, groups.Pi),
+               "outside_domain": np.where(answered, "", why)}
     ds = xr.Dataset({name: label(values) for name, values in columns.items()})
     for name, var in namespace("predict").items():
         ds[name].attrs = var.attrs()
-    ds.attrs["band"] = "total = sqrt(spread^2 + fit_error^2 + surrogate_error^2) per side; lower = R exp(-total_lower), upper = R exp(total_upper)"
+    ds.attrs["band"] = ("resistance_mean_lower, resistance_mean_upper = R exp(-/+ 1.96 sqrt(fit_error^2 + "
+                        "surrogate_error^2)): the 95 % interval of the predicted mean R (the ensemble's interval and the "
+                        "surrogate's cross-validated error)")
+    ds.attrs["spread"] = ("resistance_spread_p16, resistance_spread_p84 = R exp(-spread_lower), R exp(spread_upper): "
+                          "16-84 % of R over contacts (realizations)")
     ds.attrs["surrogate_method"] = str(tables.info.get("method", "unknown"))
     ds.attrs["model"] = model
     ds.attrs["answered_by"] = answered_by(tables)

@@ -1,5 +1,6 @@
 """The predictors' queries: broadcasting (numbers, arrays or DataArrays), their allowed values,
-the fitted ranges (refused, or warned with ``extrapolate``), and the output columns both
+the fitted ranges or domain (queries outside them NaN and the rest answered, none answered
+refused, or all answered with a warning with ``extrapolate``), and the output columns both
 predictors (:mod:`g2tom.predict.predictor`, :mod:`g2tom.predict.atlas`) answer with."""
 
 from __future__ import annotations
@@ -11,9 +12,13 @@ import numpy as np
 import xarray as xr
 
 from g2tom.config import ConfigError
+from g2tom.variables import namespace
 
-__all__ = ["ExtrapolationWarning", "SurrogateErrorWarning", "queries", "check_values", "check_ranges",
-           "OUTPUT_COLUMNS"]
+__all__ = ["ExtrapolationWarning", "SurrogateErrorWarning", "PartlyAnsweredWarning", "OutsideDomainError", "queries",
+           "check_values", "outside_ranges", "settle_domain", "OUTPUT_COLUMNS", "Z95"]
+
+#: z of a two-sided 95 % interval of a normal distribution: the mean's band is R exp(-/+ Z95 e).
+Z95 = 1.959963984540054
 
 
 class ExtrapolationWarning(UserWarning):
@@ -22,6 +27,14 @@ class ExtrapolationWarning(UserWarning):
 
 class SurrogateErrorWarning(UserWarning):
     """The surrogate's local cross-validated error exceeds the warning threshold."""
+
+
+class PartlyAnsweredWarning(UserWarning):
+    """Some queries lie outside the surrogate's domain: they are NaN, the others answered."""
+
+
+class OutsideDomainError(ConfigError):
+    """No query can be answered: the surface or every query lies outside the surrogate's domain."""
 
 
 def queries(force: Any, xi: Any, lam: Any) -> tuple[list[np.ndarray], Callable[[np.ndarray], Any]]:
@@ -70,46 +83,101 @@ def check_values(force: np.ndarray, xi: np.ndarray, lam: np.ndarray) -> None:
             raise ConfigError(f"{name} = {float(values[bad[0]])!r}{where} is out of range: {allowed}")
 
 
-def check_ranges(ranges: dict[str, tuple[float, float]], values: dict[str, np.ndarray], extrapolate: bool,
-                 span: str = "the fitted range", owner: str = "") -> None:
-    """Refuse (ConfigError) queries outside ``ranges``, or with ``extrapolate`` warn
-    (:class:`ExtrapolationWarning`): ``"<name> = <value> lies outside <span> [lo, hi]<owner>"``."""
+def outside_ranges(ranges: dict[str, tuple[float, float]], values: dict[str, np.ndarray], span: str,
+                   force_scale: float) -> tuple[list[tuple[str, str]], np.ndarray]:
+    """Every variable outside its range, and why each query is outside.
+
+    Parameters
+    ----------
+    ranges
+        (low, high) by variable name (``force_normalized`` is F').
+    values
+        The queries' flat arrays by variable name, each of the queries' length.
+    span
+        What the ranges are, for the texts ("the fitted range", "the domain").
+    force_scale
+        N per unit F' of this surface: the range of F' is also given in newtons.
+
+    Returns
+    -------
+    problems : list of (str, str)
+        One per variable outside its range: ``"<name> = <value> lies outside <span> [lo, hi]"``
+        and what to do (for F': the forces answered, in N; else "").
+    why : numpy.ndarray of str
+        Per query: the variables outside their ranges (``"F' = 43.78 above 20.4"``); empty inside.
+    """
+    size = len(next(iter(values.values())))
+    why: list[list[str]] = [[] for _ in range(size)]
+    problems = []
     for name, v in values.items():
         lo, hi = ranges[name]
-        outside = np.flatnonzero((v < lo * (1 - 1e-12)) | (v > hi * (1 + 1e-12)))
+        below, above = v < lo * (1 - 1e-12), v > hi * (1 + 1e-12)
+        outside = np.flatnonzero(below | above)
         if not outside.size:
             continue
-        i = outside[0]
         label = "F'" if name == "force_normalized" else name
+        i = outside[0]
         where = f" (query {i + 1} of {v.size}; {outside.size} outside)" if v.size > 1 else ""
-        text = f"{label} = {v[i]:.6g}{where} lies outside {span} [{lo:.6g}, {hi:.6g}]{owner}"
-        if not extrapolate:
-            raise ConfigError(f"{text}: the surrogate is not valid there; pass --extrapolate (extrapolate=True) to predict anyway")
-        warnings.warn(f"{text}: the prediction is an extrapolation", ExtrapolationWarning, stacklevel=3)
+        newtons = (f"answered from {lo * force_scale:.3g} N to {hi * force_scale:.3g} N for this surface"
+                   if name == "force_normalized" else "")
+        problems.append((f"{label} = {v[i]:.6g}{where} lies outside {span} [{lo:.6g}, {hi:.6g}]", newtons))
+        for k in outside:
+            side, bound = ("below", lo) if below[k] else ("above", hi)
+            newton = f" (F {side} {bound * force_scale:.3g} N)" if name == "force_normalized" else ""
+            why[k].append(f"{label} = {v[k]:.4g} {side} {bound:.4g}{newton}")
+    return problems, np.array(["; ".join(w) for w in why])
 
 
-#: Output variables of :func:`predict`: name -> (units, long_name).
-OUTPUT_COLUMNS: dict[str, tuple[str, str]] = {
-    "force": ("N", "normal force F"),
-    "xi": ("1", "oxide fraction"),
-    "lambda": ("1", "normalized oxide correlation length l_O sqrt(eta)"),
-    "force_normalized": ("1", "F' = 2F/(E* sqrt(R* sigma^3))"),
-    "alpha": ("1", "surrogate factor alpha"),
-    "gamma": ("1", "surrogate exponent gamma"),
-    "resistance": ("ohm", "R_el of the chosen model (curve by default; Eq. 27 with model = power_law)"),
-    "lower": ("ohm", "lower end of the combined band R exp(-total_lower)"),
-    "upper": ("ohm", "upper end of the combined band R exp(total_upper)"),
-    "realization_lower": ("ohm", "16 % of single realizations, R exp(-spread_lower)"),
-    "realization_upper": ("ohm", "84 % of single realizations, R exp(spread_upper) (inf: > 16 % open circuits)"),
-    "spread_lower": ("1", "realization spread below R, one-sigma half-width in ln R"),
-    "spread_upper": ("1", "realization spread above R, one-sigma half-width in ln R"),
-    "fit_error": ("1", "fit confidence interval, one-sigma half-width in ln R"),
-    "surrogate_error": ("1", "local cross-validated surrogate error, one-sigma half-width in ln R"),
-    "total_lower": ("1", "combined half-width below R in ln R (quadrature sum)"),
-    "total_upper": ("1", "combined half-width above R in ln R (quadrature sum)"),
-    "open_probability": ("1", "interpolated share of open-circuit realizations"),
-    "resistance_curve": ("ohm", "R_el of the curve model (ln R' polynomial in ln F' per cell, interpolated)"),
-    "resistance_power_law": ("ohm", "R_el of Eq. 27 with the surrogate's alpha and gamma"),
-    "mu": ("1", "the surface's (8/3) eta sigma sqrt(2 R* beta)"),
-    "Pi": ("1", "the surface's eta R* sigma"),
-}
+def settle_domain(problems: list[tuple[str, str]], why: np.ndarray, extrapolate: bool, owner: str) -> np.ndarray:
+    """Which queries are answered: refuse, answer in part, or (extrapolating) answer all with a warning.
+
+    Parameters
+    ----------
+    problems
+        Every variable outside the domain and what to do about it (the surface's groups first,
+        then the queries', as :func:`outside_ranges` writes them); empty: all inside.
+    why
+        Per query, why it is outside the domain ("": inside).
+    extrapolate
+        Answer every query, with an :class:`ExtrapolationWarning` per problem.
+    owner
+        The surrogate, named after the first problem's range (" of the atlas surrogate ...").
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        The queries answered (the others are NaN with ``outside_domain`` saying why).
+
+    Raises
+    ------
+    OutsideDomainError
+        Unless ``extrapolate``, when no query is inside (a surface's group outside the domain
+        leaves none), naming every problem.
+
+    Warns
+    -----
+    ExtrapolationWarning
+        With ``extrapolate``, per problem.
+    PartlyAnsweredWarning
+        When some queries are outside and others answered.
+    """
+    inside = why == ""
+    if not problems:
+        return inside
+    named = [f"{text}{owner if k == 0 else ''}{': ' + advice if advice else ''}"
+             for k, (text, advice) in enumerate(problems)]
+    if extrapolate:
+        for text in named:
+            warnings.warn(f"{text}: the prediction is an extrapolation", ExtrapolationWarning, stacklevel=3)
+        return np.ones_like(inside)
+    if not inside.any():
+        raise OutsideDomainError(f"{'; '.join(named)}: the surrogate is not valid there; pass --extrapolate "
+                                 "(extrapolate=True) to predict anyway")
+    warnings.warn(f"{inside.sum()} of {inside.size} queries answered; {'; '.join(named)}: the other queries are NaN, "
+                  "column outside_domain says why", PartlyAnsweredWarning, stacklevel=3)
+    return inside
+
+
+#: Output variables of the predictors: name -> (units, long_name), as the registry
+#: (``variables.toml``, namespace ``predict``) declares them.
+OUTPUT_COLUMNS: dict[str, tuple[str, str]] = {name: (v.units, v.long_name) for name, v in namespace("predict").items()}
