@@ -78,6 +78,7 @@ def surrogate_model_blocks(sur: xr.Dataset) -> list[Block]:
     formulas = "\n".join(str(sur.attrs.get(f"{p}_formula", "")) for p in PARAMETERS)
     return [
         Block("h2", "Surrogate (Eq. 26)"),
+        *([Block("p", f"Trivial: {sur.attrs['trivial']}.")] if "trivial" in sur.attrs else []),
         Block("p", f"Method '{method}': {text}. Free parameters of a rank-r product of polynomial spaces of "
                    f"dimensions p and q: r (p + q - r). CV: RMS relative error of each grid value predicted with its "
                    f"lambda row or xi column left out. Target per cell: |error| <= max(3 %, the cell's "

@@ -154,10 +154,11 @@ def _right_items(scenario: Scenario, fits: xr.Dataset, sur: xr.Dataset | None) -
 
 
 def _surrogate_item(sur: xr.Dataset) -> str:
-    """The surrogate's worst relative error of alpha and gamma over the grid."""
+    """The surrogate's worst relative error of alpha and gamma over the grid, and why it is trivial if it is."""
     worst = ", ".join(f"{p} {100 * float(np.nanmax(np.abs(sur[f'{p}_relative_error'].values))):.2f} %"
                       for p in PARAMETERS)
-    return f"**Surrogate (Eq. 26):** worst relative error on the grid: {worst}."
+    trivial = f" Trivial: {sur.attrs['trivial']}." if "trivial" in sur.attrs else ""
+    return f"**Surrogate (Eq. 26):** worst relative error on the grid: {worst}.{trivial}"
 
 
 def summary_blocks(scenario: Scenario, fits: xr.Dataset | None, sur: xr.Dataset | None,

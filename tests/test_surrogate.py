@@ -134,12 +134,6 @@ def test_joint_stage_on_small_grid(small) -> None:
     assert_labelled(ds)
 
 
-def test_joint_stage_needs_three_lines() -> None:
-    tiny = load_scenario("paper_gt", {**SMALL_OVERRIDES, "oxide.xi": [0.2, 0.5]})
-    with pytest.raises(ConfigError, match="must each hold >= 3 values"):
-        surrogate.build(tiny, fits.build(tiny, synthetic_cube(tiny, noise=0.0)))
-
-
 # ------------------------------------------------------------------ joint fit
 def log_rank2(lam: np.ndarray, xi: np.ndarray) -> np.ndarray:
     """exp of a rank-2 field with orders (3, 2), spanning roughly 0.2 ... 5 like alpha."""

@@ -51,6 +51,7 @@ def _preflight(args: argparse.Namespace, scenario: ResolvedScenario, scene: bool
     preflight(scenario, args.data_dir, getattr(args, "scheduler", None), scene=scene)
     for note in getattr(args, "plan_notes", ()):  # the plan, once every check has passed
         print(note, file=sys.stderr)
+    args.plan_notes = ()  # said once, though `run` checks again before the figures and the report
 
 
 def _run_stage(name: str, scenario: ResolvedScenario, args: argparse.Namespace) -> None:

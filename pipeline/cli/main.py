@@ -84,7 +84,8 @@ from g2tom.errors import StaleInputError, WriteError  # noqa: E402
 
 __all__ = ["main"]
 
-#: Commands that run the surrogate stage: its limits on the oxide grid are checked before any stage.
+#: Commands that run the surrogate stage: its limits on the oxide grid are checked before any stage (and a
+#: grid too small for the joint surrogate is said, with the plan).
 _REACH_SURROGATE = ("run", "surrogate")
 
 
@@ -169,13 +170,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         if _NUMBA_THREADS:
             raise ConfigError(_NUMBA_THREADS)
         scenario = _load(args)
-        if args.command in _REACH_SURROGATE:
-            check_surrogate_grid(scenario)
+        grid_note = check_surrogate_grid(scenario) if args.command in _REACH_SURROGATE else None
         if getattr(args, "workers", None) is not None:
             compute_options(args)  # --workers is checked before the plan is announced
         with warnings.catch_warnings():
             warnings.simplefilter("default")
             scenario, args.plan_notes = prepare(args.command, scenario, getattr(args, "workers", None))
+        if grid_note:  # said with the plan, once every check has passed
+            args.plan_notes = [*args.plan_notes, f"g2tom: note: {grid_note}"]
         args.handler(args, scenario)
     except ConfigError as exc:
         print(f"g2tom: error: {exc}", file=sys.stderr)

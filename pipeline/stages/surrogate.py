@@ -13,6 +13,12 @@ Two methods (``surrogate.method``):
   ``weight_floor``)^2 from ``fits.nc``'s ``{p}_ci``), transform, rank and orders chosen by
   leave-one-line-out cross-validation (:func:`g2tom.fitting.surrogate_joint.select_model`).
 
+A grid with fewer than three values of oxide.xi or oxide.lambda (one cell, one row) is too small
+for ``joint``: the stage then fits ``paper`` with the most rank and orders the grid determines,
+through every cell (one cell: a constant, that cell's alpha and gamma), records why in the
+attribute ``trivial`` and the method fitted in ``method``
+(:func:`g2tom.before_work.surrogate_grid.small_grid_note`).
+
 ``surrogate.nc`` holds, for ``p`` in (alpha, gamma):
 
 * ``{p}_coef_w`` ({p}_mode, {p}_power_w) and ``{p}_coef_z`` ({p}_mode, {p}_power_z): ascending
@@ -50,6 +56,7 @@ import numpy as np
 import xarray as xr
 from scipy.stats import norm
 
+from g2tom.before_work.surrogate_grid import small_grid_note
 from g2tom.compute import ComputeOptions, single_threaded
 from g2tom.config import ConfigError, Scenario
 from g2tom.fitting import surrogate as sg
@@ -149,11 +156,20 @@ def _loo(name: str, matrix: np.ndarray, lam: np.ndarray, xi: np.ndarray, rank: i
 
 
 def _paper(scenario: Scenario, name: str, matrix: np.ndarray, lam: np.ndarray, xi: np.ndarray) -> tuple[dict, dict]:
-    """The paper's method: variables, model attributes and the left-out predictions."""
+    """The paper's method: variables, model attributes and the left-out predictions.
+
+    Configured (``surrogate.method = 'paper'``), orders reduced to the grid are warned about; as the
+    trivial fit of a grid too small for the joint method (:func:`small_grid_note`, said once
+    before the run) rank and orders are the most the grid determines, so that the fit passes
+    through every cell.
+    """
     s = scenario.surrogate
-    wanted = (s.rank, getattr(s, f"{name}_order_w"), getattr(s, f"{name}_order_z"))
     limits = (min(lam.size, xi.size), lam.size - 1, xi.size - 1)
-    rank, order_w, order_z = _reduced(name, "", wanted, limits, (lam.size, xi.size))
+    if s.method != "paper":
+        rank, order_w, order_z = limits
+    else:
+        wanted = (s.rank, getattr(s, f"{name}_order_w"), getattr(s, f"{name}_order_z"))
+        rank, order_w, order_z = _reduced(name, "", wanted, limits, (lam.size, xi.size))
     model = sg_paper.fit_surrogate(matrix, lam, xi, rank, order_w, order_z)
     predictions = sg_paper.paper_loo_predictions(matrix, lam, xi, rank, order_w, order_z)
     loo = _loo(name, matrix, lam, xi, rank, (order_w, order_z))
@@ -172,11 +188,6 @@ def _paper(scenario: Scenario, name: str, matrix: np.ndarray, lam: np.ndarray, x
 def _joint(scenario: Scenario, fits: xr.Dataset, name: str, matrix: np.ndarray, lam: np.ndarray, xi: np.ndarray) -> tuple[dict, dict]:
     """The joint weighted fit with cross-validated transform, rank and orders."""
     s = scenario.surrogate
-    if lam.size < 3 or xi.size < 3:
-        raise ConfigError(
-            f"oxide.xi ({xi.size} values) and oxide.lambda ({lam.size} values) must each hold >= 3 values for "
-            "surrogate.method = 'joint' (leave-one-line-out cross-validation), or use surrogate.method = 'paper'"
-        )
     wanted = (s.max_rank, s.max_order_w, s.max_order_z)
     limits = (min(lam.size, xi.size) - 1, lam.size - 2, xi.size - 2)  # one line fewer must determine them
     max_rank, max_w, max_z = _reduced(name, "scanned up to ", wanted, limits, (lam.size, xi.size))
@@ -203,7 +214,7 @@ def _joint(scenario: Scenario, fits: xr.Dataset, name: str, matrix: np.ndarray, 
 def _parameter(scenario: Scenario, fits: xr.Dataset, name: str) -> tuple[dict[str, xr.DataArray], dict[str, object]]:
     matrix = _grid_matrix(fits, name)
     lam, xi = fits["lambda"].values, fits["xi"].values
-    if scenario.surrogate.method == "paper":
+    if _method(scenario) == "paper":
         variables, info = _paper(scenario, name, matrix, lam, xi)
     else:
         variables, info = _joint(scenario, fits, name, matrix, lam, xi)
@@ -229,6 +240,11 @@ def _parameter(scenario: Scenario, fits: xr.Dataset, name: str) -> tuple[dict[st
         f"{name}_formula": sg.closed_formula(info["coef_w"], info["coef_z"], transform, name),
     }
     return variables, attrs
+
+
+def _method(scenario: Scenario) -> str:
+    """The method fitted: the configured one, or ``paper`` on a grid too small for ``joint``."""
+    return "paper" if small_grid_note(scenario) else scenario.surrogate.method
 
 
 @single_threaded
@@ -261,7 +277,10 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
     for key in ("alpha_clean", "gamma_clean", "alpha_clean_ci", "gamma_clean_ci"):
         ds[key] = fits[key]
     ds.attrs["reduction"] = fits.attrs["reduction"]
-    ds.attrs["method"] = scenario.surrogate.method
+    ds.attrs["method"] = _method(scenario)
+    note = small_grid_note(scenario)
+    if note:
+        ds.attrs["trivial"] = note
     # the scene's dimensionless groups: the predictor answers only surfaces with these (design notes, Sect. 9)
     scene = scene_groups(scenario)
     ds.attrs["mu"], ds.attrs["Pi"] = scene.mu, scene.Pi
