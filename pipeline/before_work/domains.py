@@ -144,25 +144,92 @@ def _rigid_grid_side(scenario: Scenario) -> int:
 _GRID_BYTES = 80.0
 
 
+#: Per indenter shape, the parameters that set how far its rigid gap stays within reach of the
+#: asperities, each with the sign of its effect on the grid (+1: a larger value widens it).
+_INDENTER_REACH: dict[str, tuple[tuple[str, int], ...]] = {
+    "sphere": (("radius", 1),),
+    "cone": (("cone_angle", -1),),
+    "flat_punch": (("punch_radius", 1), ("edge_radius", 1)),
+}
+#: Units of the indenter's parameters, for the message.
+_INDENTER_UNITS = {"radius": "m", "cone_angle": "rad", "punch_radius": "m", "edge_radius": "m"}
+
+
+def _departure(value: float, default: float, sign: int) -> float:
+    """How far ``value`` lies from its bundled ``default`` towards a wider grid (log ratio)."""
+    return sign * math.log(value / default)
+
+
+def _indenter_fit(scenario: Scenario, name: str, sign: int, memory: float) -> float:
+    """The value of ``indenter.<name>`` nearest the scenario's at which the rigid-gap grid fits ``memory``.
+
+    Found by halving (or doubling) the value until the grid fits, then bisecting in log; a cone's
+    angle stays below pi/2. NaN if no value fits.
+    """
+    def fits(value: float) -> bool:
+        trial = Scenario.of(scenario, indenter=dataclasses.replace(scenario.indenter, **{name: value}))
+        return _GRID_BYTES * _rigid_grid_side(trial) ** 2 <= memory
+
+    bad = getattr(scenario.indenter, name)
+    step = 2.0 ** -sign
+    good = bad * step
+    for _ in range(200):
+        if name == "cone_angle":
+            good = min(good, (bad + math.pi / 2) / 2)
+        if fits(good):
+            break
+        bad, good = good, good * step
+    else:
+        return math.nan
+    for _ in range(40):
+        middle = math.sqrt(bad * good)
+        bad, good = (bad, middle) if fits(middle) else (middle, good)
+    return good
+
+
 def check_cell_count(scenario: Scenario, memory: float) -> None:
-    """Refuse a cell size so fine that the rigid-gap grid of :func:`domains` cannot fit in ``memory``.
+    """Refuse a scene so wide or a cell size so fine that the rigid-gap grid of :func:`domains`
+    cannot fit in ``memory``.
+
+    The grid spans the radius at which the indenter's rigid gap reaches 40 sigma (set by the
+    indenter: its radius, cone angle or punch) in cells of 1/sqrt(eta). The refusal blames the
+    parameter that lies farthest from its bundled default towards a wider grid, with the value that
+    fits, and names the other way out.
 
     Raises
     ------
     ConfigError
-        Naming ``roughness.eta`` (the cell pitch is 1/sqrt(eta)) and its largest workable value.
+        Naming ``roughness.eta`` (the cell pitch is 1/sqrt(eta)) or the indenter's parameter
+        (``indenter.radius``, ``indenter.cone_angle``, ``indenter.punch_radius`` or
+        ``indenter.edge_radius`` by shape), its value, and the value that fits.
     """
     if AUTO not in (scenario.contact.window, scenario.contact.r_max):
         return
     side = _rigid_grid_side(scenario)
     need = _GRID_BYTES * side * side
-    if need > memory:
-        eta = scenario.roughness.eta
+    if need <= memory:
+        return
+    ind, defaults = scenario.indenter, type(scenario.indenter)()
+    eta = scenario.roughness.eta
+    eta_fix = f"roughness.eta <= about {eta * memory / need:.3g} (m-2)"
+    grid = (f"the contact needs a grid of about {side} x {side} cells ({need / 2**30:.3g} GiB, "
+            f"{memory / 2**30:.3g} GiB available)")
+    name, sign = max(_INDENTER_REACH[ind.shape], key=lambda ps: _departure(getattr(ind, ps[0]), getattr(defaults, ps[0]), ps[1]))
+    value, unit = getattr(ind, name), _INDENTER_UNITS[name]
+    fit = _indenter_fit(scenario, name, sign, memory)
+    indenter_fix = (f"indenter.{name} {'<=' if sign > 0 else '>='} about {fit:.3g} ({unit})" if math.isfinite(fit)
+                    else None)
+    eta_departure = _departure(eta, type(scenario.roughness)().eta, 1)
+    if indenter_fix and _departure(value, getattr(defaults, name), sign) > eta_departure:
         raise ConfigError(
-            f"roughness.eta = {eta:g} is out of range for this machine: the contact needs a grid of "
-            f"about {side} x {side} cells ({need / 2**30:.3g} GiB, {memory / 2**30:.3g} GiB available); "
-            f"it must be <= about {eta * memory / need:.3g} (m-2)"
+            f"indenter.{name} = {value:g} ({unit}) is out of range for this machine: the {ind.shape.replace('_', ' ')}'s "
+            f"rigid gap stays within 40 sigma of the asperities out to r = {_reach(scenario):.3g} m, so {grid}; "
+            f"it must be {indenter_fix.removeprefix(f'indenter.{name} ')} (or {eta_fix})"
         )
+    raise ConfigError(
+        f"roughness.eta = {eta:g} is out of range for this machine: {grid}; it must be "
+        f"{eta_fix.removeprefix('roughness.eta ')}" + (f" (or {indenter_fix})" if indenter_fix else "")
+    )
 
 
 def estimate_cells(scenario: Scenario) -> int:
