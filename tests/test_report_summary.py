@@ -76,7 +76,7 @@ def test_the_predict_command_answers_the_law(run_dir: Path, small: ResolvedScena
     cell = fits.sel(xi=0.5, **{"lambda": 5.0})
     for q in queries:  # the first screen's law of this cell lies within the answer's band
         law = float(cell["alpha"]) * q["force_normalized"] ** -float(cell["gamma"]) * float(fits["resistance_scale"])
-        assert q["lower_ohm"] <= law <= q["upper_ohm"], (q, law)
+        assert q["resistance_mean_lower_ohm"] <= law <= q["resistance_mean_upper_ohm"], (q, law)
 
 
 def test_report_never_mentions_sessions(run_dir: Path) -> None:
