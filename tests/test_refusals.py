@@ -3,8 +3,11 @@ and the plan of ``g2tom validate --max-realizations`` stays cheap for any allowe
 
 from __future__ import annotations
 
+import dataclasses
 import re
+import time
 
+import numpy as np
 import pytest
 
 from g2tom.before_work import load_scenario
@@ -42,3 +45,33 @@ def test_near_flat_cone_refused_by_plan_naming_the_cone(capsys) -> None:
     assert main(["plan", "--set", "indenter.shape=cone", "--set", "indenter.cone_angle=1e-6"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("g2tom: error: indenter.cone_angle = 1e-06 (rad) is out of range") and err.count("\n") == 1
+
+
+def _quick_set_and_loads():
+    from g2tom.reference.validate import chosen_set
+
+    vset = chosen_set(True, "gw")
+    return vset, np.geomspace(0.0752, 18.8, len(vset.deltas))
+
+
+def test_validate_plan_counts_its_cases_without_building_them() -> None:
+    from g2tom.reference import cases, cost
+
+    vset, f = _quick_set_and_loads()
+    est = cost.estimate(vset, f, 2, 5.0)
+    built = [c for k, (n, p) in enumerate(zip(est.ensemble_counts, est.ensemble_pairs))
+             for c in (cases.ensemble_cases(vset, k, range(n)) if n > p else [])
+             + cases.pair_cases(vset, k, range(len(vset.realizations), p))]
+    assert est.ensemble == len(built)
+    assert est.seconds_part2 == pytest.approx(sum(cost.case_seconds(vset, c, float(f[c.load])) for c in built), rel=1e-12)
+
+
+def test_validate_plan_stays_cheap_at_any_ensemble_cap() -> None:
+    from g2tom.reference import cost
+
+    vset, f = _quick_set_and_loads()
+    start = time.perf_counter()
+    huge = cost.estimate(dataclasses.replace(vset, max_ensemble=10**12), f, 2, 5.0)
+    assert time.perf_counter() - start < 2.0
+    small = cost.estimate(dataclasses.replace(vset, max_ensemble=10**4), f, 2, 5.0)
+    assert huge.wall_cap > 10**7 * small.wall_cap  # part 2's bound grows with the cap (10**8 x), counted, not built

@@ -159,32 +159,34 @@ def estimate(vset: scene.ValidationSet, force_normalized: np.ndarray, workers: i
     """The plan's estimate (no case stored yet) at the loads' F' on ``workers`` processes;
     ``model_seconds``: the validated scenario's stages on the validation scene (s)."""
     part1 = cases_mod.plan_cases(vset)
-    N, P = ensemble.prior_allocation(vset, force_normalized, case_costs(vset, force_normalized))
+    costs = case_costs(vset, force_normalized)
+    N, P = ensemble.prior_allocation(vset, force_normalized, costs)
     counts, pairs = N.max(axis=0), P.max(axis=0)
     P0 = len(vset.realizations)
 
-    def seconds(cases: list[cases_mod.Case]) -> list[float]:
-        return [case_seconds(vset, c, float(force_normalized[c.load])) for c in cases]
+    def extra(proxies: np.ndarray, paired: np.ndarray) -> tuple[int, float, float]:
+        """Part 2's cases (proxies on the ensemble grid where they exceed the pairs, the pairs added
+        beyond part 1's), counted per load: how many, their summed seconds and the longest one's.
+        Every case of a kind costs the same at a load (:func:`case_costs`), so no case is built."""
+        n_proxy = np.where(proxies > paired, proxies, 0)
+        n_pair = np.maximum(paired - P0, 0)
+        longest = max([*costs.grid[n_proxy > 0], *costs.pair[n_pair > 0]], default=0.0)
+        return int(n_proxy.sum() + n_pair.sum()), float(n_proxy @ costs.grid + n_pair @ costs.pair), float(longest)
 
-    def extra(proxies: np.ndarray, paired: np.ndarray) -> list[cases_mod.Case]:
-        """Part 2's cases: proxies on the ensemble grid where they exceed the pairs, the added pairs."""
-        return [c for k, (n, p) in enumerate(zip(proxies, paired))
-                for c in (cases_mod.ensemble_cases(vset, k, range(n)) if n > p else [])
-                + cases_mod.pair_cases(vset, k, range(P0, p))]
-
-    first = seconds(part1)
+    first = [case_seconds(vset, c, float(force_normalized[c.load])) for c in part1]
     s1 = sum(first)
-    second = seconds(extra(counts, pairs))
+    second = extra(counts, pairs)
     loads = len(force_normalized)
     most_pairs = max(P0, vset.pairs_cap)
-    capped = seconds(extra(np.full(loads, vset.max_ensemble), np.full(loads, most_pairs)))
+    capped = extra(np.full(loads, vset.max_ensemble), np.full(loads, most_pairs))
     stand = STAND_IN_SECONDS * len(force_normalized) * int(counts.max()) if vset.surface == "gw" else 0.0
     g2tom = G2TOM_SECONDS * len(vset.discretizations) * len(vset.models) + model_seconds + stand
 
-    def wall(part2: list[float]) -> float:
-        return g2tom + max((s1 + sum(part2)) / max(workers, 1), max(first + part2, default=0.0))
+    def wall(part2: tuple[int, float, float]) -> float:
+        _, total, longest = part2
+        return g2tom + max((s1 + total) / max(workers, 1), max(first, default=0.0), longest)
 
     return Estimate(part1=sum(c.oxide for c in part1), convergence=sum(not c.oxide for c in part1),
                     ensemble_counts=counts, ensemble_pairs=pairs,
-                    ensemble=len(second), seconds_part1=s1, seconds_part2=sum(second),
+                    ensemble=second[0], seconds_part1=s1, seconds_part2=second[1],
                     seconds_g2tom=g2tom, wall=wall(second), wall_cap=wall(capped))
