@@ -90,10 +90,11 @@ def surrogate_model_blocks(sur: xr.Dataset) -> list[Block]:
         Block("p", "Closed formulas (w = LN(lambda) where written in w, z = -LN(1 - xi); also in surrogate.json with everything the "
                    "predictor needs):"),
         Block("pre", formulas),
-        Block("p", "Predictor band (g2tom predict): three one-sigma half-widths in ln R, each reported: the "
-                   "realization spread (16-84 %), the fit's interval (sqrt(s_a^2 + (ln F' s_g)^2) from alpha_ci, "
-                   "gamma_ci) and the surrogate's local cross-validated error (sqrt(e_a^2 + (ln F' e_g)^2)), "
-                   "combined in quadrature per side: lower = R exp(-total_lower), upper = R exp(total_upper). "
+        Block("p", "Predictor bands (g2tom predict), each from one-sigma half-widths in ln R: the 95 % interval of "
+                   "the predicted mean, R exp(-/+ 1.96 sqrt(f^2 + e^2)) (resistance_mean_lower, resistance_mean_upper) "
+                   "with the fit's interval f = sqrt(s_a^2 + (ln F' s_g)^2) from alpha_ci, gamma_ci and the "
+                   "surrogate's local cross-validated error e = sqrt(e_a^2 + (ln F' e_g)^2); and the spread over "
+                   "contacts, 16-84 % of R over realizations (resistance_spread_p16, resistance_spread_p84). "
                    f"Local cross-validated error of ln alpha: median {100 * float(np.nanmedian(sur['alpha_cv_error'])):.2f} %, "
                    f"largest {100 * float(np.nanmax(sur['alpha_cv_error'])):.2f} %; of gamma: median "
                    f"{float(np.nanmedian(sur['gamma_cv_error'])):.3g}, largest {float(np.nanmax(sur['gamma_cv_error'])):.3g}."

@@ -111,9 +111,11 @@ class SurrogateTables:
                     "R'": "R_el sqrt(R* sigma) / (2 rho*), R_el in ohm",
                     "E*": "E / (2 (1 - nu^2)), Pa",
                 },
-                "band": "ln-R half-widths (one standard deviation) combined in quadrature: "
-                        "total = sqrt(spread^2 + fit_error^2 + surrogate_error^2), lower = R exp(-total_lower), "
-                        "upper = R exp(total_upper); see g2tom.predict",
+                "band": "two bands in ohm, from ln-R half-widths (one standard deviation each): the 95 % interval "
+                        "of the predicted mean, R exp(-/+ 1.96 sqrt(fit_error^2 + surrogate_error^2)) "
+                        "(resistance_mean_lower, resistance_mean_upper), and the spread over contacts, 16-84 % of R "
+                        "over realizations, R exp(-spread_lower), R exp(spread_upper) (resistance_spread_p16, "
+                        "resistance_spread_p84); see g2tom.predict",
             },
             "parameters": {
                 p: {"transform": t, "coef_w": cw.tolist(), "coef_z": cz.tolist()} for p, (cw, cz, t) in self.coef.items()
