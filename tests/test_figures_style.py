@@ -76,7 +76,8 @@ def drawn(run_dir: Path, small: ResolvedScenario) -> dict[str, matplotlib.figure
     real = matplotlib.figure.Figure.savefig
 
     def keep(self, path, *args, **kwargs):
-        figures[Path(path).name] = self
+        name = Path(path).name  # figures are written atomically: ".<name>.<random>.tmp", then renamed
+        figures[name[1:].rsplit(".", 2)[0] if name.startswith(".") and name.endswith(".tmp") else name] = self
         return real(self, path, *args, **kwargs)
 
     with pytest.MonkeyPatch.context() as patch:
