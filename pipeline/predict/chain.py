@@ -39,6 +39,7 @@ import xarray as xr
 from g2tom.config import ConfigError, Scenario
 from g2tom.before_work import load_scenario
 from g2tom.store import atomic_path, git_commit
+from g2tom.variables import namespace
 
 __all__ = ["CHAIN_FILE", "MAP_PIXELS", "chain_dataset", "run_chain", "main"]
 
@@ -190,33 +191,23 @@ def _log_mean(ratio: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _dataset(ds: xr.Dataset, vset, measured: dict, out: dict, ratios: dict, answering) -> xr.Dataset:
-    rl, ox = ("realization", "load"), ("xi", "lambda", "realization", "load")
+    declared = namespace("chain")
 
-    def a(units: str, long_name: str) -> dict:
-        return {"units": units, "long_name": long_name}
+    def var(name: str, data: np.ndarray) -> tuple:
+        return declared[name].dims, data, declared[name].attrs()
 
     data = {
-        **{f"measured_{k}": ("realization", v, a(u, f"{k} measured on the realization's height map ({what})"))
-           for (k, v), (u, what) in zip(measured.items(), [("m", "summit heights' std"), ("m-2", "summit density"),
-                                                            ("m", "summit radius"), ("m", "rms height"),
-                                                            ("1", "(8/3) eta sigma sqrt(2 R* beta)"),
-                                                            ("1", "eta R* sigma")])},
-        "force_normalized_measured": (rl, out["force_normalized"], a("1", "F' of the force with the measured sigma")),
-        "inside_domain": (rl, out["inside"].astype(np.int8), a("1", "1 where the measured surface and F' lie in the "
-                                                               "surrogate's domain (else extrapolated)")),
-        "resistance_chain_clean": (rl, out["clean"], a("ohm", "predicted clean R from the measured height map")),
-        "resistance_chain": (ox, out["oxidized"], a("ohm", "predicted R from the measured height map")),
-        "ratio_clean": (rl, ratios["ratio_clean"], a("1", "chain / full-field clean resistance")),
-        "ratio": (ox, ratios["ratio"], a("1", "chain / full-field oxidized resistance")),
-        "ratio_clean_known": (rl, ratios["ratio_clean_known"], a("1", "predicted with the set's own sigma, eta, beta / "
-                                                                     "full field, clean")),
-        "ratio_known": (ox, ratios["ratio_known"], a("1", "predicted with the set's own sigma, eta, beta / full field")),
+        **{f"measured_{k}": var(f"measured_{k}", v) for k, v in measured.items()},
+        "force_normalized_measured": var("force_normalized_measured", out["force_normalized"]),
+        "inside_domain": var("inside_domain", out["inside"].astype(np.int8)),
+        "resistance_chain_clean": var("resistance_chain_clean", out["clean"]),
+        "resistance_chain": var("resistance_chain", out["oxidized"]),
+        **{name: var(name, ratios[name]) for name in ("ratio_clean", "ratio", "ratio_clean_known", "ratio_known")},
     }
     for name in ("ratio_clean", "ratio", "ratio_clean_known", "ratio_known"):
-        dims = ("load",) if name.startswith("ratio_clean") else ("xi", "lambda", "load")
         gm, se = _log_mean(ratios[name])
-        data[f"{name}_mean"] = (dims, gm, a("1", f"geometric mean over the realizations of {name}"))
-        data[f"{name}_standard_error"] = (dims, se, a("1", f"standard error of ln of {name}_mean over the realizations"))
+        data[f"{name}_mean"] = var(f"{name}_mean", gm)
+        data[f"{name}_standard_error"] = var(f"{name}_standard_error", se)
     coords = {k: ds[k] for k in ("realization", "load", "xi", "lambda")}
     coords.update(force=ds["force"], force_normalized=ds["force_normalized"])
     chain = xr.Dataset(data, coords=coords)

@@ -78,8 +78,7 @@ def g2tom_resistances(vset: scene.ValidationSet, model: str) -> xr.Dataset:
                                   for a in range(len(vset.lambdas))], axis=1))  # (xi, lambda, delta)
     return xr.Dataset({
         "force": contact["force"],
-        "resistance_clean": (("realization", "delta"), np.stack(clean), {"units": "ohm", "long_name": "clean resistance"}),
-        "resistance": (("xi", "lambda", "delta", "realization"), np.stack(oxidized, axis=-1),
-                       {"units": "ohm", "long_name": "resistance"}),
+        "resistance_clean": scene.case_variable("resistance_clean", np.stack(clean)),
+        "resistance": scene.case_variable("resistance", np.stack(oxidized, axis=-1)),
         "contact_extent": scene.contact_extent(contact),
     })

@@ -28,8 +28,9 @@ from g2tom.reference import surfaces
 from g2tom.stages import contact as contact_stage
 from g2tom.stages import cube as cube_stage
 from g2tom.stages import oxide as oxide_stage
+from g2tom.variables import entry
 
-__all__ = ["ValidationSet", "DEFAULT", "QUICK", "RANDOM", "random_process_set", "surface_stream", "rough_sphere", "g2tom_scenario",
+__all__ = ["case_variable", "ValidationSet", "DEFAULT", "QUICK", "RANDOM", "random_process_set", "surface_stream", "rough_sphere", "g2tom_scenario",
            "g2tom_resistances", "contact_extent", "scene_overrides", "scenario_of", "FLOOR_SIGMAS", "DEFAULT_LOADS"]
 
 #: The GW surface's floor between asperities, in sigma below the reference plane: far below any
@@ -256,13 +257,20 @@ def g2tom_scenario(vset: ValidationSet, model: str, spots: str) -> ResolvedScena
 EXTENT_FRACTION = 1e-4
 
 
+def case_variable(name: str, data: np.ndarray) -> tuple[tuple[str, ...], np.ndarray, dict[str, str]]:
+    """``(dims, data, attrs)`` of g2tom's resistances on a validation scene (``resistance_clean``,
+    ``resistance``), as the metadata registry declares them (``reference.cases``)."""
+    declared = entry(f"reference.cases.{name}")
+    return declared.dims, data, declared.attrs()
+
+
 def contact_extent(contact: xr.Dataset) -> xr.DataArray:
     """The Greenwood–Tripp contact's extent per load step (delta), m (see :data:`EXTENT_FRACTION`)."""
     fraction = contact["area_fraction"].transpose("delta", "r").values
     r = contact["r"].values
     extent = [r[np.flatnonzero(a >= EXTENT_FRACTION * a.max())[-1]] for a in fraction]
-    return xr.DataArray(np.asarray(extent), dims="delta", attrs={
-        "units": "m", "long_name": f"largest radius where GT's area fraction >= {EXTENT_FRACTION:g} of its peak"})
+    declared = entry("reference.cases.contact_extent")
+    return xr.DataArray(np.asarray(extent), dims=declared.dims, attrs=declared.attrs(fraction=f"{EXTENT_FRACTION:g}"))
 
 
 def g2tom_resistances(vset: ValidationSet, model: str, spots: str) -> xr.Dataset:

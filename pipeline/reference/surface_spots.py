@@ -66,7 +66,7 @@ def g2tom_resistances(vset: scene.ValidationSet, model: str) -> xr.Dataset:
     oxidized = lattice_cube.exact_terms(FieldSource.of(scenario), realizations, radius, radius, settings)["resistance"]
     return xr.Dataset({
         "force": contact["force"],
-        "resistance_clean": (("realization", "delta"), clean, {"units": "ohm", "long_name": "clean resistance"}),
-        "resistance": (("xi", "lambda", "delta", "realization"), oxidized, {"units": "ohm", "long_name": "resistance"}),
+        "resistance_clean": scene.case_variable("resistance_clean", clean),
+        "resistance": scene.case_variable("resistance", oxidized),
         "contact_extent": scene.contact_extent(contact),
     })
