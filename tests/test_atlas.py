@@ -174,6 +174,7 @@ def test_another_configuration_reruns_its_scenes(base, uninterrupted) -> None:
     assert atlas._done(base, design_scenes(DESIGN)[0], data_dir)
 
 
+@pytest.mark.stress  # 27 s: a two-process cluster; the cube's own (tests/test_compute.py) stays in make test
 def test_two_worker_cluster_gives_the_same_bits(tmp_path, base, uninterrupted) -> None:
     pytest.importorskip("distributed")
     path = atlas.run_atlas(base, DESIGN, tmp_path, ComputeOptions(workers=2, progress=False))

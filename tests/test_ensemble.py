@@ -94,7 +94,9 @@ def test_adaptive_counts_stop_where_the_interval_is_reached(adaptive_inputs, ada
 
 
 @pytest.mark.parametrize(
-    ("batch", "chunk", "workers"), [(1, 25, None), (13, 5, None), (40, 3, 2)]
+    ("batch", "chunk", "workers"),
+    # the two-worker cluster (12 s) under make stress: tests/test_compute.py's cluster cube stays in make test
+    [(1, 25, None), (13, 5, None), pytest.param(40, 3, 2, marks=pytest.mark.stress)]
 )
 def test_adaptive_cube_does_not_depend_on_batch_chunk_or_workers(
     adaptive_inputs, adaptive_cube, batch: int, chunk: int, workers: int | None
