@@ -79,7 +79,7 @@ from g2tom.before_work.surrogate_grid import check_surrogate_grid  # noqa: E402
 from g2tom.cli.arguments import attach_negative_values, build_parser, default_config  # noqa: E402
 from g2tom.cli.commands import compute_options  # noqa: E402
 from g2tom.config import ConfigError, Scenario  # noqa: E402
-from g2tom.before_work import load_scenario
+from g2tom.before_work import load_scenario  # noqa: E402
 from g2tom.errors import StaleInputError, WriteError  # noqa: E402
 
 __all__ = ["main"]
