@@ -11,12 +11,15 @@ import dataclasses
 from dataclasses import field
 from typing import Any, Mapping
 
-__all__ = ["AUTO", "ConfigError", "param", "parameter_key", "format_range"]
+__all__ = ["AUTO", "UNSET", "ConfigError", "param", "parameter_key", "format_range"]
 
 
 #: The value of ``contact.r_max`` and ``contact.window`` resolved from the solution
 #: (:func:`g2tom.before_work.domains.resolve`) before any stage runs.
 AUTO = "auto"
+#: The word a parameter declared with ``unset=True`` takes for "not given" (held as ``None``), e.g.
+#: ``material.hardness = "none"``: elastic asperities.
+UNSET = "none"
 
 
 class ConfigError(ValueError):
@@ -35,11 +38,17 @@ def _spec(
     key: str | None = None,
     each: bool = False,
     auto: bool = False,
+    unset: bool = False,
+    ordered: bool = True,
 ) -> dict[str, Any]:
     """Field metadata: unit, description and allowed range (``each`` applies it per element;
-    ``auto`` also accepts the word ``"auto"``, resolved from the solution before any stage runs)."""
+    ``auto`` also accepts the word ``"auto"``, resolved from the solution before any stage runs;
+    ``unset`` accepts the word ``"none"``, held as ``None``; ``ordered`` False lets a list's
+    elements come in any order)."""
     return {
         "auto": auto,
+        "unset": unset,
+        "ordered": ordered,
         "unit": unit,
         "doc": doc,
         "gt": gt,
@@ -78,4 +87,6 @@ def format_range(meta: Mapping[str, Any]) -> str:
     if meta["le"] is not None:
         parts.append(f"<= {meta['le']:g}")
     text = " and ".join(parts) if parts else "any finite value"
-    return f"{text}, or 'auto'" if meta.get("auto") else text
+    if meta.get("auto"):
+        return f"{text}, or 'auto'"
+    return f"{text}, or {UNSET!r}" if meta.get("unset") else text

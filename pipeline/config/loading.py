@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from g2tom.config.declare import ConfigError, format_range, parameter_key
+from g2tom.config.materials import pair_properties
 from g2tom.config.scenario import SECTIONS, Scenario
 from g2tom.config.validation import check_field, unknown
 
@@ -154,9 +155,9 @@ def read_scenario(
         Naming the parameter, its value and the allowed range.
     """
     data, name = _read_toml(config)
+    own = {f"{section}.{key}" for section, table in data.items() if isinstance(table, dict) for key in table}
     # the settings the user chose (a file's own, not those of its base or of a bundled scenario)
-    explicit = set() if str(config) in bundled_scenarios() else {
-        f"{section}.{key}" for section, table in data.items() if isinstance(table, dict) for key in table}
+    explicit = set() if str(config) in bundled_scenarios() else set(own)
     name = str(data.pop("name", name))
     description = str(data.pop("description", ""))
     data, base_description = _with_base(data)
@@ -164,14 +165,39 @@ def read_scenario(
     items = overrides.items() if isinstance(overrides, Mapping) else (
         _split_override(o) for o in overrides
     )
+    overridden: set[str] = set()
     for dotted, value in items:
         dotted = RENAMED.get(dotted, dotted)
         section, _, key = dotted.partition(".")
         if section not in SECTIONS or not key:
             raise unknown(dotted)
         data.setdefault(section, {})[key] = value
-        explicit.add(dotted)
-    return _settle(_build(data, name=name, description=description), explicit)
+        overridden.add(dotted)
+    explicit |= overridden
+    winners = overridden if BODIES in overridden else own | overridden
+    return _settle(_with_bodies(_build(data, name=name, description=description), winners), explicit)
+
+
+#: The parameter naming the bodies, and the parameters it fills: (E*, rho*, H) of
+#: :func:`~g2tom.config.materials.pair_properties`, each unless one of its keys was given.
+BODIES = "material.bodies"
+_FILLED_BY_BODIES = (("modulus", ("material.modulus", "material.E", "material.nu")),
+                     ("rho", ("material.rho",)),
+                     ("hardness", ("material.hardness",)))
+
+
+def _with_bodies(s: Scenario, given: set[str]) -> Scenario:
+    """``s`` with the effective modulus, resistivity and hardness of its named bodies
+    (``material.bodies``), each where none of its keys is in ``given`` (the settings made where the
+    bodies were named, or later: a value given beside the names, or after them, wins)."""
+    bodies = s.material.bodies
+    if not bodies:
+        return s
+    if len(bodies) > 2:
+        raise ConfigError(f"{BODIES} = {bodies!r} names {len(bodies)} bodies: must name one (both bodies) or two")
+    values = dict(zip(("modulus", "rho", "hardness"), pair_properties(bodies)))
+    filled = {name: values[name] for name, keys in _FILLED_BY_BODIES if not given.intersection(keys)}
+    return dataclasses.replace(s, material=dataclasses.replace(s.material, **filled))
 
 
 #: Parameters that moved, by their old key: the compute options that left the science sections.

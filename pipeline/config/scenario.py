@@ -74,7 +74,8 @@ STAGE_EXCLUDED: dict[str, tuple[str, ...]] = {
 }
 #: Parameters left out of every hash while they hold these values (their defaults): a parameter added
 #: later keeps the hashes, and so the outputs on disk, of every scenario that does not use it.
-HASH_NEUTRAL: dict[str, Any] = {"fits.control_variate": "none", "contact.pool_half_width": 0.0,
+HASH_NEUTRAL: dict[str, Any] = {"material.modulus": None, "material.hardness": None, "material.bodies": [],
+                                 "fits.control_variate": "none", "contact.pool_half_width": 0.0,
                                  "atlas.heldout_pool_half_width": 0.0, "oxide.step_half_width": 0.0,
                                  "atlas.heldout_step_half_width": 0.0}
 #: The stages whose outputs each stage reads (their hashes enter its own).

@@ -10,6 +10,7 @@ import math
 from dataclasses import dataclass
 
 from g2tom.config.declare import param
+from g2tom.config.materials import MATERIALS
 
 __all__ = ["Material", "Roughness", "Indenter", "Loading", "Contact", "MAX_POOL_SURFACES", "POOL_CONFIDENCE"]
 
@@ -21,15 +22,32 @@ POOL_CONFIDENCE = 0.95
 
 @dataclass(frozen=True)
 class Material:
-    """Effective elastic and electrical properties of the contacting pair (Table 1)."""
+    """Effective elastic, electrical and plastic properties of the contacting pair (Table 1, and
+    named materials: :mod:`g2tom.config.materials`)."""
 
     E: float = param(2.1e11, "Pa", "Young's modulus of both bodies", gt=0)
     nu: float = param(0.3, "1", "Poisson's ratio of both bodies", gt=-1, lt=0.5)
     rho: float = param(7.2e-7, "ohm m", "effective resistivity rho* = (rho1 + rho2)/2", gt=0)
+    modulus: float | None = param(
+        None, "Pa", "effective modulus E* of the pair; none: E / (2 (1 - nu^2)) of two bodies of material.E and "
+        "material.nu (or the named bodies' pair)", gt=0, unset=True,
+    )
+    hardness: float | None = param(
+        None, "Pa", "indentation hardness H of the softer body: asperity pressure is capped at H (perfectly plastic "
+        "surface); none: elastic asperities (the paper's model)", gt=0, unset=True,
+    )
+    bodies: list[str] = param(
+        [], "1", "named materials of the two bodies (one name: both); E*, rho* and H follow from the table where "
+        "material.modulus, material.rho and material.hardness are not given: " + ", ".join(MATERIALS),
+        choices=tuple(MATERIALS), ordered=False,
+    )
 
     @property
     def E_star(self) -> float:
-        """Effective modulus E* = E / (2 (1 - nu^2)) of two equal bodies, in Pa."""
+        """Effective modulus E*, in Pa: ``material.modulus`` where given, else E / (2 (1 - nu^2)) of two
+        equal bodies."""
+        if self.modulus is not None:
+            return self.modulus
         return self.E / (2.0 * (1.0 - self.nu**2))
 
 

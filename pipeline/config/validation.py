@@ -12,7 +12,7 @@ import difflib
 import math
 from typing import Any, Mapping
 
-from g2tom.config.declare import AUTO, ConfigError, format_range, parameter_key
+from g2tom.config.declare import AUTO, UNSET, ConfigError, format_range, parameter_key
 from g2tom.config.scenario import SECTIONS
 
 __all__ = ["check_field", "unknown"]
@@ -49,8 +49,8 @@ def _check_scalar(name: str, value: Any, kind: type, meta: Mapping[str, Any]) ->
 
 def _element_kind(f: dataclasses.Field) -> tuple[type, bool]:
     ann = str(f.type)
-    if f.metadata.get("auto"):
-        ann = ann.split("|")[0].strip()  # "float | str": a number, or the word "auto"
+    if f.metadata.get("auto") or f.metadata.get("unset"):
+        ann = ann.split("|")[0].strip()  # "float | str" or "float | None": a number, or the word
     if ann.startswith("list"):
         return (float if "float" in ann else int if "int" in ann else str), True
     return {"float": float, "int": int, "str": str}[ann], False
@@ -58,20 +58,23 @@ def _element_kind(f: dataclasses.Field) -> tuple[type, bool]:
 
 def check_field(section: str, f: dataclasses.Field, value: Any) -> Any:
     """``value`` of field ``f`` of ``section`` as its declared type, or a ConfigError naming the parameter,
-    its value and the allowed range (lists: non-empty, each element in range, strictly increasing)."""
+    its value and the allowed range (lists: non-empty, each element in range, strictly increasing unless declared
+    ``ordered=False``; ``"none"`` where declared ``unset``: None)."""
     name = f"{section}.{parameter_key(f)}"
     if f.metadata.get("auto") and value == AUTO:
         return AUTO
+    if f.metadata.get("unset") and value in (UNSET, None):
+        return None
     kind, is_list = _element_kind(f)
     if not is_list:
         return _check_scalar(name, value, kind, f.metadata)
     if not isinstance(value, (list, tuple)) or len(value) == 0:
         raise ConfigError(
-            f"{name} = {value!r} is not allowed: must be a non-empty list of numbers, each "
+            f"{name} = {value!r} is not allowed: must be a non-empty list of {'names' if kind is str else 'numbers'}, each "
             f"{format_range(f.metadata)} ({f.metadata['unit']})"
         )
     out = [_check_scalar(f"{name}[{i}]", v, kind, f.metadata) for i, v in enumerate(value)]
-    if len(set(out)) != len(out) or out != sorted(out):
+    if f.metadata.get("ordered", True) and (len(set(out)) != len(out) or out != sorted(out)):
         raise ConfigError(f"{name} = {value!r} must be strictly increasing")
     return out
 
