@@ -38,8 +38,9 @@ class ContactState:
     pressure
         Contact pressure, Pa, (n, n).
     gap_spread
-        Largest minus smallest ``heights - u`` over the contact set, m: how exactly the solver
-        closed the gap there (0 for an exact solution).
+        Largest minus smallest ``heights - u`` over the contact set (below the hardness, where
+        one caps the pressure), m: how exactly the solver closed the gap there (0 for an exact
+        solution).
     """
 
     force: float
@@ -50,25 +51,31 @@ class ContactState:
 
 
 def contact_at_force(operator: FreeSurface, heights: np.ndarray, force: float,
-                     tolerance: float = 1e-8) -> ContactState:
+                     tolerance: float = 1e-8, hardness: float | None = None) -> ContactState:
     """Solve the contact of the rigid ``heights`` (m, (n, n)) pressed by ``force`` (N, > 0).
+
+    With ``hardness`` H (Pa) the surface is perfectly plastic (pressure capped at H,
+    :func:`~g2tom.reference.elastic.solve_pressure`): the contact set is still ``p > 0`` and the
+    force the sum of the pressures, but the approach and the gap's spread are taken where
+    ``0 < p < H`` only (the surfaces interpenetrate at the cap).
 
     Raises
     ------
     ValueError
-        If the force is not positive.
+        If the force is not positive, or the grid cannot carry it below H.
     ContactReachesEdge
         If the contact reaches the grid's edge (the grid is too small for this load: the
         non-periodic operator assumes no pressure outside it).
     """
     if not force > 0:
         raise ValueError(f"force = {force} is out of range: must be > 0 (N)")
-    pressure = solve_pressure(operator, heights, force, tolerance)
+    pressure = solve_pressure(operator, heights, force, tolerance, hardness=hardness)
     contact = pressure > 0
     edge = contact[0].any() or contact[-1].any() or contact[:, 0].any() or contact[:, -1].any()
     if edge:
         raise ContactReachesEdge(f"force = {force:.4g} N: the contact reaches the edge of the grid; enlarge it")
-    offset = (heights - operator(pressure))[contact]  # = delta wherever p > 0
+    closed = contact if hardness is None else contact & (pressure < hardness)
+    offset = (heights - operator(pressure))[closed]  # = delta wherever 0 < p (< H)
     return ContactState(
         force=float(pressure.sum() * operator.pixel**2),
         delta=float(np.mean(offset)),

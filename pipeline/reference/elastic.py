@@ -22,7 +22,7 @@ import numpy as np
 
 from g2tom.reference import devices
 from g2tom.reference.fft_surface import FftSurface, fft_surface
-from g2tom.reference.polonsky_keer import solve_at_mean_pressure
+from g2tom.reference.polonsky_keer import solve_at_mean_pressure, solve_capped_at_mean_pressure
 
 __all__ = ["FreeSurface", "free_surface", "solve_pressure", "SolverFailure", "MAX_ITERATIONS"]
 
@@ -83,18 +83,38 @@ def free_surface(n: int, pixel: float, e_star: float, device: str = "cpu",
 
 
 def solve_pressure(operator: FreeSurface | FftSurface, heights: np.ndarray, force: float,
-                   tolerance: float) -> np.ndarray:
+                   tolerance: float, hardness: float | None = None) -> np.ndarray:
     """Contact pressure (Pa, (n, n)) of a rigid surface of ``heights`` (m) pressed by ``force`` (N).
 
     Frictionless, non-adhesive: ``p >= 0``, and where ``p > 0`` the displacement equals the
     heights plus one rigid approach. Polonsky and Keer's constrained conjugate gradients on the
     free-surface operator, to the relative ``tolerance`` of the solver's error measure (tamaas',
     or :mod:`g2tom.reference.polonsky_keer`'s on an :class:`FftSurface`).
+
+    With ``hardness`` H (Pa) the surface is perfectly plastic: ``0 <= p <= H``, the displacement
+    equals the heights plus the approach where ``0 < p < H`` only (the surfaces interpenetrate
+    where ``p = H``); g2tom's solver only
+    (:func:`~g2tom.reference.polonsky_keer.solve_capped_at_mean_pressure`).
+
+    Raises
+    ------
+    ValueError
+        With ``hardness`` on tamaas' operator, or a force the grid cannot carry below H.
+    SolverFailure
+        If the solver fails or stops above ``tolerance``.
     """
     mean_pressure = force / (operator.n * operator.pixel) ** 2
+    if hardness is not None and not isinstance(operator, FftSurface):
+        raise ValueError("the hardness-capped (perfectly plastic) contact solve runs on g2tom's solver "
+                         "(solver g2tom), not tamaas'")
     if isinstance(operator, FftSurface):
-        result = solve_at_mean_pressure(operator, operator.xp.asarray(heights, dtype=float), mean_pressure,
-                                        tolerance, MAX_ITERATIONS, start=operator.last_pressure)
+        h = operator.xp.asarray(heights, dtype=float)
+        if hardness is None:
+            result = solve_at_mean_pressure(operator, h, mean_pressure, tolerance, MAX_ITERATIONS,
+                                            start=operator.last_pressure)
+        else:
+            result = solve_capped_at_mean_pressure(operator, h, mean_pressure, hardness, tolerance, MAX_ITERATIONS,
+                                                   start=operator.last_pressure)
         if not result.error <= tolerance:
             raise SolverFailure(f"contact solver stopped at error {result.error:.3g} > tolerance {tolerance:.3g} "
                                 f"after {result.iterations} iterations")
