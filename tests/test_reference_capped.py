@@ -1,23 +1,27 @@
 """The hardness-capped full field (the perfectly plastic surface, 0 <= p <= H) on g2tom's own solver:
 against tamaas' KatoSaturated, its two limits (H -> infinity, Holm's plastic spot far above first
-yield) and below first yield, where the cap changes nothing.
+yield) and below first yield, where the cap changes nothing; Barber's theorem after plastic loading
+(the unloading stiffness) and validate's cases capped at the validated scenario's hardness.
 
 The ``gpu`` test needs CuPy and a device; elsewhere it skips, saying why.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
+from g2tom.config import ConfigError
 from g2tom.physics.plasticity import yield_force
-from g2tom.reference import devices, elastic, surfaces
-from g2tom.reference.contact import contact_at_force
+from g2tom.reference import cases, devices, elastic, scene, surfaces, validate
+from g2tom.reference.contact import contact_at_force, flattened_heights
 from g2tom.reference.fft_surface import fft_surface
 from g2tom.reference.polonsky_keer import MEAN_TOLERANCE, project_onto_box, solve_capped_at_mean_pressure
 from g2tom.reference.punch import punch_conductance
+from g2tom.scene import FieldSource
 from tests.test_reference_fft import _rough_sphere
 
 E_STAR, RHO = 1.154e11, 7.2e-7
@@ -162,6 +166,58 @@ def test_the_cap_refuses_what_it_cannot_solve() -> None:
     too_soft = 0.5 * force / (64 * pixel) ** 2  # the whole grid at H carries half the force
     with pytest.raises(ValueError, match="cannot carry the force"):
         contact_at_force(fft_surface(64, pixel, E_STAR, np), heights, force, hardness=too_soft)
+
+
+def test_barber_after_plastic_loading_ties_the_conductance_to_the_unloading_stiffness() -> None:
+    """The flattened heights carry the capped pressure elastically, and their elastic stiffness, not
+    the capped loading slope dF/d(-delta), is K_punch = kappa E* rho*."""
+    heights, pixel = _rough_sphere()
+    operator = fft_surface(heights.shape[0], pixel, E_STAR, np)
+    force, hardness = 300.0, 1e10  # 364 of 406 contact pixels at H
+    state = contact_at_force(operator, heights, force, 1e-10, hardness=hardness)
+    again = contact_at_force(operator, flattened_heights(operator, heights, state, hardness), force, 1e-10)
+    assert np.abs(again.pressure - state.pressure).max() < 1e-6 * hardness
+    assert again.delta == pytest.approx(state.delta, rel=1e-8)
+    kappa = punch_conductance(operator, state.contact, RHO).conductance
+    unloading = cases.barber_stiffness(operator, heights, state, force, hardness)
+    assert kappa == pytest.approx(unloading / (E_STAR * RHO), rel=0.01)  # measured 0.09 %
+    low, high = (contact_at_force(operator, heights, force * (1.0 + s * cases.BARBER_STEP), 1e-10, hardness=hardness)
+                 for s in (-1, 1))
+    loading = -(high.force - low.force) / (high.delta - low.delta)
+    assert kappa > 1.5 * loading / (E_STAR * RHO)  # measured 1.78: the loading slope is not Barber's
+
+
+def _hard(tmp_path) -> str:
+    """A validated scenario: the paper's with material.hardness 2 GPa (a TOML file)."""
+    path = tmp_path / "hard.toml"
+    path.write_text('base = "paper"\n[material]\nhardness = 2e9\n')
+    return str(path)
+
+
+def test_validate_takes_the_validated_scenarios_hardness(tmp_path) -> None:
+    hard = _hard(tmp_path)
+    assert scene.with_hardness_of(scene.QUICK, hard).hardness == 2e9
+    assert scene.with_hardness_of(scene.QUICK, "paper").hardness is None
+    with pytest.raises(ConfigError, match="runs on g2tom's solver only"):
+        scene.with_hardness_of(dataclasses.replace(scene.QUICK, solver="tamaas"), hard)
+    assert "capped at H = 2e+09 Pa" in validate.plan_lines(scene.QUICK, hard)[0]
+    assert "capped" not in validate.plan_lines(scene.QUICK, "paper")[0]
+
+
+def test_a_capped_validation_case_holds_holms_area_and_barbers_theorem(tmp_path) -> None:
+    """The quick set's convergence case at F' 4.85 capped at 2 GPa: the caps flattened to a mean
+    pressure near H, Barber's ratio on the unloading stiffness near 1 (measured 1.00007); the
+    hardness is in the case's key."""
+    vset = dataclasses.replace(scene.QUICK, hardness=2e9)
+    source = FieldSource.of(scene.g2tom_scenario(vset, vset.models[0], vset.discretizations[0]))
+    case = cases.Case(0, 1, 128, False)
+    force = 4.85 * vset.force_scale
+    record = cases.run_case(vset, case, force, source, "k", tmp_path / "case.json")
+    assert record["force"] == pytest.approx(force, rel=1e-9)
+    assert record["contact_area"] == pytest.approx(force / 2e9, rel=0.02)  # measured 0.7 %
+    assert record["barber_ratio"] == pytest.approx(1.0, abs=0.01)
+    keys = {cases.case_key(v, case, force, source) for v in (vset, scene.QUICK)}
+    assert len(keys) == 2
 
 
 @pytest.mark.gpu

@@ -21,13 +21,14 @@ from typing import Any
 import numpy as np
 
 from g2tom.reference import elastic, scene, window
-from g2tom.reference.contact import ContactReachesEdge, contact_at_force
+from g2tom.reference.contact import ContactReachesEdge, ContactState, contact_at_force, flattened_heights
 from g2tom.reference.oxide import oxide_on_grid
 from g2tom.reference.punch import punch_conductance
 from g2tom.scene import FieldSource
 from g2tom.store import atomic_path
 
-__all__ = ["Case", "plan_cases", "ensemble_cases", "pair_cases", "case_key", "load_case", "run_case"]
+__all__ = ["Case", "plan_cases", "ensemble_cases", "pair_cases", "case_key", "load_case", "run_case",
+           "barber_stiffness"]
 
 #: The set's fields that shape no case (part 1's realizations and loads are the case's own; part
 #: 2's sizes choose which cases run, not what one gives; the device and solver change a result only
@@ -78,7 +79,9 @@ def pair_cases(vset: scene.ValidationSet, load: int, realizations: range) -> lis
 
 def case_key(vset: scene.ValidationSet, case: Case, force: float, source: FieldSource) -> str:
     """Hash of everything that shapes a case's result (the scene, the oxide fields, the force)."""
-    shaping = {k: v for k, v in dataclasses.asdict(vset).items() if k not in UNSHAPING}
+    # an elastic set (hardness None) keys its cases as before the hardness existed
+    shaping = {k: v for k, v in dataclasses.asdict(vset).items()
+               if k not in UNSHAPING and not (k == "hardness" and v is None)}
     shaping["window"] = [window.probe_grid(vset, case.ensemble), window.MARGIN, window.PAD_SPACINGS, window.GROWTH]
     fields = [source.n_cells, source.cell_size, source.seed, source.amplitudes, source.rule,
               [m.period for m in source.modes]]
@@ -128,8 +131,7 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
     barber = np.nan
     if not case.oxide:  # the convergence grid also checks Barber's theorem: kappa = K / (E* rho*)
         try:
-            low, high = (contact_at_force(operator, heights, force * (1.0 + s * BARBER_STEP)) for s in (-1, 1))
-            stiffness = -(high.force - low.force) / (high.delta - low.delta)
+            stiffness = barber_stiffness(operator, heights, state, force, vset.hardness)
             barber = clean.conductance / (stiffness / (vset.e_star * vset.rho))
         except (elastic.SolverFailure, ContactReachesEdge):
             barber = np.nan
@@ -152,6 +154,24 @@ def run_case(vset: scene.ValidationSet, case: Case, force: float, source: FieldS
         "seconds_cpu": time.process_time() - cpu,
     }
     return _store(path, record)
+
+
+def barber_stiffness(operator: elastic.FreeSurface, heights: np.ndarray, state: ContactState, force: float,
+                     hardness: float | None) -> float:
+    """The stiffness K = dF/d(-delta) (N/m) that Barber's theorem ties to the conductance of ``state``,
+    the contact of ``heights`` (m) at ``force`` (N): from two elastic solves at ``force (1 -+
+    BARBER_STEP)``, of the heights themselves (elastic), or after a loading capped at ``hardness``
+    (Pa) of the flattened heights (:func:`~g2tom.reference.contact.flattened_heights`): the
+    unloading stiffness, not the loading slope, which is lower where the pressure sits at H.
+
+    Raises
+    ------
+    g2tom.reference.elastic.SolverFailure, ContactReachesEdge
+        If either solve fails or reaches the grid's edge.
+    """
+    surface = heights if hardness is None else flattened_heights(operator, heights, state, hardness)
+    low, high = (contact_at_force(operator, surface, force * (1.0 + s * BARBER_STEP)) for s in (-1, 1))
+    return -(high.force - low.force) / (high.delta - low.delta)
 
 
 def _store(path: Path, record: dict[str, Any]) -> dict[str, Any]:

@@ -16,7 +16,7 @@ import numpy as np
 
 from g2tom.reference.elastic import FreeSurface, solve_pressure
 
-__all__ = ["ContactState", "ContactReachesEdge", "contact_at_force"]
+__all__ = ["ContactState", "ContactReachesEdge", "contact_at_force", "flattened_heights"]
 
 
 class ContactReachesEdge(ValueError):
@@ -83,3 +83,16 @@ def contact_at_force(operator: FreeSurface, heights: np.ndarray, force: float,
         pressure=pressure,
         gap_spread=float(np.ptp(offset)),
     )
+
+
+def flattened_heights(operator: FreeSurface, heights: np.ndarray, state: ContactState, hardness: float) -> np.ndarray:
+    """The rigid ``heights`` (m, (n, n)) after the perfectly plastic loading of ``state`` (capped at
+    ``hardness``, Pa): lowered to ``u + delta`` where the pressure is at H.
+
+    There the surfaces interpenetrate by ``heights - delta - u``, a permanent set that unloading
+    leaves. Pressed elastically at the state's force, the flattened heights carry the state's
+    pressure again, every contact pixel closed; their elastic stiffness dF/d(-delta) is the
+    unloading stiffness of the plastic contact, the one Barber's theorem ties to its conductance.
+    """
+    capped = state.pressure >= hardness
+    return np.where(capped, np.minimum(heights, operator(state.pressure) + state.delta), heights)

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from g2tom.config import ResolvedScenario
+from g2tom.config import ConfigError, ResolvedScenario
 from g2tom.before_work import load_scenario
 from g2tom.before_work.domains import resolve
 from g2tom.reference import surfaces
@@ -30,7 +30,8 @@ from g2tom.stages import cube as cube_stage
 from g2tom.stages import oxide as oxide_stage
 from g2tom.variables import entry
 
-__all__ = ["case_variable", "ValidationSet", "DEFAULT", "QUICK", "RANDOM", "random_process_set", "surface_stream", "rough_sphere", "g2tom_scenario",
+__all__ = ["case_variable", "ValidationSet", "DEFAULT", "QUICK", "RANDOM", "random_process_set", "capped_contact",
+           "with_hardness_of", "surface_stream", "rough_sphere", "g2tom_scenario",
            "g2tom_resistances", "contact_extent", "scene_overrides", "scenario_of", "FLOOR_SIGMAS", "DEFAULT_LOADS"]
 
 #: The GW surface's floor between asperities, in sigma below the reference plane: far below any
@@ -85,6 +86,10 @@ class ValidationSet:
         Where the reference's cases compute (``cpu`` or ``gpu``) and with which solver (``tamaas``,
         CPU only, or ``g2tom``'s own: :mod:`g2tom.reference.devices`); they do not shape a
         case's result beyond the solvers' tolerances, so they are not in the cases' keys.
+    hardness
+        The full field's hardness H, Pa: its contact pressure is capped at H (the perfectly plastic
+        surface: an elastic half-space whose pressure cannot exceed H, not an elasto-plastic volume),
+        the validated scenario's ``material.hardness`` (:func:`with_hardness_of`); None: elastic.
     """
 
     sigma: float = 20e-6
@@ -119,6 +124,7 @@ class ValidationSet:
     spot_rule: str = "disc"
     device: str = "cpu"
     solver: str = "g2tom"
+    hardness: float | None = None
 
     @property
     def pairs_cap(self) -> int:
@@ -185,6 +191,29 @@ RANDOM_LOADS = tuple(float(d) for d in np.linspace(1.75, -3.5, 8))
 #: :data:`RANDOM_LOADS`.
 RANDOM = dataclasses.replace(random_process_set(DEFAULT, rms=20e-6), deltas=RANDOM_LOADS)
 
+
+
+def capped_contact(hardness: float) -> str:
+    """The full field's contact capped at ``hardness`` (Pa), in words (the plan, validate.nc, the report)."""
+    return (f"contact pressure capped at H = {hardness:.4g} Pa (a perfectly plastic surface on the elastic "
+            "half-space, not an elasto-plastic volume)")
+
+
+def with_hardness_of(vset: ValidationSet, config: str) -> ValidationSet:
+    """``vset`` with the hardness (Pa) of the validated scenario ``config`` (its ``material.hardness``,
+    None where it has none: the elastic full field).
+
+    Raises
+    ------
+    ConfigError
+        If the scenario has a hardness and the set's solver is tamaas' (only g2tom's solver caps the
+        pressure).
+    """
+    hardness = load_scenario(config).material.hardness
+    if hardness is not None and vset.solver == "tamaas":
+        raise ConfigError(f"--config {config!r} sets material.hardness = {hardness:g} Pa: the hardness-capped full "
+                          "field runs on g2tom's solver only; leave out --solver tamaas")
+    return dataclasses.replace(vset, hardness=hardness)
 
 
 def surface_stream(vset: ValidationSet, realization: int) -> np.random.Generator:

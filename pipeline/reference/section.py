@@ -7,6 +7,7 @@ import xarray as xr
 
 from g2tom.reference.discrete_spots import DISCRETE
 from g2tom.reference.ensemble import MAX_ROUNDS, STAND_IN_TOLERANCE
+from g2tom.reference.scene import capped_contact
 from g2tom.reference.summary import ratios
 
 __all__ = ["markdown", "CLEAN_LIMIT", "OXIDE_LIMIT", "MEANINGS"]
@@ -241,8 +242,10 @@ def markdown(ds: xr.Dataset) -> str:
            f"Gaussian self-affine surfaces (H {ds.attrs['scene_hurst']:g}, rms {ds.attrs['scene_rms']:g} m; g2tom fed "
            "their summit statistics)") + " on a "
         f"{ds.attrs['scene_n_grid']}^2 grid on each case's window, fitted to its contact ({_pixels(ds)}), "
-        f"{n_real} realization(s); the reference is solved at g2tom's force. Ratio g2tom / full field: "
-        "geometric mean ± the standard error of its log (paired over realizations) [min-max].", "",
+        f"{n_real} realization(s); the reference is solved at g2tom's force"
+        + ("" if "scene_hardness" not in ds.attrs else f", its {capped_contact(ds.attrs['scene_hardness'])}")
+        + ". Ratio g2tom / full field: geometric mean ± the standard error of its log (paired over realizations) "
+        "[min-max].", "",
     ]
     lines += _ensemble_table(ds)
     lines += ["### Part 1: exactness per surface (paired)", "",
@@ -273,7 +276,10 @@ def markdown(ds: xr.Dataset) -> str:
     lines += [f"Grid convergence (first realization, clean): doubling the grid step ({ds['grid'].values[0]}^2 -> "
               f"{ds['grid'].values[1]}^2) changes R by " + ", ".join(f"{100 * c:+.2f} %" for c in change) + " at the loads.",
               "Barber's theorem on the full-field clean solution (convergence grid, first realization): punch "
-              "conductance / (K / (E* rho*)) = " + ", ".join(f"{b:.4f}" for b in ds["barber_ratio"].values) + ".",
+              "conductance / (K / (E* rho*)) = " + ", ".join(f"{b:.4f}" for b in ds["barber_ratio"].values)
+              + ("." if "scene_hardness" not in ds.attrs else
+                 ", K the unloading stiffness (the heights flattened where the pressure is at H, pressed elastically; "
+                 "the loading slope dF/d(-delta) is lower where the caps yield)."),
               f"Wall time: {float(np.nansum(ds['seconds_case'].values)):.0f} s for the main grid's cases "
               f"(contact solves {float(np.nansum(ds['seconds_contact'].values)):.0f} s; CPU "
               f"{float(np.nansum(ds['seconds_cpu_case'].values)):.0f} s), "

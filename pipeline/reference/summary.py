@@ -112,7 +112,9 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
         "resistance_convergence": variable("resistance_convergence",
                                            np.stack([fine, ref["coarse"]["resistance_clean"]])),
         "convergence_change": variable("convergence_change", ref["coarse"]["resistance_clean"] / fine - 1.0),
-        "barber_ratio": variable("barber_ratio", ref["coarse"]["barber_ratio"]),
+        "barber_ratio": variable("barber_ratio", ref["coarse"]["barber_ratio"], **({} if vset.hardness is None else {
+            "comment": "K: the unloading stiffness, dF/d(-delta) of the heights flattened where p = H, pressed "
+                       "elastically (the loading slope is lower)"})),
         "seconds_contact": variable("seconds_contact", ref["seconds_contact"]),
         "seconds_case": variable("seconds_case", ref["seconds_total"]),
         "seconds_cpu_case": variable("seconds_cpu_case", ref["seconds_cpu"]),
@@ -125,7 +127,9 @@ def dataset(vset: scene.ValidationSet, everything: list, done: dict, g2tom: dict
     attrs = {f"scene_{k}": v for k, v in dataclasses.asdict(vset).items()
              if isinstance(v, (int, float, str)) and not isinstance(v, bool)}
     attrs.update({
-        "title": f"g2tom against the full-field elastic contact of a rough sphere ({vset.surface} surface; Barber's analogy)",
+        "title": "g2tom against the full-field "
+                 + ("elastic contact" if vset.hardness is None else scene.capped_contact(vset.hardness))
+                 + f" of a rough sphere ({vset.surface} surface; Barber's analogy)",
         "g2tom_version": __version__, "git_commit": git_commit() or "unknown",
         "default_discretization": default["discretization"], "default_model": default["resistance_model"],
         "validated_scenario": default["name"], "validated_model": default["model"],

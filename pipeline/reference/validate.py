@@ -90,7 +90,9 @@ def _validated(vset: scene.ValidationSet, config: str) -> Scenario:
 
 
 def plan_lines(vset: scene.ValidationSet, config: str = "paper", workers: int = 1) -> list[str]:
-    """The plan printed before any work: scene, both parts' cases and grids, the estimate (no case stored)."""
+    """The plan printed before any work: scene, both parts' cases and grids, the estimate (no case stored);
+    the full field capped at the validated scenario's hardness where it has one (:func:`scene.with_hardness_of`)."""
+    vset = scene.with_hardness_of(vset, config)
     f = _force_normalized(vset)
     validated = _validated(vset, config)
     est = cost.estimate(vset, f, workers, _model_seconds(validated, workers))
@@ -103,7 +105,9 @@ def plan_lines(vset: scene.ValidationSet, config: str = "paper", workers: int = 
                                               f"{vset.short_wavelength:.3g} .. {vset.short_wavelength * vset.bandwidth_ratio:.3g} m; "
                                               "g2tom's parameters are its summits')" if vset.surface == "random_process" else "")
         + f": sigma {vset.sigma:g} m, eta {vset.eta:g} m^-2, beta {vset.beta:g} m, "
-        f"R* {vset.radius:g} m, E* {vset.e_star:.4g} Pa, rho* {vset.rho:g} ohm m (mu = {vset.mu:.3f})",
+        f"R* {vset.radius:g} m, E* {vset.e_star:.4g} Pa, rho* {vset.rho:g} ohm m (mu = {vset.mu:.3f})"
+        + ("" if vset.hardness is None else
+           f"; the full field's {scene.capped_contact(vset.hardness)}: the validated scenario's material.hardness"),
         f"validate: {len(vset.deltas)} loads delta/sigma {[round(d, 3) for d in vset.deltas]}, F' "
         + ", ".join(f"{x:.3g}" for x in f) + f"; clean + {oxide}",
         f"validate: part 1 (exactness per surface, paired): realizations {list(vset.realizations)}, grid "
@@ -250,7 +254,7 @@ def run_validation(vset: scene.ValidationSet, out: Path, stream: TextIO = sys.st
     """
     start = time.perf_counter()
     out = Path(out)
-    vset = discrete_spots.with_rule_of(vset, config)
+    vset = scene.with_hardness_of(discrete_spots.with_rule_of(vset, config), config)
     everything = cases_mod.plan_cases(vset)
     workers = 1 if options.scheduler is None and (options.workers or 1) <= 1 else (options.workers or 1)
     for line in plan_lines(vset, config, workers):

@@ -59,7 +59,7 @@ def fitted_side(vset: scene.ValidationSet, realization: int, force: float,
     n = probe_grid(vset, ensemble)
     pixel = vset.side / n
     operator = elastic.free_surface(n, pixel, vset.e_star, vset.device, vset.solver)
-    state = contact_at_force(operator, scene.rough_sphere(vset, realization, n), force)
+    state = contact_at_force(operator, scene.rough_sphere(vset, realization, n), force, hardness=vset.hardness)
     c = cell_centres(n, pixel)
     iy, ix = np.nonzero(state.contact)
     reach = float(max(np.abs(c[ix]).max(), np.abs(c[iy]).max())) + pixel  # to the far side of the pixel
@@ -84,7 +84,7 @@ def solve_in_window(vset: scene.ValidationSet, realization: int, n: int, force: 
         operator = elastic.free_surface(n, side / n, vset.e_star, vset.device, vset.solver)
         heights = scene.rough_sphere(vset, realization, n, side)
         try:
-            return operator, heights, contact_at_force(operator, heights, force), side
+            return operator, heights, contact_at_force(operator, heights, force, hardness=vset.hardness), side
         except ContactReachesEdge:
             if side >= vset.side:
                 raise
