@@ -19,6 +19,7 @@ from g2tom import __version__
 from g2tom.analysis.report_blocks import Block
 from g2tom.config import STAGE_INPUTS, Scenario
 from g2tom.models import contact_model
+from g2tom.scene import scene_plasticity
 from g2tom.stages.table3 import PARAMETERS
 
 __all__ = ["summary_blocks", "recorded_timings", "predict_command", "law_forces", "shown_cells"]
@@ -187,7 +188,8 @@ def summary_blocks(scenario: Scenario, fits: xr.Dataset | None, sur: xr.Dataset 
              f"{scenario.oxide.spot_rule}" if contact_model(scenario).pooled else f"{scenario.contact.spots} spots")
     computed = (f"**Computed:** scenario '{scenario.name}': {scenario.description} (g2tom {__version__}, "
                 f"configuration hash {scenario.config_hash()}); contact model {scenario.contact.model} with "
-                f"{spots}, resistance model {scenario.cube.model}.")
+                f"{spots}, resistance model {scenario.cube.model}; "
+                f"{scene_plasticity(scenario).line(scenario.roughness.sigma)}.")
     blocks: list[Block] = [Block("h2", "Summary")]
     items: list[str] = []
     if fits is None:

@@ -10,16 +10,74 @@ from dataclasses import dataclass
 import numpy as np
 
 from g2tom.config import ResolvedScenario, Scenario
-from g2tom.physics import oxide_band, oxide_field
+from g2tom.config.materials import pair_properties
+from g2tom.physics import oxide_band, oxide_field, plasticity
 from g2tom.physics.groups import Groups, groups
 
-__all__ = ["scene_groups", "bands", "threshold_block", "FieldSource"]
+__all__ = ["scene_groups", "Plasticity", "scene_plasticity", "bands", "threshold_block", "FieldSource"]
 
 
 def scene_groups(scenario: Scenario) -> Groups:
     """(mu, Pi) of a scenario's surface and sphere (:mod:`g2tom.physics.groups`)."""
     rough = scenario.roughness
     return groups(rough.sigma, rough.eta, rough.beta, scenario.indenter.radius)
+
+
+@dataclass(frozen=True)
+class Plasticity:
+    """Whether a scene's asperities yield (:mod:`g2tom.physics.plasticity`).
+
+    Attributes
+    ----------
+    hardness
+        The hardness the caps' pressure is capped at, Pa (``material.hardness``); None: elastic caps.
+    index
+        Plasticity index ``psi``, of ``material.hardness`` or, where that is unset, of the named bodies'
+        hardness (``material.bodies``); None where neither is known.
+    yield_interference
+        A cap's first yield ``omega_c``, m, at the same hardness (None where it is not known).
+    known_from
+        The parameter the hardness of ``index`` comes from (``""`` where it is not known).
+    """
+
+    hardness: float | None
+    index: float | None
+    yield_interference: float | None
+    known_from: str
+
+    @property
+    def outside_elastic_range(self) -> bool:
+        """Caps held elastic although ``psi`` says they yield (``psi`` > :data:`plasticity.ELASTIC_LIMIT`)."""
+        return self.hardness is None and self.index is not None and self.index > plasticity.ELASTIC_LIMIT
+
+    def line(self, sigma: float) -> str:
+        """One line for ``g2tom plan``, ``run`` and the report, ``sigma`` the asperity height spread (m)."""
+        if self.index is None:
+            return ("caps: elastic (Hertz); plasticity index unknown: material.hardness and material.bodies unset")
+        known = (f"plasticity index psi = {self.index:.3g} (H from {self.known_from}), first yield at "
+                 f"omega_c = {self.yield_interference * 1e9:.3g} nm = {self.yield_interference / sigma:.3g} sigma")
+        if self.hardness is None:
+            return f"caps: elastic (Hertz; material.hardness unset); {known}"
+        return f"caps: capped at H = {self.hardness / 1e9:.3g} GPa (perfectly plastic surface); {known}"
+
+    def warning(self) -> str | None:
+        """The one-line warning of a scene whose caps yield but are held elastic, or None."""
+        if not self.outside_elastic_range:
+            return None
+        return (f"plasticity index psi = {self.index:.3g} > {plasticity.ELASTIC_LIMIT:g}: most touching asperities "
+                "yield, outside the elastic model's range; set material.hardness to cap their pressure")
+
+
+def scene_plasticity(scenario: Scenario) -> Plasticity:
+    """The scene's :class:`Plasticity` (``psi`` and ``omega_c`` of Greenwood and Williamson's ``beta``)."""
+    material, rough = scenario.material, scenario.roughness
+    hardness, known_from = material.hardness, "material.hardness"
+    if hardness is None and material.bodies:
+        hardness, known_from = pair_properties(material.bodies)[2], "material.bodies"
+    if hardness is None:
+        return Plasticity(None, None, None, "")
+    return Plasticity(material.hardness, plasticity.plasticity_index(material.E_star, hardness, rough.sigma, rough.beta),
+                      plasticity.yield_interference(rough.beta, material.E_star, hardness), known_from)
 
 
 def bands(scenario: ResolvedScenario) -> list[oxide_band.Band]:

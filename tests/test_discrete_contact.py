@@ -9,6 +9,7 @@ from scipy.special import ndtr
 
 from g2tom.physics import discrete_contact as dc
 from g2tom.physics.discrete_resistance import resistances
+from g2tom.physics.cap_law import CappedCap, HertzCap
 from g2tom.physics.hertz import hertz_radius
 
 E_STAR = 2.1e11 / (2 * (1 - 0.3**2))
@@ -38,7 +39,7 @@ def test_one_asperity_is_hertz_exactly():
     forces = np.array([0.1, 1.0, 10.0])
     sol = dc.solve_forces(cap, sphere, forces, E_STAR, BETA, FLOOR)
     a = hertz_radius(forces, BETA, E_STAR)  # a cap of radius beta on a flat
-    np.testing.assert_allclose(sol.radius(BETA)[:, 0], a, rtol=1e-12)
+    np.testing.assert_allclose(sol.radii[:, 0], a, rtol=1e-12)
     np.testing.assert_allclose(sol.delta, 1e-6 - a**2 / BETA, rtol=1e-12)
     np.testing.assert_allclose(sol.stiffness, 2.0 * E_STAR * a, rtol=1e-12)
 
@@ -81,7 +82,7 @@ def test_equilibrium_and_complementarity_on_rough_spheres(k):
         touching = sol.load[f] > 0
         np.testing.assert_allclose(w[touching], sol.interference[f, touching], rtol=1e-8, atol=1e-9 * SIGMA)
         assert np.all(w[~touching] <= 1e-9 * SIGMA)
-        np.testing.assert_allclose(sol.load[f], dc.hertz_load(sol.interference[f], E_STAR, BETA), rtol=1e-12)
+        np.testing.assert_allclose(sol.load[f], 4 / 3 * E_STAR * np.sqrt(BETA) * sol.interference[f] ** 1.5, rtol=1e-12)
     # heavier loads, more approach and more contacts
     assert np.all(np.diff(sol.delta) < 0)
     assert (sol.load[-1] > 0).sum() > 100 and (sol.load[0] > 0).sum() <= 10
@@ -113,9 +114,9 @@ def test_barber_holds_per_realization_with_the_point_model(k):
     asp = surface(k)
     sol = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR)
     kernel = dc.interaction_kernel(asp.x, asp.y, FLOOR)
-    r_point = resistances(kernel, sol.radius(BETA), RHO, "point")
+    r_point = resistances(kernel, sol.radii, RHO, "point")
     np.testing.assert_allclose(1.0 / r_point, sol.stiffness / (E_STAR * RHO), rtol=1e-8)
-    r_greenwood = resistances(kernel, sol.radius(BETA), RHO, "greenwood")
+    r_greenwood = resistances(kernel, sol.radii, RHO, "greenwood")
     assert np.all(r_greenwood >= r_point * (1 - 1e-12))
 
 
@@ -157,7 +158,7 @@ def test_bad_forces_are_refused():
 def test_rigid_approach_when_only_the_highest_cap_touches():
     """The bracket's lower end is where the highest cap alone carries the force: with no other cap
     touching there the excess is zero up to rounding, of either sign, and that end is the root."""
-    from g2tom.physics.discrete_contact import _rigid_delta, hertz_load
+    from g2tom.physics.discrete_contact import _rigid_delta
 
     rng = np.random.default_rng(4)
     e_star, beta = 1.154e11, 3e-5
@@ -165,8 +166,8 @@ def test_rigid_approach_when_only_the_highest_cap_touches():
         top = rng.uniform(-5e-5, 5e-5)
         g = np.concatenate([[top], top - rng.uniform(2e-5, 1e-4, 20)])  # the rest far below
         force = 10.0 ** rng.uniform(-3, 1)
-        d = _rigid_delta(g, force, e_star, beta)
-        assert hertz_load(g - d, e_star, beta).sum() == pytest.approx(force, rel=1e-12)
+        d = _rigid_delta(g, force, HertzCap(e_star, beta))
+        assert HertzCap(e_star, beta).load(g - d).sum() == pytest.approx(force, rel=1e-12)
 
 
 @pytest.mark.parametrize("forces", [FORCES[[0, -1]], FORCES[[1, 4, 7]], FORCES[-1:]])
@@ -289,7 +290,7 @@ def test_caps_wider_than_their_spacing_pass_a_fold_of_the_load_path(monkeypatch)
         touching = sol.load[i] > 0
         np.testing.assert_allclose(w[touching], sol.interference[i, touching], rtol=0, atol=1e-9 * SIGMA)
         assert np.all(w[~touching] <= 1e-9 * SIGMA)
-        hessian = coupling[np.ix_(touching, touching)] + np.diag(1.0 / (2.0 * E_STAR * sol.radius(beta)[i, touching]))
+        hessian = coupling[np.ix_(touching, touching)] + np.diag(1.0 / (2.0 * E_STAR * sol.radii[i, touching]))
         assert np.linalg.eigvalsh(hessian).min() > 0  # a minimum of the energy, not a saddle
     monkeypatch.setattr(dc, "_proximal", lambda *args, **kwargs: (args[5], 0.0, 0, 1.0, True))
     with pytest.raises(dc.NotConverged):  # Newton alone, as before, does not get through
@@ -303,9 +304,10 @@ def test_proximal_rounds_solve_a_convex_problem_like_newton():
     order = np.argsort(-(asp.z - sphere(np.hypot(asp.x, asp.y))), kind="stable")[:300]
     kernel = dc.interaction_kernel(asp.x[order], asp.y[order], FLOOR)
     force = FORCES[5]
-    start = dc._State(g - dc._rigid_delta(g, force, E_STAR, BETA), dc._rigid_delta(g, force, E_STAR, BETA))
-    newton = dc._newton(g, kernel, force, E_STAR, BETA, start, 1e-11, 100)
-    rounds = dc._proximal(g, kernel, force, E_STAR, BETA, start, 1e-11, 100)
+    cap = HertzCap(E_STAR, BETA)
+    start = dc._State(g - dc._rigid_delta(g, force, cap), dc._rigid_delta(g, force, cap))
+    newton = dc._newton(g, kernel, force, E_STAR, cap, start, 1e-11, 100)
+    rounds = dc._proximal(g, kernel, force, E_STAR, cap, start, 1e-11, 100)
     assert not newton[4] and not rounds[4] and rounds[3] <= 1e-11
     assert rounds[0].delta == pytest.approx(newton[0].delta, abs=1e-9 * SIGMA)
     np.testing.assert_allclose(rounds[0].s, newton[0].s, rtol=0, atol=1e-9 * SIGMA)
@@ -342,7 +344,7 @@ def test_one_cap_under_a_sphere_is_hertz_of_the_two_curvatures() -> None:
     w = (np.array([10.0, 100.0]) / (4 / 3 * e_star * np.sqrt(cap))) ** (2 / 3)
     np.testing.assert_allclose(sol.interference[:, 0], w, rtol=1e-8)
     np.testing.assert_allclose(sol.delta, z - x * x / (2 * profile_radius) - w, rtol=1e-8)
-    np.testing.assert_allclose(sol.radius(cap)[:, 0], np.sqrt(cap * w), rtol=1e-8)
+    np.testing.assert_allclose(sol.radii[:, 0], np.sqrt(cap * w), rtol=1e-8)
 
 
 @pytest.mark.parametrize("shape, params", [
@@ -383,3 +385,47 @@ def test_the_stage_places_caps_by_their_first_contact_with_every_indenter() -> N
     big_r = sphere.indenter.radius
     assert radius == pytest.approx(beta * big_r / (beta + big_r), rel=1e-12)
     assert gap(np.array([6e-4]))[0] == pytest.approx(6e-4**2 / (2 * (big_r + beta)), rel=1e-12)
+
+
+# ---------------------------------------------------------------- caps capped at a hardness
+@pytest.mark.parametrize("hardness", [5e9, 2e9])
+def test_capped_caps_balance_the_force_and_obey_barber_through_their_unloading_stiffness(hardness):
+    """Capped caps (psi 20-50): each cap's force is its law's at its interference, the forces sum to F,
+    the interference closes the coupled gap; the conductance of the spots is the unloading stiffness
+    over E* rho* (Barber), and the loading stiffness is lower once caps yield."""
+    asp = surface(5)
+    cap = CappedCap(E_STAR, BETA, hardness)
+    sol = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR, cap=cap)
+    g = asp.z - sphere(np.hypot(asp.x, asp.y))
+    kernel = dc.interaction_kernel(asp.x, asp.y, FLOOR)
+    np.testing.assert_allclose(sol.load.sum(axis=1), FORCES, rtol=1e-9)
+    for f in range(FORCES.size):
+        w = g - sol.delta[f] - kernel @ sol.load[f] / E_STAR
+        touching = sol.load[f] > 0
+        np.testing.assert_allclose(w[touching], sol.interference[f, touching], rtol=0, atol=1e-9 * SIGMA)
+        np.testing.assert_allclose(sol.load[f], cap.load(sol.interference[f]), rtol=1e-12)
+        np.testing.assert_allclose(sol.radii[f], cap.radius(sol.interference[f]), rtol=1e-12)
+    r_point = resistances(kernel, sol.radii, RHO, "point")
+    np.testing.assert_allclose(1.0 / r_point, sol.unloading_stiffness / (E_STAR * RHO), rtol=1e-8)
+    yielded = (sol.interference > cap.omega_c).any(axis=1)
+    assert yielded[-1] and np.all(sol.stiffness[yielded] < sol.unloading_stiffness[yielded])
+
+
+def test_capped_caps_far_above_any_yield_are_the_elastic_solution():
+    """A hardness no cap reaches (H -> infinity) gives the elastic caps' answer."""
+    asp = surface(6)
+    elastic = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR)
+    capped = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR, cap=CappedCap(E_STAR, BETA, 1e15))
+    np.testing.assert_allclose(capped.delta, elastic.delta, rtol=1e-12)
+    np.testing.assert_allclose(capped.radii, elastic.radii, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(capped.stiffness, elastic.stiffness, rtol=1e-12)
+
+
+def test_yielding_caps_widen_the_spots_and_lower_the_resistance_at_a_force():
+    """At the same force yielding caps sink deeper and touch over more area: R falls below the elastic R."""
+    asp = surface(7)
+    kernel = dc.interaction_kernel(asp.x, asp.y, FLOOR)
+    elastic = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR)
+    capped = dc.solve_forces(asp, sphere, FORCES, E_STAR, BETA, FLOOR, cap=CappedCap(E_STAR, BETA, 2e9))
+    assert np.all(capped.delta <= elastic.delta + 1e-15)
+    assert np.all(resistances(kernel, capped.radii, RHO, "point") < resistances(kernel, elastic.radii, RHO, "point"))

@@ -314,6 +314,9 @@ def format_plan(scenario: ResolvedScenario, workers: int | None = None) -> list[
             f"typical {counts.computed * n_cells:.0f}; times below are typical "
             f"(range: every cell at oxide.min_realizations .. at oxide.max_realizations); so is memory "
             f"(in brackets: a cell at oxide.max_realizations)")
+    from g2tom.scene import scene_plasticity  # here: the command line imports this module before numpy
+
+    lines.append(scene_plasticity(scenario).line(scenario.roughness.sigma))
     lines += model.plan_lines(scenario)
     lines.append(f"{'stage':10s} {'peak memory':>14s} {'time':>12s}")
     total, low, high = 0.0, 0.0, 0.0

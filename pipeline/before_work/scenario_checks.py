@@ -10,6 +10,7 @@ models (:mod:`g2tom.models`) are imported where their checks run.
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
@@ -142,6 +143,17 @@ def check_scenario(s: Scenario) -> None:
                               f"atlas.{low} = {getattr(s.atlas, low)!r}")
     if AUTO not in (s.contact.window, s.contact.r_max):
         check_domains(s)
+    _warn_plasticity(s)
+
+
+def _warn_plasticity(s: Scenario) -> None:
+    """One warning where the scene's caps yield (its plasticity index, :class:`g2tom.scene.Plasticity`)
+    but are held elastic (``material.hardness`` unset)."""
+    from g2tom.scene import scene_plasticity  # here: the command line imports this module before numpy
+
+    warning = scene_plasticity(s).warning()
+    if warning is not None:
+        warnings.warn(warning, stacklevel=3)
 
 
 def load_scenario(config: str | Path = "paper", overrides: Iterable[str] | Mapping[str, Any] = ()) -> Scenario:

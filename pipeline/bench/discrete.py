@@ -85,8 +85,8 @@ def _contact(scenario: Scenario) -> tuple[dict[str, Any], np.ndarray]:
         slow_seconds, slow, _ = _solve(settings, k, all_candidates=True)
         kernel = dc.interaction_kernel(asp.x, asp.y, settings["floor"])
         rho = scenario.material.rho
-        r_fast = resistances(kernel, fast.radius(cap_radius), rho)
-        r_slow = resistances(kernel, slow.radius(cap_radius), rho)
+        r_fast = resistances(kernel, fast.radii, rho)
+        r_slow = resistances(kernel, slow.radii, rho)
         reference.append({"surface": k, "asperities": asp.size, "seconds": round(fast_seconds, 4),
                           "all_candidates_seconds": round(slow_seconds, 4),
                           "speedup": round(slow_seconds / fast_seconds, 2),

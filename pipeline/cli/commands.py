@@ -55,8 +55,13 @@ def _preflight(args: argparse.Namespace, scenario: ResolvedScenario, scene: bool
 
 
 def _run_stage(name: str, scenario: ResolvedScenario, args: argparse.Namespace) -> None:
-    """Run stage ``name`` where ``args`` says, and record its wall time."""
+    """Run stage ``name`` where ``args`` says, and record its wall time (the contact stage first says
+    whether the caps yield: :class:`g2tom.scene.Plasticity`)."""
     options = compute_options(args)
+    if name == "contact":
+        from g2tom.scene import scene_plasticity
+
+        print(f"contact: {scene_plasticity(scenario).line(scenario.roughness.sigma)}", file=sys.stderr)
     module = importlib.import_module(STAGES[name])
     start = time.perf_counter()
     path = module.run(scenario, args.data_dir, options)

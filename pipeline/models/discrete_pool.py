@@ -24,6 +24,7 @@ gives the same numbers as a full solve), and surface ``s`` is solved at step ``i
 from __future__ import annotations
 
 import functools
+import warnings
 from typing import Any, Callable
 
 import dask
@@ -34,6 +35,7 @@ from g2tom import config
 from g2tom.config import POOL_CONFIDENCE, Scenario
 from g2tom.fitting.ensemble import mean_half_width, z_value
 from g2tom.physics import discrete_contact as dc
+from g2tom.physics.cap_law import CapLaw, CappedCap, HertzCap
 from g2tom.variables import entry
 
 __all__ = ["CHUNK", "DOMAIN_MARGIN", "cap_contact", "domain", "surface_spots", "solve_pool", "grow_pool",
@@ -44,6 +46,10 @@ CHUNK = 16
 #: The disc serves approaches down to the Greenwood–Tripp solution's lowest minus this many sigma
 #: (the coupled caps' approach at the same force lies within a fraction of sigma of it).
 DOMAIN_MARGIN = 1.0
+#: The same margin for caps capped at a hardness, whose approach at a force lies deeper than the elastic
+#: layer's (yielding caps carry less at the same interference): 1.02 sigma below it at 10 N on
+#: ``gold_connector`` (psi 4.5).
+CAPPED_DOMAIN_MARGIN = 4.0
 #: Expected number of asperities left outside the disc that could touch at that approach.
 DOMAIN_OUTSIDE = 1e-6
 
@@ -58,10 +64,20 @@ def cap_contact(scenario: Scenario) -> tuple[Callable[[np.ndarray], np.ndarray],
     return gap, dc.cap_radius(ind.shape, beta, radius=ind.radius)
 
 
+def cap_law(scenario: Scenario) -> CapLaw:
+    """The caps' law of force and radius against interference: Hertz's of the caps' Hertz radius
+    (:func:`cap_contact`), capped at ``material.hardness`` where it is given (the perfectly plastic
+    surface: :class:`g2tom.physics.cap_law.CappedCap`)."""
+    beta, hardness = cap_contact(scenario)[1], scenario.material.hardness
+    e_star = scenario.material.E_star
+    return HertzCap(e_star, beta) if hardness is None else CappedCap(e_star, beta, hardness)
+
+
 def domain(scenario: Scenario, lowest_delta: float) -> tuple[float, float]:
     """The asperity disc's radius (m) and the lowest approach (m) it serves."""
     rough = scenario.roughness
-    served = lowest_delta - DOMAIN_MARGIN * rough.sigma
+    margin = DOMAIN_MARGIN if scenario.material.hardness is None else CAPPED_DOMAIN_MARGIN
+    served = lowest_delta - margin * rough.sigma
     return dc.domain_radius(cap_contact(scenario)[0], served, rough.sigma, rough.eta, DOMAIN_OUTSIDE), served
 
 
@@ -75,13 +91,14 @@ def surface_spots(settings: dict[str, Any], k: int) -> dict[str, np.ndarray]:
     """
     asp = dc.draw_asperities(settings["seed"], k, settings["radius"], settings["eta"], settings["sigma"])
     sol = dc.solve_forces(asp, settings["profile"], settings["forces"][: settings.get("steps")], settings["e_star"],
-                          settings["beta"], settings["floor"])
+                          settings["beta"], settings["floor"], cap=settings["cap"])
     if sol.delta.min() < settings["served"]:
         raise ValueError(f"surface {k}: the approach {sol.delta.min():.4g} m falls below the "
                          f"{settings['served']:.4g} m its asperity disc serves")
     touching = np.flatnonzero((sol.interference > 0).any(axis=0))
-    return {"x": asp.x[touching], "y": asp.y[touching], "radius": sol.radius(settings["beta"])[:, touching],
-            "delta": sol.delta, "stiffness": sol.stiffness, "iterations": sol.iterations,
+    return {"x": asp.x[touching], "y": asp.y[touching], "radius": sol.radii[:, touching],
+            "delta": sol.delta, "stiffness": sol.stiffness, "unloading_stiffness": sol.unloading_stiffness,
+            "iterations": sol.iterations,
             "residual": sol.residual, "candidates": sol.candidates}
 
 
@@ -106,7 +123,7 @@ def solve_pool(scenario: Scenario, forces: np.ndarray, lowest_delta: float,
     settings = {"seed": scenario.oxide.seed, "radius": radius, "served": served, "eta": rough.eta,
                 "sigma": rough.sigma, "beta": cap_radius, "e_star": scenario.material.E_star,
                 "profile": cap_profile, "forces": np.asarray(forces, float),
-                "floor": dc.coupling_floor(rough.beta, rough.sigma)}
+                "floor": dc.coupling_floor(rough.beta, rough.sigma), "cap": cap_law(scenario)}
     n = scenario.contact.surfaces
     pool = _solve(dask.delayed(settings), 0, n, options, f"contact: {n} discrete surfaces")
     target = scenario.contact.pool_half_width
@@ -114,16 +131,29 @@ def solve_pool(scenario: Scenario, forces: np.ndarray, lowest_delta: float,
         pool = grow_pool(pool, target, lambda first, stop, steps: _solve(
             dask.delayed({**settings, "steps": steps}), first, stop, options,
             f"contact: pool surfaces {first}-{stop - 1} at the {steps} lightest steps"))
+    _warn_no_yield(settings["cap"], pool)
     return pool, radius
+
+
+def _warn_no_yield(cap: CapLaw, pool: list[dict[str, np.ndarray]]) -> None:
+    """One warning where the caps are capped at a hardness that none of them reaches at any load
+    (every contact radius below first yield's): the answer is the elastic one."""
+    if not isinstance(cap, CappedCap):
+        return
+    largest = max(float(r["radius"].max(initial=0.0)) for r in pool)
+    if largest < cap.a_c:
+        warnings.warn(f"material.hardness = {cap.hardness:g} Pa: no cap of the pool reaches first yield at any load "
+                      f"(largest contact radius {largest:.3g} m, first yield at {cap.a_c:.3g} m): the answer is the "
+                      "elastic one", stacklevel=4)
 
 
 def pool_half_widths(pool: list[dict[str, np.ndarray]]) -> np.ndarray:
     """Relative half-width (:data:`g2tom.config.POOL_CONFIDENCE`) of the pool's mean Barber conductance
-    at every step, over the surfaces solved there (NaN where no surface touches)."""
+    (its unloading stiffness) at every step, over the surfaces solved there (NaN where no surface touches)."""
     width = pool[0]["delta"].size
     stiffness = np.full((len(pool), width), np.nan)
     for k, r in enumerate(pool):
-        stiffness[k, : r["stiffness"].size] = r["stiffness"]
+        stiffness[k, : r["unloading_stiffness"].size] = r["unloading_stiffness"]
     return mean_half_width(stiffness, z_value(POOL_CONFIDENCE))
 
 
@@ -156,7 +186,7 @@ def grow_pool(pool: list[dict[str, np.ndarray]], target: float,
         if short.size == 0:
             break
         steps = int(short[-1]) + 1
-        counts = np.array([sum(r["stiffness"].size > i for r in pool) for i in short])
+        counts = np.array([sum(r["delta"].size > i for r in pool) for i in short])
         wanted = int(np.max(np.ceil(counts * (widths[short] / target) ** 2)))
         stop = min(config.MAX_POOL_SURFACES, max(wanted, len(pool) + CHUNK))
         pool = pool + solve(len(pool), stop, steps)
@@ -181,7 +211,7 @@ def variables(scenario: Scenario, pool: list[dict[str, np.ndarray]], radius: flo
         m = r["x"].size
         x[k, :m], y[k, :m], spot_radius[k, : solved[k], :m] = r["x"], r["y"], r["radius"]
     stacked = {}  # steps a surface was not solved at: NaN (counts -1)
-    for name in ("delta", "stiffness", "iterations", "residual", "candidates"):
+    for name in ("delta", "stiffness", "unloading_stiffness", "iterations", "residual", "candidates"):
         stacked[name] = np.full((n_s, n_d), -1 if name in ("iterations", "candidates") else np.nan)
         for k, r in enumerate(pool):
             stacked[name][k, : solved[k]] = r[name]
@@ -193,7 +223,8 @@ def variables(scenario: Scenario, pool: list[dict[str, np.ndarray]], radius: flo
         "asperity_radius": _var("asperity_radius", spot_radius),
         "discrete_approach": _var("discrete_approach", stacked["delta"]),
         "discrete_stiffness": _var("discrete_stiffness", stacked["stiffness"]),
-        "discrete_barber_conductance": _var("discrete_barber_conductance", stacked["stiffness"] / (e_star * rho)),
+        "discrete_barber_conductance": _var("discrete_barber_conductance",
+                                            stacked["unloading_stiffness"] / (e_star * rho)),
         "discrete_iterations": _var("discrete_iterations", stacked["iterations"].astype(np.int32)),
         "discrete_residual": _var("discrete_residual", stacked["residual"]),
         "discrete_candidates": _var("discrete_candidates", stacked["candidates"].astype(np.int32)),

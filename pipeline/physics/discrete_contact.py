@@ -50,6 +50,7 @@ from typing import Callable
 import numpy as np
 
 from g2tom.physics import indenter
+from g2tom.physics.cap_law import CapLaw, HertzCap
 
 __all__ = [
     "ASPERITIES_TAG",
@@ -63,7 +64,6 @@ __all__ = [
     "interaction_kernel",
     "domain_radius",
     "draw_asperities",
-    "hertz_load",
     "solve_forces",
     "symmetric_solve",
 ]
@@ -132,6 +132,12 @@ class DiscreteContact:
         Final relative residual (the larger of the interference and the force balance), (n_f,).
     candidates
         Candidates in the final solve of each force, shape (n_f,).
+    radii
+        Contact radii of the caps by their law (Hertz: ``sqrt(beta w)``), m, shape (n_f, n) (0 off contact).
+    unloading_stiffness
+        The elastic stiffness of the contact set, ``1^T (D_u^-1 + C)^-1 1`` with ``D_u = diag(2 E* a_i)``
+        (N/m, shape (n_f,)): the slope of unloading, which Barber's theorem ties to the conductance. It
+        is ``stiffness`` for elastic caps; below it once caps yield (their loading slope is lower).
     """
 
     force: np.ndarray
@@ -142,10 +148,8 @@ class DiscreteContact:
     iterations: np.ndarray
     residual: np.ndarray
     candidates: np.ndarray
-
-    def radius(self, beta: float) -> np.ndarray:
-        """Contact radii ``sqrt(beta w)``, m, shape (n_f, n) (0 off contact)."""
-        return np.sqrt(beta * self.interference)
+    radii: np.ndarray
+    unloading_stiffness: np.ndarray
 
 
 def sphere_cap_geometry(radius: float, beta: float) -> tuple[float, float]:
@@ -209,11 +213,6 @@ def interaction_kernel(x: np.ndarray, y: np.ndarray, floor: float) -> np.ndarray
     kernel = 1.0 / (np.pi * np.maximum(d, floor))
     np.fill_diagonal(kernel, 0.0)
     return kernel
-
-
-def hertz_load(w: np.ndarray, e_star: float, beta: float) -> np.ndarray:
-    """Hertz force ``(4/3) E* sqrt(beta) max(w, 0)^(3/2)`` of caps of radius ``beta`` (m), N."""
-    return 4.0 / 3.0 * e_star * np.sqrt(beta) * np.maximum(w, 0.0) ** 1.5
 
 
 def domain_radius(profile: Callable[[np.ndarray], np.ndarray], delta: float, sigma: float, eta: float,
@@ -288,15 +287,15 @@ def _positive_definite(matrix: np.ndarray) -> bool:
     return True
 
 
-def _rigid_delta(g: np.ndarray, force: float, e_star: float, beta: float) -> float:
+def _rigid_delta(g: np.ndarray, force: float, cap: CapLaw) -> float:
     """The approach at which the uncoupled caps carry ``force``: an upper bound on the coupled one."""
     from scipy.optimize import brentq
 
     top = float(g.max())
-    low = top - (force / (4.0 / 3.0 * e_star * np.sqrt(beta))) ** (2.0 / 3.0)  # one cap alone: too low
+    low = top - cap.interference(force)  # one cap alone: too low
 
     def excess(d: float) -> float:
-        return float(hertz_load(g - d, e_star, beta).sum() - force)
+        return float(cap.load(g - d).sum() - force)
 
     if excess(low) <= 0.0:  # only the highest cap touches there: low is the root (to rounding)
         return low
@@ -334,16 +333,16 @@ class _GrowingKernel:
         return self.table[:m, :m]
 
 
-def _hessian(kernel: np.ndarray, s: np.ndarray, active: np.ndarray, e_star: float, beta: float) -> tuple[
+def _hessian(kernel: np.ndarray, s: np.ndarray, active: np.ndarray, e_star: float, cap: CapLaw) -> tuple[
         np.ndarray, np.ndarray]:
     """The energy's Hessian ``D^-1 + C`` on the ``active`` caps (m/N) and their ``dP/ds`` (N/m)."""
-    slope = 1.5 * (4.0 / 3.0 * e_star * np.sqrt(beta)) * np.sqrt(s[active])  # d/ds of hertz_load
+    slope = cap.slope(s[active])
     system = kernel[np.ix_(active, active)] / e_star
     system[np.diag_indices_from(system)] += 1.0 / slope
     return system, slope
 
 
-def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, beta: float, state: _State,
+def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, cap: CapLaw, state: _State,
             tolerance: float, max_iterations: int) -> tuple[_State, float, int, float, bool]:
     """Solve ``s - g + delta + C P(s) = 0``, ``sum P(s) = F`` on a fixed candidate set (``C = kernel / E*``).
 
@@ -352,24 +351,23 @@ def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, beta
     state, the stiffness ``K = 1^T (D^-1 + C)^-1 1`` (N/m), the iterations, the final relative
     residual, and whether it stalled (no step of the line search lowered the residual).
     """
-    k = 4.0 / 3.0 * e_star * np.sqrt(beta)
     s, delta = state.s.copy(), state.delta
 
     def residuals(s: np.ndarray, delta: float) -> tuple[np.ndarray, float, np.ndarray]:
-        load = hertz_load(s, e_star, beta)
+        load = cap.load(s)
         active = np.flatnonzero(load > 0)
         return s - g + delta + kernel[:, active] @ load[active] / e_star, load.sum() - force, active
 
     res, res_f, active = residuals(s, delta)
     for iteration in range(max_iterations + 1):
-        if active.size == 0:  # no cap touches: put the highest one at its lone Hertz interference
-            delta = delta + s.max() - (force / k) ** (2.0 / 3.0)
+        if active.size == 0:  # no cap touches: put the highest one at its lone interference
+            delta = delta + s.max() - cap.interference(force)
             s = g - delta
             res, res_f, active = residuals(s, delta)
             continue
         scale = float(s[active].max())
         error = max(float(np.abs(res).max()) / scale, abs(res_f) / force)
-        system, slope = _hessian(kernel, s, active, e_star, beta)
+        system, slope = _hessian(kernel, s, active, e_star, cap)
         solved = symmetric_solve(system, np.column_stack([np.ones(active.size), res[active]]))
         unit, along = solved[:, 0], solved[:, 1]
         stiffness = float(unit.sum())
@@ -394,13 +392,22 @@ def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, beta
     raise AssertionError("unreachable")  # pragma: no cover
 
 
-def _convex_at(kernel: np.ndarray, state: _State, e_star: float, beta: float) -> bool:
+def _convex_at(kernel: np.ndarray, state: _State, e_star: float, cap: CapLaw) -> bool:
     """Whether the energy's Hessian ``D^-1 + C`` is positive definite at ``state``."""
     active = np.flatnonzero(state.s > 0)
-    return _positive_definite(_hessian(kernel, state.s, active, e_star, beta)[0])
+    return _positive_definite(_hessian(kernel, state.s, active, e_star, cap)[0])
 
 
-def _proximal(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, beta: float, state: _State,
+def _unloading_stiffness(kernel: np.ndarray, s: np.ndarray, e_star: float, cap: CapLaw) -> float:
+    """``1^T (D_u^-1 + C)^-1 1`` on the contacting caps, ``D_u = diag(2 E* a_i)`` (N/m): the elastic
+    stiffness of the contact set (:class:`DiscreteContact`)."""
+    active = np.flatnonzero(s > 0)
+    system = kernel[np.ix_(active, active)] / e_star
+    system[np.diag_indices_from(system)] += 1.0 / (2.0 * e_star * cap.radius(s[active]))
+    return float(symmetric_solve(system, np.ones(active.size)).sum())
+
+
+def _proximal(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, cap: CapLaw, state: _State,
               tolerance: float, max_iterations: int) -> tuple[_State, float, int, float, bool]:
     """Minimise the energy where it is not convex by proximal rounds, from ``state``.
 
@@ -421,13 +428,13 @@ def _proximal(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, be
     shifted[np.diag_indices_from(shifted)] += shift
     iterations = 0
     for _ in range(MAX_PROXIMAL_ROUNDS):
-        raised = g + shift / e_star * hertz_load(state.s, e_star, beta)
-        state, _, its, error, stalled = _newton(raised, shifted, force, e_star, beta, state, tolerance,
+        raised = g + shift / e_star * cap.load(state.s)
+        state, _, its, error, stalled = _newton(raised, shifted, force, e_star, cap, state, tolerance,
                                                 max_iterations)
         iterations += its
         if stalled or error > tolerance:
             break
-        _, stiffness, _, error, _ = _newton(g, kernel, force, e_star, beta, state, tolerance, 0)
+        _, stiffness, _, error, _ = _newton(g, kernel, force, e_star, cap, state, tolerance, 0)
         if error <= tolerance:
             return state, stiffness, iterations, error, False
     return state, 0.0, iterations, error, True
@@ -440,9 +447,9 @@ class NotConverged(ArithmeticError):
 class _Walker:
     """One surface's solution carried from force to force (warm starts, candidate rounds, continuation)."""
 
-    def __init__(self, g: np.ndarray, kernel: _GrowingKernel, e_star: float, beta: float, tolerance: float,
+    def __init__(self, g: np.ndarray, kernel: _GrowingKernel, e_star: float, cap: CapLaw, tolerance: float,
                  max_iterations: int, all_candidates: bool = False) -> None:
-        self.g, self.kernel, self.e_star, self.beta = g, kernel, e_star, beta
+        self.g, self.kernel, self.e_star, self.cap = g, kernel, e_star, cap
         self.all_candidates = all_candidates
         self.tolerance, self.max_iterations = tolerance, max_iterations
         self.force = 0.0  # 0: cold, no solution yet
@@ -454,7 +461,7 @@ class _Walker:
         every asperity able to touch is one; the state changes only on success."""
         g, e_star = self.g, self.e_star
         if self.force == 0.0:
-            delta = threshold = _rigid_delta(g, force, e_star, self.beta)
+            delta = threshold = _rigid_delta(g, force, self.cap)
         else:  # the previous stiffness overstates the step: a lower delta, more candidates
             delta = self.delta
             threshold = min(self.threshold, delta - (force - self.force) / self.stiffness)
@@ -465,11 +472,11 @@ class _Walker:
             carried = np.zeros(m)
             carried[: self.loads.size] = self.loads[:m]
             start = _State(g[:m] - delta - coupling @ carried / e_star, delta)
-            state, stiffness, its, error, stalled = _newton(g[:m], coupling, force, e_star, self.beta, start,
+            state, stiffness, its, error, stalled = _newton(g[:m], coupling, force, e_star, self.cap, start,
                                                             self.tolerance, self.max_iterations)
             iterations += its
-            if stalled and error > STALL_TOLERANCE and not _convex_at(coupling, state, e_star, self.beta):
-                state, stiffness, its, error, stalled = _proximal(g[:m], coupling, force, e_star, self.beta,
+            if stalled and error > STALL_TOLERANCE and not _convex_at(coupling, state, e_star, self.cap):
+                state, stiffness, its, error, stalled = _proximal(g[:m], coupling, force, e_star, self.cap,
                                                                   state, self.tolerance, self.max_iterations)
                 iterations += its
             if not (error <= self.tolerance or stalled and error <= STALL_TOLERANCE):
@@ -480,7 +487,7 @@ class _Walker:
                 break
             threshold = delta - 0.5 * (threshold - delta)
         self.force, self.delta, self.threshold, self.stiffness, self.error = force, delta, threshold, stiffness, error
-        self.s, self.loads = state.s, hertz_load(state.s, e_star, self.beta)
+        self.s, self.loads = state.s, self.cap.load(state.s)
         return iterations
 
     def climb(self, force: float) -> int:
@@ -528,6 +535,7 @@ def solve_forces(
     tolerance: float = TOLERANCE,
     max_iterations: int = MAX_ITERATIONS,
     all_candidates: bool = False,
+    cap: CapLaw | None = None,
 ) -> DiscreteContact:
     """The coupled caps of one surface at each total force (see the module for the model).
 
@@ -542,13 +550,16 @@ def solve_forces(
     e_star
         Effective modulus E*, Pa.
     beta
-        Cap radius, m.
+        Cap radius, m: the Hertz law's where ``cap`` is not given.
     floor
         Coupling distance floor, m (:func:`coupling_floor`).
     tolerance, max_iterations
         Newton's relative tolerance and iteration cap per candidate round.
     all_candidates
         Solve on every asperity of the surface (the slow reference of the candidate selection).
+    cap
+        The caps' force and radius against their interference (:mod:`g2tom.physics.cap_law`);
+        Hertz's of radius ``beta`` by default.
 
     Raises
     ------
@@ -564,10 +575,13 @@ def solve_forces(
         raise ValueError("the surface has no asperity")
     g = asperities.z - profile(np.hypot(asperities.x, asperities.y))
     order = np.argsort(-g, kind="stable")  # candidates are a prefix of the descending gaps
-    walker = _Walker(g[order], _GrowingKernel(asperities.x[order], asperities.y[order], floor), e_star, beta,
+    cap = HertzCap(e_star, beta) if cap is None else cap
+    walker = _Walker(g[order], _GrowingKernel(asperities.x[order], asperities.y[order], floor), e_star, cap,
                      tolerance, max_iterations, all_candidates)
     n, n_f = g.size, forces.size
-    out = {name: np.zeros(n_f) for name in ("delta", "stiffness", "iterations", "residual", "candidates")}
+    elastic = isinstance(cap, HertzCap)  # whose loading slope is its unloading slope: D = diag(2 E* a)
+    names = ("delta", "stiffness", "unloading_stiffness", "iterations", "residual", "candidates")
+    out = {name: np.zeros(n_f) for name in names}
     interference, load = np.zeros((n_f, n)), np.zeros((n_f, n))
     for index, force in enumerate(forces):
         iterations = walker.climb(force)
@@ -575,9 +589,12 @@ def solve_forces(
         interference[index, order[:m]] = np.maximum(walker.s, 0.0)
         load[index, order[:m]] = walker.loads
         out["delta"][index], out["stiffness"][index] = walker.delta, walker.stiffness
+        out["unloading_stiffness"][index] = (walker.stiffness if elastic else
+                                             _unloading_stiffness(walker.kernel(m), walker.s, e_star, cap))
         out["iterations"][index], out["residual"][index], out["candidates"][index] = iterations, walker.error, m
     return DiscreteContact(
         force=forces, delta=out["delta"], interference=interference, load=load, stiffness=out["stiffness"],
         iterations=out["iterations"].astype(np.int32), residual=out["residual"],
-        candidates=out["candidates"].astype(np.int32),
+        candidates=out["candidates"].astype(np.int32), radii=cap.radius(interference),
+        unloading_stiffness=out["unloading_stiffness"],
     )

@@ -25,6 +25,8 @@ from g2tom.predict import atlas as atlas_file  # atlas_file.shipped_path, looked
 from g2tom.predict.atlas import NOT_IN_ATLAS, AtlasSurrogate, is_atlas_document, load_atlas_surrogate, predict_atlas
 from g2tom.predict.domain import check_surface, with_measured_roughness
 from g2tom.predict.predictor import predict
+from g2tom.predict.queries import OutsideDomainError
+from g2tom.scene import scene_plasticity
 from g2tom.stages.surrogate_file import SurrogateTables, load_surrogate
 
 __all__ = ["MODELS", "choose_surrogate", "own_surrogate_path", "predict_resistance", "predict_with",
@@ -117,6 +119,7 @@ def predict_with(surrogate: SurrogateTables | AtlasSurrogate, scenario: Scenario
         ``attrs["answered_by"]`` naming the surrogate that answered.
     """
     _check_model(model)
+    check_plasticity(surrogate, scenario)
     if isinstance(surrogate, SurrogateTables):
         return predict(surrogate, scenario, force, xi, lam, extrapolate=extrapolate, model=model)
     if model != "curve":
@@ -125,6 +128,36 @@ def predict_with(surrogate: SurrogateTables | AtlasSurrogate, scenario: Scenario
                           "column resistance_power_law); or give a run's own surrogate fitted on this surface "
                           "(--surrogate, surrogate=)")
     return predict_atlas(surrogate, scenario, force, xi, lam, extrapolate=extrapolate).drop_vars(NOT_IN_ATLAS)
+
+
+def check_plasticity(surrogate: SurrogateTables | AtlasSurrogate, scenario: Scenario) -> None:
+    """Refuse a surface whose caps are capped at a hardness the surrogate was not fitted with.
+
+    The atlas covers elastic caps (its scenes have no hardness); a run's own surrogate answers the
+    hardness it was fitted with (its attribute ``hardness``; none: elastic). A scene whose caps yield
+    while held elastic is answered, with the warning :func:`g2tom.before_work.load_scenario` gives.
+
+    Raises
+    ------
+    g2tom.predict.queries.OutsideDomainError
+        Naming ``material.hardness``, its value and the surrogate's.
+    """
+    hardness = scenario.material.hardness
+    fitted = surrogate.info.get("hardness") if isinstance(surrogate, SurrogateTables) else None
+    if hardness == fitted:
+        return
+    if hardness is None:
+        raise OutsideDomainError(f"material.hardness is unset (elastic caps), but the surrogate was fitted with "
+                                 f"caps capped at {fitted:g} Pa: set material.hardness = {fitted:g}")
+    if not isinstance(surrogate, SurrogateTables):
+        kind = "the atlas surrogate covers elastic caps only"
+    elif fitted is None:
+        kind = "the surrogate was fitted on elastic caps"
+    else:
+        kind = f"the surrogate was fitted with material.hardness = {fitted:g} Pa"
+    psi = scene_plasticity(scenario).index
+    raise OutsideDomainError(f"material.hardness = {hardness:g} Pa (plasticity index psi = {psi:.3g}) is outside "
+                             f"what the surrogate answers: {kind}")
 
 
 def surface_scenario(surface: Scenario | str | Path, overrides: Mapping[str, Any] | None = None,

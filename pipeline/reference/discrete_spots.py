@@ -19,6 +19,7 @@ import xarray as xr
 
 from g2tom.before_work import load_scenario
 from g2tom.physics import discrete_contact as dc
+from g2tom.physics.cap_law import CappedCap
 from g2tom.reference import scene, surfaces
 from g2tom.scene import FieldSource
 from g2tom.stages import contact as contact_stage
@@ -49,10 +50,11 @@ def surface_pool(vset: scene.ValidationSet, realization: int, forces: np.ndarray
     floor = dc.coupling_floor(vset.beta, vset.sigma)
     cap = dc.cap_radius("sphere", vset.beta, radius=vset.radius)
     gap = functools.partial(dc.cap_gap, shape="sphere", beta=vset.beta, radius=vset.radius)
+    law = None if vset.hardness is None else CappedCap(vset.e_star, cap, vset.hardness)
     sol = dc.solve_forces(dc.Asperities(tips.x, tips.y, tips.z), gap, np.asarray(forces, float), vset.e_star, cap,
-                          floor)
+                          floor, cap=law)
     touching = np.flatnonzero((sol.interference > 0).any(axis=0))
-    return DiscretePool(tips.x[None, touching], tips.y[None, touching], sol.radius(cap)[None][..., touching],
+    return DiscretePool(tips.x[None, touching], tips.y[None, touching], sol.radii[None][..., touching],
                         np.array([touching.size]), floor)
 
 

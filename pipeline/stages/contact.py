@@ -21,6 +21,7 @@ from g2tom.physics import hertz, spot_models, spots
 from g2tom.physics.asperity import area_fraction
 from g2tom.physics.grid import cell_centres
 from g2tom.models import contact_model
+from g2tom.scene import scene_plasticity
 from g2tom.stages.schema import SCHEMA, SPOT_RADIUS_LONG_NAMES, labelled
 from g2tom.store import write_dataset
 
@@ -125,7 +126,22 @@ def build(scenario: Scenario, options: ComputeOptions = ComputeOptions(progress=
     data_vars.update(pool_vars)
     coords.update(pool_coords)
     attrs.update(pool_attrs)
+    data_vars.update(_plasticity_vars(scenario))
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def _plasticity_vars(scenario: Scenario) -> dict[str, tuple]:
+    """The plasticity index and a cap's first yield where a hardness is known, and the hardness the caps
+    are capped at where they are (:class:`g2tom.scene.Plasticity`); none for an elastic scene of
+    unknown hardness."""
+    known = scene_plasticity(scenario)
+    if known.index is None:
+        return {}
+    out = {"plasticity_index": _var("plasticity_index", np.float64(known.index)),
+           "yield_interference": _var("yield_interference", np.float64(known.yield_interference))}
+    if known.hardness is not None:
+        out["hardness"] = _var("hardness", np.float64(known.hardness))
+    return out
 
 
 def _continuous_vars(scenario: Scenario, r: np.ndarray, f: dict[str, np.ndarray]) -> dict:

@@ -285,6 +285,8 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
     scene = scene_groups(scenario)
     ds.attrs["mu"], ds.attrs["Pi"] = scene.mu, scene.Pi
     ds.attrs["indenter_shape"] = scenario.indenter.shape
+    if scenario.material.hardness is not None:  # capped caps: the predictor answers only this hardness
+        ds.attrs["hardness"] = scenario.material.hardness
     ds.attrs["fit_confidence"] = scenario.fits.confidence
     ds.attrs["model"] = "T(p)(lambda, xi) = sum_k P_k(log lambda) Q_k(-log(1 - xi)), T = log or identity (Eq. 26)"
     ds.attrs["predictor"] = ("R_el = 2 rho*/sqrt(R* sigma) exp(sum_k c_k(xi, lambda) (ln F')^k), the curve model "

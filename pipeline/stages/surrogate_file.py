@@ -185,6 +185,7 @@ class SurrogateTables:
 
 _INFO_KEYS = (
     "scenario", "config_hash", "method", "trivial", "reduction", "fit_confidence", "mu", "Pi", "indenter_shape",
+    "hardness",
     *(f"{p}_{k}" for p in PARAMETERS for k in ("transform", "rank", "order_w", "order_z", "free_parameters", "cv_rms", "formula")),
 )
 
