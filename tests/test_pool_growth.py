@@ -80,7 +80,7 @@ def test_growth_stops_at_the_cap_and_adds_whole_rounds(monkeypatch):
 
     def surface(steps: int) -> dict[str, np.ndarray]:
         k = np.array([rng.uniform(0.0, 2.0), 1.0 + 1e-3 * rng.standard_normal(), 1.0])[:steps]
-        return {"stiffness": k, "delta": np.zeros(steps)}
+        return {"stiffness": k, "unloading_stiffness": k, "delta": np.zeros(steps)}
 
     def solve(first: int, stop: int, steps: int) -> list[dict[str, np.ndarray]]:
         calls.append((first, stop, steps))
