@@ -91,7 +91,7 @@ def _validated(vset: scene.ValidationSet, config: str) -> Scenario:
 
 def plan_lines(vset: scene.ValidationSet, config: str = "paper", workers: int = 1) -> list[str]:
     """The plan printed before any work: scene, both parts' cases and grids, the estimate (no case stored);
-    the full field capped at the validated scenario's hardness where it has one (:func:`scene.with_hardness_of`)."""
+    the full field capped at the validated scenario's hardness where it has one (:func:`g2tom.reference.scene.with_hardness_of`)."""
     vset = scene.with_hardness_of(vset, config)
     f = _force_normalized(vset)
     validated = _validated(vset, config)
