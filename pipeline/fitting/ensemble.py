@@ -15,7 +15,6 @@ notes; the fits stage's bootstrap gives the final intervals.
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 __all__ = ["fit_weights", "statistic", "prefix_half_width", "prefix_controlled_half_width", "stop_count", "z_value",
            "log_standard_error", "mean_half_width"]
@@ -68,6 +67,8 @@ def statistic(log_r: np.ndarray, weights: np.ndarray) -> np.ndarray:
 
 def z_value(confidence: float) -> float:
     """Two-sided normal quantile of a confidence level (1.96 for 0.95)."""
+    from scipy import stats  # here: half a second to import, and most commands that import this module never call it
+
     return float(stats.norm.ppf(0.5 * (1.0 + confidence)))
 
 
