@@ -224,7 +224,7 @@ def fig11_barber(path: Path, fits: xr.Dataset) -> Path:
 
 def write(scenario: Scenario, data_dir: Path, out_dir: Path) -> list[Path]:
     """Write Figs. 3, 8, 9, 10 (with its realizations map) and 11 under ``out_dir``, in that order."""
-    cube = read_stage(data_dir, "cube", scenario)
+    cube = read_stage(data_dir, "cube", scenario, select=lambda ds: ds[["resistance"]])  # the grey lines' realizations
     fits = read_stage(data_dir, "fits", scenario)
     surrogate = read_stage(data_dir, "surrogate", scenario)
     out_dir = Path(out_dir)

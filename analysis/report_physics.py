@@ -98,7 +98,7 @@ def barber_blocks(data_dir: Path, scenario: Scenario) -> list[Block]:
     blocks = [Block("h2", "Barber's theorem: the clean surface's check")]
     try:
         contact = read_stage(data_dir, "contact", scenario)
-        cube = read_stage(data_dir, "cube", scenario)
+        cube = read_stage(data_dir, "cube", scenario, select=lambda ds: ds.drop_dims("realization"))  # the clean surface
     except (FileNotFoundError, StaleInputError, OSError) as exc:
         return blocks + [Block("p", f"Not available: {exc}")]
     discrete = "discrete_barber_conductance" in contact

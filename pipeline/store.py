@@ -19,7 +19,7 @@ import tempfile
 import threading
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 import xarray as xr
@@ -283,12 +283,14 @@ def _reason(exc: BaseException) -> str:
     return text.split(": '/")[0].split(": b'")[0]
 
 
-def read_stage(data_dir: str | Path, stage: str, scenario: Scenario, *,
-               allow_unconverged: bool = False) -> xr.Dataset:
+def read_stage(data_dir: str | Path, stage: str, scenario: Scenario, *, allow_unconverged: bool = False,
+               select: Callable[[xr.Dataset], xr.Dataset] | None = None) -> xr.Dataset:
     """Load a stage's output into memory, checking it matches ``scenario``.
 
     A contact file whose solver did not converge at some approach is refused unless
-    ``allow_unconverged`` (later stages must not build on an unconverged contact).
+    ``allow_unconverged`` (later stages must not build on an unconverged contact). ``select``
+    picks the part to load from the file opened lazily (``lambda ds: ds[["resistance"]]``):
+    the rest is never read nor decompressed (most of a cube's seconds). Default: all of it.
 
     Raises
     ------
@@ -303,7 +305,7 @@ def read_stage(data_dir: str | Path, stage: str, scenario: Scenario, *,
     path = stage_path(data_dir, stage)
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
-            ds = ds.load()
+            ds = (ds if select is None else select(ds)).load()
     except (OSError, ValueError, RuntimeError) as exc:  # damaged past its header
         raise StaleInputError(f"{path} is unreadable ({_reason(exc)}): {_fix(stage)}") from None
     if stage == "contact" and "converged" in ds and not allow_unconverged and not ds["converged"].values.all():

@@ -51,6 +51,9 @@ from g2tom.store import read_stage, write_dataset
 __all__ = ["build", "run"]
 
 GRID = ("xi", "lambda")
+#: The cube's per-realization variables the fits read; the others (the resistance's self and interaction
+#: terms, the conducting counts, the solver's report) are not loaded.
+REDUCED = ("resistance", "clean_share")
 
 
 def _bootstrap(
@@ -348,5 +351,10 @@ def run(scenario: Scenario, data_dir: str | Path, options: ComputeOptions) -> Pa
 
     ``options`` is accepted for the stage interface; the fits are in-memory numpy work.
     """
-    cube = read_stage(data_dir, "cube", scenario)
+    cube = read_stage(data_dir, "cube", scenario, select=_reduced)
     return write_dataset(build(scenario, cube), data_dir, "fits", scenario)
+
+
+def _reduced(cube: xr.Dataset) -> xr.Dataset:
+    """``cube`` without the per-realization variables the fits do not read (:data:`REDUCED`)."""
+    return cube.drop_vars([name for name, var in cube.data_vars.items() if DIM in var.dims and name not in REDUCED])
