@@ -6,7 +6,8 @@ figures (medians of repeated timings, errors, ratios to a reference run in the s
 ``run`` also takes ``data_dir`` save labelled data there too: ``frontier`` (the accuracy–time
 frontier, ``bench/frontier.nc`` and its figures; its sweeps, prefix curve and figures in
 ``frontier_sweeps``, ``frontier_prefix`` and ``frontier_plot``) and ``stability``
-(``bench/stability.nc``); ``schema`` declares those files' variables.
+(``bench/stability.nc``); ``schema`` declares those files' variables. ``biases`` reads the contact
+stage's file there instead (the steps' contact it holds, not solved again).
 """
 
 from __future__ import annotations

@@ -20,23 +20,35 @@ thing, all on the same oxide fields (same seeds; realization ``k`` of a lambda i
 and beside the chain, asperity spots (drawn per realization) in place of step 5. Each run
 reports alpha and gamma (the geometric-mean fit over the steps with F >= 200 N) and the
 geometric-mean R at three loads, clean and on a few oxidized cells.
+
+The steps' contact is not solved again where the contact stage's file holds it
+(:func:`stored_contact`): ``<data_dir>/contact.nc``, current for the run's scenario, serves each step
+whose contact parameters are the scenario's but for a smaller pool (on the default scenario, the
+discrete steps' 100 surfaces are the first 100 of its 256). The steps that differ only in their spots
+share one Greenwood-Tripp solve (:func:`g2tom.contact_solution.shared_solves`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+import xarray as xr
 
 from g2tom.compute import ComputeOptions
+from g2tom.contact_solution import shared_solves
+from g2tom.errors import StaleInputError
 from g2tom.models import Discrete
 from g2tom.config import ResolvedScenario, Scenario
 from g2tom.before_work import load_scenario
-from g2tom.before_work.domains import resolve
+from g2tom.before_work.domains import resolve, resolved
 from g2tom.stages import contact, cube, fits, oxide
+from g2tom.store import provenance, read_stage
 
-__all__ = ["STEPS", "run"]
+__all__ = ["STEPS", "run", "stored_contact"]
 
 #: The chain: (label, overrides added to the previous step's).
 STEPS: tuple[tuple[str, dict[str, Any]], ...] = (
@@ -62,16 +74,65 @@ STUDY = {"oxide.xi": [0.5, 0.9], "oxide.lambda": [1.0, 9.0], "oxide.ensemble": "
 LOADS = (273.0, 1339.0, 9699.0)
 
 
-def _one(overrides: dict[str, Any], contacts: dict[str, Any]) -> dict[str, Any]:
+def stored_contact(stored: ResolvedScenario, dataset: xr.Dataset, wanted: ResolvedScenario) -> xr.Dataset | None:
+    """``wanted``'s contact dataset taken from ``dataset``, the contact stage's dataset of ``stored``, or
+    None where ``dataset`` does not hold it.
+
+    It holds it where the contact parameters of ``wanted`` are those of ``stored`` but for
+    ``contact.surfaces``, at most ``stored``'s, and both draw the pool from the same ``oxide.seed``.
+    Surface ``k`` of a pool is drawn from stream ``k`` and solved alone, so a pool of ``n`` surfaces
+    is the first ``n`` of a larger one; a grown pool (``contact.pool_half_width``) is not, and is
+    refused. The result is the dataset :func:`g2tom.stages.contact.build` gives for ``wanted``: the
+    first ``n`` surfaces, the spots padded to their largest count, without the file's provenance.
+
+    Parameters
+    ----------
+    stored
+        The scenario ``dataset`` was built from.
+    dataset
+        contact.nc of ``stored``, loaded (:func:`g2tom.store.read_stage`).
+    wanted
+        The scenario whose contact is wanted.
+    """
+    c, n = wanted.contact, wanted.contact.surfaces
+    as_stored = dataclasses.replace(wanted, contact=dataclasses.replace(c, surfaces=stored.contact.surfaces))
+    if (n > stored.contact.surfaces or c.pool_half_width > 0 or wanted.oxide.seed != stored.oxide.seed
+            or as_stored.config_hash("contact") != stored.config_hash("contact")):
+        return None
+    out = dataset.copy(deep=False)
+    if "surface" in out.dims:
+        out = out.isel(surface=slice(0, n))
+        out = out.isel(spot=slice(0, max(1, int(out["spot_count"].max())))).copy(deep=True)  # contiguous, as solved
+    written = provenance(stored, "contact")
+    out.attrs = {k: v for k, v in dataset.attrs.items() if k not in written}
+    return out
+
+
+def _stored(scenario: Scenario, data_dir: str | Path | None) -> tuple[ResolvedScenario, xr.Dataset] | None:
+    """``scenario`` resolved and its contact.nc under ``data_dir``, or None if there is none current
+    (missing, stale, unreadable, unconverged: :func:`g2tom.store.read_stage`)."""
+    if data_dir is None:
+        return None
+    scenario = resolved(scenario)
+    try:
+        return scenario, read_stage(data_dir, "contact", scenario)
+    except StaleInputError:
+        return None
+
+
+def _one(overrides: dict[str, Any], contacts: dict[str, Any],
+         stored: tuple[ResolvedScenario, xr.Dataset] | None) -> dict[str, Any]:
     """alpha, gamma and R at :data:`LOADS` (clean and per cell) of the published scenario with
     ``overrides``; ``contacts`` keeps the contact datasets by configuration hash (steps that change
-    only the oxide or the cube share one)."""
+    only the oxide or the cube share one), each taken from ``stored`` (the run's scenario and its
+    contact.nc) where it holds it (:func:`stored_contact`), else solved."""
     scenario: ResolvedScenario = resolve(load_scenario("published", {**STUDY, **overrides}))
     options = ComputeOptions(progress=False)
     start = time.perf_counter()
     key = scenario.config_hash("contact")
     if key not in contacts:
-        contacts[key] = contact.build(scenario, options)
+        found = stored_contact(*stored, scenario) if stored else None
+        contacts[key] = contact.build(scenario, options) if found is None else found
     contact_ds = contacts[key]
     cube_ds = cube.build(scenario, contact_ds, oxide.build(scenario, options), options)
     fits_ds = fits.build(scenario, cube_ds)
@@ -89,14 +150,17 @@ def _one(overrides: dict[str, Any], contacts: dict[str, Any]) -> dict[str, Any]:
             "n_cells": scenario.n_cells, "seconds": time.perf_counter() - start}
 
 
-def run(scenario: Scenario) -> dict[str, Any]:
-    """The chain of :data:`STEPS` and the :data:`SIDE` run (``scenario`` names the study only)."""
+def run(scenario: Scenario, data_dir: str | Path | None = None) -> dict[str, Any]:
+    """The chain of :data:`STEPS` and the :data:`SIDE` run (``scenario`` names the study only; its
+    contact.nc under ``data_dir``, where current, stands in for the steps' contact it holds)."""
     chain, overrides, contacts = [], {}, {}
-    for label, change in STEPS:
-        overrides = {**overrides, **change}
-        chain.append({"step": label, "overrides": dict(change), **_one(overrides, contacts)})
-    label, after, change = SIDE
-    base = {k: v for _, c in STEPS[: after + 1] for k, v in c.items()}
-    side = {"step": label, "overrides": dict(change), **_one({**base, **change}, contacts)}
+    stored = _stored(scenario, data_dir)
+    with shared_solves():
+        for label, change in STEPS:
+            overrides = {**overrides, **change}
+            chain.append({"step": label, "overrides": dict(change), **_one(overrides, contacts, stored)})
+        label, after, change = SIDE
+        base = {k: v for _, c in STEPS[: after + 1] for k, v in c.items()}
+        side = {"step": label, "overrides": dict(change), **_one({**base, **change}, contacts, stored)}
     return {"chain": chain, "side": side, "study": STUDY,
             "note": "each step changes one thing from the previous; all runs use the same oxide fields"}
