@@ -6,9 +6,16 @@ solve before any stage runs); no I/O. :func:`solve` needs numeric domains
 (:func:`g2tom.before_work.domains.resolve` resolves ``auto``;
 :func:`g2tom.before_work.domains.solve_scenario` resolves, then solves). :func:`fields` are the
 solution's separation, pressure, area fraction and force, as the contact stage stores them.
+Inside :func:`shared_solves`, :func:`solve_with_stiffness` solves each distinct system once (the
+benchmarks that build the contact of several scenarios on one solve).
 """
 
 from __future__ import annotations
+
+import copy
+import hashlib
+from contextlib import contextmanager
+from typing import Any, Iterator
 
 import numpy as np
 
@@ -18,10 +25,12 @@ from g2tom.physics import radial_grid as rg
 from g2tom.physics.asperity import area_fraction, asperity_pressure
 from g2tom.physics.indenter import profile
 
-__all__ = ["indenter_profile", "radial_grid", "layer", "solve", "solve_with_stiffness", "fields"]
+__all__ = ["indenter_profile", "radial_grid", "layer", "solve", "solve_with_stiffness", "shared_solves", "fields"]
 
 #: Rigid gap (units of sigma) beyond which the graded grid coarsens: F_{3/2}(4) / F_{3/2}(0) ~ 1e-5.
 _FINE_GAP = 4.0
+#: The solutions :func:`solve_with_stiffness` keeps inside :func:`shared_solves`, by their inputs; None outside.
+_SHARED: dict[str, tuple[np.ndarray, list[gt.Solution], np.ndarray]] | None = None
 
 
 def indenter_profile(scenario: Scenario, r: np.ndarray) -> np.ndarray:
@@ -57,26 +66,27 @@ def layer(scenario: Scenario) -> gt.Layer:
     return gt.Layer(rough.sigma, rough.eta, rough.beta, scenario.material.E_star)
 
 
-def _solve(
+def _system(
     scenario: Scenario, solver: str | None, n_radial: int | None, tolerance: float | None,
-) -> tuple[np.ndarray, np.ndarray, list[gt.Solution]]:
-    """Radial nodes (m), influence matrix (m/Pa) and the solution of every approach."""
+) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """Radial nodes (m), the indenter profile at them (m) and the solver's settings: with the
+    approaches and the layer, every input of the solve."""
     c = scenario.contact
     if c.r_max == AUTO:
         raise ValueError("contact.r_max = 'auto' must be resolved first (g2tom.before_work.domains.resolve)")
     r = radial_grid(scenario, n_radial)
+    settings = {"solver": solver or c.solver, "tolerance": tolerance or c.tolerance, "max_iterations": c.max_iterations,
+                "relaxation": c.relaxation, "fixed_point_tolerance": c.fixed_point_tolerance}
+    return r, indenter_profile(scenario, r), settings
+
+
+def _solve(
+    scenario: Scenario, solver: str | None, n_radial: int | None, tolerance: float | None,
+) -> tuple[np.ndarray, np.ndarray, list[gt.Solution]]:
+    """Radial nodes (m), influence matrix (m/Pa) and the solution of every approach."""
+    r, z, settings = _system(scenario, solver, n_radial, tolerance)
     matrix = rg.influence_matrix(r, scenario.material.E_star)
-    sols = gt.solve(
-        matrix,
-        indenter_profile(scenario, r),
-        scenario.deltas,
-        layer(scenario),
-        solver=solver or c.solver,
-        tolerance=tolerance or c.tolerance,
-        max_iterations=c.max_iterations,
-        relaxation=c.relaxation,
-        fixed_point_tolerance=c.fixed_point_tolerance,
-    )
+    sols = gt.solve(matrix, z, scenario.deltas, layer(scenario), **settings)
     return r, matrix, sols
 
 
@@ -99,10 +109,44 @@ def solve(
 
 def solve_with_stiffness(scenario: Scenario) -> tuple[np.ndarray, list[gt.Solution], np.ndarray]:
     """:func:`solve` and the contact stiffness ``K = -dF/d delta`` of every approach (N/m), by the
-    exact linearisation of the discretised system (:func:`g2tom.physics.greenwood_tripp.stiffness`)."""
+    exact linearisation of the discretised system (:func:`g2tom.physics.greenwood_tripp.stiffness`);
+    inside :func:`shared_solves`, a copy of the solution of an earlier scenario with the same inputs."""
+    key = _system_key(scenario) if _SHARED is not None else None
+    if key is not None and key in _SHARED:
+        return copy.deepcopy(_SHARED[key])
     r, matrix, sols = _solve(scenario, None, None, None)
     stiffness = gt.stiffness(matrix, indenter_profile(scenario, r), scenario.deltas, layer(scenario), sols, r)
+    if key is not None:
+        _SHARED[key] = copy.deepcopy((r, sols, stiffness))
     return r, sols, stiffness
+
+
+def _system_key(scenario: Scenario) -> str:
+    """A digest of every input of the scenario's solve (:func:`_system`, the approaches and the layer)."""
+    r, z, settings = _system(scenario, None, None, None)
+    digest = hashlib.sha256()
+    for part in (r, z, np.asarray(scenario.deltas, float)):
+        digest.update(np.ascontiguousarray(part, float).tobytes())
+    digest.update(repr((layer(scenario), sorted(settings.items()))).encode())
+    return digest.hexdigest()
+
+
+@contextmanager
+def shared_solves() -> Iterator[None]:
+    """Inside the block, :func:`solve_with_stiffness` solves each distinct system once.
+
+    Scenarios whose solves have the same inputs (radial nodes, profile, approaches, layer and solver
+    settings; ``contact.spots``, ``contact.window`` and ``contact.model`` are not among them) share one
+    solve: the later ones get a copy of its nodes (m), solutions and stiffness (N/m), equal to
+    solving again. Nested blocks share the outer one's solutions.
+    """
+    global _SHARED
+    outer = _SHARED
+    _SHARED = {} if outer is None else outer
+    try:
+        yield
+    finally:
+        _SHARED = outer
 
 
 def fields(scenario: Scenario, r: np.ndarray, sols: list[gt.Solution]) -> dict[str, np.ndarray]:

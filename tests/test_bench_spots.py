@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import numpy as np
+import xarray as xr
 
+from g2tom import contact_solution
 from g2tom.before_work.domains import resolve
 from g2tom.bench import spots
 from g2tom.before_work import load_scenario
+from g2tom.stages import contact
 from tests.conftest import SMALL_OVERRIDES
 
 
@@ -25,3 +28,21 @@ def test_a_discrete_scenario_benchmarks_greenwood_tripps_three_discretizations(m
     assert np.max(np.abs(expected - 1.0)) <= spots.TARGETS["expected"]  # Barber-consistent spots
     assert np.max(np.abs(mean_area - 1.0)) > 0.1  # the paper's mean-area spots are not: the three differ
     assert discrete["met"]["expected_greenwood"]
+
+
+def test_discretizations_on_one_domain_share_one_solve_equal_to_solving_each(monkeypatch) -> None:
+    """expected and asperities resolve to the same window and radial domain: inside shared_solves
+    their contact datasets come from one Greenwood-Tripp solve, bit for bit those of two solves."""
+    chosen = [spots._with_spots(resolve(load_scenario("paper_gt", SMALL_OVERRIDES)), name)
+              for name in ("expected", "asperities")]
+    alone = [contact.build(s) for s in chosen]
+    solves: list[int] = []
+    real = contact_solution._solve
+    monkeypatch.setattr(contact_solution, "_solve", lambda *args: solves.append(1) or real(*args))
+    with contact_solution.shared_solves():
+        shared = [contact.build(s) for s in chosen]
+    assert len(solves) == 1
+    for one, other in zip(alone, shared):
+        xr.testing.assert_identical(one, other)
+    contact.build(chosen[0])
+    assert len(solves) == 2  # outside the block every build solves
