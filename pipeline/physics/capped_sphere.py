@@ -63,7 +63,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.optimize import brentq
 
 from g2tom.physics.radial_grid import force_weights, influence_matrix
 
@@ -178,6 +177,8 @@ def _graded(length: float, first: float, count: int) -> np.ndarray:
     offsets are smooth in ``length`` and ``first``; ``first >= length / count`` gives even
     elements.
     """
+    from scipy.optimize import brentq  # here: every command imports this module through the cap laws
+
     share = first / length
     s = np.linspace(0.0, 1.0, count + 1)
     if share * count >= 1.0 - 1e-9:  # a grading below 1e-9: even (k would be below its bracket)
@@ -352,6 +353,8 @@ def capped_contact(w: float, beta: float, e_star: float, hardness: float,
         return elastic
     omega_c = critical_scales(beta, e_star, hardness)[0]
     target = np.log(w / omega_c)
+    from scipy.optimize import brentq  # here: every command imports this module through the cap laws
+
     top = -np.log(THINNEST_ANNULUS)
 
     def excess(depth: float, elements: int) -> float:
