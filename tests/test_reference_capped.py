@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -232,3 +233,23 @@ def test_gpu_capped_solve_equals_numpy() -> None:
     np.testing.assert_array_equal(on_gpu.contact, on_cpu.contact)
     assert np.abs(on_gpu.pressure - on_cpu.pressure).max() < 1e-8 * hardness
     assert on_gpu.delta == pytest.approx(on_cpu.delta, rel=1e-8)
+
+
+def test_a_lone_pixel_at_the_cap_steps_by_steepest_descent() -> None:
+    """Three isolated pixels that can touch, one pixel's worth of force at H: an iterate puts one pixel
+    alone at H and the rest at 0, where a conjugate step on the free set has no direction (0/0, the
+    solve's pressure then not finite); the solver takes the steepest-descent step instead and converges."""
+    n, pixel, e_star, hardness = 16, 1e-6, 1e11, 1e9
+    operator = fft_surface(n, pixel, e_star, np)
+    heights = np.full((n, n), -1e-3)
+    for (i, j), z in zip([(0, 2), (12, 5), (10, 15)], [-2.5893606125679533e-08, -2.6439215182130694e-08,
+                                                       -1.5321195166309355e-08]):
+        heights[i, j] = z
+    mean = hardness / n**2 * (1 - 1e-9)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = solve_capped_at_mean_pressure(operator, heights, mean, hardness, 1e-10, 300)
+    assert result.error <= 1e-10 and np.all(np.isfinite(result.pressure))
+    assert np.all((result.pressure >= 0) & (result.pressure <= hardness))
+    assert result.pressure.sum() == pytest.approx(mean * n * n, rel=1e-13)
+    assert result.pressure[10, 15] == result.pressure.max()  # the highest pixel carries most

@@ -136,10 +136,15 @@ def solve_capped_at_mean_pressure(operator: FftSurface, heights: Any, mean_press
         if not error > tolerance or iteration == max_iterations:  # converged, not finite, or out of iterations
             return PolonskyKeerResult(pressure=p, error=error, iterations=iteration)
         free = (p > 0) & below
-        g, direction, norm_before, tau = _conjugate_step(operator, g, free, direction, norm_before, conjugate)
-        trial = p - tau * xp.where(free, direction, g)
-        projected = project_onto_box(trial, mean_pressure, hardness, xp)
-        conjugate = 1.0 - xp.any(~free & (projected != p)).astype(float)
+        if int(xp.count_nonzero(free)) < 2:  # a centred gradient on under two pixels vanishes: steepest descent,
+            trial = p - xp.sum(g * g) / xp.sum(g * operator.apply(g)) * g  # exact step, the projection re-centres
+            projected = project_onto_box(trial, mean_pressure, hardness, xp)
+            conjugate = xp.asarray(0.0)
+        else:
+            g, direction, norm_before, tau = _conjugate_step(operator, g, free, direction, norm_before, conjugate)
+            trial = p - tau * xp.where(free, direction, g)
+            projected = project_onto_box(trial, mean_pressure, hardness, xp)
+            conjugate = 1.0 - xp.any(~free & (projected != p)).astype(float)
         p = projected
         iteration += 1
 
