@@ -81,3 +81,20 @@ def test_a_hardness_no_cap_reaches_warns_that_the_answer_is_elastic() -> None:
         warnings.simplefilter("error")
         _warn_no_yield(cap, [{"radius": np.full((3, 4), 1.1 * cap.a_c)}])
         _warn_no_yield(HertzCap(1.154e11, 3e-5), below)
+
+
+def test_overlapping_capped_caps_are_counted_and_warned_about() -> None:
+    from g2tom.models.discrete_pool import _warn_overlap, overlap_shares
+    from g2tom.physics.cap_law import CappedCap, HertzCap
+
+    # three caps on a line 10 um apart: none, two, then all three overlap as they grow
+    x, y = np.array([0.0, 10e-6, 20e-6]), np.zeros(3)
+    radius = np.array([[4e-6, 4e-6, 0.0], [6e-6, 4.5e-6, 0.0], [6e-6, 6e-6, 6e-6]])
+    pool = [{"x": x, "y": y, "radius": radius, "delta": np.zeros(3)}]
+    np.testing.assert_allclose(overlap_shares(pool), [0.0, 1.0, 1.0])
+    cap = CappedCap(1.154e11, 3e-5, 2e9)
+    with pytest.warns(UserWarning, match=r"capped caps overlap: from 2 N \(step 2\) 100 % of the touching caps"):
+        _warn_overlap(cap, pool, np.array([1.0, 2.0, 3.0]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _warn_overlap(HertzCap(1.154e11, 3e-5), pool, np.array([1.0, 2.0, 3.0]))  # elastic caps: as before

@@ -132,6 +132,7 @@ def solve_pool(scenario: Scenario, forces: np.ndarray, lowest_delta: float,
             dask.delayed({**settings, "steps": steps}), first, stop, options,
             f"contact: pool surfaces {first}-{stop - 1} at the {steps} lightest steps"))
     _warn_no_yield(settings["cap"], pool)
+    _warn_overlap(settings["cap"], pool, settings["forces"])
     return pool, radius
 
 
@@ -145,6 +146,44 @@ def _warn_no_yield(cap: CapLaw, pool: list[dict[str, np.ndarray]]) -> None:
         warnings.warn(f"material.hardness = {cap.hardness:g} Pa: no cap of the pool reaches first yield at any load "
                       f"(largest contact radius {largest:.3g} m, first yield at {cap.a_c:.3g} m): the answer is the "
                       "elastic one", stacklevel=4)
+
+
+#: Share of touching caps whose contact disc overlaps a neighbour's above which capped caps are
+#: warned about (:func:`_warn_overlap`).
+OVERLAP_SHARE = 0.1
+
+
+def overlap_shares(pool: list[dict[str, np.ndarray]]) -> np.ndarray:
+    """Share of the pool's touching caps whose contact disc overlaps another's (``a_i + a_j > d_ij``) at
+    every step (NaN where none touches)."""
+    steps = pool[0]["delta"].size
+    overlapping, touching = np.zeros(steps), np.zeros(steps)
+    for r in pool:
+        d = np.hypot(r["x"][:, None] - r["x"][None, :], r["y"][:, None] - r["y"][None, :])
+        np.fill_diagonal(d, np.inf)
+        for k, a in enumerate(r["radius"]):
+            on = a > 0
+            touching[k] += on.sum()
+            overlapping[k] += ((a[:, None] + a[None, :] > d) & on[:, None] & on[None, :]).any(axis=1).sum()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(touching > 0, overlapping / np.maximum(touching, 1), np.nan)
+
+
+def _warn_overlap(cap: CapLaw, pool: list[dict[str, np.ndarray]], forces: np.ndarray) -> None:
+    """One warning where capped caps flatten into their neighbours: from the lightest step at which more
+    than :data:`OVERLAP_SHARE` of the touching caps overlap another's disc, the discrete model counts
+    merged contacts as separate spots (and its point solve takes the slow path of indefinite
+    matrices)."""
+    if not isinstance(cap, CappedCap):
+        return
+    shares = overlap_shares(pool)
+    crowded = np.flatnonzero(shares > OVERLAP_SHARE)
+    if crowded.size:
+        k = int(crowded[0])
+        warnings.warn(f"capped caps overlap: from {forces[k]:.4g} N (step {k + 1}) {100 * shares[k]:.0f} % of the "
+                      f"touching caps' discs overlap a neighbour's ({100 * np.nanmax(shares):.0f} % at most), where "
+                      "the discrete model counts merged contacts as separate spots: its R is too high there "
+                      "(g2tom validate measures by how much) and its cube is slow", stacklevel=4)
 
 
 def pool_half_widths(pool: list[dict[str, np.ndarray]]) -> np.ndarray:
