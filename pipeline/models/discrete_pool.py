@@ -149,7 +149,7 @@ def _warn_no_yield(cap: CapLaw, pool: list[dict[str, np.ndarray]]) -> None:
 
 
 #: Share of touching caps whose contact disc overlaps a neighbour's above which capped caps are
-#: warned about (:func:`_warn_overlap`).
+#: warned about by the contact stage.
 OVERLAP_SHARE = 0.1
 
 
