@@ -51,7 +51,7 @@ def test_capped_caps_do_not_warn() -> None:
 
 def test_greenwood_tripp_refuses_a_hardness() -> None:
     with pytest.raises(ConfigError, match=r"material.hardness = 2e\+09 Pa needs contact.model = 'discrete': "
-                                          r"greenwood_tripp's mean asperity layer has elastic caps only"):
+                                          r"greenwood_tripp's caps are elastic only"):
         load_scenario("paper_gt", {"material.hardness": 2e9})
 
 

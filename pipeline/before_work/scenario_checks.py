@@ -86,6 +86,18 @@ def _check_control_variate(s: Scenario) -> None:
                               f"{s.fits.control_variate!r}: must be {allowed!r} ({why})")
 
 
+def _check_hardness(s: Scenario) -> None:
+    """A hardness needs a contact model whose caps can yield (:attr:`g2tom.models.ContactModel.caps_yield`)."""
+    if s.material.hardness is None:
+        return
+    from g2tom.models import contact_model, models_that  # here: the command line imports this module before numpy
+
+    model = contact_model(s)
+    if not model.caps_yield:
+        raise ConfigError(f"material.hardness = {s.material.hardness:g} Pa needs contact.model = "
+                          f"{models_that(lambda m: m.caps_yield)}: {model.name}'s caps are elastic only")
+
+
 def _check_step_target(s: Scenario) -> None:
     """A per-step target grows an adaptive ensemble on discrete spots, for the geometric mean."""
     from g2tom.models import step_target_conflicts  # here: the command line imports this module before numpy
@@ -117,6 +129,7 @@ def check_scenario(s: Scenario) -> None:
     from g2tom.models import check_contact_model  # here: the command line imports this module before numpy
 
     check_contact_model(s)
+    _check_hardness(s)
     _check_control_variate(s)
     _check_step_target(s)
     for section in SECTIONS:

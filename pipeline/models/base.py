@@ -82,6 +82,8 @@ class ContactModel(ABC):
     computes_steps_alone: ClassVar[bool]
     #: Its cube returns each realization's clean share (the control variate's control).
     has_clean_share: ClassVar[bool]
+    #: Its caps can be capped at ``material.hardness`` (else elastic only).
+    caps_yield: ClassVar[bool]
     #: The adaptive ensemble's typical counts on the default scene (``g2tom plan``).
     typical: ClassVar[TypicalEnsemble]
 

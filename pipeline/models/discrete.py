@@ -38,6 +38,7 @@ class Discrete(ContactModel):
     spot_rules: ClassVar[tuple[str, ...]] = ("centre", "disc", "segment")
     computes_steps_alone: ClassVar[bool] = True
     has_clean_share: ClassVar[bool] = True
+    caps_yield: ClassVar[bool] = True
     #: With the disc rule and the point model, from a fixed 64-realization cube of the discrete study: per
     #: cell 64 (w / (0.9 x 0.025))^2 from its fast-rule half-widths w, clipped to [400, 30,000]: 146,587
     #: realizations over the 108 cells, 188,200 computed in whole batches, 39,800 fields; the largest

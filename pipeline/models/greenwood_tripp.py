@@ -10,7 +10,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from g2tom.config import ConfigError, Scenario
+from g2tom.config import Scenario
 from g2tom.models.base import ContactModel, TypicalEnsemble
 from g2tom.models.cube_settings import CubeSettings
 from g2tom.models.lattice_cube import asperity_spots, clean_terms, exact_terms, field_chunk, spots_of, terms
@@ -29,16 +29,11 @@ class GreenwoodTripp(ContactModel):
     spot_rule_reason: ClassVar[str] = "a grid spot stands for a cell's asperities, not one contact disc"
     computes_steps_alone: ClassVar[bool] = False
     has_clean_share: ClassVar[bool] = False
+    caps_yield: ClassVar[bool] = False
     #: Measured (expected spots, fit range F' >= 0.4, 49^2 cells): 361,115 realizations kept over 9 xi x
     #: 12 lambda at target_half_width 0.025 (min 400, cap 30,000, batch 1000); 386,200 computed in whole
     #: batches, 171,200 fields regenerated over the 12 lambdas; the largest cell reached the cap.
     typical: ClassVar[TypicalEnsemble] = TypicalEnsemble(361_115 / 108, 386_200 / 108, 171_200 / 12, 30_000)
-
-    def check(self, s: Scenario) -> None:
-        """Refuse ``material.hardness``: the mean asperity layer's caps are elastic (Hertz) only."""
-        if s.material.hardness is not None:
-            raise ConfigError(f"material.hardness = {s.material.hardness:g} Pa needs contact.model = 'discrete': "
-                              f"{self.name}'s mean asperity layer has elastic caps only")
 
     def cube_spots(self, contact: Any, radius: np.ndarray, weights: np.ndarray,
                    settings: CubeSettings) -> tuple[np.ndarray, np.ndarray, CubeSettings]:
