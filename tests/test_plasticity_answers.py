@@ -23,11 +23,13 @@ def test_plan_prints_psi_and_first_yield_of_capped_caps(capsys) -> None:
     # the paper's steel: E* = 2.1e11 / (2 (1 - 0.09)) = 115.4 GPa, sigma 20 um, beta 30 um
     assert "caps: capped at H = 2 GPa (perfectly plastic surface); plasticity index psi = 47.1" in out
     assert "first yield at omega_c = 22.2 nm = 0.00111 sigma" in out
+    assert "capped caps: the times below assume caps that stay apart" in out
 
 
 def test_plan_of_an_elastic_scene_says_its_index_is_unknown(capsys) -> None:
     assert main(["plan"]) == 0
-    assert "caps: elastic (Hertz); plasticity index unknown" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "caps: elastic (Hertz); plasticity index unknown" in out and "capped caps:" not in out
 
 
 def test_caps_that_yield_held_elastic_warn_once_naming_the_hardness() -> None:

@@ -316,7 +316,12 @@ def format_plan(scenario: ResolvedScenario, workers: int | None = None) -> list[
             f"(in brackets: a cell at oxide.max_realizations)")
     from g2tom.scene import scene_plasticity  # here: the command line imports this module before numpy
 
-    lines.append(scene_plasticity(scenario).line(scenario.roughness.sigma))
+    plastic = scene_plasticity(scenario)
+    lines.append(plastic.line(scenario.roughness.sigma))
+    if plastic.hardness is not None:
+        lines.append("capped caps: the times below assume caps that stay apart; where they flatten into their "
+                     "neighbours (the contact stage warns) the cube's point solves take the slow path and can take "
+                     "many times longer")
     lines += model.plan_lines(scenario)
     lines.append(f"{'stage':10s} {'peak memory':>14s} {'time':>12s}")
     total, low, high = 0.0, 0.0, 0.0
