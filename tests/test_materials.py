@@ -63,3 +63,8 @@ def test_plasticity_index_and_first_yield_of_table_1_steel() -> None:
     a = math.sqrt(beta * omega)
     assert 2 * e_star * a / (math.pi * beta) == pytest.approx(h, rel=1e-12)
     assert 4 / 3 * e_star * math.sqrt(beta) * omega**1.5 == pytest.approx(plasticity.yield_force(beta, e_star, h), rel=1e-12)
+
+
+def test_the_seed_that_draws_the_pool_enters_the_contact_hash() -> None:
+    """The discrete pool's surfaces come from oxide.seed: a contact.nc of another seed is not current."""
+    assert read_scenario("paper", {"oxide.seed": 1}).config_hash("contact") != read_scenario("paper").config_hash("contact")

@@ -44,7 +44,8 @@ COMPUTE_SECTION = "compute"
 #: Parameters each stage depends on (whole sections or single ``section.key`` entries);
 #: a stage's config hash covers these and the hashes of the stages it reads.
 STAGE_INPUTS: dict[str, tuple[str, ...]] = {
-    "contact": ("material", "roughness", "indenter", "loading", "contact"),
+    # oxide.seed: the discrete pool's surfaces are drawn from it
+    "contact": ("material", "roughness", "indenter", "loading", "contact", "oxide.seed"),
     "oxide": ("roughness.eta", "indenter.radius", "contact.window", "oxide"),
     # the fitted steps and fits.confidence: the adaptive ensemble's stopping rule
     "cube": ("material.rho", "cube", "oxide.film", "oxide.film_resistance", "oxide.spot_rule", "fits.min_force",
