@@ -24,6 +24,9 @@ defined pixels, and m2, m4 from finite differences over the pixel pairs and trip
 all defined. They are finite-difference estimates (every wavelength down to two pixels, not the
 spectral moments below a cutoff), meant for comparing a masked with a filled map by the same
 estimator.
+
+With ``inside`` (a measured area that is not the whole map), :func:`fill_gaps` fills only the
+NaN pixels inside it from the stencils wholly inside it; the pixels outside stay NaN.
 """
 
 from __future__ import annotations
@@ -44,15 +47,19 @@ METHODS = ("curvature", "harmonic")
 SLOPE_WEIGHT = 1e-4
 
 
-def _links(index: np.ndarray, z: np.ndarray, stencil: tuple[float, ...], axis: int):
+def _links(index: np.ndarray, z: np.ndarray, stencil: tuple[float, ...], axis: int,
+           inside: np.ndarray | None = None):
     """Rows of one 1-D difference stencil along ``axis`` at every position that touches a missing
-    pixel: (row numbers, unknown numbers, weights) of the unknowns and the known part of each row."""
+    pixel (and, with ``inside``, lies wholly inside): (row numbers, unknown numbers, weights) of the
+    unknowns and the known part of each row."""
     n = index.shape[axis]
     width = len(stencil)
     parts = [tuple(slice(k, n - width + 1 + k) if a == axis else slice(None) for a in range(2)) for k in range(width)]
     ks = [index[p].ravel() for p in parts]
     zs = [z[p].ravel() for p in parts]
     touch = np.any([k >= 0 for k in ks], axis=0)
+    if inside is not None:
+        touch &= np.all([inside[p].ravel() for p in parts], axis=0)
     rows = np.arange(int(touch.sum()))
     known = np.zeros(rows.size)
     out_rows, out_cols, out_vals = [], [], []
@@ -66,12 +73,13 @@ def _links(index: np.ndarray, z: np.ndarray, stencil: tuple[float, ...], axis: i
     return np.concatenate(out_rows), np.concatenate(out_cols), np.concatenate(out_vals), known
 
 
-def _system(index: np.ndarray, z: np.ndarray, stencil: tuple[float, ...], weight: float):
+def _system(index: np.ndarray, z: np.ndarray, stencil: tuple[float, ...], weight: float,
+            inside: np.ndarray | None = None):
     """The stencil's rows along both axes as one sparse matrix over the unknowns, and the right-hand side."""
     count = int((index >= 0).sum())
     blocks, rhs, offset = [], [], 0
     for axis in (0, 1):
-        rows, cols, vals, known = _links(index, z, stencil, axis)
+        rows, cols, vals, known = _links(index, z, stencil, axis, inside)
         blocks.append((rows + offset, cols, weight * vals))
         rhs.append(-weight * known)
         offset += known.size
@@ -79,7 +87,8 @@ def _system(index: np.ndarray, z: np.ndarray, stencil: tuple[float, ...], weight
     return coo_matrix((vals, (rows, cols)), shape=(offset, count)), np.concatenate(rhs)
 
 
-def fill_gaps(heights: np.ndarray, method: str = "curvature") -> tuple[np.ndarray, int]:
+def fill_gaps(heights: np.ndarray, method: str = "curvature",
+              inside: np.ndarray | None = None) -> tuple[np.ndarray, int]:
     """The height map with its NaN pixels filled from the defined ones.
 
     Parameters
@@ -92,18 +101,23 @@ def fill_gaps(heights: np.ndarray, method: str = "curvature") -> tuple[np.ndarra
         missing pixel (with :data:`SLOPE_WEIGHT` times the first differences, for uniqueness): a
         smooth fill that meets the defined pixels without a kink and keeps any tilt, also at the
         map's edges. ``harmonic``: the discrete Laplace interpolant (see the module).
+    inside
+        The measured area, bool, same shape (default: the whole map): only its NaN pixels are
+        filled, and only stencils wholly inside it count; pixels outside it stay NaN. Every
+        region of NaN pixels inside must border a defined pixel inside (a hole, not the outside).
 
     Returns
     -------
     filled : numpy.ndarray
-        float64 copy of the map, defined pixels unchanged, NaN pixels filled, m.
+        float64 copy of the map, defined pixels unchanged, NaN pixels (inside) filled, m.
     count : int
         Number of filled pixels.
 
     Raises
     ------
     ValueError
-        If the map is not 2-D, no pixel is defined or the method is unknown.
+        If the map is not 2-D, no pixel (inside) is defined, ``inside`` has another shape, or the
+        method is unknown.
     """
     if method not in METHODS:
         raise ValueError(f"method = {method!r} is not allowed: must be one of {', '.join(METHODS)}")
@@ -111,18 +125,23 @@ def fill_gaps(heights: np.ndarray, method: str = "curvature") -> tuple[np.ndarra
     if z.ndim != 2:
         raise ValueError(f"height map has shape {z.shape}: must be a 2-D array")
     missing = np.isnan(z)
+    if inside is not None:
+        inside = np.asarray(inside, dtype=bool)
+        if inside.shape != z.shape:
+            raise ValueError(f"inside has shape {inside.shape}: must be the map's, {z.shape}")
+        missing &= inside
     count = int(missing.sum())
     if count == 0:
         return z, 0
-    if count == z.size:
+    if count == (z.size if inside is None else int(inside.sum())):
         raise ValueError(f"height map holds no defined pixel ({z.shape[0]} x {z.shape[1]}, all NaN)")
     index = np.full(z.shape, -1)
     index[missing] = np.arange(count)
-    slope, slope_rhs = _system(index, z, (-1.0, 1.0), 1.0 if method == "harmonic" else SLOPE_WEIGHT)
+    slope, slope_rhs = _system(index, z, (-1.0, 1.0), 1.0 if method == "harmonic" else SLOPE_WEIGHT, inside)
     if method == "harmonic":  # the Laplace equation: the normal equations of the first differences
         matrix, rhs = slope, slope_rhs
     else:
-        curvature, curvature_rhs = _system(index, z, (1.0, -2.0, 1.0), 1.0)
+        curvature, curvature_rhs = _system(index, z, (1.0, -2.0, 1.0), 1.0, inside)
         matrix = vstack([curvature, slope])
         rhs = np.concatenate([curvature_rhs, slope_rhs])
     matrix = matrix.tocsc()
