@@ -85,7 +85,7 @@ def test_synthetic_x3p_with_holes_is_filled_and_measured_like_the_map(tmp_path, 
     _write_x3p(path, holed)
     r = measure(path)
     assert r["reader"].startswith("SurfaceTopography") and r["pixel_size"] == pytest.approx([PIXEL, PIXEL], rel=1e-6)
-    assert r["shape"] == [128, 96] and r["cropped_to"] is None
+    assert r["shape"] == [128, 96] and r["measured_pixels"] == r["used_pixels"] == 128 * 96 - r["filled_pixels"]
     assert r["filled_pixels"] == int(np.isnan(holed).sum())
     np.save(tmp_path / "same.npy", holed)
     from_npy = measure(tmp_path / "same.npy", PIXEL)
@@ -96,27 +96,40 @@ def test_synthetic_x3p_with_holes_is_filled_and_measured_like_the_map(tmp_path, 
     assert f"filled      {r['filled_pixels']} undefined pixels ({r['filled_share']:.2%})" in capsys.readouterr().out
 
 
-def test_a_frame_around_the_measured_area_is_cropped_not_filled(tmp_path, capsys) -> None:
+def test_a_frame_around_the_measured_area_is_masked_not_filled(tmp_path, capsys) -> None:
     """An instrument's field of view inside a larger frame of undefined pixels (as in a Mountains
-    .sur of SurfaceTopography's test set): the rectangle measured is kept, its holes filled."""
+    .sur of SurfaceTopography's test set): the measured area is kept whole, its holes filled, the
+    frame masked."""
     surface = rough_surface()[:96, :80]
     framed = np.full((120, 110), np.nan)
     framed[10:106, 20:100] = punch_holes(surface, 0.02)
-    framed[10:30, 20:40] = np.nan  # a notch of the frame: outside the rectangle kept
+    framed[10:30, 20:40] = np.nan  # a notch of the frame: outside the measured area
     path = tmp_path / "framed.x3p"
     _write_x3p(path, framed)
     r = measure(path)
-    assert r["read_shape"] == [120, 110]
-    (r0, r1), (c0, c1) = r["cropped_to"]
-    kept = framed[r0:r1 + 1, c0:c1 + 1]
-    # the largest rectangle without the frame: below the notch (76 x 80 beats 96 x 60 beside it),
-    # a few rows lower where a punched hole joins the notch
-    assert 30 <= r0 <= 36 and r1 == 105 and (c0, c1) == (20, 99) and r["shape"] == list(kept.shape)
-    assert r["filled_pixels"] == int(np.isnan(kept).sum()) and r["filled_share"] < 0.03
-    np.save(tmp_path / "kept.npy", kept)
-    assert r["rms_height"] == pytest.approx(measure(tmp_path / "kept.npy", PIXEL)["rms_height"], rel=1e-9)
+    from g2tom.heightmap import measured_area
+
+    area = measured_area(framed)
+    inside = area.inside
+    field = np.zeros(framed.shape, dtype=bool)
+    field[10:106, 20:100] = True
+    field[10:30, 20:40] = False
+    # the field of view less the punched holes that touch the frame (they join it)
+    assert not inside[~field].any() and 0 < (field & ~inside).sum() < 0.01 * field.sum()
+    holes = int(np.isnan(framed[inside]).sum())
+    assert r["shape"] == [120, 110] and r["estimator"] == "masked spectrum of the measured area"
+    assert r["filled_pixels"] == area.filled == holes > 0
+    assert r["filled_share"] == pytest.approx(holes / inside.sum(), rel=1e-12)
+    assert r["measured_pixels"] == r["used_pixels"] == int((~np.isnan(framed)).sum()) and r["used_share"] == 1.0
+    # the rms height of the whole measured area (holes filled, plane removed), not of a rectangle in it
+    yy, xx = np.nonzero(inside)
+    design = np.column_stack([np.ones(yy.size), xx, yy])
+    coef, *_ = np.linalg.lstsq(design, area.heights[inside], rcond=None)
+    direct = float(np.std(area.heights[inside] - design @ coef))
+    assert r["rms_height"] == pytest.approx(direct, rel=1e-6)  # the file holds float32 heights
     assert main(["roughness", str(path)]) == 0
-    assert f"cropped     to rows {r0}..{r1}, columns {c0}..{c1} of the 120 x 110 map read" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert f"measured    {r['measured_pixels']} of 13200 pixels" in out and "used: all of them" in out
 
 
 def test_a_few_edge_dropouts_are_filled_not_cropped(tmp_path) -> None:
@@ -125,17 +138,4 @@ def test_a_few_edge_dropouts_are_filled_not_cropped(tmp_path) -> None:
     assert 4 / surface.size <= OUTSIDE_FILL_SHARE
     np.save(tmp_path / "edge.npy", surface)
     r = measure(tmp_path / "edge.npy", PIXEL)
-    assert r["cropped_to"] is None and r["filled_pixels"] == 4 and r["shape"] == [64, 64]
-
-
-def test_largest_rectangle_against_brute_force() -> None:
-    from g2tom.heightmap import _largest_rectangle
-
-    rng = np.random.default_rng(4)
-    for _ in range(20):
-        inside = rng.uniform(size=(9, 11)) > 0.25
-        (r0, r1), (c0, c1) = _largest_rectangle(inside)
-        assert inside[r0:r1 + 1, c0:c1 + 1].all()
-        best = max(((b - a + 1) * (d - c + 1) for a in range(9) for b in range(a, 9) for c in range(11)
-                    for d in range(c, 11) if inside[a:b + 1, c:d + 1].all()), default=0)
-        assert (r1 - r0 + 1) * (c1 - c0 + 1) == best
+    assert r["estimator"] == "spectrum of the whole map" and r["filled_pixels"] == 4 and r["shape"] == [64, 64]

@@ -1,5 +1,9 @@
 """``g2tom roughness FILE``: the moments and Greenwood–Williamson parameters of a measured surface
-(:func:`g2tom.heightmap.measure`), printed as text or one JSON object."""
+(:func:`g2tom.heightmap.measure`), printed as text or one JSON object.
+
+The text says how many pixels of the map were measured and used, and how the moments were taken:
+the spectrum of the whole map, or, when undefined pixels around the measured area lie outside it
+(a round or irregular field of view), the masked, window-corrected spectrum of that area."""
 
 from __future__ import annotations
 
@@ -33,14 +37,13 @@ def _report(r: dict[str, Any]) -> str:
 
 
 def _filled_line(r: dict[str, Any]) -> str:
-    crop = ""
-    if r.get("cropped_to"):
-        (r0, r1), (c0, c1) = r["cropped_to"]
-        crop = (f"cropped     to rows {r0}..{r1}, columns {c0}..{c1} of the {r['read_shape'][0]} x "
-                f"{r['read_shape'][1]} map read (the largest rectangle of the measured area: undefined pixels connected to the border lie outside it)\n")
+    measured, total, used = r["measured_pixels"], r["map_pixels"], r["used_pixels"]
+    share = "all of them" if used == measured else f"{used} ({r['used_share']:.1%})"
+    line = f"measured    {measured} of {total} pixels ({measured / total:.1%}) used: {share} ({r['estimator']})\n"
     if not r["filled_pixels"]:
-        return crop + "filled      none (no undefined pixels)"
-    return crop + _gap_line(r)
+        where = "" if measured == total else " inside the measured area"
+        return line + f"filled      none (no undefined pixels{where})"
+    return line + _gap_line(r)
 
 
 def _gap_line(r: dict[str, Any]) -> str:
