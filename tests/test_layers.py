@@ -37,6 +37,8 @@ FLOORS = {
     "g2tom.reference": 6,
     "g2tom.atlas": 7,
     "g2tom.predict": 8,
+    # 8: the full field on a measured surface (beside the predictor: it may ask it for the statistical answer)
+    "g2tom.surface": 8,
     # 9: benchmarks, figures and report
     "g2tom.bench": 9, "g2tom.analysis": 9,
     # 10: the command line and the facade

@@ -46,7 +46,7 @@ def test_the_registry_is_the_shipped_file() -> None:
     assert {path for path, _ in namespaces()} == {
         "stages.coordinates", "stages.surrogate_coordinates", "stages.oxide", "stages.contact", "stages.cube",
         "stages.fits", "stages.surrogate", "validate", "bench.frontier", "bench.sweep", "bench.stability", "atlas",
-        "predict", "chain", "reference.cases"}
+        "predict", "chain", "reference.cases", "surface"}
 
 
 def test_every_entry_has_units_and_a_long_name() -> None:

@@ -186,5 +186,29 @@ def build_parser() -> argparse.ArgumentParser:
     rough.add_argument("--beta-rule", choices=("paper", "nayak"), default="paper",
                        help="beta = 0.737/sqrt(m4) (paper, default) or 0.375 sqrt(pi/m4) (nayak)")
     rough.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
+    surface = add("surface", commands.surface,
+                  "the full-field resistance of a measured height map (or two: their sum) at given forces, clean "
+                  "and with oxide, over contact positions: <data-dir>/surface/")
+    surface.add_argument("heightmap", type=Path, help="the height map (any format `g2tom roughness` reads)")
+    surface.add_argument("second", type=Path, nargs="?", default=None,
+                         help="the other body's height map: the composite (sum) is pressed on a flat")
+    surface.add_argument("--force", default=None, help="normal forces F, N: a number or a comma-separated list")
+    surface.add_argument("--pixel-size", type=float, default=None,
+                         help="pixel size, m (required for .npy, netCDF and text; overrides an instrument file's)")
+    surface.add_argument("--xi", default=None, help="oxide fractions in (0, 1), comma-separated (with "
+                         "--correlation-length; neither: clean only)")
+    surface.add_argument("--correlation-length", default=None,
+                         help="oxide correlation lengths l_O, m, comma-separated (at least one pixel)")
+    surface.add_argument("--fields", type=int, default=8, help="oxide fields per position and case (default 8)")
+    surface.add_argument("--positions", type=int, default=16,
+                         help="contact positions spread over the map (default 16; independent where the map allows)")
+    surface.add_argument("--at", default=None,
+                         help="one contact at X,Y (m from the centre of the map's first pixel) or 'centre'")
+    surface.add_argument("--window", type=int, default=None,
+                         help="window side, pixels (default: the smallest that holds the heaviest force's contact)")
+    surface.add_argument("--detrend", choices=("plane", "none"), default="plane",
+                         help="remove the measured pixels' least-squares plane (default) or nothing")
+    surface.add_argument("--output", type=Path, default=None, help="folder of the outputs (default <data-dir>/surface)")
+    surface.add_argument("--no-progress", action="store_true", help="hide the progress line")
     sub.metavar = "{" + ",".join(name for name, p in sub.choices.items() if name != "stamp") + "}"
     return parser

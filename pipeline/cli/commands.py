@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from g2tom.reference.validate import Part2Precision
 
 __all__ = ["STAGES", "compute_options", "stage", "run", "figures", "report", "bench", "stamp", "params", "plan",
-           "predict", "atlas", "roughness", "validate"]
+           "predict", "atlas", "roughness", "surface", "validate"]
 
 #: Stage name -> module implementing ``run(scenario, data_dir, options) -> Path``, in order.
 STAGES: dict[str, str] = {
@@ -276,6 +276,14 @@ def atlas(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
           f"{worst['allowed']:.3g} allowed; targets {'met' if held['met'] else 'not met'}; the noise ceiling at this "
           f"precision {100 * held['noise_ceiling']['independent_steps']:.0f}-"
           f"{100 * held['noise_ceiling']['correlated_steps']:.0f} % of the cells", file=sys.stderr)
+
+
+def surface(args: argparse.Namespace, scenario: Scenario) -> None:
+    """``g2tom surface``: the full-field resistance of a measured height map (the scenario's materials,
+    indenter and oxide spectrum)."""
+    from g2tom.cli.surface import surface_cli
+
+    surface_cli(args, scenario)
 
 
 def roughness(args: argparse.Namespace, scenario: Scenario) -> None:

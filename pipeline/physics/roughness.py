@@ -10,12 +10,20 @@ __all__ = ["detrend", "validated_heights"]
 
 
 def detrend(heights: ArrayLike) -> np.ndarray:
-    """Heights minus their least-squares plane, same shape, same unit."""
+    """Heights minus their least-squares plane, same shape, same unit.
+
+    Undefined (NaN) pixels stay NaN and take no part in the fit: the plane of a map with an
+    irregular field of view is that of its measured pixels.
+    """
     z = np.asarray(heights, dtype=float)
     ny, nx = z.shape
     y, x = np.mgrid[0:ny, 0:nx]
     design = np.column_stack([np.ones(z.size), x.ravel(), y.ravel()])
-    coef, *_ = np.linalg.lstsq(design, z.ravel(), rcond=None)
+    defined = np.isfinite(z.ravel())
+    if defined.all():
+        coef, *_ = np.linalg.lstsq(design, z.ravel(), rcond=None)
+    else:
+        coef, *_ = np.linalg.lstsq(design[defined], z.ravel()[defined], rcond=None)
     return z - (design @ coef).reshape(z.shape)
 
 

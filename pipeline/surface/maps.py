@@ -1,0 +1,120 @@
+"""The map a contact is pressed on: one measured topography, or the composite of two, in m.
+
+Two rough bodies in elastic contact (small slopes) are one rigid rough body of the composite
+topography ``h1 + h2`` on a flat of the pair's E*: the two maps are added pixel by pixel as given
+(same shape and pixel; flip one first if they were measured facing each other). Undefined pixels
+are handled by :func:`g2tom.heightmap.measured_area`: holes inside the measured area are filled,
+the outside (an irregular field of view) stays undefined and no window may cover it. The plane
+removed (``plane``) is the least-squares plane of the measured pixels.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from g2tom.config import ConfigError
+from g2tom.heightmap import Measured, measured_area, read_measured
+from g2tom.physics.roughness import detrend
+
+__all__ = ["SurfaceMap", "load_map"]
+
+
+@dataclass(frozen=True)
+class SurfaceMap:
+    """A measured (or composite) topography ready for windows.
+
+    Attributes
+    ----------
+    heights
+        Heights, m, (rows, columns) = (y, x); NaN outside the measured area.
+    inside
+        Where the map is measured (or a hole was filled), bool, same shape.
+    pixel
+        Pixel side, m (square pixels).
+    files, digests
+        The files read and the SHA-256 of each.
+    filled
+        Undefined pixels filled inside the measured area.
+    detrend
+        What was removed: ``plane`` or ``none``.
+    """
+
+    heights: np.ndarray
+    inside: np.ndarray
+    pixel: float
+    files: tuple[str, ...]
+    digests: tuple[str, ...]
+    filled: int
+    detrend: str
+
+    @property
+    def measured_share(self) -> float:
+        """Share of the map's pixels that are measured (or filled holes)."""
+        return float(self.inside.mean())
+
+    @property
+    def rms_height(self) -> float:
+        """Standard deviation of the heights over the measured area, m."""
+        return float(np.std(self.heights[self.inside]))
+
+
+def _digest(path: Path) -> str:
+    sha = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            sha.update(block)
+    return sha.hexdigest()
+
+
+def _pixel(path: Path, measured: Measured, pixel_size: float | None) -> float:
+    """The map's square pixel side, m: ``pixel_size`` where given, else the file's."""
+    if pixel_size is not None:
+        if not (math.isfinite(pixel_size) and pixel_size > 0):
+            raise ConfigError(f"--pixel-size = {pixel_size!r} is out of range: must be > 0 (m)")
+        return float(pixel_size)
+    if measured.pixel_size is None:
+        raise ConfigError(f"MAP {str(path)!r} carries no pixel size: give --pixel-size (m)")
+    dy, dx = measured.pixel_size
+    if not math.isclose(dy, dx, rel_tol=1e-6):
+        raise ConfigError(f"MAP {str(path)!r} has pixels of {dy:.4g} x {dx:.4g} m: the full field needs square "
+                          "pixels; resample the map, or give --pixel-size to take them as square")
+    return float(dx)
+
+
+def load_map(paths: list[Path], pixel_size: float | None, how: str = "plane") -> SurfaceMap:
+    """Read one map, or two and add them, with their measured area and (``how="plane"``) plane removed.
+
+    Parameters
+    ----------
+    paths
+        One or two height maps (any format :func:`g2tom.heightmap.read_measured` reads).
+    pixel_size
+        Pixel side, m (required for .npy, netCDF and text maps; overrides an instrument file's).
+    how
+        ``plane`` or ``none`` (:data:`g2tom.surface.study.DETRENDS`).
+
+    Raises
+    ------
+    ConfigError
+        If a map is unreadable, has no pixel size, non-square pixels, no measured pixel, or the two
+        maps differ in shape or pixel.
+    """
+    maps, pixels = [], []
+    for path in paths:
+        measured = read_measured(path)
+        pixels.append(_pixel(Path(path), measured, pixel_size))
+        maps.append(np.asarray(measured.heights, dtype=float))
+    if len(maps) == 2 and (maps[0].shape != maps[1].shape or not np.isclose(pixels[0], pixels[1], rtol=1e-6)):
+        raise ConfigError(f"MAP2 {str(paths[1])!r} is {maps[1].shape[0]} x {maps[1].shape[1]} pixels of "
+                          f"{pixels[1]:.4g} m: must match MAP ({maps[0].shape[0]} x {maps[0].shape[1]} pixels of "
+                          f"{pixels[0]:.4g} m) to be added pixel by pixel")
+    composite = maps[0] if len(maps) == 1 else maps[0] + maps[1]
+    area = measured_area(composite)
+    heights = detrend(area.heights) if how == "plane" else area.heights - np.nanmean(area.heights)
+    return SurfaceMap(heights=heights, inside=area.inside, pixel=pixels[0], files=tuple(str(p) for p in paths),
+                      digests=tuple(_digest(Path(p)) for p in paths), filled=area.filled, detrend=how)

@@ -1,0 +1,178 @@
+"""The driver of ``g2tom surface``: checks before work, every position, the dataset and its files."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import xarray as xr
+
+from g2tom.progress import ProgressLine
+from g2tom.reference.fft_surface import fft_surface
+from g2tom.store import atomic_path
+from g2tom.surface import windows
+from g2tom.surface.dataset import surface_dataset
+from g2tom.surface.maps import SurfaceMap, load_map
+from g2tom.surface.oxide import check_lengths, oxide_masks
+from g2tom.surface.solve import solve_position
+from g2tom.surface.study import Spot, SurfaceStudy, study_of
+
+__all__ = ["Prepared", "prepare", "compute", "plan_lines", "write_outputs", "surface_resistance", "FILES"]
+
+#: The files ``g2tom surface`` writes in its folder.
+FILES = ("surface.nc", "surface.csv")
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A study checked against its map: the map, the window's side (pixels) and the positions."""
+
+    study: SurfaceStudy
+    surface: SurfaceMap
+    n: int
+    positions: windows.Positions
+
+
+def prepare(study: SurfaceStudy, paths: Sequence[str | Path], pixel_size: float | None = None) -> Prepared:
+    """Read the map(s) and check everything before work: resolution, window, positions.
+
+    Raises
+    ------
+    ConfigError
+        On an unusable map, a pixel too coarse for the lightest force, a measured area too small for
+        the heaviest, or a position off the measured area (one line each).
+    """
+    surface = load_map([Path(p) for p in paths], pixel_size, study.detrend)
+    windows.check_resolution(study, surface)
+    check_lengths(study, surface.pixel)
+    n = windows.window_pixels(study, surface)
+    valid = windows.check_window(study, surface, n)
+    if study.at is not None:
+        corner = windows.spot_corner(surface, n, study.at.x, study.at.y, study.at.centre)
+        positions = windows.Positions(corner[None, :], np.ones(1, bool), 1)
+    else:
+        positions = windows.choose_positions(valid, n, study.positions, study.seed)
+    return Prepared(study, surface, n, positions)
+
+
+def plan_lines(prepared: Prepared) -> list[str]:
+    """What the run will compute, in a few lines (printed before work)."""
+    s, m, n = prepared.study, prepared.surface, prepared.n
+    count = len(prepared.positions.corners)
+    independent = int(prepared.positions.independent.sum())
+    cases = len(s.xi) * len(s.correlation_lengths) * s.fields
+    shape = m.inside.shape
+    lines = [
+        f"surface: {' + '.join(m.files)}: {shape[0]} x {shape[1]} pixels of {m.pixel:.4g} m, "
+        f"{m.measured_share:.1%} measured, rms height {m.rms_height:.4g} m ({m.detrend} removed)",
+        f"surface: window {n} x {n} pixels ({n * m.pixel:.4g} m); {count} position(s), {independent} independent "
+        f"(the measured area holds {prepared.positions.capacity} independent windows)",
+        f"surface: {len(s.forces)} forces {s.forces[0]:.4g} .. {s.forces[-1]:.4g} N, "
+        + ("elastic" if s.hardness is None else f"pressure capped at H = {s.hardness:.4g} Pa")
+        + f", E* = {s.e_star:.4g} Pa, rho* = {s.rho:.4g} ohm m; clean"
+        + (f" and {len(s.xi)} x {len(s.correlation_lengths)} oxide cases x {s.fields} fields" if cases else "")
+        + f": {count * len(s.forces)} contact solves, {count * len(s.forces) * (1 + cases)} conductances",
+    ]
+    return lines
+
+
+def compute(prepared: Prepared, line: ProgressLine | None = None) -> xr.Dataset:
+    """Solve every position (in order; ``line`` shows progress) and return the Dataset."""
+    s, m, n = prepared.study, prepared.surface, prepared.n
+    operator = fft_surface(n, m.pixel, s.e_star, np)
+    results, first = [], None
+    if line is not None:
+        line.start(len(prepared.positions.corners))
+    for index, (row, col) in enumerate(prepared.positions.corners):
+        window = m.heights[row:row + n, col:col + n]
+        masks = oxide_masks(s, n, m.pixel, index) if s.oxidized else np.zeros((0, 0, 0, n, n), bool)
+        results.append(solve_position(s, operator, window, masks))
+        if first is None:
+            first = (window, masks)
+        if line is not None:
+            line.update(index + 1)
+    if line is not None:
+        line.finish()
+    return surface_dataset(s, m, n, prepared.positions, results, *first)
+
+
+def _csv_rows(ds: xr.Dataset) -> list[str]:
+    """One row per position, force and case (clean: xi, correlation length and field empty)."""
+    rows = ["position,x_m,y_m,independent,force_N,xi,correlation_length_m,field,resistance_ohm"]
+    for p in range(ds.sizes["position"]):
+        head = (f"{p},{float(ds.position_x[p]):.9g},{float(ds.position_y[p]):.9g},"
+                f"{int(ds.independent[p])}")
+        for f, force in enumerate(ds.force.values):
+            rows.append(f"{head},{force:.9g},,,,{float(ds.resistance_clean[p, f]):.9g}")
+            if "resistance" not in ds:
+                continue
+            for a, xi in enumerate(ds.xi.values):
+                for b, length in enumerate(ds.correlation_length.values):
+                    for k in range(ds.sizes["field"]):
+                        value = float(ds.resistance[a, b, p, k, f])
+                        rows.append(f"{head},{force:.9g},{xi:.9g},{length:.9g},{k},{value:.9g}")
+    return rows
+
+
+def write_outputs(ds: xr.Dataset, folder: str | Path) -> list[Path]:
+    """Write ``surface.nc`` and ``surface.csv`` (:data:`FILES`) atomically into ``folder``."""
+    folder = Path(folder)
+    nc, csv = (folder / name for name in FILES)
+    with atomic_path(nc) as tmp:
+        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4")
+    with atomic_path(csv) as tmp:
+        tmp.write_text("\n".join(_csv_rows(ds)) + "\n")
+    return [nc, csv]
+
+
+def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, xi: Any = (),
+                       correlation_length: Any = (), config: str = "paper",
+                       overrides: Mapping[str, Any] | None = None, pixel_size: float | None = None, fields: int = 8,
+                       positions: int = 16, at: tuple[float, float] | str | None = None, window: int | None = None,
+                       detrend: str = "plane") -> xr.Dataset:
+    """The full-field resistance of a measured surface, as ``g2tom surface`` computes it.
+
+    Parameters
+    ----------
+    maps
+        One height map, or two whose composite (sum) is the rough body.
+    force
+        Normal forces F, N (> 0).
+    xi, correlation_length
+        Oxide fractions in (0, 1) and correlation lengths l_O, m (both or neither).
+    config, overrides
+        The scenario (a bundled name or a TOML file) and ``{"section.key": value}`` overrides: its
+        ``material.*`` (E*, rho*, hardness), ``indenter.*`` and ``oxide.*`` (spectrum, seed) are used.
+    pixel_size
+        Pixel side, m (for maps that carry none).
+    fields, positions
+        Oxide fields per position; contact positions over the map.
+    at
+        ``(x, y)`` in m from the centre of the map's first pixel, or ``"centre"``: one position there.
+    window
+        Window side in pixels (default: the smallest that holds the heaviest force's contact).
+    detrend
+        ``plane`` (default) or ``none``.
+
+    Returns
+    -------
+    xarray.Dataset
+        surface.nc's contents.
+
+    Raises
+    ------
+    ConfigError
+        On any input out of range, before work.
+    """
+    from g2tom.before_work import load_scenario
+
+    paths = [maps] if isinstance(maps, (str, Path)) else list(maps)
+    scenario = load_scenario(config, dict(overrides or {}))
+    spot = None
+    if at is not None:
+        spot = Spot(centre=True) if at == "centre" else Spot(x=float(at[0]), y=float(at[1]))
+    study = study_of(scenario, force, xi=xi, correlation_lengths=correlation_length, fields=fields,
+                     positions=positions, at=spot, window=window, detrend=detrend)
+    return compute(prepare(study, paths, pixel_size))

@@ -1,0 +1,178 @@
+"""`g2tom surface`: the full field on a measured map — limits, the validation's own solver, oxide,
+positions, composites and the refusals before work."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from g2tom.cli.main import main
+from g2tom.config import ConfigError
+from g2tom.physics.hertz import hertz_radius
+from g2tom.reference import scene, surfaces, window
+from g2tom.reference.punch import punch_conductance
+from g2tom.surface import surface_resistance
+from g2tom.surface.windows import choose_positions, valid_corners
+
+PIXEL = 0.5e-6
+#: A gold-like pair: E* (Pa), rho* (ohm m), sphere radius R* (m).
+E_STAR, RHO, RADIUS = 5e10, 2.2e-8, 1e-3
+PAIR = {"material.modulus": E_STAR, "material.rho": RHO, "indenter.radius": RADIUS}
+
+
+def rough_map(n: int = 256, rms: float = 0.2e-6, seed: int = 3) -> np.ndarray:
+    """A self-affine map (H 0.8) of n x n pixels of PIXEL, periodic over itself, heights in m."""
+    side = n * PIXEL
+    rng = np.random.default_rng(seed)
+    return surfaces.random_process(n, PIXEL, 0.8, 4 * np.pi / side, np.pi / (4 * PIXEL), rms, rng)
+
+
+@pytest.fixture(scope="module")
+def map_file(tmp_path_factory) -> str:
+    path = tmp_path_factory.mktemp("maps") / "rough.npy"
+    np.save(path, rough_map())
+    return str(path)
+
+
+def test_flat_map_gives_hertz_and_holm(tmp_path) -> None:
+    """A smooth sphere on a flat map: contact area pi a^2 and R = rho* / (2 a) with Hertz's a."""
+    np.save(tmp_path / "flat.npy", np.zeros((128, 128)))
+    forces = np.array([0.2, 0.6])
+    ds = surface_resistance(tmp_path / "flat.npy", forces, overrides=PAIR, pixel_size=PIXEL, at="centre")
+    a = hertz_radius(forces, RADIUS, E_STAR)
+    assert a.min() / PIXEL > 25  # the disc is resolved
+    np.testing.assert_allclose(ds["contact_area"].values[0], np.pi * a**2, rtol=0.03)
+    np.testing.assert_allclose(ds["resistance_clean"].values[0], RHO / (2 * a), rtol=0.01)
+
+
+def test_a_map_of_a_validation_surface_gives_validate_own_answer(tmp_path) -> None:
+    """The random-process surface of `g2tom validate`, written as a map and pressed at the same force
+    on the same window, gives the validation case's resistance (the same solver) within 1e-6."""
+    vset = dataclasses.replace(scene.random_process_set(scene.QUICK, rms=20e-6), deltas=(0.0,))
+    n, side = 256, scene.QUICK.side / 2
+    pixel = side / n
+    rough = scene.rough_sphere(vset, 0, n, side) - surfaces.sphere(n, pixel, vset.radius)
+    np.save(tmp_path / "validation.npy", rough)
+    force = 12.0  # F' 0.03: a few summits near the axis; Hertz's radius spans 16 pixels
+    operator, _, state, used = window.solve_in_window(vset, 0, n, force, side)
+    assert used == side
+    reference = 1.0 / punch_conductance(operator, state.contact, vset.rho).conductance
+    ds = surface_resistance(tmp_path / "validation.npy", force, pixel_size=pixel, at="centre", window=n,
+                            detrend="none", overrides={"material.modulus": vset.e_star, "material.rho": vset.rho,
+                                                       "indenter.radius": vset.radius})
+    assert ds["resistance_clean"].values[0, 0] == pytest.approx(reference, rel=1e-6)
+    assert ds["contact_area"].values[0, 0] == pytest.approx(state.contact.sum() * pixel**2, rel=1e-6)
+
+
+def test_oxide_vanishing_gives_clean_and_more_oxide_more_resistance(map_file) -> None:
+    ds = surface_resistance(map_file, [0.05, 0.2], overrides=PAIR, pixel_size=PIXEL, positions=2, fields=2,
+                            xi=[1e-9, 0.3, 0.6], correlation_length=[4e-6])
+    clean = ds["resistance_clean"].values
+    r = ds["resistance"].values[:, 0]  # (xi, position, field, force)
+    np.testing.assert_array_equal(r[0], np.broadcast_to(clean[:, None, :], r[0].shape))
+    assert np.all(r[1] >= clean[:, None, :]) and np.all(r[2] >= r[1])
+    np.testing.assert_allclose(ds["oxide_fraction"].values[1:, 0].mean(axis=(1, 2)), [0.3, 0.6], atol=0.15)
+
+
+def test_positions_reproducible_and_independent(map_file) -> None:
+    inside = np.ones((256, 256), bool)
+    valid = valid_corners(inside, 64)
+    first, again = (choose_positions(valid, 64, 20, seed=7) for _ in range(2))
+    np.testing.assert_array_equal(first.corners, again.corners)
+    assert first.capacity == 16 and first.independent.sum() == 16 and not first.independent[16:].any()
+    tiles = first.corners[:16]
+    # the 16 independent windows share no pixel
+    for i in range(16):
+        for j in range(i):
+            assert np.abs(tiles[i] - tiles[j]).max() >= 64
+    other = choose_positions(valid, 64, 4, seed=8)
+    assert not np.array_equal(other.corners, first.corners[:4])
+    # the dataset's positions and fields do not depend on how many positions are asked for
+    few = surface_resistance(map_file, 0.05, overrides=PAIR, pixel_size=PIXEL, positions=1, fields=1, xi=[0.4],
+                             correlation_length=[4e-6])
+    more = surface_resistance(map_file, 0.05, overrides=PAIR, pixel_size=PIXEL, positions=2, fields=1, xi=[0.4],
+                              correlation_length=[4e-6])
+    assert few["resistance"].values[..., 0, :, :] == pytest.approx(more["resistance"].values[..., 0, :, :], rel=1e-12)
+
+
+def test_two_maps_are_their_sum(tmp_path) -> None:
+    one, two = rough_map(256, seed=1), rough_map(256, rms=0.1e-6, seed=2)
+    for name, z in (("one", one), ("two", two), ("sum", one + two)):
+        np.save(tmp_path / f"{name}.npy", z)
+    both = surface_resistance([tmp_path / "one.npy", tmp_path / "two.npy"], 0.05, overrides=PAIR, pixel_size=PIXEL,
+                              at="centre")
+    summed = surface_resistance(tmp_path / "sum.npy", 0.05, overrides=PAIR, pixel_size=PIXEL, at="centre")
+    np.testing.assert_array_equal(both["resistance_clean"].values, summed["resistance_clean"].values)
+    alone = surface_resistance(tmp_path / "one.npy", 0.05, overrides=PAIR, pixel_size=PIXEL, at="centre")
+    assert not np.allclose(alone["resistance_clean"].values, summed["resistance_clean"].values, rtol=1e-3)
+
+
+def test_windows_only_on_measured_pixels(tmp_path) -> None:
+    """A map measured in a disc (a ring of undefined pixels around it): every window lies in the disc."""
+    z = rough_map(256)
+    y, x = np.mgrid[0:256, 0:256]
+    outside = np.hypot(x - 127.5, y - 127.5) > 120
+    np.save(tmp_path / "disc.npy", np.where(outside, np.nan, z))
+    ds = surface_resistance(tmp_path / "disc.npy", 0.03, overrides=PAIR, pixel_size=PIXEL, positions=3)
+    n = ds.attrs["window_pixels"]
+    for cx, cy in zip(ds["position_x"].values / PIXEL, ds["position_y"].values / PIXEL):
+        r0, c0 = round(cy - (n - 1) / 2), round(cx - (n - 1) / 2)
+        assert not outside[r0:r0 + n, c0:c0 + n].any()
+    assert np.isfinite(ds["resistance_clean"].values).all()
+
+
+def test_capped_contact_is_wider_than_elastic(map_file) -> None:
+    elastic = surface_resistance(map_file, [0.05, 0.5], overrides=PAIR, pixel_size=PIXEL, at="centre")
+    capped = surface_resistance(map_file, [0.05, 0.5], overrides={**PAIR, "material.hardness": 1.5e9},
+                                pixel_size=PIXEL, at="centre")
+    assert np.all(capped["contact_area"].values > elastic["contact_area"].values)
+    assert np.all(capped["resistance_clean"].values < elastic["resistance_clean"].values)
+    assert np.all(capped["plastic_share"].values > 0) and "plastic_share" not in elastic
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--force", "1e-6"], "--force = 1e-06 is out of range: its contact radius"),
+    (["--force", "50"], "--force = 50 is out of range: its contact needs a window"),
+    (["--force", "0.05", "--xi", "1.2", "--correlation-length", "4e-6"], "--xi = 1.2 is out of range"),
+    (["--force", "0.05", "--xi", "0.3", "--correlation-length", "1e-7"], "--correlation-length = 1e-07 is out of range"),
+    (["--force", "0.05", "--xi", "0.3"], "--xi is given without --correlation-length"),
+    (["--force", "0.05", "--at", "0,0"], "--at = 0,0 is out of range"),
+    (["--force", "-1"], "--force = -1 is out of range"),
+])
+def test_refusals_before_work(tmp_path, map_file, capsys, extra, message) -> None:
+    code = main(["surface", map_file, "--pixel-size", str(PIXEL), "--set", f"material.modulus={E_STAR}",
+                 "--set", f"indenter.radius={RADIUS}", "--data-dir", str(tmp_path), *extra])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert message in err and err.count("\n") == 1, err
+    assert not (tmp_path / "surface").exists()
+
+
+def test_all_undefined_map_refused(tmp_path, capsys) -> None:
+    np.save(tmp_path / "empty.npy", np.full((64, 64), np.nan))
+    code = main(["surface", str(tmp_path / "empty.npy"), "--pixel-size", str(PIXEL), "--force", "0.05",
+                 "--data-dir", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("g2tom: error:") and err.count("\n") == 1, err
+
+
+def test_cli_writes_dataset_csv_and_figure(tmp_path, map_file, capsys) -> None:
+    code = main(["surface", map_file, "--pixel-size", str(PIXEL), "--force", "0.03,0.1", "--positions", "2",
+                 "--xi", "0.3", "--correlation-length", "4e-6", "--fields", "2", "--set", f"material.modulus={E_STAR}",
+                 "--set", f"material.rho={RHO}", "--set", f"indenter.radius={RADIUS}", "--data-dir", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert code == 0
+    folder = tmp_path / "surface"
+    with xr.open_dataset(folder / "surface.nc") as ds:
+        for name, var in {**ds.data_vars, **ds.coords}.items():
+            assert var.attrs.get("units") and var.attrs.get("long_name"), name
+        assert ds.attrs["map_sha256"] and ds.attrs["window_pixels"] > 0
+        typical = ds["resistance_clean_typical"].values
+    rows = (folder / "surface.csv").read_text().splitlines()
+    assert len(rows) == 1 + 2 * 2 * (1 + 2)
+    assert (folder / "surface.png").stat().st_size > 10_000
+    assert f"{typical[0]:.5g}" in out and math.isfinite(typical[1])
