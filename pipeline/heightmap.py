@@ -50,9 +50,9 @@ from g2tom.errors import install_hint
 from g2tom.physics.height_fill import fill_gaps, masked_moments
 from g2tom.physics.masked_moments import masked_psd_moments
 from g2tom.physics.roughness import validated_heights
-from g2tom.physics.surface_spectrum import BETA_RULES, psd_moments, summit_parameters
+from g2tom.physics.surface_spectrum import BETA_RULES, SpectralMoments, psd_moments, summit_parameters
 
-__all__ = ["read_heightmap", "read_measured", "Measured", "measure", "MeasuredArea", "measured_area",
+__all__ = ["read_heightmap", "read_measured", "Measured", "measure", "MeasuredArea", "measured_area", "area_moments",
            "PLAUSIBLE_SIGMA", "CUTOFF_PIXELS", "INSTALL", "MAX_MISSING_SHARE", "MAP_EXTENT", "OUTSIDE_FILL_SHARE"]
 
 #: Height standard deviations (m) outside this range are almost surely in the wrong unit.
@@ -219,6 +219,29 @@ def _check_extent(shape: tuple[int, ...], pixel: tuple[float, float], source: st
                       f"(a map spans {low:g} m to {high:g} m)")
 
 
+def area_moments(heights: np.ndarray, inside: np.ndarray | None, pixel: tuple[float, float], cutoff: float,
+                 periodic: bool = False) -> SpectralMoments:
+    """The spectral moments of a map's measured area: the whole map's spectrum where every pixel is
+    measured (``inside`` None or all True), else the masked, window-corrected spectrum.
+
+    Parameters
+    ----------
+    heights
+        Height map, m (finite on the measured area).
+    inside
+        The measured area, bool, or None: all of it.
+    pixel
+        Pixel pitch (dy, dx), m.
+    cutoff
+        Shortest wavelength counted, m.
+    periodic
+        The whole map is one period (ignored for a masked area).
+    """
+    if inside is None or bool(np.all(inside)):
+        return psd_moments(heights, pixel, cutoff, periodic)
+    return masked_psd_moments(heights, inside, pixel, cutoff)
+
+
 def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | None = None,
             periodic: bool | None = None, beta_rule: str = "paper") -> dict[str, Any]:
     """Everything ``g2tom roughness --json`` prints: moments, summit parameters, what was done (SI).
@@ -276,12 +299,9 @@ def measure(path: str | Path, pixel_size: float | None = None, cutoff: float | N
         cutoff = CUTOFF_PIXELS * max(pixel) if cutoff is None else cutoff
         if not (math.isfinite(cutoff) and cutoff > 0):
             raise ConfigError(f"--cutoff = {cutoff!r} is out of range: must be > 0 (m)")
-        if whole:
-            moments = psd_moments(z, pixel, cutoff, periodic)
-        else:
-            if not np.all(np.isfinite(z[area.inside])):
-                raise ValueError(f"height map holds {int(np.sum(~np.isfinite(z[area.inside])))} infinite values")
-            moments = masked_psd_moments(z, area.inside, pixel, cutoff)
+        if not whole and not np.all(np.isfinite(z[area.inside])):
+            raise ValueError(f"height map holds {int(np.sum(~np.isfinite(z[area.inside])))} infinite values")
+        moments = area_moments(z, None if whole else area.inside, pixel, cutoff, periodic)
         summits = summit_parameters(moments.m0, moments.m2, moments.m4, beta_rule)
         gaps = _gaps(z, raw if area is not None and area.filled else None, pixel, periodic,
                      None if area is None else area.inside)

@@ -110,14 +110,15 @@ def _check_step_target(s: Scenario) -> None:
                       f"{s.oxide.step_half_width!r}: must be {allowed!r} ({why})")
 
 
-def check_scenario(s: Scenario) -> None:
+def check_scenario(s: Scenario, rough_scene: bool = True) -> None:
     """Every check across parameters of a scenario, run as it is loaded (before any work).
 
     The settings that rule each other out (:func:`_check_point_model`, :func:`_check_spots`,
     :func:`g2tom.models.check_contact_model`, :func:`_check_control_variate`, :func:`_check_step_target`), integers a netCDF attribute cannot hold, the approaches' order,
     the atlas's box and, once ``contact.window`` and ``contact.r_max`` are both numbers, the
     window against the radial domain and the oxide band
-    (:func:`g2tom.before_work.window_checks.check_domains`).
+    (:func:`g2tom.before_work.window_checks.check_domains`); where ``rough_scene``, the warning of
+    caps that yield but are held elastic.
 
     Raises
     ------
@@ -156,7 +157,8 @@ def check_scenario(s: Scenario) -> None:
                               f"atlas.{low} = {getattr(s.atlas, low)!r}")
     if AUTO not in (s.contact.window, s.contact.r_max):
         check_domains(s)
-    _warn_plasticity(s)
+    if rough_scene:
+        _warn_plasticity(s)
 
 
 def _warn_plasticity(s: Scenario) -> None:
@@ -169,7 +171,8 @@ def _warn_plasticity(s: Scenario) -> None:
         warnings.warn(warning, stacklevel=3)
 
 
-def load_scenario(config: str | Path = "paper", overrides: Iterable[str] | Mapping[str, Any] = ()) -> Scenario:
+def load_scenario(config: str | Path = "paper", overrides: Iterable[str] | Mapping[str, Any] = (), *,
+                  rough_scene: bool = True) -> Scenario:
     """Load a bundled scenario by name or a TOML file, apply overrides, and check every value and
     every combination (:func:`check_scenario`).
 
@@ -180,6 +183,9 @@ def load_scenario(config: str | Path = "paper", overrides: Iterable[str] | Mappi
         which may set ``base = "paper"`` to start from a bundled scenario.
     overrides
         ``"section.key=value"`` strings (values in TOML syntax) or a mapping ``{"section.key": value}``.
+    rough_scene
+        Whether the scenario's ``roughness.*`` describe the surface computed (False for a measured
+        map, ``g2tom surface``: no warning about the plasticity index of the scenario's roughness).
 
     Raises
     ------
@@ -187,5 +193,5 @@ def load_scenario(config: str | Path = "paper", overrides: Iterable[str] | Mappi
         Naming the parameter, its value and the allowed range.
     """
     scenario = read_scenario(config, overrides)
-    check_scenario(scenario)
+    check_scenario(scenario, rough_scene)
     return scenario

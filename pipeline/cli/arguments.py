@@ -188,7 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
     rough.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
     surface = add("surface", commands.surface,
                   "the full-field resistance of a measured height map (or two: their sum) at given forces, clean "
-                  "and with oxide, over contact positions: <data-dir>/surface/")
+                  "and with oxide, over contact positions: <data-dir>/surface/", compute=True)
     surface.add_argument("heightmap", type=Path, help="the height map (any format `g2tom roughness` reads)")
     surface.add_argument("second", type=Path, nargs="?", default=None,
                          help="the other body's height map: the composite (sum) is pressed on a flat")
@@ -209,6 +209,5 @@ def build_parser() -> argparse.ArgumentParser:
     surface.add_argument("--detrend", choices=("plane", "none"), default="plane",
                          help="remove the measured pixels' least-squares plane (default) or nothing")
     surface.add_argument("--output", type=Path, default=None, help="folder of the outputs (default <data-dir>/surface)")
-    surface.add_argument("--no-progress", action="store_true", help="hide the progress line")
     sub.metavar = "{" + ",".join(name for name, p in sub.choices.items() if name != "stamp") + "}"
     return parser

@@ -283,7 +283,7 @@ def surface(args: argparse.Namespace, scenario: Scenario) -> None:
     indenter and oxide spectrum)."""
     from g2tom.cli.surface import surface_cli
 
-    surface_cli(args, scenario)
+    surface_cli(args, scenario, compute_options(args))
 
 
 def roughness(args: argparse.Namespace, scenario: Scenario) -> None:

@@ -115,7 +115,8 @@ def _load(args: argparse.Namespace) -> Scenario:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("default")
-            return load_scenario(args.config, _rejoin(args.overrides))
+            # a measured map (`g2tom surface`) replaces the scenario's roughness
+            return load_scenario(args.config, _rejoin(args.overrides), rough_scene=args.command != "surface")
     except UnicodeDecodeError as exc:
         raise ConfigError(f"--config {args.config!r} is not UTF-8 text (byte {exc.start}: "
                           f"{exc.object[exc.start:exc.start + 1]!r}); save it as UTF-8") from None

@@ -9,8 +9,8 @@ from pathlib import Path
 import xarray as xr
 
 from g2tom.cli.parsing import number_list
+from g2tom.compute import ComputeOptions
 from g2tom.config import ConfigError, Scenario
-from g2tom.progress import ProgressLine
 
 __all__ = ["surface_cli", "summary_lines"]
 
@@ -48,8 +48,9 @@ def summary_lines(ds: xr.Dataset) -> list[str]:
     return lines
 
 
-def surface_cli(args: argparse.Namespace, scenario: Scenario) -> None:
-    """Check everything, print the plan, solve every position, write surface.nc, surface.csv, surface.png.
+def surface_cli(args: argparse.Namespace, scenario: Scenario, options: ComputeOptions) -> None:
+    """Check everything, print the plan, solve every position where ``options`` says, write surface.nc,
+    surface.csv, surface.png.
 
     Raises
     ------
@@ -75,7 +76,7 @@ def surface_cli(args: argparse.Namespace, scenario: Scenario) -> None:
     check_writable(folder, "nothing is written")
     for line in plan_lines(prepared):
         print(line, file=sys.stderr)
-    ds = compute(prepared, None if args.no_progress else ProgressLine("surface", after=2.0))
+    ds = compute(prepared, options)
     written = write_outputs(ds, folder)
     written.append(figure(ds, folder / "surface.png"))
     print("\n".join(summary_lines(ds)))

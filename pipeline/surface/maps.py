@@ -18,10 +18,11 @@ from pathlib import Path
 import numpy as np
 
 from g2tom.config import ConfigError
-from g2tom.heightmap import Measured, measured_area, read_measured
+from g2tom.heightmap import CUTOFF_PIXELS, Measured, area_moments, measured_area, read_measured
 from g2tom.physics.roughness import detrend
+from g2tom.physics.surface_spectrum import SummitParameters, summit_parameters
 
-__all__ = ["SurfaceMap", "load_map"]
+__all__ = ["SurfaceMap", "load_map", "summits"]
 
 
 @dataclass(frozen=True)
@@ -118,3 +119,15 @@ def load_map(paths: list[Path], pixel_size: float | None, how: str = "plane") ->
     heights = detrend(area.heights) if how == "plane" else area.heights - np.nanmean(area.heights)
     return SurfaceMap(heights=heights, inside=area.inside, pixel=pixels[0], files=tuple(str(p) for p in paths),
                       digests=tuple(_digest(Path(p)) for p in paths), filled=area.filled, detrend=how)
+
+
+def summits(surface: SurfaceMap) -> SummitParameters | None:
+    """The Greenwood–Williamson summit parameters of the map's measured area (``g2tom roughness``'s:
+    spectral moments to :data:`g2tom.heightmap.CUTOFF_PIXELS` pixels, beta by the paper's rule), or
+    None where the area is too narrow for them."""
+    pixel = (surface.pixel, surface.pixel)
+    try:
+        moments = area_moments(surface.heights, surface.inside, pixel, CUTOFF_PIXELS * surface.pixel)
+        return summit_parameters(moments.m0, moments.m2, moments.m4)
+    except ValueError:
+        return None

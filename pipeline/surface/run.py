@@ -6,17 +6,21 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+import dask
 import numpy as np
 import xarray as xr
 
-from g2tom.progress import ProgressLine
+from g2tom.compute import ComputeOptions
+from g2tom.compute import compute as run_tasks
+from g2tom.physics.plasticity import plasticity_index
+from g2tom.physics.surface_spectrum import SummitParameters
 from g2tom.reference.fft_surface import fft_surface
 from g2tom.store import atomic_path
 from g2tom.surface import windows
 from g2tom.surface.dataset import surface_dataset
-from g2tom.surface.maps import SurfaceMap, load_map
+from g2tom.surface.maps import SurfaceMap, load_map, summits
 from g2tom.surface.oxide import check_lengths, oxide_masks
-from g2tom.surface.solve import solve_position
+from g2tom.surface.solve import PositionResult, solve_position
 from g2tom.surface.study import Spot, SurfaceStudy, study_of
 
 __all__ = ["Prepared", "prepare", "compute", "plan_lines", "write_outputs", "surface_resistance", "FILES"]
@@ -33,6 +37,14 @@ class Prepared:
     surface: SurfaceMap
     n: int
     positions: windows.Positions
+    summits: SummitParameters | None
+
+    @property
+    def plasticity_index(self) -> float | None:
+        """psi = (E*/H) sqrt(sigma/beta) of the map's summits, None without a hardness or summits."""
+        if self.study.hardness is None or self.summits is None:
+            return None
+        return plasticity_index(self.study.e_star, self.study.hardness, self.summits.sigma, self.summits.beta)
 
 
 def prepare(study: SurfaceStudy, paths: Sequence[str | Path], pixel_size: float | None = None) -> Prepared:
@@ -54,7 +66,7 @@ def prepare(study: SurfaceStudy, paths: Sequence[str | Path], pixel_size: float 
         positions = windows.Positions(corner[None, :], np.ones(1, bool), 1)
     else:
         positions = windows.choose_positions(valid, n, study.positions, study.seed)
-    return Prepared(study, surface, n, positions)
+    return Prepared(study, surface, n, positions, summits(surface))
 
 
 def plan_lines(prepared: Prepared) -> list[str]:
@@ -75,27 +87,38 @@ def plan_lines(prepared: Prepared) -> list[str]:
         + (f" and {len(s.xi)} x {len(s.correlation_lengths)} oxide cases x {s.fields} fields" if cases else "")
         + f": {count * len(s.forces)} contact solves, {count * len(s.forces) * (1 + cases)} conductances",
     ]
+    if prepared.summits is not None:
+        z = prepared.summits
+        psi = prepared.plasticity_index
+        lines.append(f"surface: the map's summits (4-pixel cutoff): sigma = {z.sigma:.4g} m, eta = {z.eta:.4g} m^-2, "
+                     f"beta = {z.beta:.4g} m" + ("" if psi is None else f"; plasticity index psi = {psi:.3g}"))
     return lines
 
 
-def compute(prepared: Prepared, line: ProgressLine | None = None) -> xr.Dataset:
-    """Solve every position (in order; ``line`` shows progress) and return the Dataset."""
+def _solve(study: SurfaceStudy, window: np.ndarray, pixel: float, index: int) -> PositionResult:
+    """One position's task: its operator, oxide fields and solve (each task owns its operator)."""
+    n = window.shape[0]
+    operator = fft_surface(n, pixel, study.e_star, np)
+    masks = oxide_masks(study, n, pixel, index) if study.oxidized else np.zeros((0, 0, 0, n, n), bool)
+    return solve_position(study, operator, window, masks)
+
+
+def compute(prepared: Prepared, options: ComputeOptions | None = None) -> xr.Dataset:
+    """Solve every position, one dask task each, where ``options`` says (default: one thread per
+    core; the FFTs release the GIL), and return the Dataset."""
     s, m, n = prepared.study, prepared.surface, prepared.n
-    operator = fft_surface(n, m.pixel, s.e_star, np)
-    results, first = [], None
-    if line is not None:
-        line.start(len(prepared.positions.corners))
-    for index, (row, col) in enumerate(prepared.positions.corners):
-        window = m.heights[row:row + n, col:col + n]
-        masks = oxide_masks(s, n, m.pixel, index) if s.oxidized else np.zeros((0, 0, 0, n, n), bool)
-        results.append(solve_position(s, operator, window, masks))
-        if first is None:
-            first = (window, masks)
-        if line is not None:
-            line.update(index + 1)
-    if line is not None:
-        line.finish()
-    return surface_dataset(s, m, n, prepared.positions, results, *first)
+    tasks = [dask.delayed(_solve, pure=False)(s, m.heights[row:row + n, col:col + n].copy(), m.pixel, index)
+             for index, (row, col) in enumerate(prepared.positions.corners)]
+    results = list(run_tasks(*tasks, options=options or ComputeOptions(progress=False), label="surface"))
+    row, col = prepared.positions.corners[0]
+    masks = oxide_masks(s, n, m.pixel, 0) if s.oxidized else np.zeros((0, 0, 0, n, n), bool)
+    ds = surface_dataset(s, m, n, prepared.positions, results, m.heights[row:row + n, col:col + n], masks)
+    if prepared.summits is not None:
+        z = prepared.summits
+        ds.attrs.update(map_summit_sigma=z.sigma, map_summit_eta=z.eta, map_summit_beta=z.beta)
+        if prepared.plasticity_index is not None:
+            ds.attrs["plasticity_index"] = prepared.plasticity_index
+    return ds
 
 
 def _csv_rows(ds: xr.Dataset) -> list[str]:
@@ -131,7 +154,7 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
                        correlation_length: Any = (), config: str = "paper",
                        overrides: Mapping[str, Any] | None = None, pixel_size: float | None = None, fields: int = 8,
                        positions: int = 16, at: tuple[float, float] | str | None = None, window: int | None = None,
-                       detrend: str = "plane") -> xr.Dataset:
+                       detrend: str = "plane", options: ComputeOptions | None = None) -> xr.Dataset:
     """The full-field resistance of a measured surface, as ``g2tom surface`` computes it.
 
     Parameters
@@ -155,6 +178,9 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
         Window side in pixels (default: the smallest that holds the heaviest force's contact).
     detrend
         ``plane`` (default) or ``none``.
+    options
+        Where the positions compute (:class:`g2tom.compute.ComputeOptions`; default one thread per
+        core, no progress line).
 
     Returns
     -------
@@ -169,10 +195,10 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
     from g2tom.before_work import load_scenario
 
     paths = [maps] if isinstance(maps, (str, Path)) else list(maps)
-    scenario = load_scenario(config, dict(overrides or {}))
+    scenario = load_scenario(config, dict(overrides or {}), rough_scene=False)
     spot = None
     if at is not None:
         spot = Spot(centre=True) if at == "centre" else Spot(x=float(at[0]), y=float(at[1]))
     study = study_of(scenario, force, xi=xi, correlation_lengths=correlation_length, fields=fields,
                      positions=positions, at=spot, window=window, detrend=detrend)
-    return compute(prepare(study, paths, pixel_size))
+    return compute(prepare(study, paths, pixel_size), options)
