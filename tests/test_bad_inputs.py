@@ -220,7 +220,7 @@ def _hand_cases() -> list[Case]:
              setup=_npy("nan.npy", np.where(np.isin((np.arange(16)[:, None] + np.arange(16)) % 8, (0, 3, 5)), np.nan,
                                             _SURFACE))),  # 37.5 %, single pixels: none is a frame
         Case("frame of NaN leaves too small a map", (*_ROUGH, f"{outside}frame.npy"),
-             ("HEIGHTMAP", "cropping to the measured area", "37.5% of the map undefined"),
+             ("HEIGHTMAP", "cutoff wavelength", "out of range", "the measured area's largest disc"),
              setup=_npy("frame.npy", np.where(np.arange(16)[:, None] < 6, np.nan, _SURFACE))),
         Case("flat height map", (*_ROUGH, f"{outside}flat.npy"), ("HEIGHTMAP", "flat"),
              setup=_npy("flat.npy", np.add.outer(np.arange(8.0), np.arange(8.0)))),
