@@ -3,7 +3,7 @@
 Two rough bodies in elastic contact (small slopes) are one rigid rough body of the composite
 topography ``h1 + h2`` on a flat of the pair's E*: the two maps are added pixel by pixel as given
 (same shape and pixel; flip one first if they were measured facing each other). Undefined pixels
-are handled by :func:`g2tom.heightmap.measured_area`: holes inside the measured area are filled,
+are handled by ``g2tom.heightmap.measured_area``: holes inside the measured area are filled,
 the outside (an irregular field of view) stays undefined and no window may cover it. The plane
 removed (``plane``) is the least-squares plane of the measured pixels.
 """
@@ -93,7 +93,7 @@ def load_map(paths: list[Path], pixel_size: float | None, how: str = "plane") ->
     Parameters
     ----------
     paths
-        One or two height maps (any format :func:`g2tom.heightmap.read_measured` reads).
+        One or two height maps (any format ``g2tom.heightmap.read_measured`` reads).
     pixel_size
         Pixel side, m (required for .npy, netCDF and text maps; overrides an instrument file's).
     how
@@ -123,7 +123,7 @@ def load_map(paths: list[Path], pixel_size: float | None, how: str = "plane") ->
 
 def summits(surface: SurfaceMap) -> SummitParameters | None:
     """The Greenwood–Williamson summit parameters of the map's measured area (``g2tom roughness``'s:
-    spectral moments to :data:`g2tom.heightmap.CUTOFF_PIXELS` pixels, beta by the paper's rule), or
+    spectral moments to ``g2tom.heightmap.CUTOFF_PIXELS`` pixels, beta by the paper's rule), or
     None where the area is too narrow for them."""
     pixel = (surface.pixel, surface.pixel)
     try:

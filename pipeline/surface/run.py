@@ -179,7 +179,7 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
     detrend
         ``plane`` (default) or ``none``.
     options
-        Where the positions compute (:class:`g2tom.compute.ComputeOptions`; default one thread per
+        Where the positions compute (``g2tom.compute.ComputeOptions``; default one thread per
         core, no progress line).
 
     Returns

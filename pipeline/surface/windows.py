@@ -30,7 +30,7 @@ from g2tom.physics.indenter import profile, smooth_contact_radius
 from g2tom.surface.maps import SurfaceMap
 from g2tom.surface.study import SurfaceStudy
 
-__all__ = ["MARGIN", "ROUGHNESS_RMS", "MIN_RADIUS_PIXELS", "POSITIONS_KEY", "Positions", "contact_reach",
+__all__ = ["MARGIN", "ROUGHNESS_RMS", "MIN_RADIUS_PIXELS", "POSITIONS_KEY", "CANDIDATES", "Positions", "contact_reach",
            "window_pixels", "check_resolution", "check_window", "valid_corners", "choose_positions", "spot_corner"]
 
 #: The window's half side over the heaviest force's contact reach.
@@ -152,8 +152,8 @@ def choose_positions(valid: np.ndarray, n: int, count: int, seed: int) -> Positi
     """``count`` windows of ``n`` pixels among the ``valid`` corners (:func:`valid_corners`), in the
     seed's order: the independent windows first, then overlapping ones.
 
-    The independent windows are the best tiling's (:func:`_tiles`), completed by any valid corner
-    (of at most :data:`CANDIDATES`, in the seed's order) whose window overlaps none of them.
+    The independent windows are the best tiling's, completed by any valid corner (of at most
+    :data:`CANDIDATES`, in the seed's order) whose window overlaps none of them.
 
     Raises
     ------
@@ -209,10 +209,14 @@ def check_window(study: SurfaceStudy, surface: SurfaceMap, n: int) -> np.ndarray
     for _ in range(60):
         mid = 0.5 * (low + high)
         low, high = (mid, high) if window_pixels(study, surface, mid) <= largest else (low, mid)
-    holds = f"the heaviest force it holds is {low:.3g} N" if low > 0 else "it holds no force"
+    if low > 0:
+        fix = f"the heaviest force it holds is {low:.3g} N: lower --force or measure a larger area"
+    else:
+        fix = (f"the margin for the map's roughness ({ROUGHNESS_RMS:g} rms heights) alone needs more: measure a larger "
+               f"area, or give --window <= {largest} and check that no force reports the window's edge")
     raise ConfigError(f"--force = {study.forces[-1]:g} is out of range: its contact needs a window of {side} and "
                       f"the map's measured area holds at most {largest} pixels ({largest * surface.pixel:.3g} m); "
-                      f"{holds}: lower --force or measure a larger area")
+                      f"{fix}")
 
 
 def spot_corner(surface: SurfaceMap, n: int, x: float, y: float, centre: bool) -> np.ndarray:
