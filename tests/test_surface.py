@@ -215,3 +215,25 @@ def test_halving_the_pixel_moves_summits_not_resistance(tmp_path) -> None:
     assert summits["fine"]["eta"] / summits["coarse"]["eta"] > 2
     assert summits["fine"]["beta"] / summits["coarse"]["beta"] < 0.5
     np.testing.assert_allclose(answers["fine"], answers["coarse"], rtol=0.025)
+
+
+def test_statistical_answer_beside_the_full_field(tmp_path, map_file) -> None:
+    """The map's summits through the predictor (the shipped atlas): a finite ratio where it answers;
+    outside the atlas's scenes, or with a hardness (the atlas is elastic), the reason it does not."""
+    side = 512 * PIXEL  # finer content than rough_map's: its summits lie in the atlas's scenes
+    np.save(tmp_path / "rougher.npy", surfaces.random_process(512, PIXEL, 0.8, 8 * np.pi / side, np.pi / (2 * PIXEL),
+                                                              0.3e-6, np.random.default_rng(5)))
+    elastic = surface_resistance(tmp_path / "rougher.npy", [0.05, 0.2], overrides=PAIR, pixel_size=PIXEL, positions=1, fields=2,
+                                 xi=[0.3], correlation_length=[20e-6])
+    assert "atlas" in elastic.attrs["statistical_answer"]
+    ratio = elastic["statistical_ratio"].values
+    np.testing.assert_allclose(ratio, elastic["resistance_typical"].values / elastic["resistance_statistical"].values)
+    assert np.isfinite(ratio).any() and np.all((ratio[np.isfinite(ratio)] > 0.3) & (ratio[np.isfinite(ratio)] < 3))
+    outside = surface_resistance(map_file, 0.05, overrides=PAIR, pixel_size=PIXEL, positions=1, fields=1, xi=[0.3],
+                                 correlation_length=[4e-6])
+    assert outside.attrs["statistical_answer"].startswith("none: Pi = ")
+    capped = surface_resistance(tmp_path / "rougher.npy", 0.05, overrides={**PAIR, "material.hardness": 1.5e9},
+                                pixel_size=PIXEL,
+                                positions=1, fields=1, xi=[0.3], correlation_length=[4e-6])
+    assert capped.attrs["statistical_answer"].startswith("none: material.hardness")
+    assert "statistical_ratio" not in capped

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 
 from g2tom.cli.parsing import number_list
@@ -41,6 +42,12 @@ def summary_lines(ds: xr.Dataset) -> list[str]:
         if "resistance_typical" in ds:
             row += "  " + "  ".join(f"{v:.5g}" for v in ds["resistance_typical"].values[..., f].ravel())
         lines.append(row)
+    if "statistical_ratio" in ds:
+        ratios = ds["statistical_ratio"].values
+        lines.append(f"full field / statistical answer (the map's summits, {ds.attrs['statistical_answer'].split(' (')[0]}): "
+                     f"{np.nanmin(ratios):.3g} .. {np.nanmax(ratios):.3g} over the oxide cases and forces")
+    else:
+        lines.append(f"statistical answer: {ds.attrs['statistical_answer']}")
     unsolved = int((ds["solved"] == 0).sum())
     if unsolved:
         lines.append(f"{unsolved} of {ds['solved'].size} position-force solves reached the window's edge or failed "
@@ -59,6 +66,7 @@ def surface_cli(args: argparse.Namespace, scenario: Scenario, options: ComputeOp
     """
     from g2tom.analysis.figures_surface import figure
     from g2tom.surface.run import compute, plan_lines, prepare, write_outputs
+    from g2tom.surface.statistical import attach_statistical
     from g2tom.surface.study import study_of
 
     if args.force is None:
@@ -76,7 +84,7 @@ def surface_cli(args: argparse.Namespace, scenario: Scenario, options: ComputeOp
     check_writable(folder, "nothing is written")
     for line in plan_lines(prepared):
         print(line, file=sys.stderr)
-    ds = compute(prepared, options)
+    ds = attach_statistical(compute(prepared, options), scenario, prepared.summits, args.data_dir)
     written = write_outputs(ds, folder)
     written.append(figure(ds, folder / "surface.png"))
     print("\n".join(summary_lines(ds)))

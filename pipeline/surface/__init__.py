@@ -10,7 +10,8 @@ Modules: ``study`` (what is computed: forces, oxide cases, positions, the pair's
 ``maps`` (the map or the composite of two, its measured area and plane), ``windows`` (the window
 the contact needs, the refusals before work, the positions), ``oxide`` (oxide fields on a window's
 pixels, correlation lengths in m), ``solve`` (one position's forces and conductances),
-``dataset`` (surface.nc), ``run`` (the driver: :func:`surface_resistance`).
+``dataset`` (surface.nc), ``statistical`` (the predictor on the map's summits, beside the full
+field), ``run`` (the driver: :func:`surface_resistance`).
 """
 
 from __future__ import annotations

@@ -20,6 +20,7 @@ from g2tom.surface import windows
 from g2tom.surface.dataset import surface_dataset
 from g2tom.surface.maps import SurfaceMap, load_map, summits
 from g2tom.surface.oxide import check_lengths, oxide_masks
+from g2tom.surface.statistical import attach_statistical
 from g2tom.surface.solve import PositionResult, solve_position
 from g2tom.surface.study import Spot, SurfaceStudy, study_of
 
@@ -154,7 +155,8 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
                        correlation_length: Any = (), config: str = "paper",
                        overrides: Mapping[str, Any] | None = None, pixel_size: float | None = None, fields: int = 8,
                        positions: int = 16, at: tuple[float, float] | str | None = None, window: int | None = None,
-                       detrend: str = "plane", options: ComputeOptions | None = None) -> xr.Dataset:
+                       detrend: str = "plane", options: ComputeOptions | None = None,
+                       data_dir: str | Path = "data") -> xr.Dataset:
     """The full-field resistance of a measured surface, as ``g2tom surface`` computes it.
 
     Parameters
@@ -181,6 +183,9 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
     options
         Where the positions compute (``g2tom.compute.ComputeOptions``; default one thread per
         core, no progress line).
+    data_dir
+        A run's data directory, whose own surrogate gives the statistical answer where it was
+        fitted on the map's summits (:mod:`g2tom.surface.statistical`; else the atlas's).
 
     Returns
     -------
@@ -201,4 +206,5 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
         spot = Spot(centre=True) if at == "centre" else Spot(x=float(at[0]), y=float(at[1]))
     study = study_of(scenario, force, xi=xi, correlation_lengths=correlation_length, fields=fields,
                      positions=positions, at=spot, window=window, detrend=detrend)
-    return compute(prepare(study, paths, pixel_size), options)
+    prepared = prepare(study, paths, pixel_size)
+    return attach_statistical(compute(prepared, options), scenario, prepared.summits, data_dir)
