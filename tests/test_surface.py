@@ -175,6 +175,8 @@ def test_cli_writes_dataset_csv_and_figure(tmp_path, map_file, capsys) -> None:
     rows = (folder / "surface.csv").read_text().splitlines()
     assert len(rows) == 1 + 2 * 2 * (1 + 2)
     assert (folder / "surface.png").stat().st_size > 10_000
+    report = (folder / "surface.md").read_text()
+    assert f"{typical[0]:.4g}" in report and "g2tom surface " in report and "--fields 2" in report
     assert f"{typical[0]:.5g}" in out and math.isfinite(typical[1])
 
 

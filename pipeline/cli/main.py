@@ -162,7 +162,9 @@ def _kept(args: argparse.Namespace) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``g2tom`` console script; returns the exit status."""
-    args = build_parser().parse_args(attach_negative_values(sys.argv[1:] if argv is None else argv))
+    words = list(sys.argv[1:] if argv is None else argv)
+    args = build_parser().parse_args(attach_negative_values(words))
+    args.command_line = ["g2tom", *words]  # what reproduces this run, for the outputs that say so
     args.config = default_config(args)
     formatwarning = warnings.formatwarning
     warnings.formatwarning = _one_line_warning

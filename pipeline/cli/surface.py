@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from pathlib import Path
 
@@ -65,6 +66,7 @@ def surface_cli(args: argparse.Namespace, scenario: Scenario, options: ComputeOp
         On any input out of range, before work.
     """
     from g2tom.analysis.figures_surface import figure
+    from g2tom.analysis.report_surface import surface_report
     from g2tom.surface.run import compute, plan_lines, prepare, write_outputs
     from g2tom.surface.statistical import attach_statistical
     from g2tom.surface.study import study_of
@@ -79,7 +81,7 @@ def surface_cli(args: argparse.Namespace, scenario: Scenario, options: ComputeOp
         fields=args.fields, positions=args.positions, at=_spot(args.at), window=args.window, detrend=args.detrend)
     prepared = prepare(study, [args.heightmap] + ([args.second] if args.second else []), args.pixel_size)
     folder = Path(args.output) if args.output else Path(args.data_dir) / "surface"
-    from g2tom.store import check_writable
+    from g2tom.store import atomic_path, check_writable
 
     check_writable(folder, "nothing is written")
     for line in plan_lines(prepared):
@@ -87,5 +89,9 @@ def surface_cli(args: argparse.Namespace, scenario: Scenario, options: ComputeOp
     ds = attach_statistical(compute(prepared, options), scenario, prepared.summits, args.data_dir)
     written = write_outputs(ds, folder)
     written.append(figure(ds, folder / "surface.png"))
+    report = folder / "surface.md"
+    with atomic_path(report) as tmp:
+        tmp.write_text(surface_report(ds, shlex.join(args.command_line)))
+    written.append(report)
     print("\n".join(summary_lines(ds)))
     print(f"surface: wrote {', '.join(str(p) for p in written)}", file=sys.stderr)
