@@ -38,6 +38,8 @@ def surface_report(ds: xr.Dataset, command: str) -> str:
         f"Typical = geometric mean over the contacts; band = their {low:g} % and {high:g} % quantiles.",
         "",
     ]
+    if "extended" in ds.attrs:
+        lines[2:2] = [f"Windows synthesized: {ds.attrs['extended']}.", ""]
     header = ["force (N)", "R clean (ohm)", "band (ohm)"]
     cases = []
     if "resistance_typical" in ds:

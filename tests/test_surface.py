@@ -239,3 +239,33 @@ def test_statistical_answer_beside_the_full_field(tmp_path, map_file) -> None:
                                 positions=1, fields=1, xi=[0.3], correlation_length=[4e-6])
     assert capped.attrs["statistical_answer"].startswith("none: material.hardness")
     assert "statistical_ratio" not in capped
+
+
+def test_spectrum_of_a_map_and_surfaces_drawn_from_it() -> None:
+    """The radially averaged spectrum of a self-affine map gives back its variance; surfaces drawn
+    from it (one period of the map's size) have the map's variance and spectrum across the band."""
+    from g2tom.physics.spectrum_synthesis import isotropic_spectrum, synthesize
+
+    z = rough_map(256, rms=0.3e-6)
+    inside = np.ones(z.shape, bool)
+    spectrum = isotropic_spectrum(z, inside, PIXEL)
+    drawn = [synthesize(spectrum, 256, PIXEL, np.random.default_rng(k), period=256) for k in range(8)]
+    assert np.mean([d.std() for d in drawn]) == pytest.approx(z.std(), rel=0.1)
+    again = isotropic_spectrum(drawn[0], inside, PIXEL)
+    middle = slice(len(spectrum.q) // 4, 3 * len(spectrum.q) // 4)  # the band away from its ends
+    ratio = np.exp(np.mean(np.log(again.power[middle] / spectrum.power[middle])))
+    assert ratio == pytest.approx(1.0, rel=0.15)
+    assert spectrum(np.array([spectrum.q_min / 10]))[0] == pytest.approx(spectrum.power[0])  # the plateau
+    assert spectrum(np.array([2 * spectrum.q_max]))[0] == 0.0
+
+
+def test_a_map_smaller_than_the_window_is_extended_from_its_spectrum(tmp_path) -> None:
+    np.save(tmp_path / "small.npy", rough_map(128, rms=0.2e-6))
+    args = dict(overrides=PAIR, pixel_size=PIXEL, positions=3, extend="spectrum")
+    ds = surface_resistance(tmp_path / "small.npy", [0.03, 0.1], **args)
+    assert ds.attrs["window_pixels"] > 128 and "drawn from the map's isotropic power spectrum" in ds.attrs["extended"]
+    assert np.isnan(ds["position_x"].values).all() and np.isfinite(ds["resistance_clean"].values).all()
+    again = surface_resistance(tmp_path / "small.npy", [0.03, 0.1], **args)
+    np.testing.assert_array_equal(again["resistance_clean"].values, ds["resistance_clean"].values)
+    with pytest.raises(ConfigError, match="--force = 0.1 is out of range: its contact needs a window"):
+        surface_resistance(tmp_path / "small.npy", [0.03, 0.1], overrides=PAIR, pixel_size=PIXEL)

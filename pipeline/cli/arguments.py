@@ -208,6 +208,9 @@ def build_parser() -> argparse.ArgumentParser:
                          help="window side, pixels (default: the smallest that holds the heaviest force's contact)")
     surface.add_argument("--detrend", choices=("plane", "none"), default="plane",
                          help="remove the measured pixels' least-squares plane (default) or nothing")
+    surface.add_argument("--extend", choices=("none", "spectrum"), default="none",
+                         help="a map smaller than the window: refused (none, default) or windows drawn from its own "
+                              "isotropic power spectrum, longer wavelengths at the plateau of its longest (spectrum)")
     surface.add_argument("--output", type=Path, default=None, help="folder of the outputs (default <data-dir>/surface)")
     sub.metavar = "{" + ",".join(name for name, p in sub.choices.items() if name != "stamp") + "}"
     return parser

@@ -49,6 +49,8 @@ def summary_lines(ds: xr.Dataset) -> list[str]:
                      f"{np.nanmin(ratios):.3g} .. {np.nanmax(ratios):.3g} over the oxide cases and forces")
     else:
         lines.append(f"statistical answer: {ds.attrs['statistical_answer']}")
+    if "extended" in ds.attrs:
+        lines.append(f"windows synthesized: {ds.attrs['extended']}")
     unsolved = int((ds["solved"] == 0).sum())
     if unsolved:
         lines.append(f"{unsolved} of {ds['solved'].size} position-force solves reached the window's edge or failed "
@@ -78,7 +80,8 @@ def surface_cli(args: argparse.Namespace, scenario: Scenario, options: ComputeOp
         xi=number_list("--xi", args.xi) if args.xi else (),
         correlation_lengths=number_list("--correlation-length", args.correlation_length)
         if args.correlation_length else (),
-        fields=args.fields, positions=args.positions, at=_spot(args.at), window=args.window, detrend=args.detrend)
+        fields=args.fields, positions=args.positions, at=_spot(args.at), window=args.window, detrend=args.detrend,
+        extend=args.extend)
     prepared = prepare(study, [args.heightmap] + ([args.second] if args.second else []), args.pixel_size)
     folder = Path(args.output) if args.output else Path(args.data_dir) / "surface"
     from g2tom.store import atomic_path, check_writable

@@ -11,8 +11,10 @@ import numpy as np
 import xarray as xr
 
 from g2tom.compute import ComputeOptions
+from g2tom.config import ConfigError
 from g2tom.compute import compute as run_tasks
 from g2tom.physics.plasticity import plasticity_index
+from g2tom.physics.spectrum_synthesis import IsotropicSpectrum, isotropic_spectrum, synthesize
 from g2tom.physics.surface_spectrum import SummitParameters
 from g2tom.reference.fft_surface import fft_surface
 from g2tom.store import atomic_path
@@ -24,8 +26,10 @@ from g2tom.surface.statistical import attach_statistical
 from g2tom.surface.solve import PositionResult, solve_position
 from g2tom.surface.study import Spot, SurfaceStudy, study_of
 
-__all__ = ["Prepared", "prepare", "compute", "plan_lines", "write_outputs", "surface_resistance", "FILES"]
+__all__ = ["EXTEND_KEY", "Prepared", "prepare", "window_of", "compute", "plan_lines", "write_outputs", "surface_resistance", "FILES"]
 
+#: The spawn key of the windows drawn from the map's spectrum (the positions and oxide fields use others).
+EXTEND_KEY = 2
 #: The files ``g2tom surface`` writes in its folder.
 FILES = ("surface.nc", "surface.csv")
 
@@ -39,6 +43,12 @@ class Prepared:
     n: int
     positions: windows.Positions
     summits: SummitParameters | None
+    spectrum: IsotropicSpectrum | None = None
+
+    @property
+    def synthesized(self) -> bool:
+        """Whether the windows are drawn from the map's spectrum (the map is smaller than a window)."""
+        return self.spectrum is not None
 
     @property
     def plasticity_index(self) -> float | None:
@@ -61,6 +71,14 @@ def prepare(study: SurfaceStudy, paths: Sequence[str | Path], pixel_size: float 
     windows.check_resolution(study, surface)
     check_lengths(study, surface.pixel)
     n = windows.window_pixels(study, surface)
+    if study.extend == "spectrum" and not windows.valid_corners(surface.inside, n).any():
+        try:
+            spectrum = isotropic_spectrum(surface.heights, surface.inside, surface.pixel)
+        except ValueError as exc:
+            raise ConfigError(f"--extend = 'spectrum' cannot be used: {exc}") from None
+        count = study.positions
+        synthesized = windows.Positions(np.full((count, 2), -1), np.ones(count, bool), count)
+        return Prepared(study, surface, n, synthesized, summits(surface), spectrum)
     valid = windows.check_window(study, surface, n)
     if study.at is not None:
         corner = windows.spot_corner(surface, n, study.at.x, study.at.y, study.at.centre)
@@ -80,8 +98,11 @@ def plan_lines(prepared: Prepared) -> list[str]:
     lines = [
         f"surface: {' + '.join(m.files)}: {shape[0]} x {shape[1]} pixels of {m.pixel:.4g} m, "
         f"{m.measured_share:.1%} measured, rms height {m.rms_height:.4g} m ({m.detrend} removed)",
-        f"surface: window {n} x {n} pixels ({n * m.pixel:.4g} m); {count} position(s), {independent} independent "
-        f"(the measured area holds {prepared.positions.capacity} independent windows)",
+        f"surface: window {n} x {n} pixels ({n * m.pixel:.4g} m); " + (
+            f"the map holds none: {count} windows drawn from its isotropic power spectrum (--extend spectrum; "
+            "wavelengths longer than the map at the plateau of its longest)" if prepared.synthesized else
+            f"{count} position(s), {independent} independent (the measured area holds "
+            f"{prepared.positions.capacity} independent windows)"),
         f"surface: {len(s.forces)} forces {s.forces[0]:.4g} .. {s.forces[-1]:.4g} N, "
         + ("elastic" if s.hardness is None else f"pressure capped at H = {s.hardness:.4g} Pa")
         + f", E* = {s.e_star:.4g} Pa, rho* = {s.rho:.4g} ohm m; clean"
@@ -96,6 +117,17 @@ def plan_lines(prepared: Prepared) -> list[str]:
     return lines
 
 
+def window_of(prepared: Prepared, index: int) -> np.ndarray:
+    """Position ``index``'s window of heights (m, (n, n)): the map's, or drawn from its spectrum with
+    the position's own stream ``SeedSequence(seed, spawn_key=(EXTEND_KEY, index))``."""
+    n, m = prepared.n, prepared.surface
+    if prepared.synthesized:
+        seq = np.random.SeedSequence(prepared.study.seed, spawn_key=(EXTEND_KEY, int(index)))
+        return synthesize(prepared.spectrum, n, m.pixel, np.random.Generator(np.random.PCG64(seq)))
+    row, col = prepared.positions.corners[index]
+    return m.heights[row:row + n, col:col + n].copy()
+
+
 def _solve(study: SurfaceStudy, window: np.ndarray, pixel: float, index: int) -> PositionResult:
     """One position's task: its operator, oxide fields and solve (each task owns its operator)."""
     n = window.shape[0]
@@ -108,12 +140,20 @@ def compute(prepared: Prepared, options: ComputeOptions | None = None) -> xr.Dat
     """Solve every position, one dask task each, where ``options`` says (default: one thread per
     core; the FFTs release the GIL), and return the Dataset."""
     s, m, n = prepared.study, prepared.surface, prepared.n
-    tasks = [dask.delayed(_solve, pure=False)(s, m.heights[row:row + n, col:col + n].copy(), m.pixel, index)
-             for index, (row, col) in enumerate(prepared.positions.corners)]
+    tasks = [dask.delayed(_solve, pure=False)(s, window_of(prepared, index), m.pixel, index)
+             for index in range(len(prepared.positions.corners))]
     results = list(run_tasks(*tasks, options=options or ComputeOptions(progress=False), label="surface"))
-    row, col = prepared.positions.corners[0]
     masks = oxide_masks(s, n, m.pixel, 0) if s.oxidized else np.zeros((0, 0, 0, n, n), bool)
-    ds = surface_dataset(s, m, n, prepared.positions, results, m.heights[row:row + n, col:col + n], masks)
+    ds = surface_dataset(s, m, n, prepared.positions, results, window_of(prepared, 0), masks)
+    if prepared.synthesized:
+        sp = prepared.spectrum
+        ds["position_x"][:] = np.nan
+        ds["position_y"][:] = np.nan
+        ds.attrs["extended"] = (
+            f"spectrum: every window drawn from the map's isotropic power spectrum (the map holds no window of "
+            f"{n} pixels): wavelengths {2 * np.pi / sp.q_max:.4g} .. {2 * np.pi / sp.q_min:.4g} m measured, longer "
+            f"ones up to the period {2 * n * m.pixel:.4g} m synthesized at the plateau C(q_min) = "
+            f"{float(sp.power[0]):.4g} m^4")
     if prepared.summits is not None:
         z = prepared.summits
         ds.attrs.update(map_summit_sigma=z.sigma, map_summit_eta=z.eta, map_summit_beta=z.beta)
@@ -155,7 +195,7 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
                        correlation_length: Any = (), config: str = "paper",
                        overrides: Mapping[str, Any] | None = None, pixel_size: float | None = None, fields: int = 8,
                        positions: int = 16, at: tuple[float, float] | str | None = None, window: int | None = None,
-                       detrend: str = "plane", options: ComputeOptions | None = None,
+                       detrend: str = "plane", extend: str = "none", options: ComputeOptions | None = None,
                        data_dir: str | Path = "data") -> xr.Dataset:
     """The full-field resistance of a measured surface, as ``g2tom surface`` computes it.
 
@@ -180,6 +220,9 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
         Window side in pixels (default: the smallest that holds the heaviest force's contact).
     detrend
         ``plane`` (default) or ``none``.
+    extend
+        ``none`` (default: a map smaller than the window is refused) or ``spectrum`` (windows drawn
+        from the map's own isotropic power spectrum, :mod:`g2tom.physics.spectrum_synthesis`).
     options
         Where the positions compute (``g2tom.compute.ComputeOptions``; default one thread per
         core, no progress line).
@@ -205,6 +248,6 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
     if at is not None:
         spot = Spot(centre=True) if at == "centre" else Spot(x=float(at[0]), y=float(at[1]))
     study = study_of(scenario, force, xi=xi, correlation_lengths=correlation_length, fields=fields,
-                     positions=positions, at=spot, window=window, detrend=detrend)
+                     positions=positions, at=spot, window=window, detrend=detrend, extend=extend)
     prepared = prepare(study, paths, pixel_size)
     return attach_statistical(compute(prepared, options), scenario, prepared.summits, data_dir)

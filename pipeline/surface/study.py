@@ -10,11 +10,14 @@ import numpy as np
 
 from g2tom.config import ConfigError, Scenario
 
-__all__ = ["SurfaceStudy", "Spot", "study_of", "DETRENDS"]
+__all__ = ["SurfaceStudy", "Spot", "study_of", "DETRENDS", "EXTENDS"]
 
 #: How the map's long-wavelength form is removed before the sphere is added: ``plane`` (the
 #: least-squares plane of the measured pixels, a tilted sample) or ``none`` (the heights as given).
 DETRENDS = ("plane", "none")
+#: What a map smaller than the window becomes: refused (``none``), or windows drawn from the map's own
+#: isotropic power spectrum (``spectrum``, :mod:`g2tom.physics.spectrum_synthesis`).
+EXTENDS = ("none", "spectrum")
 
 
 @dataclass(frozen=True)
@@ -49,6 +52,8 @@ class SurfaceStudy:
         Window side in pixels, or None: the smallest that holds the heaviest force's contact.
     detrend
         One of :data:`DETRENDS`.
+    extend
+        One of :data:`EXTENDS`.
     seed
         Root seed of the positions' order and the oxide fields.
     e_star, rho, hardness
@@ -69,6 +74,7 @@ class SurfaceStudy:
     at: Spot | None = None
     window: int | None = None
     detrend: str = "plane"
+    extend: str = "none"
     seed: int = 20240531
     e_star: float = 1.153846e11
     rho: float = 7.2e-7
@@ -121,7 +127,7 @@ def _numbers(name: str, values: object, low: float, high: float, unit: str, open
 
 def study_of(scenario: Scenario, forces: object, *, xi: object = (), correlation_lengths: object = (),
              fields: int = 8, positions: int = 16, at: Spot | None = None, window: int | None = None,
-             detrend: str = "plane") -> SurfaceStudy:
+             detrend: str = "plane", extend: str = "none") -> SurfaceStudy:
     """The study of ``scenario``'s pair of materials, indenter and oxide spectrum at ``forces`` (N).
 
     Raises
@@ -144,10 +150,14 @@ def study_of(scenario: Scenario, forces: object, *, xi: object = (), correlation
         raise ConfigError(f"--window = {window} is out of range: must be in [8, 8192] (pixels)")
     if detrend not in DETRENDS:
         raise ConfigError(f"--detrend = {detrend!r} is not allowed: must be one of {', '.join(DETRENDS)}")
+    if extend not in EXTENDS:
+        raise ConfigError(f"--extend = {extend!r} is not allowed: must be one of {', '.join(EXTENDS)}")
+    if extend != "none" and at is not None:
+        raise ConfigError(f"--extend = {extend!r} is not allowed with --at: a chosen position is a measured window")
     m, ind, ox = scenario.material, scenario.indenter, scenario.oxide
     return SurfaceStudy(
         forces=force, xi=xis, correlation_lengths=lengths, fields=int(fields), positions=int(positions), at=at,
-        window=window, detrend=detrend, seed=ox.seed, e_star=m.E_star, rho=m.rho, hardness=m.hardness,
+        window=window, detrend=detrend, extend=extend, seed=ox.seed, e_star=m.E_star, rho=m.rho, hardness=m.hardness,
         shape=ind.shape, radius=ind.radius, cone_angle=ind.cone_angle, punch_radius=ind.punch_radius,
         edge_radius=ind.edge_radius, hurst=ox.hurst, ks_ratio=ox.ks_ratio, amplitudes=ox.amplitudes,
         resolution=ox.spectral_resolution, threshold=ox.threshold)
