@@ -269,3 +269,12 @@ def test_a_map_smaller_than_the_window_is_extended_from_its_spectrum(tmp_path) -
     np.testing.assert_array_equal(again["resistance_clean"].values, ds["resistance_clean"].values)
     with pytest.raises(ConfigError, match="--force = 0.1 is out of range: its contact needs a window"):
         surface_resistance(tmp_path / "small.npy", [0.03, 0.1], overrides=PAIR, pixel_size=PIXEL)
+
+
+def test_plan_prints_the_work_and_writes_nothing(tmp_path, map_file, capsys) -> None:
+    code = main(["surface", map_file, "--pixel-size", str(PIXEL), "--force", "0.03,0.1", "--positions", "3",
+                 "--xi", "0.3", "--correlation-length", "4e-6", "--fields", "2", "--set", f"material.modulus={E_STAR}",
+                 "--set", f"indenter.radius={RADIUS}", "--data-dir", str(tmp_path), "--plan", "--workers", "1"])
+    out = capsys.readouterr().out
+    assert code == 0 and not (tmp_path / "surface").exists()
+    assert "6 contact solves, 18 conductances" in out and "on 1 core(s)" in out and "MiB a task" in out

@@ -211,6 +211,8 @@ def build_parser() -> argparse.ArgumentParser:
     surface.add_argument("--extend", choices=("none", "spectrum"), default="none",
                          help="a map smaller than the window: refused (none, default) or windows drawn from its own "
                               "isotropic power spectrum, longer wavelengths at the plateau of its longest (spectrum)")
+    surface.add_argument("--plan", action="store_true",
+                         help="print the map, window, positions, work and its estimated time and memory, then stop")
     surface.add_argument("--output", type=Path, default=None, help="folder of the outputs (default <data-dir>/surface)")
     sub.metavar = "{" + ",".join(name for name, p in sub.choices.items() if name != "stamp") + "}"
     return parser

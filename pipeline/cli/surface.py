@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import shlex
 import sys
 from pathlib import Path
@@ -83,11 +84,15 @@ def surface_cli(args: argparse.Namespace, scenario: Scenario, options: ComputeOp
         fields=args.fields, positions=args.positions, at=_spot(args.at), window=args.window, detrend=args.detrend,
         extend=args.extend)
     prepared = prepare(study, [args.heightmap] + ([args.second] if args.second else []), args.pixel_size)
+    workers = options.workers or os.cpu_count() or 1
+    if args.plan:
+        print("\n".join(plan_lines(prepared, workers)))
+        return
     folder = Path(args.output) if args.output else Path(args.data_dir) / "surface"
     from g2tom.store import atomic_path, check_writable
 
     check_writable(folder, "nothing is written")
-    for line in plan_lines(prepared):
+    for line in plan_lines(prepared, workers):
         print(line, file=sys.stderr)
     ds = attach_statistical(compute(prepared, options), scenario, prepared.summits, args.data_dir)
     written = write_outputs(ds, folder)

@@ -14,6 +14,7 @@ from g2tom.compute import ComputeOptions
 from g2tom.config import ConfigError
 from g2tom.compute import compute as run_tasks
 from g2tom.physics.plasticity import plasticity_index
+from g2tom.progress import format_duration
 from g2tom.physics.spectrum_synthesis import IsotropicSpectrum, isotropic_spectrum, synthesize
 from g2tom.physics.surface_spectrum import SummitParameters
 from g2tom.reference.fft_surface import fft_surface
@@ -26,10 +27,16 @@ from g2tom.surface.statistical import attach_statistical
 from g2tom.surface.solve import PositionResult, solve_position
 from g2tom.surface.study import Spot, SurfaceStudy, study_of
 
-__all__ = ["EXTEND_KEY", "Prepared", "prepare", "window_of", "compute", "plan_lines", "write_outputs", "surface_resistance", "FILES"]
+__all__ = ["EXTEND_KEY", "Prepared", "prepare", "window_of", "compute", "estimate", "plan_lines", "write_outputs", "surface_resistance", "FILES"]
 
 #: The spawn key of the windows drawn from the map's spectrum (the positions and oxide fields use others).
 EXTEND_KEY = 2
+#: Seconds of one contact solve and of one conductance on a 256^2 window (one core, the 2-core
+#: machine: ``make bench``'s surface case, 0.226 s and 0.042 s); both grow as the window's side to
+#: the power :data:`COST_EXPONENT` (x5 and x5.6 at 512^2: larger windows hold larger contacts).
+SECONDS_CONTACT, SECONDS_CONDUCTANCE, COST_EXPONENT = 0.226, 0.042, 2.5
+#: Bytes a task holds per (2n)^2 pixel of its padded grid (about ten complex arrays in the solvers).
+BYTES_PER_PADDED_PIXEL = 160
 #: The files ``g2tom surface`` writes in its folder.
 FILES = ("surface.nc", "surface.csv")
 
@@ -88,8 +95,22 @@ def prepare(study: SurfaceStudy, paths: Sequence[str | Path], pixel_size: float 
     return Prepared(study, surface, n, positions, summits(surface))
 
 
-def plan_lines(prepared: Prepared) -> list[str]:
-    """What the run will compute, in a few lines (printed before work)."""
+def estimate(prepared: Prepared, workers: int) -> tuple[float, float]:
+    """The run's wall time (s) on ``workers`` cores and one task's memory (bytes): the constants
+    :data:`SECONDS_CONTACT`, :data:`SECONDS_CONDUCTANCE` scaled to the window."""
+    s, n = prepared.study, prepared.n
+    cases = len(s.xi) * len(s.correlation_lengths) * s.fields
+    per_force = SECONDS_CONTACT + SECONDS_CONDUCTANCE * (1 + cases)
+    positions = len(prepared.positions.corners)
+    rounds = -(-positions // max(1, workers))
+    seconds = rounds * len(s.forces) * per_force * (n / 256) ** COST_EXPONENT
+    memory = BYTES_PER_PADDED_PIXEL * (2 * n) ** 2 + (cases + 1) * n * n * 9
+    return seconds, memory
+
+
+def plan_lines(prepared: Prepared, workers: int = 1) -> list[str]:
+    """What the run will compute and about how long it takes on ``workers`` cores, in a few lines
+    (printed before work)."""
     s, m, n = prepared.study, prepared.surface, prepared.n
     count = len(prepared.positions.corners)
     independent = int(prepared.positions.independent.sum())
@@ -109,6 +130,9 @@ def plan_lines(prepared: Prepared) -> list[str]:
         + (f" and {len(s.xi)} x {len(s.correlation_lengths)} oxide cases x {s.fields} fields" if cases else "")
         + f": {count * len(s.forces)} contact solves, {count * len(s.forces) * (1 + cases)} conductances",
     ]
+    seconds, memory = estimate(prepared, workers)
+    lines.append(f"surface: about {format_duration(seconds)} on {workers} core(s), {memory / 2**20:.0f} MiB a task "
+                 "(the constants of make bench's surface case; contacts larger than its can take longer)")
     if prepared.summits is not None:
         z = prepared.summits
         psi = prepared.plasticity_index
@@ -154,6 +178,9 @@ def compute(prepared: Prepared, options: ComputeOptions | None = None) -> xr.Dat
             f"{n} pixels): wavelengths {2 * np.pi / sp.q_max:.4g} .. {2 * np.pi / sp.q_min:.4g} m measured, longer "
             f"ones up to the period {2 * n * m.pixel:.4g} m synthesized at the plateau C(q_min) = "
             f"{float(sp.power[0]):.4g} m^4")
+    seconds, memory = estimate(prepared, workers)
+    lines.append(f"surface: about {format_duration(seconds)} on {workers} core(s), {memory / 2**20:.0f} MiB a task "
+                 "(the constants of make bench's surface case; contacts larger than its can take longer)")
     if prepared.summits is not None:
         z = prepared.summits
         ds.attrs.update(map_summit_sigma=z.sigma, map_summit_eta=z.eta, map_summit_beta=z.beta)
