@@ -178,9 +178,6 @@ def compute(prepared: Prepared, options: ComputeOptions | None = None) -> xr.Dat
             f"{n} pixels): wavelengths {2 * np.pi / sp.q_max:.4g} .. {2 * np.pi / sp.q_min:.4g} m measured, longer "
             f"ones up to the period {2 * n * m.pixel:.4g} m synthesized at the plateau C(q_min) = "
             f"{float(sp.power[0]):.4g} m^4")
-    seconds, memory = estimate(prepared, workers)
-    lines.append(f"surface: about {format_duration(seconds)} on {workers} core(s), {memory / 2**20:.0f} MiB a task "
-                 "(the constants of make bench's surface case; contacts larger than its can take longer)")
     if prepared.summits is not None:
         z = prepared.summits
         ds.attrs.update(map_summit_sigma=z.sigma, map_summit_eta=z.eta, map_summit_beta=z.beta)
