@@ -27,14 +27,17 @@ from g2tom.surface.statistical import attach_statistical
 from g2tom.surface.solve import PositionResult, solve_position
 from g2tom.surface.study import Spot, SurfaceStudy, study_of
 
-__all__ = ["EXTEND_KEY", "Prepared", "prepare", "window_of", "compute", "estimate", "plan_lines", "write_outputs", "surface_resistance", "FILES"]
+__all__ = ["SECONDS_CONTACT", "SECONDS_CONDUCTANCE", "COST_EXPONENT", "BYTES_PER_PADDED_PIXEL", "EXTEND_KEY", "Prepared", "prepare", "window_of", "compute", "estimate", "plan_lines", "write_outputs", "surface_resistance", "FILES"]
 
 #: The spawn key of the windows drawn from the map's spectrum (the positions and oxide fields use others).
 EXTEND_KEY = 2
-#: Seconds of one contact solve and of one conductance on a 256^2 window (one core, the 2-core
-#: machine: ``make bench``'s surface case, 0.226 s and 0.042 s); both grow as the window's side to
-#: the power :data:`COST_EXPONENT` (x5 and x5.6 at 512^2: larger windows hold larger contacts).
-SECONDS_CONTACT, SECONDS_CONDUCTANCE, COST_EXPONENT = 0.226, 0.042, 2.5
+#: Seconds of one contact solve on a 256^2 window (one core of the 2-core machine, ``make bench``'s
+#: surface case).
+SECONDS_CONTACT = 0.226
+#: Seconds of one conductance (a punch) on a 256^2 window, measured as :data:`SECONDS_CONTACT`.
+SECONDS_CONDUCTANCE = 0.042
+#: Both grow as the window's side to this power (x5 and x5.6 at 512^2: larger windows hold larger contacts).
+COST_EXPONENT = 2.5
 #: Bytes a task holds per (2n)^2 pixel of its padded grid (about ten complex arrays in the solvers).
 BYTES_PER_PADDED_PIXEL = 160
 #: The files ``g2tom surface`` writes in its folder.
