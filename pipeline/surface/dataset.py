@@ -112,7 +112,7 @@ def surface_dataset(study: SurfaceStudy, surface: SurfaceMap, n: int, positions:
         "map_files": list(surface.files), "map_sha256": list(surface.digests),
         "map_pixel_size": surface.pixel, "map_shape": list(surface.inside.shape),
         "map_measured_share": surface.measured_share, "map_filled_pixels": surface.filled,
-        "map_rms_height": surface.rms_height,
+        "map_rms_height": surface.rms_height, "map_resampled": surface.resampled or "no",
         "window_pixels": n, "window_side": n * pixel, "independent_positions": positions.capacity,
         "band_quantiles": list(BAND),
         **{f"study_{k}": v for k, v in study.parameters().items()},

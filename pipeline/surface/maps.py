@@ -22,7 +22,10 @@ from g2tom.heightmap import CUTOFF_PIXELS, Measured, area_moments, measured_area
 from g2tom.physics.roughness import detrend
 from g2tom.physics.surface_spectrum import SummitParameters, summit_parameters
 
-__all__ = ["SurfaceMap", "load_map", "summits"]
+__all__ = ["RESAMPLE_ORDER", "SurfaceMap", "load_map", "summits"]
+
+#: Spline order of the resampling of oblong pixels onto square ones (1: linear).
+RESAMPLE_ORDER = 1
 
 
 @dataclass(frozen=True)
@@ -43,6 +46,8 @@ class SurfaceMap:
         Undefined pixels filled inside the measured area.
     detrend
         What was removed: ``plane`` or ``none``.
+    resampled
+        How oblong pixels were made square ('' where they were square).
     """
 
     heights: np.ndarray
@@ -52,6 +57,7 @@ class SurfaceMap:
     digests: tuple[str, ...]
     filled: int
     detrend: str
+    resampled: str = ""
 
     @property
     def measured_share(self) -> float:
@@ -72,19 +78,29 @@ def _digest(path: Path) -> str:
     return sha.hexdigest()
 
 
-def _pixel(path: Path, measured: Measured, pixel_size: float | None) -> float:
-    """The map's square pixel side, m: ``pixel_size`` where given, else the file's."""
+def _square(path: Path, measured: Measured, pixel_size: float | None) -> tuple[np.ndarray, float, str]:
+    """The map's heights (m) on square pixels and their side, m: ``pixel_size`` where given, else the
+    file's; a map of oblong pixels is resampled along its finer axis onto the coarser pitch
+    (linear interpolation between pixel centres, :data:`RESAMPLE_ORDER`)."""
+    heights = np.asarray(measured.heights, dtype=float)
     if pixel_size is not None:
         if not (math.isfinite(pixel_size) and pixel_size > 0):
             raise ConfigError(f"--pixel-size = {pixel_size!r} is out of range: must be > 0 (m)")
-        return float(pixel_size)
+        return heights, float(pixel_size), ""
     if measured.pixel_size is None:
         raise ConfigError(f"MAP {str(path)!r} carries no pixel size: give --pixel-size (m)")
     dy, dx = measured.pixel_size
-    if not math.isclose(dy, dx, rel_tol=1e-6):
-        raise ConfigError(f"MAP {str(path)!r} has pixels of {dy:.4g} x {dx:.4g} m: the full field needs square "
-                          "pixels; resample the map, or give --pixel-size to take them as square")
-    return float(dx)
+    if math.isclose(dy, dx, rel_tol=1e-6):
+        return heights, float(dx), ""
+    if np.isnan(heights).any():
+        raise ConfigError(f"MAP {str(path)!r} has pixels of {dy:.4g} x {dx:.4g} m and undefined pixels: the full "
+                          "field needs square pixels; resample the map, or give --pixel-size to take them as square")
+    from scipy.ndimage import zoom
+
+    pixel = max(dy, dx)
+    factors = (dy / pixel, dx / pixel)
+    square = zoom(heights, factors, order=RESAMPLE_ORDER, mode="nearest", grid_mode=True)
+    return square, float(pixel), f"resampled linearly from pixels of {dy:.4g} x {dx:.4g} m"
 
 
 def load_map(paths: list[Path], pixel_size: float | None, how: str = "plane") -> SurfaceMap:
@@ -102,14 +118,15 @@ def load_map(paths: list[Path], pixel_size: float | None, how: str = "plane") ->
     Raises
     ------
     ConfigError
-        If a map is unreadable, has no pixel size, non-square pixels, no measured pixel, or the two
-        maps differ in shape or pixel.
+        If a map is unreadable, has no pixel size, oblong pixels and undefined ones, no measured
+        pixel, or the two maps differ in shape or pixel.
     """
-    maps, pixels = [], []
+    maps, pixels, notes = [], [], []
     for path in paths:
-        measured = read_measured(path)
-        pixels.append(_pixel(Path(path), measured, pixel_size))
-        maps.append(np.asarray(measured.heights, dtype=float))
+        heights, pixel, note = _square(Path(path), read_measured(path), pixel_size)
+        maps.append(heights)
+        pixels.append(pixel)
+        notes.append(note)
     if len(maps) == 2 and (maps[0].shape != maps[1].shape or not np.isclose(pixels[0], pixels[1], rtol=1e-6)):
         raise ConfigError(f"MAP2 {str(paths[1])!r} is {maps[1].shape[0]} x {maps[1].shape[1]} pixels of "
                           f"{pixels[1]:.4g} m: must match MAP ({maps[0].shape[0]} x {maps[0].shape[1]} pixels of "
@@ -118,7 +135,8 @@ def load_map(paths: list[Path], pixel_size: float | None, how: str = "plane") ->
     area = measured_area(composite)
     heights = detrend(area.heights) if how == "plane" else area.heights - np.nanmean(area.heights)
     return SurfaceMap(heights=heights, inside=area.inside, pixel=pixels[0], files=tuple(str(p) for p in paths),
-                      digests=tuple(_digest(Path(p)) for p in paths), filled=area.filled, detrend=how)
+                      digests=tuple(_digest(Path(p)) for p in paths), filled=area.filled, detrend=how,
+                      resampled="; ".join(n for n in notes if n))
 
 
 def summits(surface: SurfaceMap) -> SummitParameters | None:

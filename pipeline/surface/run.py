@@ -121,7 +121,8 @@ def plan_lines(prepared: Prepared, workers: int = 1) -> list[str]:
     shape = m.inside.shape
     lines = [
         f"surface: {' + '.join(m.files)}: {shape[0]} x {shape[1]} pixels of {m.pixel:.4g} m, "
-        f"{m.measured_share:.1%} measured, rms height {m.rms_height:.4g} m ({m.detrend} removed)",
+        f"{m.measured_share:.1%} measured, rms height {m.rms_height:.4g} m ({m.detrend} removed"
+        + (f"; {m.resampled}" if m.resampled else "") + ")",
         f"surface: window {n} x {n} pixels ({n * m.pixel:.4g} m); " + (
             f"the map holds none: {count} windows drawn from its isotropic power spectrum (--extend spectrum; "
             "wavelengths longer than the map at the plateau of its longest)" if prepared.synthesized else
