@@ -22,13 +22,14 @@ from g2tom.surface.study import SurfaceStudy
 from g2tom.surface.windows import Positions
 from g2tom.variables import entry
 
-__all__ = ["BAND", "surface_dataset"]
+__all__ = ["BAND", "surface_dataset", "surface_variable"]
 
 #: The band's quantiles over the contacts, %.
 BAND = (10.0, 90.0)
 
 
-def _var(name: str, data: np.ndarray) -> xr.Variable:
+def surface_variable(name: str, data: np.ndarray) -> xr.Variable:
+    """surface.nc's variable ``name`` holding ``data``: dims, units and long name from the registry."""
     declared = entry(f"surface.{name}")
     return xr.Variable(declared.dims, np.asarray(data), declared.attrs(lower=BAND[0], upper=BAND[1]))
 
@@ -65,46 +66,46 @@ def surface_dataset(study: SurfaceStudy, surface: SurfaceMap, n: int, positions:
     if first_masks.size:
         state = np.where(results[0].contact & first_masks[0, 0, 0], 2, state).astype(np.uint8)
     coords = {
-        "force": _var("force", np.asarray(study.forces)),
-        "xi": _var("xi", np.asarray(study.xi, float)),
-        "correlation_length": _var("correlation_length", np.asarray(study.correlation_lengths, float)),
-        "position": _var("position", np.arange(len(results))),
-        "field": _var("field", np.arange(study.fields if study.oxidized else 0)),
-        "y": _var("y", (np.arange(n) - (n - 1) / 2.0) * pixel),
-        "x": _var("x", (np.arange(n) - (n - 1) / 2.0) * pixel),
+        "force": surface_variable("force", np.asarray(study.forces)),
+        "xi": surface_variable("xi", np.asarray(study.xi, float)),
+        "correlation_length": surface_variable("correlation_length", np.asarray(study.correlation_lengths, float)),
+        "position": surface_variable("position", np.arange(len(results))),
+        "field": surface_variable("field", np.arange(study.fields if study.oxidized else 0)),
+        "y": surface_variable("y", (np.arange(n) - (n - 1) / 2.0) * pixel),
+        "x": surface_variable("x", (np.arange(n) - (n - 1) / 2.0) * pixel),
     }
     typical, lower, upper = _geometric(clean, (0,))
     data = {
-        "position_x": _var("position_x", centres[:, 1]),
-        "position_y": _var("position_y", centres[:, 0]),
-        "independent": _var("independent", positions.independent.astype(np.int8)),
-        "contact_radius_smooth": _var("contact_radius_smooth", smooth_contact_radius(
+        "position_x": surface_variable("position_x", centres[:, 1]),
+        "position_y": surface_variable("position_y", centres[:, 0]),
+        "independent": surface_variable("independent", positions.independent.astype(np.int8)),
+        "contact_radius_smooth": surface_variable("contact_radius_smooth", smooth_contact_radius(
             np.asarray(study.forces), study.e_star, study.shape, radius=study.radius, cone_angle=study.cone_angle,
             punch_radius=study.punch_radius)),
-        "solved": _var("solved", np.stack([[not why for why in r.failed] for r in results]).astype(np.int8)),
-        "delta": _var("delta", np.stack([r.delta for r in results])),
-        "contact_area": _var("contact_area", np.stack([r.area for r in results])),
-        "resistance_clean": _var("resistance_clean", clean),
-        "resistance_clean_typical": _var("resistance_clean_typical", typical),
-        "resistance_clean_lower": _var("resistance_clean_lower", lower),
-        "resistance_clean_upper": _var("resistance_clean_upper", upper),
-        "resistance_clean_standard_error": _var("resistance_clean_standard_error",
+        "solved": surface_variable("solved", np.stack([[not why for why in r.failed] for r in results]).astype(np.int8)),
+        "delta": surface_variable("delta", np.stack([r.delta for r in results])),
+        "contact_area": surface_variable("contact_area", np.stack([r.area for r in results])),
+        "resistance_clean": surface_variable("resistance_clean", clean),
+        "resistance_clean_typical": surface_variable("resistance_clean_typical", typical),
+        "resistance_clean_lower": surface_variable("resistance_clean_lower", lower),
+        "resistance_clean_upper": surface_variable("resistance_clean_upper", upper),
+        "resistance_clean_standard_error": surface_variable("resistance_clean_standard_error",
                                                 _standard_error(clean, positions.independent)),
-        "height": _var("height", first_window),
-        "contact_state": _var("contact_state", state),
+        "height": surface_variable("height", first_window),
+        "contact_state": surface_variable("contact_state", state),
     }
     if study.hardness is not None:
-        data["plastic_share"] = _var("plastic_share", np.stack([r.plastic_share for r in results]))
+        data["plastic_share"] = surface_variable("plastic_share", np.stack([r.plastic_share for r in results]))
     if study.oxidized:
         typical, lower, upper = _geometric(oxidized, (2, 3))
         open_share = np.mean(np.isinf(oxidized), axis=(2, 3))
         data.update({
-            "resistance": _var("resistance", oxidized),
-            "oxide_fraction": _var("oxide_fraction", np.stack([r.oxide_fraction for r in results], axis=2)),
-            "resistance_typical": _var("resistance_typical", typical),
-            "resistance_lower": _var("resistance_lower", lower),
-            "resistance_upper": _var("resistance_upper", upper),
-            "open_fraction": _var("open_fraction", open_share),
+            "resistance": surface_variable("resistance", oxidized),
+            "oxide_fraction": surface_variable("oxide_fraction", np.stack([r.oxide_fraction for r in results], axis=2)),
+            "resistance_typical": surface_variable("resistance_typical", typical),
+            "resistance_lower": surface_variable("resistance_lower", lower),
+            "resistance_upper": surface_variable("resistance_upper", upper),
+            "open_fraction": surface_variable("open_fraction", open_share),
         })
     attrs = {
         "title": "g2tom surface: the full-field resistance of a measured topography",

@@ -17,17 +17,12 @@ import numpy as np
 from g2tom.config import ConfigError
 from g2tom.physics import oxide_band, oxide_field
 from g2tom.physics.grid import cell_centres
-from g2tom.surface.study import SurfaceStudy
+from g2tom.surface.study import SurfaceStudy, stream
 
 __all__ = ["OXIDE_KEY", "check_lengths", "oxide_masks"]
 
 #: The spawn key of the oxide fields (the positions use another).
 OXIDE_KEY = 1
-
-
-def _stream(seed: int, position: int, field: int, length: float) -> np.random.Generator:
-    key = (OXIDE_KEY, int(position), int(field), int(round(length * 1e12)))
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key)))
 
 
 def check_lengths(study: SurfaceStudy, pixel: float) -> None:
@@ -63,7 +58,8 @@ def oxide_masks(study: SurfaceStudy, n: int, pixel: float, position: int) -> np.
         lam = length / pixel
         period = oxide_band.spectral_period(cells, lam, study.resolution)
         modes = oxide_band.band(cells, pixel, lam, study.ks_ratio, study.hurst, period)
-        coeffs = np.stack([oxide_band.coefficients(modes, _stream(study.seed, position, k, length), study.amplitudes)
+        coeffs = np.stack([oxide_band.coefficients(modes, stream(study.seed, OXIDE_KEY, position, k, round(length * 1e12)),
+                                                     study.amplitudes)
                            for k in range(study.fields)])
         psi = oxide_field.grid_values(modes, coeffs, centres, centres)  # (field, n, n)
         if study.threshold == "theoretical":

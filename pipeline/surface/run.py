@@ -11,23 +11,25 @@ import numpy as np
 import xarray as xr
 
 from g2tom.compute import ComputeOptions
-from g2tom.config import ConfigError
 from g2tom.compute import compute as run_tasks
+from g2tom.config import ConfigError
 from g2tom.physics.plasticity import plasticity_index
-from g2tom.progress import format_duration
 from g2tom.physics.spectrum_synthesis import IsotropicSpectrum, isotropic_spectrum, synthesize
 from g2tom.physics.surface_spectrum import SummitParameters
+from g2tom.progress import format_duration
 from g2tom.reference.fft_surface import fft_surface
 from g2tom.store import atomic_path
 from g2tom.surface import windows
 from g2tom.surface.dataset import surface_dataset
 from g2tom.surface.maps import SurfaceMap, load_map, summits
 from g2tom.surface.oxide import check_lengths, oxide_masks
-from g2tom.surface.statistical import attach_statistical
 from g2tom.surface.solve import PositionResult, solve_position
-from g2tom.surface.study import Spot, SurfaceStudy, study_of
+from g2tom.surface.statistical import attach_statistical
+from g2tom.surface.study import Spot, SurfaceStudy, stream, study_of
 
-__all__ = ["SECONDS_CONTACT", "SECONDS_CONDUCTANCE", "COST_EXPONENT", "BYTES_PER_PADDED_PIXEL", "EXTEND_KEY", "Prepared", "prepare", "window_of", "compute", "estimate", "plan_lines", "write_outputs", "surface_resistance", "FILES"]
+__all__ = ["SECONDS_CONTACT", "SECONDS_CONDUCTANCE", "COST_EXPONENT", "BYTES_PER_PADDED_PIXEL", "EXTEND_KEY",
+           "FILES", "Prepared", "prepare", "window_of", "compute", "estimate", "plan_lines", "write_outputs",
+           "surface_resistance"]
 
 #: The spawn key of the windows drawn from the map's spectrum (the positions and oxide fields use others).
 EXTEND_KEY = 2
@@ -150,8 +152,7 @@ def window_of(prepared: Prepared, index: int) -> np.ndarray:
     the position's own stream ``SeedSequence(seed, spawn_key=(EXTEND_KEY, index))``."""
     n, m = prepared.n, prepared.surface
     if prepared.synthesized:
-        seq = np.random.SeedSequence(prepared.study.seed, spawn_key=(EXTEND_KEY, int(index)))
-        return synthesize(prepared.spectrum, n, m.pixel, np.random.Generator(np.random.PCG64(seq)))
+        return synthesize(prepared.spectrum, n, m.pixel, stream(prepared.study.seed, EXTEND_KEY, index))
     row, col = prepared.positions.corners[index]
     return m.heights[row:row + n, col:col + n].copy()
 

@@ -17,20 +17,14 @@ import math
 import warnings
 from pathlib import Path
 
-import numpy as np
 import xarray as xr
 
 from g2tom.config import ConfigError, Scenario
 from g2tom.physics.surface_spectrum import SummitParameters
 from g2tom.predict import predict_resistance
-from g2tom.variables import entry
+from g2tom.surface.dataset import surface_variable
 
 __all__ = ["attach_statistical"]
-
-
-def _var(name: str, data: np.ndarray) -> xr.Variable:
-    declared = entry(f"surface.{name}")
-    return xr.Variable(declared.dims, data, declared.attrs())
 
 
 def attach_statistical(ds: xr.Dataset, scenario: Scenario, summits: SummitParameters | None,
@@ -58,7 +52,7 @@ def attach_statistical(ds: xr.Dataset, scenario: Scenario, summits: SummitParame
         ds.attrs["statistical_answer"] = f"none: {exc}"
         return ds
     statistical = answer["resistance"].transpose("xi", "correlation_length", "force").values
-    ds["resistance_statistical"] = _var("resistance_statistical", statistical)
-    ds["statistical_ratio"] = _var("statistical_ratio", ds["resistance_typical"].values / statistical)
+    ds["resistance_statistical"] = surface_variable("resistance_statistical", statistical)
+    ds["statistical_ratio"] = surface_variable("statistical_ratio", ds["resistance_typical"].values / statistical)
     ds.attrs["statistical_answer"] = str(answer.attrs.get("answered_by", "g2tom's predictor"))
     return ds

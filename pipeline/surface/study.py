@@ -10,7 +10,7 @@ import numpy as np
 
 from g2tom.config import ConfigError, Scenario
 
-__all__ = ["SurfaceStudy", "Spot", "study_of", "DETRENDS", "EXTENDS"]
+__all__ = ["SurfaceStudy", "Spot", "study_of", "stream", "DETRENDS", "EXTENDS"]
 
 #: How the map's long-wavelength form is removed before the sphere is added: ``plane`` (the
 #: least-squares plane of the measured pixels, a tilted sample) or ``none`` (the heights as given).
@@ -110,6 +110,11 @@ class SurfaceStudy:
                 value = "none" if self.at is None else ("centre" if self.at.centre else f"{self.at.x:g},{self.at.y:g}")
             out[key] = "none" if value is None else (list(value) if isinstance(value, tuple) else value)
         return out
+
+
+def stream(seed: int, *key: int) -> np.random.Generator:
+    """The random stream ``SeedSequence(seed, spawn_key=key)`` (each use of randomness has its own key)."""
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=tuple(int(k) for k in key))))
 
 
 def _numbers(name: str, values: object, low: float, high: float, unit: str, open_low: bool = True,

@@ -28,7 +28,7 @@ import numpy as np
 from g2tom.config import ConfigError
 from g2tom.physics.indenter import profile, smooth_contact_radius
 from g2tom.surface.maps import SurfaceMap
-from g2tom.surface.study import SurfaceStudy
+from g2tom.surface.study import SurfaceStudy, stream
 
 __all__ = ["MARGIN", "ROUGHNESS_RMS", "MIN_RADIUS_PIXELS", "POSITIONS_KEY", "CANDIDATES", "Positions", "contact_reach",
            "window_pixels", "check_resolution", "check_window", "valid_corners", "choose_positions", "spot_corner"]
@@ -160,7 +160,7 @@ def choose_positions(valid: np.ndarray, n: int, count: int, seed: int) -> Positi
     ConfigError
         If the measured area holds fewer than ``count`` windows among those candidates.
     """
-    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(POSITIONS_KEY,))))
+    rng = stream(seed, POSITIONS_KEY)
     tiles = [tuple(t) for t in _tiles(valid, n).tolist()]
     corners = np.argwhere(valid)
     order = rng.permutation(len(corners))[:CANDIDATES]
