@@ -295,3 +295,13 @@ def test_oblong_pixels_are_resampled_onto_square_ones(tmp_path) -> None:
     assert oblong_answer.attrs["map_pixel_size"] == pytest.approx(2 * PIXEL)
     np.testing.assert_allclose(oblong_answer["resistance_clean"].values, square_answer["resistance_clean"].values,
                                rtol=0.02)
+
+
+def test_a_force_the_window_cannot_carry_below_the_hardness_is_marked_not_raised(map_file) -> None:
+    """A window whose whole area at H carries less than the force: that force is NaN, the others solved."""
+    window = 64
+    too_much = 1.5e9 * (window * PIXEL) ** 2 * 1.5
+    ds = surface_resistance(map_file, [0.02, too_much], overrides={**PAIR, "material.hardness": 1.5e9},
+                            pixel_size=PIXEL, at="centre", window=window)
+    assert ds["solved"].values.tolist() == [[1, 0]]
+    assert np.isfinite(ds["resistance_clean"].values[0, 0]) and np.isnan(ds["resistance_clean"].values[0, 1])

@@ -90,7 +90,7 @@ def solve_position(study: SurfaceStudy, operator: FftSurface, window: np.ndarray
     for f, force in enumerate(study.forces):
         try:
             state = contact_at_force(operator, heights, force, study.tolerance, hardness=study.hardness)
-        except (ContactReachesEdge, SolverFailure) as exc:
+        except (ContactReachesEdge, SolverFailure, ValueError) as exc:  # ValueError: more than H times the window
             failed[f] = str(exc)
             operator.last_pressure = None
             continue
