@@ -30,7 +30,7 @@ from g2tom.physics.indenter import profile, smooth_contact_radius
 from g2tom.surface.maps import SurfaceMap
 from g2tom.surface.study import SurfaceStudy, stream
 
-__all__ = ["MARGIN", "ROUGHNESS_RMS", "MIN_RADIUS_PIXELS", "POSITIONS_KEY", "CANDIDATES", "Positions", "contact_reach",
+__all__ = ["MARGIN", "ROUGHNESS_RMS", "MIN_RADIUS_PIXELS", "POSITIONS_KEY", "CANDIDATES", "LATTICE_LIMIT", "Positions", "contact_reach",
            "window_pixels", "check_resolution", "check_window", "valid_corners", "choose_positions", "spot_corner"]
 
 #: The window's half side over the heaviest force's contact reach.
@@ -45,6 +45,8 @@ POSITIONS_KEY = 0
 #: Most valid corners (in the seed's order) looked at to complete the independent windows and to
 #: add overlapping ones.
 CANDIDATES = 4096
+#: Most valid corners drawn from: a larger map's are thinned to every 2nd, 4th, ... pixel.
+LATTICE_LIMIT = 65536
 
 
 def contact_reach(study: SurfaceStudy, force: float, rms: float) -> float:
@@ -162,7 +164,10 @@ def choose_positions(valid: np.ndarray, n: int, count: int, seed: int) -> Positi
     """
     rng = stream(seed, POSITIONS_KEY)
     tiles = [tuple(t) for t in _tiles(valid, n).tolist()]
-    corners = np.argwhere(valid)
+    step = 1  # a large map's valid corners are thinned to a lattice of at most LATTICE_LIMIT
+    while np.count_nonzero(valid[::step, ::step]) > LATTICE_LIMIT:
+        step *= 2
+    corners = np.argwhere(valid[::step, ::step]) * step
     order = rng.permutation(len(corners))[:CANDIDATES]
     rest = []
     for corner in corners[order].tolist():
