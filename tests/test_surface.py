@@ -305,3 +305,11 @@ def test_a_force_the_window_cannot_carry_below_the_hardness_is_marked_not_raised
                             pixel_size=PIXEL, at="centre", window=window)
     assert ds["solved"].values.tolist() == [[1, 0]]
     assert np.isfinite(ds["resistance_clean"].values[0, 0]) and np.isnan(ds["resistance_clean"].values[0, 1])
+
+
+def test_default_positions_are_the_independent_windows_the_map_holds(tmp_path) -> None:
+    """Without --positions: every window that shares no pixel with another, at most 16; a map that holds
+    one gives one, not a refusal."""
+    np.save(tmp_path / "one.npy", rough_map(256, rms=0.2e-6))
+    ds = surface_resistance(tmp_path / "one.npy", 0.1, overrides=PAIR, pixel_size=PIXEL)
+    assert ds.sizes["position"] == ds.attrs["independent_positions"] == 1

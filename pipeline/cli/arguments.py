@@ -200,8 +200,9 @@ def build_parser() -> argparse.ArgumentParser:
     surface.add_argument("--correlation-length", default=None,
                          help="oxide correlation lengths l_O, m, comma-separated (at least one pixel)")
     surface.add_argument("--fields", type=int, default=8, help="oxide fields per position and case (default 8)")
-    surface.add_argument("--positions", type=int, default=16,
-                         help="contact positions spread over the map (default 16; independent where the map allows)")
+    surface.add_argument("--positions", type=int, default=None,
+                         help="contact positions spread over the map (default: every window that shares no pixel "
+                              "with another, at most 16; more overlap)")
     surface.add_argument("--at", default=None,
                          help="one contact at X,Y (m from the centre of the map's first pixel) or 'centre'")
     surface.add_argument("--window", type=int, default=None,

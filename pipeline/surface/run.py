@@ -25,7 +25,7 @@ from g2tom.surface.maps import SurfaceMap, load_map, summits
 from g2tom.surface.oxide import check_lengths, oxide_masks
 from g2tom.surface.solve import PositionResult, solve_position
 from g2tom.surface.statistical import attach_statistical
-from g2tom.surface.study import Spot, SurfaceStudy, stream, study_of
+from g2tom.surface.study import DEFAULT_POSITIONS, Spot, SurfaceStudy, stream, study_of
 
 __all__ = ["SECONDS_CONTACT", "SECONDS_CONDUCTANCE", "COST_EXPONENT", "BYTES_PER_PADDED_PIXEL", "EXTEND_KEY",
            "FILES", "Prepared", "prepare", "window_of", "compute", "estimate", "plan_lines", "write_outputs",
@@ -88,7 +88,7 @@ def prepare(study: SurfaceStudy, paths: Sequence[str | Path], pixel_size: float 
             spectrum = isotropic_spectrum(surface.heights, surface.inside, surface.pixel)
         except ValueError as exc:
             raise ConfigError(f"--extend = 'spectrum' cannot be used: {exc}") from None
-        count = study.positions
+        count = DEFAULT_POSITIONS if study.positions is None else study.positions
         synthesized = windows.Positions(np.full((count, 2), -1), np.ones(count, bool), count)
         return Prepared(study, surface, n, synthesized, summits(surface), spectrum)
     valid = windows.check_window(study, surface, n)
@@ -223,7 +223,7 @@ def write_outputs(ds: xr.Dataset, folder: str | Path) -> list[Path]:
 def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, xi: Any = (),
                        correlation_length: Any = (), config: str = "paper",
                        overrides: Mapping[str, Any] | None = None, pixel_size: float | None = None, fields: int = 8,
-                       positions: int = 16, at: tuple[float, float] | str | None = None, window: int | None = None,
+                       positions: int | None = None, at: tuple[float, float] | str | None = None, window: int | None = None,
                        detrend: str = "plane", extend: str = "none", options: ComputeOptions | None = None,
                        data_dir: str | Path = "data") -> xr.Dataset:
     """The full-field resistance of a measured surface, as ``g2tom surface`` computes it.
@@ -242,7 +242,8 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
     pixel_size
         Pixel side, m (for maps that carry none).
     fields, positions
-        Oxide fields per position; contact positions over the map.
+        Oxide fields per position; contact positions over the map (default: every independent window
+        the map holds, at most 16).
     at
         ``(x, y)`` in m from the centre of the map's first pixel, or ``"centre"``: one position there.
     window

@@ -10,7 +10,10 @@ import numpy as np
 
 from g2tom.config import ConfigError, Scenario
 
-__all__ = ["SurfaceStudy", "Spot", "study_of", "stream", "DETRENDS", "EXTENDS"]
+__all__ = ["SurfaceStudy", "Spot", "study_of", "stream", "DETRENDS", "EXTENDS", "DEFAULT_POSITIONS"]
+
+#: The most positions taken when none are asked for (the independent windows the map holds, up to it).
+DEFAULT_POSITIONS = 16
 
 #: How the map's long-wavelength form is removed before the sphere is added: ``plane`` (the
 #: least-squares plane of the measured pixels, a tilted sample) or ``none`` (the heights as given).
@@ -45,7 +48,9 @@ class SurfaceStudy:
     fields
         Oxide fields per position and oxide case.
     positions
-        Contact positions spread over the map (ignored with ``at``).
+        Contact positions spread over the map (ignored with ``at``), or None: every independent
+        window the map holds, at most :data:`DEFAULT_POSITIONS` (windows drawn from the spectrum:
+        that many).
     at
         A single position chosen by the user, or None.
     window
@@ -70,7 +75,7 @@ class SurfaceStudy:
     xi: tuple[float, ...] = ()
     correlation_lengths: tuple[float, ...] = ()
     fields: int = 8
-    positions: int = 16
+    positions: int | None = None
     at: Spot | None = None
     window: int | None = None
     detrend: str = "plane"
@@ -131,7 +136,7 @@ def _numbers(name: str, values: object, low: float, high: float, unit: str, open
 
 
 def study_of(scenario: Scenario, forces: object, *, xi: object = (), correlation_lengths: object = (),
-             fields: int = 8, positions: int = 16, at: Spot | None = None, window: int | None = None,
+             fields: int = 8, positions: int | None = None, at: Spot | None = None, window: int | None = None,
              detrend: str = "plane", extend: str = "none") -> SurfaceStudy:
     """The study of ``scenario``'s pair of materials, indenter and oxide spectrum at ``forces`` (N).
 
@@ -149,7 +154,7 @@ def study_of(scenario: Scenario, forces: object, *, xi: object = (), correlation
         raise ConfigError(f"{given} is given without {missing}: an oxide case needs both (or neither: clean only)")
     if not 1 <= fields <= 1024:
         raise ConfigError(f"--fields = {fields} is out of range: must be in [1, 1024] (oxide fields per position)")
-    if not 1 <= positions <= 4096:
+    if positions is not None and not 1 <= positions <= 4096:
         raise ConfigError(f"--positions = {positions} is out of range: must be in [1, 4096]")
     if window is not None and not 8 <= window <= 8192:
         raise ConfigError(f"--window = {window} is out of range: must be in [8, 8192] (pixels)")
@@ -161,7 +166,8 @@ def study_of(scenario: Scenario, forces: object, *, xi: object = (), correlation
         raise ConfigError(f"--extend = {extend!r} is not allowed with --at: a chosen position is a measured window")
     m, ind, ox = scenario.material, scenario.indenter, scenario.oxide
     return SurfaceStudy(
-        forces=force, xi=xis, correlation_lengths=lengths, fields=int(fields), positions=int(positions), at=at,
+        forces=force, xi=xis, correlation_lengths=lengths, fields=int(fields), positions=None if positions is None else int(positions),
+        at=at,
         window=window, detrend=detrend, extend=extend, seed=ox.seed, e_star=m.E_star, rho=m.rho, hardness=m.hardness,
         shape=ind.shape, radius=ind.radius, cone_angle=ind.cone_angle, punch_radius=ind.punch_radius,
         edge_radius=ind.edge_radius, hurst=ox.hurst, ks_ratio=ox.ks_ratio, amplitudes=ox.amplitudes,

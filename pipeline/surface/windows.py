@@ -28,7 +28,7 @@ import numpy as np
 from g2tom.config import ConfigError
 from g2tom.physics.indenter import profile, smooth_contact_radius
 from g2tom.surface.maps import SurfaceMap
-from g2tom.surface.study import SurfaceStudy, stream
+from g2tom.surface.study import DEFAULT_POSITIONS, SurfaceStudy, stream
 
 __all__ = ["MARGIN", "ROUGHNESS_RMS", "MIN_RADIUS_PIXELS", "POSITIONS_KEY", "CANDIDATES", "LATTICE_LIMIT", "Positions", "contact_reach",
            "window_pixels", "check_resolution", "check_window", "valid_corners", "choose_positions", "spot_corner"]
@@ -150,9 +150,10 @@ def _tiles(valid: np.ndarray, n: int) -> np.ndarray:
     return best
 
 
-def choose_positions(valid: np.ndarray, n: int, count: int, seed: int) -> Positions:
+def choose_positions(valid: np.ndarray, n: int, count: int | None, seed: int) -> Positions:
     """``count`` windows of ``n`` pixels among the ``valid`` corners (:func:`valid_corners`), in the
-    seed's order: the independent windows first, then overlapping ones.
+    seed's order: the independent windows first, then overlapping ones (``count`` None: every
+    independent window, at most :data:`g2tom.surface.study.DEFAULT_POSITIONS`).
 
     The independent windows are the best tiling's, completed by any valid corner (of at most
     :data:`CANDIDATES`, in the seed's order) whose window overlaps none of them.
@@ -178,6 +179,8 @@ def choose_positions(valid: np.ndarray, n: int, count: int, seed: int) -> Positi
     independent = np.array(tiles, int).reshape(-1, 2)[rng.permutation(len(tiles))]
     extra = np.array([c for c in rest if c not in set(tiles)], int).reshape(-1, 2)
     available = len(independent) + len(extra)
+    if count is None:
+        count = min(DEFAULT_POSITIONS, len(independent))
     if available < count:
         raise ConfigError(f"--positions = {count} is out of range: the measured area holds {available} windows of "
                           f"{n} pixels ({len(independent)} of them independent); must be <= {available}")
