@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import signal
 
 import numpy as np
 import pytest
@@ -313,3 +314,17 @@ def test_default_positions_are_the_independent_windows_the_map_holds(tmp_path) -
     np.save(tmp_path / "one.npy", rough_map(256, rms=0.2e-6))
     ds = surface_resistance(tmp_path / "one.npy", 0.1, overrides=PAIR, pixel_size=PIXEL)
     assert ds.sizes["position"] == ds.attrs["independent_positions"] == 1
+
+
+def test_ctrl_c_to_the_process_group_stops_with_one_line_and_writes_nothing(tmp_path, map_file) -> None:
+    """SIGINT to the group while the positions compute (SIGTERM takes the same path: tests/test_signals.py)."""
+    from tests.test_signals import _after_signal, _signalled
+
+    args = ["surface", map_file, "--pixel-size", str(PIXEL), "--force", "0.02,0.05,0.1,0.2,0.3", "--positions", "4",
+            "--xi", "0.3", "--correlation-length", "4e-6", "--fields", "4", "--set", f"material.modulus={E_STAR}",
+            "--set", f"indenter.radius={RADIUS}"]
+    rc, out = _signalled(args, "surface: about", signal.SIGINT, tmp_path, delay=1.0)  # the plan's line: working
+    assert rc == 130, out
+    assert "Traceback" not in out and "Error" not in out, out
+    assert _after_signal(out, "surface: about")[-1] == "g2tom: interrupted: stopped before the end; run the command again"
+    assert not [p for p in tmp_path.rglob("*") if p.is_file()], list(tmp_path.rglob("*"))
