@@ -1,6 +1,6 @@
 """The atlas's design over the dimensionless groups (mu, Pi), its scenes, and their plan.
 
-The atlas (issue 23) runs the whole chain contact -> oxide -> cube -> fits on many scenes that
+The atlas runs the whole chain contact -> oxide -> cube -> fits on many scenes that
 differ only in mu = (8/3) eta sigma sqrt(2 R* beta) and Pi = eta R* sigma
 (:mod:`g2tom.physics.groups`): everything else, E*, rho* and the reference lengths sigma and
 R*, only scales F and R. This module holds what is known before any scene runs:
@@ -249,7 +249,7 @@ def plan_atlas(base: Scenario, design: AtlasDesign, workers: int | None = 1) -> 
     return out
 
 
-#: The wall time an atlas may take on this 2-core machine (issue 31: `make atlas` <= 3 h).
+#: The wall time an atlas may take (`make atlas` within 3 h on a 2-core machine).
 BUDGET_SECONDS = 3 * 3600.0
 
 

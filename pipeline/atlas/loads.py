@@ -31,7 +31,7 @@ from g2tom.config import Scenario
 
 __all__ = ["FORCE_RANGE", "END_MARGIN", "normalized_forces", "approaches_at", "loading_for_range"]
 
-#: The range of F' = 2F/(E* sqrt(R* sigma^3)) every scene of the atlas covers (issue 31:
+#: The range of F' = 2F/(E* sqrt(R* sigma^3)) every scene of the atlas covers (electrical
 #: connectors sit below F' 1; the paper's own range is 0.075-18.8).
 FORCE_RANGE = (0.05, 20.0)
 #: Relative margin beyond FORCE_RANGE at which the end steps are placed (the fast solve that

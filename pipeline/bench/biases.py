@@ -11,7 +11,7 @@ thing, all on the same oxide fields (same seeds; realization ``k`` of a lambda i
 5. expected spots (the discretization that obeys Barber's theorem: today's default);
 6. the point model (Greenwood's closed form is a bound; the exact solve of the same spots);
 7. discrete asperities (each surface's own caps coupled through the half-space, at the same forces,
-   in place of Greenwood–Tripp's mean; design note 11);
+   in place of Greenwood–Tripp's mean: the discrete model);
 8. the disc spot rule (each spot conducts with its clean share of its contact disc, not on/off
    at its centre: radius a sqrt(f));
 9. the segment spot rule (the same share, conducting as the circular segment of that share:

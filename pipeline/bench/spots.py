@@ -17,7 +17,7 @@ The discretizations whose domains resolve alike share one Greenwood–Tripp solv
 (:func:`g2tom.contact_solution.shared_solves`: on the default scene expected and asperities; mean_area's
 window, and so its radial domain, is wider).
 
-Targets (issue 21): expected within :data:`TARGETS` ``expected`` of Barber at every step,
+Targets: expected within :data:`TARGETS` ``expected`` of Barber at every step,
 asperities (realization mean) within ``asperities``, point + lattice term within
 ``point_lattice``; per-map time of expected and asperities <= ``time_ratio`` x mean_area's.
 """

@@ -1,4 +1,4 @@
-"""The full-field reference: elastic contact of the actual rough sphere on a grid (issue 22).
+"""The full-field reference: elastic contact of the actual rough sphere on a grid.
 
 Only this package imports the optional extra ``tamaas`` (``pip install -e '.[reference]'``),
 and only :mod:`g2tom.reference.elastic` touches it: everything else calls that module's

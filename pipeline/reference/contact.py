@@ -4,8 +4,8 @@ The rigid body's surface is ``heights(x, y)`` (m, e.g. :func:`surfaces.sphere` p
 surface): it touches where the elastic surface, displaced by ``u`` (positive into the
 half-space), reaches it. In contact ``u = heights - delta`` with one rigid approach ``delta``,
 in g2tom's convention: the separation of the sphere tip (height 0) from the reference plane
-(height 0 of the rough surface) before deformation, negative when they interpenetrate
-(design.md section 1). Check: a smooth sphere has ``delta = -a^2 / R`` (Hertz).
+(height 0 of the rough surface) before deformation, negative when they interpenetrate.
+Check: a smooth sphere has ``delta = -a^2 / R`` (Hertz).
 """
 
 from __future__ import annotations

@@ -51,7 +51,7 @@ __all__ = ["STAND_IN_TOLERANCE", "STAND_IN", "MAX_ROUNDS", "ModelEnsemble", "val
            "variables"]
 
 #: Part 1's largest |discrete / full field - 1| over every realization at a load and case that lets
-#: the discrete solve of each surface's own caps stand in for the full field there (issue 30: 2 %).
+#: the discrete solve of each surface's own caps stand in for the full field there (2 %).
 STAND_IN_TOLERANCE = 0.02
 #: Part 1's discretization and resistance model whose solve stands in.
 STAND_IN = (discrete_spots.DISCRETE, "point")

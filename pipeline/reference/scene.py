@@ -153,7 +153,7 @@ class ValidationSet:
 
     @property
     def mu(self) -> float:
-        """(8/3) eta sigma sqrt(2 R* beta): the Greenwood-Tripp group (design.md section 9)."""
+        """(8/3) eta sigma sqrt(2 R* beta): the Greenwood-Tripp group (:mod:`g2tom.physics.groups`)."""
         return 8.0 / 3.0 * self.eta * self.sigma * math.sqrt(2.0 * self.radius * self.beta)
 
 

@@ -33,7 +33,7 @@ __all__ = ["LogMean", "log_mean", "two_phase_log_mean", "ratio_error", "allocati
            "PRIOR_PAIRS_OXIDE_SD", "CLEAN_TARGETS", "OXIDE_TARGETS"]
 
 #: Surface-to-surface scatter of the full field's clean ``ln R`` before any is measured: (F', sd)
-#: measured outside the project on 16 GW-cap surfaces (issue 30): 0.32 at F' 0.075, 0.15 at 0.5,
+#: measured outside the project on 16 GW-cap surfaces: 0.32 at F' 0.075, 0.15 at 0.5,
 #: 0.08 at 2, ~0.03 from 5. Interpolated in (ln F', ln sd), constant outside.
 PRIOR_CLEAN_SD = ((0.075, 0.32), (0.5, 0.15), (2.0, 0.08), (5.0, 0.03))
 #: The oxidized scatter before any is measured: (F', sd of ln R per realization, the proxy's share
@@ -48,7 +48,7 @@ PRIOR_OXIDE_SD = ((0.075, 0.75), (0.5, 0.6), (1.5, 0.42), (3.5, 0.30), (6.0, 0.1
 #: cut by oxide, at light loads).
 PRIOR_PAIRS_CLEAN_SD = ((0.075, 0.042), (0.5, 0.01))
 PRIOR_PAIRS_OXIDE_SD = ((0.075, 0.17), (0.45, 0.12), (1.5, 0.032), (3.5, 0.025), (6.0, 0.01))
-#: Issue 29's targets on the default's ensemble against the full field, |ratio - 1| at F': clean
+#: The accuracy targets of the default's ensemble against the full field, |ratio - 1| at F': clean
 #: 15 % at F' 0.075, 8 % at 0.5, 5 % from F' 1; oxidized 10 % at F' 1-2 and 7 % from F' 5 (none
 #: below F' 1). Between two stated points the target is interpolated in ln F'; outside, the
 #: nearest stated one holds.
@@ -254,7 +254,7 @@ def prior_pairs_sd(force_normalized: float, oxidized: bool) -> float:
 
 
 def target(force_normalized: float, oxidized: bool) -> float:
-    """Issue 29's allowed |ratio - 1| at F' (:data:`CLEAN_TARGETS`, :data:`OXIDE_TARGETS`); NaN: none."""
+    """The accuracy target's allowed |ratio - 1| at F' (:data:`CLEAN_TARGETS`, :data:`OXIDE_TARGETS`); NaN: none."""
     points = OXIDE_TARGETS if oxidized else CLEAN_TARGETS
     if oxidized and force_normalized < points[0][0]:
         return np.nan

@@ -281,7 +281,7 @@ def build(scenario: Scenario, fits: xr.Dataset) -> xr.Dataset:
     note = small_grid_note(scenario)
     if note:
         ds.attrs["trivial"] = note
-    # the scene's dimensionless groups: the predictor answers only surfaces with these (design notes, Sect. 9)
+    # the scene's dimensionless groups: the predictor answers only surfaces with these (g2tom.physics.groups)
     scene = scene_groups(scenario)
     ds.attrs["mu"], ds.attrs["Pi"] = scene.mu, scene.Pi
     ds.attrs["indenter_shape"] = scenario.indenter.shape
