@@ -328,3 +328,18 @@ def test_ctrl_c_to_the_process_group_stops_with_one_line_and_writes_nothing(tmp_
     assert "Traceback" not in out and "Error" not in out, out
     assert _after_signal(out, "surface: about")[-1] == "g2tom: interrupted: stopped before the end; run the command again"
     assert not [p for p in tmp_path.rglob("*") if p.is_file()], list(tmp_path.rglob("*"))
+
+
+@pytest.mark.parametrize("name, heights, message", [
+    ("str", np.array([["a"] * 4] * 4), "heights must be real numbers"),
+    ("complex", np.ones((64, 64)) * (1 + 1j), "complex-valued"),
+    ("inf", np.where(np.eye(64, dtype=bool), np.inf, 0.0), "non-finite"),
+    ("line", np.ones(64), "must be a 2-D array"),
+])
+def test_maps_that_are_not_height_maps_are_refused(tmp_path, capsys, name, heights, message) -> None:
+    np.save(tmp_path / f"{name}.npy", heights)
+    code = main(["surface", str(tmp_path / f"{name}.npy"), "--pixel-size", str(PIXEL), "--force", "0.05",
+                 "--data-dir", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and err.count("\n") == 1, err
+    assert not (tmp_path / "surface").exists()

@@ -12,14 +12,15 @@ from __future__ import annotations
 
 import hashlib
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from g2tom.config import ConfigError
-from g2tom.heightmap import CUTOFF_PIXELS, Measured, area_moments, measured_area, read_measured
-from g2tom.physics.roughness import detrend
+from g2tom.heightmap import CUTOFF_PIXELS, PLAUSIBLE_SIGMA, Measured, area_moments, measured_area, read_measured
+from g2tom.physics.roughness import detrend, validated_heights
 from g2tom.physics.surface_spectrum import SummitParameters, summit_parameters
 
 __all__ = ["RESAMPLE_ORDER", "SurfaceMap", "load_map", "summits"]
@@ -78,11 +79,22 @@ def _digest(path: Path) -> str:
     return sha.hexdigest()
 
 
+def _checked(path: Path, measured: Measured) -> np.ndarray:
+    """The map's heights as floats, refused (one line naming the file) unless real, numeric, 2-D, at
+    least 3 x 3 and finite wherever defined (NaN marks an undefined pixel)."""
+    raw = np.asarray(measured.heights)
+    try:
+        validated_heights(np.where(np.isnan(raw), 0.0, raw) if raw.dtype.kind == "f" else raw)
+    except ValueError as exc:
+        raise ConfigError(f"MAP {str(path)!r}: {exc}") from None
+    return raw.astype(float)
+
+
 def _square(path: Path, measured: Measured, pixel_size: float | None) -> tuple[np.ndarray, float, str]:
     """The map's heights (m) on square pixels and their side, m: ``pixel_size`` where given, else the
     file's; a map of oblong pixels is resampled along its finer axis onto the coarser pitch
     (linear interpolation between pixel centres, :data:`RESAMPLE_ORDER`)."""
-    heights = np.asarray(measured.heights, dtype=float)
+    heights = _checked(path, measured)
     if pixel_size is not None:
         if not (math.isfinite(pixel_size) and pixel_size > 0):
             raise ConfigError(f"--pixel-size = {pixel_size!r} is out of range: must be > 0 (m)")
@@ -134,6 +146,11 @@ def load_map(paths: list[Path], pixel_size: float | None, how: str = "plane") ->
     composite = maps[0] if len(maps) == 1 else maps[0] + maps[1]
     area = measured_area(composite)
     heights = detrend(area.heights) if how == "plane" else area.heights - np.nanmean(area.heights)
+    rms = float(np.std(heights[area.inside]))
+    low, high = PLAUSIBLE_SIGMA
+    if not low <= rms <= high:
+        warnings.warn(f"MAP {str(paths[0])!r}: rms height = {rms:.3g} m is implausible for a surface (expected "
+                      f"{low:g}..{high:g} m): are the heights in m?", stacklevel=2)
     return SurfaceMap(heights=heights, inside=area.inside, pixel=pixels[0], files=tuple(str(p) for p in paths),
                       digests=tuple(_digest(Path(p)) for p in paths), filled=area.filled, detrend=how,
                       resampled="; ".join(n for n in notes if n))
