@@ -135,7 +135,7 @@ def _ensemble_table(ds: xr.Dataset) -> list[str]:
              + ("value, one exact answer" if int(ds["ensemble_model_count_clean"]) == 1 else "surfaces")
              + f"; oxidized: {int(ds['ensemble_model_count'])} realizations) against the full field's, each as the geometric mean of R over its conducting realizations at equal force; ratio ± the "
              "standard error of its log (both ensembles', in squares); ✓ within the accuracy target at that F', ✗ outside, "
-             "no mark where the issue sets none (oxidized below F' 1). The full field's ensemble: N realizations, a "
+             "no mark where the accuracy target sets none (oxidized below F' 1). The full field's ensemble: N realizations, a "
              "proxy on all N corrected by P paired main-grid solves (two-phase: part 1's realizations, then more "
              "where the proxy and the full field disagree, sized with the proxies at least cost; N = P: the pairs "
              "alone). Open circuits (R = +inf) are counted, full field / model, where any.", "",
