@@ -181,10 +181,10 @@ def test_cli_writes_dataset_csv_and_figure(tmp_path, map_file, capsys) -> None:
     assert f"{typical[0]:.5g}" in out and math.isfinite(typical[1])
 
 
-def self_affine_pair(seed: int = 11) -> tuple[np.ndarray, np.ndarray]:
+def self_affine_pair(n: int = 2048, seed: int = 11) -> tuple[np.ndarray, np.ndarray]:
     """The same self-affine surface (H 0.8, 2.5 decades from roll-off to the short cut-off at 2
-    pixels) on 1024^2 pixels of PIXEL / 2 and on 512^2 pixels of PIXEL without its finest octave."""
-    n, pixel = 1024, PIXEL / 2
+    pixels) on n^2 pixels of PIXEL / 2 and on (n/2)^2 pixels of PIXEL without its finest octave."""
+    pixel = PIXEL / 2
     q = 2 * np.pi * np.fft.fftfreq(n, d=pixel)
     qq = np.hypot(*np.meshgrid(q, q))
     q_high = np.pi / pixel
@@ -202,8 +202,10 @@ def self_affine_pair(seed: int = 11) -> tuple[np.ndarray, np.ndarray]:
 
 @pytest.mark.stress
 def test_halving_the_pixel_moves_summits_not_resistance(tmp_path) -> None:
-    """A finer map of the same surface: eta and beta move by more than 2x, the full field's R by
-    2.1 % at most (measured: +0.95, +2.11, +0.53, -0.03 % at 0.02, 0.1, 0.5, 3 N; eta x3.88, beta x0.434)."""
+    """A finer map of the same surface: eta and beta move by more than 2x, the full field's typical R
+    over 8 positions (the same windows on both maps) by at most 2 % (measured: -0.87, +0.14, +0.06,
+    -0.05 % at 0.02, 0.1, 0.5, 3 N; eta x3.85, beta x0.436). One position alone moves by up to 7.6 %
+    at 0.02 N, where a few of the finest summits carry the contact."""
     from g2tom.heightmap import measure
 
     fine, coarse = self_affine_pair()
@@ -214,10 +216,13 @@ def test_halving_the_pixel_moves_summits_not_resistance(tmp_path) -> None:
     for name, pixel, n in (("coarse", PIXEL, 256), ("fine", PIXEL / 2, 512)):
         summits[name] = measure(tmp_path / f"{name}.npy", pixel, cutoff=2 * pixel)
         answers[name] = surface_resistance(tmp_path / f"{name}.npy", [0.02, 0.1, 0.5, 3.0], pixel_size=pixel,
-                                           at=(128e-6, 128e-6), window=n, overrides=pair)["resistance_clean"].values
+                                           window=n, positions=8, overrides=pair)
     assert summits["fine"]["eta"] / summits["coarse"]["eta"] > 2
     assert summits["fine"]["beta"] / summits["coarse"]["beta"] < 0.5
-    np.testing.assert_allclose(answers["fine"], answers["coarse"], rtol=0.025)
+    np.testing.assert_allclose(answers["fine"]["position_x"].values, answers["coarse"]["position_x"].values,
+                               atol=PIXEL)
+    np.testing.assert_allclose(answers["fine"]["resistance_clean_typical"].values,
+                               answers["coarse"]["resistance_clean_typical"].values, rtol=0.02)
 
 
 def test_statistical_answer_beside_the_full_field(tmp_path, map_file) -> None:
