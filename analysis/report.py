@@ -24,6 +24,7 @@ from g2tom.analysis.report_physics import (
     atlas_blocks, barber_blocks, bias_blocks, curve_blocks, point_blocks, validation_blocks)
 from g2tom.analysis.report_render import to_html, to_markdown
 from g2tom.analysis.report_summary import summary_blocks as _summary_blocks
+from g2tom.analysis.report_surface import surface_blocks
 from g2tom.analysis.report_results import ensemble_blocks, fit_blocks, surrogate_model_blocks, surrogate_table_blocks
 from g2tom.config import Scenario
 from g2tom.store import StaleInputError, atomic_path, read_stage
@@ -128,7 +129,7 @@ def build_blocks(scenario: Scenario, data_dir: str | Path, started: float | None
         fit_blocks(fits, scenario) + ensemble_blocks(fits, scenario) + curve_blocks(fits))
     physics += missing_sur if sur is None else surrogate_model_blocks(sur)
     physics += bias_blocks(data_dir) + barber_blocks(data_dir, scenario) + validation
-    physics += atlas_blocks(data_dir) + point_blocks(data_dir)
+    physics += atlas_blocks(data_dir) + point_blocks(data_dir) + surface_blocks(data_dir)
     figures = sorted((p for p in (data_dir / "figures").glob("*.png") if p.stem not in FRONTIER_FIGURES),
                      key=_figure_order)
     body = [Block("h2", "Figures")]

@@ -1,4 +1,5 @@
-"""The measured surface's report: ``surface.md`` beside ``surface.nc`` (``g2tom surface``).
+"""The measured surface's report: ``surface.md`` beside ``surface.nc`` (``g2tom surface``), and its
+section in the study's report when ``<data-dir>/surface/`` holds one.
 
 What was computed (the map, its digest, the window and positions, the pair), the answer per force
 (typical resistance and its band over contacts, clean and per oxide case), the statistical answer's
@@ -7,10 +8,17 @@ ratio where there is one, the figure, and the command that reproduces it.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import xarray as xr
 
-__all__ = ["surface_report"]
+from g2tom.analysis.report_blocks import Block, markdown_blocks
+
+__all__ = ["FOLDER", "surface_report", "surface_blocks"]
+
+#: The surface's folder under the data directory.
+FOLDER = "surface"
 
 
 def _row(cells: list[str]) -> str:
@@ -26,7 +34,7 @@ def surface_report(ds: xr.Dataset, command: str) -> str:
     files = ", ".join(f"`{f}` (SHA-256 {d[:12]}...)" for f, d in zip(np.atleast_1d(ds.attrs["map_files"]),
                                                                       np.atleast_1d(ds.attrs["map_sha256"])))
     lines = [
-        "# The resistance of a measured surface",
+        "## The resistance of a measured surface",
         "",
         f"Map {files}: {ds.attrs['map_shape'][0]} x {ds.attrs['map_shape'][1]} pixels of "
         f"{float(ds.attrs['map_pixel_size']):.4g} m, {float(ds.attrs['map_measured_share']):.1%} measured, rms height "
@@ -60,5 +68,20 @@ def surface_report(ds: xr.Dataset, command: str) -> str:
         lines.append(_row(cells))
     lines += ["", f"Statistical answer (the map's summits through g2tom's predictor): "
               f"{ds.attrs.get('statistical_answer', 'none')}.", "", "![R against F](surface.png)", "",
-              "Reproduce with:", "", "```sh", command, "```", ""]
+              f"Reproduce with `{command}`.", ""]
     return "\n".join(lines)
+
+
+def surface_blocks(data_dir: str | Path) -> list[Block]:
+    """Section "Your surface": ``g2tom surface``'s report and figure, when ``<data_dir>/surface/`` holds
+    them (nothing otherwise: the surface is not part of the study)."""
+    folder = Path(data_dir) / FOLDER
+    if not (folder / "surface.md").is_file():
+        return []
+    text = "\n".join(line for line in (folder / "surface.md").read_text().splitlines() if not line.startswith("!["))
+    blocks = [Block("h2", "Your surface: the full field on a measured map (g2tom surface)")]
+    blocks += markdown_blocks(text, "The resistance of a measured surface")
+    if (folder / "surface.png").is_file():
+        blocks.append(Block("img", "R against F on the measured surface, with its band over contacts; one contact's "
+                                   "map", src=f"{FOLDER}/surface.png"))
+    return blocks

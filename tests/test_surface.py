@@ -178,6 +178,13 @@ def test_cli_writes_dataset_csv_and_figure(tmp_path, map_file, capsys) -> None:
     assert (folder / "surface.png").stat().st_size > 10_000
     report = (folder / "surface.md").read_text()
     assert f"{typical[0]:.4g}" in report and "g2tom surface " in report and "--fields 2" in report
+    from g2tom.analysis.report_blocks import Block
+    from g2tom.analysis.report_surface import surface_blocks
+
+    blocks = surface_blocks(tmp_path)  # the study's report takes the same section
+    assert blocks[0].kind == "h2" and any(b.kind == "table" for b in blocks)
+    assert Block("img", blocks[-1].text, src="surface/surface.png") == blocks[-1]
+    assert surface_blocks(tmp_path / "elsewhere") == []
     assert f"{typical[0]:.5g}" in out and math.isfinite(typical[1])
 
 
