@@ -59,16 +59,16 @@ __all__ = ["fit_atlas", "write_atlas_surrogate", "verdict", "noise_ceiling", "CE
 FORMAT = "g2tom-atlas-surrogate"
 #: 4: the curve model names the frame of the groups it is built in (``frame``); 3: the curve model
 #: is the grid surrogate or the scene series (``kind``), in (ln mu, ln Pi); 2: the grid surrogate with
-#: its regional band; 1 (no ``format_version``): one polynomial in five logs with one global
-#: error. The predictor reads all four.
+#: its regional band (issue 31); 1 (no ``format_version``): one polynomial in five logs with one
+#: global error (issue 23). The predictor reads all four.
 FORMAT_VERSION = 4
 #: The name of the curve model of ln R'(xi, lambda, mu, Pi, F') in the document.
 CURVE = "log_resistance"
-#: Least relative error of ln R' a held-out step is allowed (the accuracy target's 5 %).
+#: Least relative error of ln R' a held-out step is allowed (the issue's 5 %).
 FLOOR = 0.05
-#: Largest error of ln R' at any held-out step the target allows (15 %).
+#: Largest error of ln R' at any held-out step the target allows (the issue's 15 %).
 WORST = 0.15
-#: Share of held-out cells that must be within at every step (95 %).
+#: Share of held-out cells that must be within at every step (the issue's 95 %).
 TARGET_SHARE = 0.95
 #: Least one-sigma uncertainty of ln alpha, of gamma and of ln R' in the fits' weights.
 SIGMA_FLOOR = {"alpha": 0.01, "gamma": 0.005, CURVE: 0.01}
