@@ -335,10 +335,10 @@ def test_ctrl_c_to_the_process_group_stops_with_one_line_and_writes_nothing(tmp_
     args = ["surface", map_file, "--pixel-size", str(PIXEL), "--force", "0.02,0.05,0.1,0.2,0.3", "--positions", "4",
             "--xi", "0.3", "--correlation-length", "4e-6", "--fields", "4", "--set", f"material.modulus={E_STAR}",
             "--set", f"indenter.radius={RADIUS}"]
-    rc, out = _signalled(args, "surface: about", signal.SIGINT, tmp_path, delay=1.0)  # the plan's line: working
+    rc, out = _signalled(args, "MiB a task", signal.SIGINT, tmp_path, delay=1.0)  # the plan's estimate: working
     assert rc == 130, out
     assert "Traceback" not in out and "Error" not in out, out
-    assert _after_signal(out, "surface: about")[-1] == "g2tom: interrupted: stopped before the end; run the command again"
+    assert _after_signal(out, "MiB a task")[-1] == "g2tom: interrupted: stopped before the end; run the command again"
     assert not [p for p in tmp_path.rglob("*") if p.is_file()], list(tmp_path.rglob("*"))
 
 

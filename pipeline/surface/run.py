@@ -137,7 +137,8 @@ def plan_lines(prepared: Prepared, workers: int = 1) -> list[str]:
         + f": {count * len(s.forces)} contact solves, {count * len(s.forces) * (1 + cases)} conductances",
     ]
     seconds, memory = estimate(prepared, workers)
-    lines.append(f"surface: about {format_duration(seconds)} on {workers} core(s), {memory / 2**20:.0f} MiB a task "
+    took = "under 1 s" if seconds < 0.5 else f"about {format_duration(seconds)}"
+    lines.append(f"surface: {took} on {workers} core(s), {memory / 2**20:.0f} MiB a task "
                  "(the constants of make bench's surface case; contacts larger than its can take longer)")
     if prepared.summits is not None:
         z = prepared.summits
@@ -178,11 +179,13 @@ def compute(prepared: Prepared, options: ComputeOptions | None = None) -> xr.Dat
         sp = prepared.spectrum
         ds["position_x"][:] = np.nan
         ds["position_y"][:] = np.nan
+        period, longest = 2 * n * m.pixel, 2 * np.pi / sp.q_min
+        beyond = (f"longer ones up to the period {period:.4g} m synthesized at the plateau C(q_min) = "
+                  f"{float(sp.power[0]):.4g} m^4" if period > longest else
+                  f"none longer synthesized (the windows' period, {period:.4g} m, is shorter than the map)")
         ds.attrs["extended"] = (
             f"spectrum: every window drawn from the map's isotropic power spectrum (the map holds no window of "
-            f"{n} pixels): wavelengths {2 * np.pi / sp.q_max:.4g} .. {2 * np.pi / sp.q_min:.4g} m measured, longer "
-            f"ones up to the period {2 * n * m.pixel:.4g} m synthesized at the plateau C(q_min) = "
-            f"{float(sp.power[0]):.4g} m^4")
+            f"{n} pixels): wavelengths {2 * np.pi / sp.q_max:.4g} .. {longest:.4g} m measured, {beyond}")
     if prepared.summits is not None:
         z = prepared.summits
         ds.attrs.update(map_summit_sigma=z.sigma, map_summit_eta=z.eta, map_summit_beta=z.beta)
