@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -31,7 +32,7 @@ from g2tom.surface.maps import SurfaceMap
 from g2tom.surface.study import DEFAULT_POSITIONS, SurfaceStudy, stream
 
 __all__ = ["MARGIN", "ROUGHNESS_RMS", "MIN_RADIUS_PIXELS", "POSITIONS_KEY", "CANDIDATES", "LATTICE_LIMIT", "Positions", "contact_reach",
-           "window_pixels", "check_resolution", "check_window", "valid_corners", "choose_positions", "spot_corner"]
+           "smooth_radius", "window_pixels", "check_resolution", "check_window", "valid_corners", "choose_positions", "spot_corner"]
 
 #: The window's half side over the heaviest force's contact reach.
 MARGIN = 1.15
@@ -49,19 +50,33 @@ CANDIDATES = 4096
 LATTICE_LIMIT = 65536
 
 
+def _bisect(below: Callable[[float], bool], low: float, high: float, steps: int = 60,
+            geometric: bool = False) -> tuple[float, float]:
+    """The bracket ``[low, high]`` narrowed ``steps`` times around where ``below`` turns False (True at
+    ``low``, False at ``high``), at the arithmetic or ``geometric`` midpoint."""
+    for _ in range(steps):
+        mid = math.sqrt(low * high) if geometric else 0.5 * (low + high)
+        low, high = (mid, high) if below(mid) else (low, mid)
+    return low, high
+
+
+def smooth_radius(study: SurfaceStudy, force: float) -> float:
+    """The study's smooth indenter's contact radius at ``force`` (N), m
+    (:func:`g2tom.physics.indenter.smooth_contact_radius`)."""
+    return float(smooth_contact_radius(force, study.e_star, study.shape, radius=study.radius,
+                                       cone_angle=study.cone_angle, punch_radius=study.punch_radius))
+
+
 def contact_reach(study: SurfaceStudy, force: float, rms: float) -> float:
     """How far from the axis the contact at ``force`` (N) may reach on a map of ``rms`` heights (m), m."""
-    a = float(smooth_contact_radius(force, study.e_star, study.shape, radius=study.radius,
-                                    cone_angle=study.cone_angle, punch_radius=study.punch_radius))
+    a = smooth_radius(study, force)
     if study.hardness is not None:
         a = max(a, math.sqrt(force / (math.pi * study.hardness)))
     rise = float(profile(a, **study.indenter)) + ROUGHNESS_RMS * rms
     low, high = a, max(2.0 * a, a + 1e-9)
     while float(profile(high, **study.indenter)) < rise:
         low, high = high, 2.0 * high
-    for _ in range(60):  # bisection: the profile rises monotonically
-        mid = 0.5 * (low + high)
-        low, high = (mid, high) if float(profile(mid, **study.indenter)) < rise else (low, mid)
+    low, high = _bisect(lambda r: float(profile(r, **study.indenter)) < rise, low, high)  # the profile rises
     return high
 
 
@@ -84,8 +99,7 @@ def check_resolution(study: SurfaceStudy, surface: SurfaceMap) -> None:
     ConfigError
         Naming the lightest force, its contact radius in pixels and the force that would do.
     """
-    a = float(smooth_contact_radius(study.forces[0], study.e_star, study.shape, radius=study.radius,
-                                    cone_angle=study.cone_angle, punch_radius=study.punch_radius))
+    a = smooth_radius(study, study.forces[0])
     pixels = a / surface.pixel
     if pixels >= MIN_RADIUS_PIXELS:
         return
@@ -100,18 +114,12 @@ def check_resolution(study: SurfaceStudy, surface: SurfaceMap) -> None:
 
 def _force_for_radius(study: SurfaceStudy, radius: float) -> float | None:
     """The force (N) whose smooth contact radius is ``radius`` (m), or None if none is (a flat punch)."""
-    def a(force: float) -> float:
-        return float(smooth_contact_radius(force, study.e_star, study.shape, radius=study.radius,
-                                           cone_angle=study.cone_angle, punch_radius=study.punch_radius))
-
     if study.shape == "flat_punch":
         return None
     low, high = 1e-12, 1.0
-    while a(high) < radius:
+    while smooth_radius(study, high) < radius:
         high *= 10.0
-    for _ in range(200):
-        mid = math.sqrt(low * high)
-        low, high = (mid, high) if a(mid) < radius else (low, mid)
+    low, high = _bisect(lambda force: smooth_radius(study, force) < radius, low, high, steps=200, geometric=True)
     return high
 
 
@@ -214,9 +222,7 @@ def check_window(study: SurfaceStudy, surface: SurfaceMap, n: int) -> np.ndarray
         raise ConfigError(f"--window = {n} is out of range: the map's measured area holds no window of {side}; "
                           f"must be <= {largest}")
     low, high = 0.0, study.forces[-1]
-    for _ in range(60):
-        mid = 0.5 * (low + high)
-        low, high = (mid, high) if window_pixels(study, surface, mid) <= largest else (low, mid)
+    low, high = _bisect(lambda force: window_pixels(study, surface, force) <= largest, low, high)
     if low > 0:
         fix = f"the heaviest force it holds is {low:.3g} N: lower --force or measure a larger area"
     else:
