@@ -58,6 +58,7 @@ def test_light_steps_go_on_until_every_fitted_step_meets_the_target(scene, stepp
     rule = stopping_rule(scene, stepped["force"].values, stepped["force_normalized"].values)
     resistance = stepped["resistance"].transpose("xi", "lambda", "delta", "realization").values
     share = stepped["clean_share"].transpose("xi", "lambda", "delta", "realization").values
+    expected = stepped["clean_share_expected"].transpose("xi", "lambda").values
     conducting = stepped["n_conducting"].transpose("xi", "lambda", "delta", "realization").values
     limit = RULE_MARGIN * STEP_TARGET
     for z, a in np.ndindex(alpha.shape):
@@ -68,10 +69,8 @@ def test_light_steps_go_on_until_every_fitted_step_meets_the_target(scene, stepp
         own = []
         for j in rule["steps"]:
             n = counts[z, a, j]
-            with np.errstate(divide="ignore"):
-                t = np.log(resistance[z, a, j, :n])
-            t = np.where(np.isfinite(t), t, np.nan)
-            width = np.sinh(ensemble.prefix_controlled_half_width(t, share[z, a, j, :n], rule["z"]))
+            width = np.sinh(ensemble.prefix_controlled_half_width(
+                resistance[z, a, j : j + 1, :n], share[z, a, j : j + 1, :n], expected[z, a], np.ones(1), rule["z"]))
             own.append(ensemble.stop_count(np.nan_to_num(width, nan=np.inf)[None], limit, alpha[z, a]))
         assert None not in own  # every fitted step met the target (none reached the cap here)
         # each step keeps its own first count meeting it, or a heavier step's larger one
@@ -103,6 +102,7 @@ def test_the_fits_reduce_each_step_over_its_own_realizations(scene, stepped, pla
     np.testing.assert_array_equal(out["step_realizations"].transpose("xi", "lambda", "delta").values, counts)
     resistance = stepped["resistance"].transpose("xi", "lambda", "delta", "realization").values
     share = stepped["clean_share"].transpose("xi", "lambda", "delta", "realization").values
+    expected = stepped["clean_share_expected"].transpose("xi", "lambda").values
     expected = stepped["clean_share_expected"].transpose("xi", "lambda").values
     mean = out["geometric_mean"].transpose("xi", "lambda", "delta").values
     for z, a, j in np.ndindex(counts.shape):

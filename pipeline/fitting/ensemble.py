@@ -10,11 +10,17 @@ weights. A normalization ``R' = R / scale`` only shifts ``t_r`` by ``-log scale`
 Open circuits (``R = +inf``) are left out of ``t_r`` (the geometric mean is over conducting
 realizations): the rule then uses the finite statistics only, an approximation that the stage
 notes; the fits stage's bootstrap gives the final intervals.
+
+With a control variate the fits' per-step estimate is a ratio adjusted by the control
+(:mod:`g2tom.fitting.control_variate`); :func:`prefix_controlled_half_width` is its linearized
+half-width, in which open circuits count (they move the conducting share the control adjusts).
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from g2tom.fitting.control_variate import MIN_CONTROL_VARIANCE
 
 __all__ = ["fit_weights", "statistic", "prefix_half_width", "prefix_controlled_half_width", "stop_count", "z_value",
            "log_standard_error", "mean_half_width"]
@@ -114,36 +120,86 @@ def _prefix_sums(*columns: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
     return count, out
 
 
-def prefix_controlled_half_width(t: np.ndarray, u: np.ndarray, z: float) -> np.ndarray:
-    """:func:`prefix_half_width` of ``t`` adjusted by the control ``u`` (known mean): ``z`` times the
-    standard error of ``mean(t) - b (mean(u) - E u)``, from the residual variance of ``t`` after its
-    least-squares regression on ``u``, over every prefix of the realizations.
+def prefix_controlled_half_width(resistance: np.ndarray, control: np.ndarray, expected: float,
+                                 weights: np.ndarray, z: float, first: int = 1,
+                                 block: int = 256) -> np.ndarray:
+    """Half-width of ``sum_s w_s m_s`` over every prefix of the realizations, ``m_s`` the fits'
+    control-variate estimate of the log geometric mean at step s.
+
+    ``m_s = (mean(y c) - b_n (mean(x) - p)) / (mean(c) - b_d (mean(x) - p))`` (y = ln R, c = 1 where
+    the realization conducts, x its control, p the control's exact expectation; the slopes
+    ``b_n = cov(x, y c) / var(x)``, ``b_d = cov(x, c) / var(x)`` from the same realizations, 0
+    where the control does not vary) is :func:`g2tom.fitting.control_variate.controlled_mean`, step
+    by step. Its linearization: with ``D_s`` the denominator, the realization r contributes
+    ``e_sr = (y_sr c_sr - m_s c_sr - (b_n - m_s b_d) x_sr) / D_s``, so the standard error of
+    ``sum_s w_s m_s`` is ``std_r(sum_s w_s e_sr) / sqrt(n)``: the residual of the ratio's influence
+    after its regression on the control, open circuits counted (they move the share of conducting
+    realizations, which the control adjusts too). Every prefix's covariance of (y c, c, x) over the
+    steps comes from running sums of their products, ``block`` prefixes at a time.
 
     Parameters
     ----------
-    t, u
-        Statistics and their controls on the last axis (..., r); a realization where either is NaN
-        (an open circuit) is skipped.
+    resistance
+        R in ohm, shape (s, r): the steps and the realizations in order; +inf an open circuit.
+        Every entry computed (no NaN).
+    control
+        The realizations' controls, shape (s, r), finite.
+    expected
+        The controls' exact expectation p.
+    weights
+        Step weights, shape (k, s) or (s,) (e.g. ``c_alpha`` and ``c_gamma`` of :func:`fit_weights`).
     z
         Normal quantile of the confidence level.
+    first
+        Smallest prefix wanted (>= 1): the entries of shorter prefixes are NaN and cost nothing.
+    block
+        Prefixes handled together (memory ~ block (3 s)^2 doubles).
 
     Returns
     -------
     numpy.ndarray
-        Shape (..., r): entry n - 1 for the first n realizations (NaN below three finite ones);
-        where ``u`` does not vary, the plain one with n - 2 degrees of freedom.
+        Shape (k, r) ((r,) for one weight vector): entry n - 1 is the half-width with the first n
+        realizations; NaN below three realizations, below ``first``, and where a step has no
+        conducting realization or a non-positive adjusted share of them.
     """
-    count, (tc, uc) = _prefix_sums(t, u)
-    st, su = np.cumsum(tc, axis=-1), np.cumsum(uc, axis=-1)
-    stt, suu, stu = (np.cumsum(a * b, axis=-1) for a, b in ((tc, tc), (uc, uc), (tc, uc)))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        var_t = (stt - st**2 / count) / (count - 1)
-        var_u = (suu - su**2 / count) / (count - 1)
-        cov = (stu - st * su / count) / (count - 1)
-        explained = np.where(var_u > 1e-300, cov**2 / np.where(var_u > 1e-300, var_u, 1.0), 0.0)
-        residual = np.maximum(var_t - explained, 0.0) * (count - 1) / (count - 2)
-        out = z * np.sqrt(residual / count)
-    return np.where(count >= 3, out, np.nan)
+    w = np.atleast_2d(np.asarray(weights, float))
+    conducts = np.isfinite(resistance) & (resistance > 0)
+    y = np.where(conducts, np.log(np.where(conducts, resistance, 1.0)), 0.0)
+    values = np.concatenate([y, conducts.astype(float), np.asarray(control, float)])
+    steps, n = resistance.shape
+    # Shifted by the first realizations' means: conditioned sums, every prefix's result unchanged.
+    shift = values[:, : min(n, 16)].mean(axis=1, keepdims=True)
+    values = values - shift
+    sums = np.cumsum(values, axis=1)
+    out = np.full((w.shape[0], n), np.nan)
+    start = max(first, 1) - 1
+    running = values[:, :start] @ values[:, :start].T
+    ys, cs, xs = (slice(k * steps, (k + 1) * steps) for k in range(3))
+    for begin in range(start, n, block):
+        stop = min(begin + block, n)
+        part = values[:, begin:stop]
+        products = running + np.cumsum(np.einsum("ir,jr->rij", part, part), axis=0)
+        running = products[-1]
+        count = np.arange(begin + 1, stop + 1, dtype=float)[:, None]
+        total = sums[:, begin:stop].T
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cov = (products - total[:, :, None] * total[:, None, :] / count[:, :, None]) / (count[:, :, None] - 1)
+            mean = total / count + shift[:, 0]
+            var_x = np.diagonal(cov[:, xs, xs], axis1=1, axis2=2)
+            varies = var_x > MIN_CONTROL_VARIANCE
+            safe = np.where(varies, var_x, 1.0)
+            slope_y = np.where(varies, np.diagonal(cov[:, ys, xs], axis1=1, axis2=2) / safe, 0.0)
+            slope_c = np.where(varies, np.diagonal(cov[:, cs, xs], axis1=1, axis2=2) / safe, 0.0)
+            offset = mean[:, xs] - expected
+            share = mean[:, cs] - slope_c * offset
+            m = (mean[:, ys] - slope_y * offset) / share
+            scale = w[:, None, :] / share
+            coefficients = np.concatenate([scale, -scale * m, -scale * (slope_y - m * slope_c)], axis=2)
+            variance = np.einsum("kbi,bij,kbj->kb", coefficients, cov, coefficients)
+            width = z * np.sqrt(np.maximum(variance, 0.0) / count[:, 0])
+        valid = (count[:, 0] >= 3) & np.all((mean[:, cs] > 0) & (share > 0), axis=1)
+        out[:, begin:stop] = np.where(valid, width, np.nan)
+    return out[0] if np.ndim(weights) == 1 else out
 
 
 def stop_count(half_width: np.ndarray, target: float, n_min: int) -> int | None:

@@ -202,17 +202,19 @@ def build(
     _check_grids(contact, oxide)
     source = RecordedFields.of(scenario, oxide) if source is None else source
     radius, weights, settings = work_settings(scenario, contact)
-    rule = stopping_rule(scenario, contact["force"].values, contact["force_normalized"].values)
+    expected = expected_clean_share(scenario) if settings.control_variate else None
+    rule = stopping_rule(scenario, contact["force"].values, contact["force_normalized"].values, expected)
     cells, counts, step_counts, uncropped = compute_cells(scenario, source, radius, weights, settings, rule, options)
-    widths = [[half_widths(c["resistance"][None, ..., :n], rule, c["clean_share"][None, ..., :n] if "clean_share" in c
-                           else None) for c, n in zip(row, n_row)] for row, n_row in zip(cells, counts)]
+    widths = [[half_widths(c["resistance"][None, ..., :n], rule, c["clean_share"][None, ..., :n], expected[z, a, None], n)
+               if settings.control_variate else half_widths(c["resistance"][None, ..., :n], rule)
+               for a, (c, n) in enumerate(zip(row, n_row))] for z, (row, n_row) in enumerate(zip(cells, counts))]
     last = tuple(np.array([[w[k][0, -1] for w in row] for row in widths]) for k in (0, 1))
     out: dict[str, Any] = padded(cells)
     out["n_uncropped"] = uncropped
     if step_counts is not None:
         out["step_realizations"] = step_counts
-    if "clean_share" in out:
-        out["clean_share_expected"] = expected_clean_share(scenario)
+    if settings.control_variate:
+        out["clean_share_expected"] = expected
     clean = settings.contact_model.clean(radius, weights, settings, _clean_draws(scenario))
     insulating_greenwood = scenario.cube.model == "greenwood" and scenario.oxide.film == "insulating"
     clean["models"] = clean_conductances(

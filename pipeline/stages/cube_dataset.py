@@ -117,6 +117,10 @@ def dataset(
                 f"alpha half-width is <= {RULE_MARGIN:g} x target_half_width, else max_realizations"
             ),
         })
+        if "clean_share" in out:
+            attrs["stopping_rule"] += (
+                "; the half-width of the fits' control-variate estimate, linearized (the influence of each "
+                "realization on every step's adjusted ratio, open circuits counted)")
     if "step_realizations" in out:
         attrs["step_half_width"] = ox.step_half_width
         attrs["stopping_rule"] += (
