@@ -96,12 +96,46 @@ def test_default_and_quick_sets_meet_the_issue(surface) -> None:
     assert est.ensemble > 0 and est.wall <= 60  # --quick exercises part 2 too
 
 
+#: g2tom's side of a set (``validate._g2tom_side``) and the validated scenario's ensemble
+#: (``ensemble.model_ensemble``), as ``tiny_run`` computed them, by their arguments.
+_G2TOM_ANSWERS: dict = {}
+
+
+def _remembering(monkeypatch, reuse: bool) -> None:
+    """Store g2tom's side and the model's ensemble of each set computed from now on in
+    :data:`_G2TOM_ANSWERS`; with ``reuse``, answer a set stored there from the store (a deep copy)
+    instead of computing it again. Both are deterministic and no full-field case depends on them: the
+    tests that read them back are about the cases (resuming, running them on a cluster)."""
+    import copy
+
+    from g2tom.reference import validate
+
+    for owner, name in ((validate, "_g2tom_side"), (ensemble, "model_ensemble")):
+        real = getattr(owner, name)
+
+        def answer(*args, _real=real, _name=name):
+            key = (_name, *args)
+            if not (reuse and key in _G2TOM_ANSWERS):
+                _G2TOM_ANSWERS[key] = _real(*args)
+            return copy.deepcopy(_G2TOM_ANSWERS[key])
+
+        monkeypatch.setattr(owner, name, answer)
+
+
 @pytest.fixture(scope="module")
 def tiny_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("validate")
     log = io.StringIO()
-    run_validation(TINY, out, stream=log, draw=figure)
+    with pytest.MonkeyPatch.context() as patch:
+        _remembering(patch, reuse=False)  # computed here, once
+        run_validation(TINY, out, stream=log, draw=figure)
     return out, log.getvalue()
+
+
+@pytest.fixture
+def g2tom_once(tiny_run, monkeypatch) -> None:
+    """g2tom's side and the model's ensemble of ``tiny_run``'s set read back, not computed again."""
+    _remembering(monkeypatch, reuse=True)
 
 
 def test_outputs_are_labelled_and_consistent(tiny_run) -> None:
@@ -209,7 +243,7 @@ def test_log_standard_error_against_a_bootstrap() -> None:
     assert np.isnan(log_standard_error(np.array([1.2, np.inf])))
 
 
-def test_a_rerun_resumes_from_the_stored_cases(tiny_run) -> None:
+def test_a_rerun_resumes_from_the_stored_cases(tiny_run, g2tom_once) -> None:
     out, _ = tiny_run
     before = xr.open_dataset(out / "validate.nc").load()
     damaged = out / "cases" / f"{cases.Case(1, 0, TINY.n_grid, True).name}.json"
@@ -404,7 +438,8 @@ def _same(a: xr.Dataset, b: xr.Dataset) -> None:
             np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
 
 
-def test_a_killed_run_resumes_to_the_uninterrupted_result_in_both_parts(tiny_run, tmp_path, monkeypatch) -> None:
+def test_a_killed_run_resumes_to_the_uninterrupted_result_in_both_parts(tiny_run, g2tom_once, tmp_path,
+                                                                         monkeypatch) -> None:
     out, _ = tiny_run
     real = cases.run_case
     calls = []
@@ -568,7 +603,7 @@ def test_part_2_validates_the_scenarios_own_model(model) -> None:
     assert own.contact.model in model.description and own.cube.model in model.description
 
 
-def test_a_run_on_the_discrete_model_reuses_part_1s_cases(tiny_run, tmp_path) -> None:
+def test_a_run_on_the_discrete_model_reuses_part_1s_cases(tiny_run, g2tom_once, tmp_path) -> None:
     import shutil
 
     out, _ = tiny_run
@@ -627,7 +662,7 @@ def test_plan_validate_prints_both_surfaces_cases_grids_and_estimate(capsys) -> 
     assert out.count("validate: estimated") == 2 and "on 2 worker(s)" in out
 
 
-def test_cases_on_a_local_cluster_give_the_serial_run(tiny_run, tmp_path) -> None:
+def test_cases_on_a_local_cluster_give_the_serial_run(tiny_run, g2tom_once, tmp_path) -> None:
     from g2tom.compute import ComputeOptions
 
     out, _ = tiny_run
