@@ -52,20 +52,47 @@ def small() -> ResolvedScenario:
     return resolve(load_scenario("paper_gt", SMALL_OVERRIDES))
 
 
-@pytest.fixture(scope="session")
-def small_atlas(tmp_path_factory) -> Path:
-    """``atlas.nc`` of the small atlas (tests/test_atlas.py's ``BASE`` on ``paper_gt``, its ``DESIGN``:
-    5 scenes and the invariance twin), computed once for the whole run, whichever pytest-xdist worker
-    asks first (the others wait on a lock and read it). Read it only: copy it to change it."""
-    from g2tom.atlas import run as atlas
-    from tests.test_atlas import BASE, DESIGN
-
+def _shared(tmp_path_factory, name: str, build) -> Path:
+    """``build(folder)``'s path, computed once for the whole run in ``<basetemp>/<name>``, whichever
+    pytest-xdist worker asks first (the others wait on a lock and read it)."""
     root = tmp_path_factory.getbasetemp()
     if os.environ.get("PYTEST_XDIST_WORKER"):  # the workers' temporary folders share this parent
         root = root.parent
-    with open(root / "small_atlas.lock", "w") as lock:
+    with open(root / f"{name}.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
-        path = root / "small_atlas" / "atlas" / atlas.ATLAS_FILE
-        if not path.is_file():
-            path = atlas.run_atlas(load_scenario("paper_gt", BASE), DESIGN, root / "small_atlas")
-        return path
+        done = root / name / "path.txt"
+        if not done.is_file():
+            path = build(root / name)
+            done.write_text(str(path))
+        return Path(done.read_text())
+
+
+@pytest.fixture(scope="session")
+def small_atlas(tmp_path_factory) -> Path:
+    """``atlas.nc`` of the small atlas (tests/test_atlas.py's ``BASE`` on ``paper_gt``, its ``DESIGN``:
+    5 scenes and the invariance twin), computed once for the whole run. Read it only: copy it to change it."""
+    from g2tom.atlas import run as atlas
+    from tests.test_atlas import BASE, DESIGN
+
+    return _shared(tmp_path_factory, "small_atlas",
+                   lambda folder: atlas.run_atlas(load_scenario("paper_gt", BASE), DESIGN, folder))
+
+
+#: The small atlas on discrete asperities (tests/test_atlas.py's ``BASE`` on the default's discrete
+#: model with the disc rule, a fixed pool of 8 surfaces) and its design: mu 2 .. 8, Pi 10 .. 40.
+DISCRETE_ATLAS = {"contact.model": "discrete", "oxide.spot_rule": "disc", "cube.model": "point",
+                  "contact.surfaces": 8}
+
+
+@pytest.fixture(scope="session")
+def small_discrete_atlas(tmp_path_factory) -> Path:
+    """``atlas.nc`` of the small atlas on discrete asperities (:data:`DISCRETE_ATLAS`), computed once for
+    the whole run (tests/test_atlas.py checks it, tests/test_predict_chain.py answers with its
+    surrogate). Read it only: copy it to change it."""
+    from g2tom.atlas import run as atlas
+    from g2tom.atlas.design import AtlasDesign
+    from tests.test_atlas import BASE
+
+    design = AtlasDesign(mu=(2.0, 8.0), Pi=(10.0, 40.0), n_mu=2, n_pi=2, n_heldout=1)
+    return _shared(tmp_path_factory, "small_discrete_atlas",
+                   lambda folder: atlas.run_atlas(load_scenario("paper", {**BASE, **DISCRETE_ATLAS}), design, folder))

@@ -319,17 +319,15 @@ def test_cli_runs_fits_and_summarizes(tmp_path, capsys) -> None:
     assert "atlas: scene " not in capsys.readouterr().err
 
 
-def test_the_atlas_runs_on_discrete_asperities(tmp_path) -> None:
+def test_the_atlas_runs_on_discrete_asperities(small_discrete_atlas) -> None:
     """The atlas on whatever model its base has: discrete coupled asperities with the disc rule and the
-    point model (what `paper` is about to become), on a small design."""
+    point model (what `paper` is about to become), on a small design (conftest's ``small_discrete_atlas``:
+    mu 2 .. 8, Pi 10 .. 40, which tests/test_predict_chain.py answers with)."""
     from g2tom.atlas.fit import fit_atlas
 
-    discrete = load_scenario("paper", {**BASE, "contact.model": "discrete", "oxide.spot_rule": "disc",
-                                       "cube.model": "point", "contact.surfaces": 8})
-    # mu <= 6: at mu >= ~16 and Pi <= 40, the discrete solve's first bracket (physics/discrete_contact.py,
+    # mu <= 8: at mu >= ~16 and Pi <= 40, the discrete solve's first bracket (physics/discrete_contact.py,
     # _rigid_delta) fails by rounding at F' 0.05 on many surfaces where one cap carries the load alone
-    design = AtlasDesign(mu=(2.0, 6.0), Pi=(20.0, 40.0), n_mu=2, n_pi=2, n_heldout=1)
-    ds = _load(atlas.run_atlas(discrete, design, tmp_path))
+    ds = _load(small_discrete_atlas)
     assert ds.attrs["contact.model"] == "discrete" and ds.attrs["oxide.spot_rule"] == "disc"
     force = ds["force_normalized"].values
     assert np.all(force[:, 0] < 0.05) and np.all(force[:, -1] > 20)

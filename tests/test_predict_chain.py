@@ -4,6 +4,7 @@ against its full field (pipeline/predict/chain.py), on the quick validation set.
 from __future__ import annotations
 
 import dataclasses
+import shutil
 
 import numpy as np
 import pytest
@@ -11,9 +12,7 @@ import xarray as xr
 
 from g2tom.atlas import run as atlas
 from g2tom.atlas.fit import write_atlas_surrogate
-from g2tom.before_work import load_scenario
 from g2tom.predict import chain
-from tests.test_atlas import BASE, DESIGN
 
 
 @pytest.fixture(scope="module")
@@ -31,11 +30,12 @@ def validated(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def surrogate(tmp_path_factory):
-    design = DESIGN.__class__(mu=(2.0, 8.0), Pi=(10.0, 40.0), n_mu=2, n_pi=2, n_heldout=1)
-    # a small fixed pool of discrete surfaces (the default's 256 solved at every scene cost most of this fixture)
-    base = load_scenario("paper", {**BASE, "contact.surfaces": 8})
-    target, _ = write_atlas_surrogate(atlas.run_atlas(base, design, tmp_path_factory.mktemp("atlas")))
+def surrogate(tmp_path_factory, small_discrete_atlas):
+    """The surrogate of conftest's small atlas on discrete asperities (mu 2 .. 8, Pi 10 .. 40; a small
+    fixed pool of 8 surfaces), fitted on a copy of it."""
+    folder = tmp_path_factory.mktemp("atlas") / "atlas"
+    folder.mkdir()
+    target, _ = write_atlas_surrogate(shutil.copy(small_discrete_atlas, folder / atlas.ATLAS_FILE))
     return target
 
 
