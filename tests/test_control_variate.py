@@ -155,6 +155,22 @@ def test_the_control_variate_is_refused_where_its_expectation_is_not_exact() -> 
             load_scenario("paper", overrides)
 
 
+def test_auto_takes_the_control_variate_where_it_applies_and_leaves_it_elsewhere() -> None:
+    """The default study's ``auto`` is settled as the scenario loads; published's hashes stay."""
+    from g2tom.before_work import load_scenario
+    from g2tom.config import read_scenario
+
+    assert read_scenario("paper").fits.control_variate == "auto"
+    assert load_scenario("paper").fits.control_variate == "clean_share"
+    for name in ("paper_gt", "published"):
+        assert load_scenario(name).fits.control_variate == "none"
+    for key, value in (("oxide.threshold", "empirical"), ("fits.reduction", "median"), ("oxide.amplitudes", "rayleigh")):
+        assert load_scenario("paper", {key: value}).fits.control_variate == "none"  # no refusal
+    published = load_scenario("published")
+    assert "fits.control_variate" not in published.stage_parameters("cube")
+    assert load_scenario("published", {"fits.control_variate": "none"}).config_hash() == published.config_hash()
+
+
 def _synthetic_steps(rng: np.random.Generator, n: int, p: float = 0.45) -> tuple[np.ndarray, np.ndarray]:
     """Three load steps of R (ohm, +inf where open) tied to a control of expectation ``p``: the
     lightest steps open most often where the control is small."""

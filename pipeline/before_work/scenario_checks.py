@@ -17,7 +17,7 @@ from typing import Any, Iterable, Mapping
 from g2tom.before_work.window_checks import check_domains
 from g2tom.config import AUTO, SECTIONS, ConfigError, Scenario, parameter_key, read_scenario
 
-__all__ = ["check_scenario", "load_scenario"]
+__all__ = ["check_scenario", "load_scenario", "with_control_variate"]
 
 
 #: Largest integer a netCDF attribute (64-bit signed) can record.
@@ -63,17 +63,15 @@ def _check_spots(s: Scenario) -> None:
         )
 
 
-def _check_control_variate(s: Scenario) -> None:
-    """The control variate's expectation is exact for discrete spots, the theoretical threshold
-    and ideal amplitudes only, and it adjusts the geometric mean."""
-    if s.fits.control_variate == "none":
-        return
+def _control_variate_conflict(s: Scenario) -> str | None:
+    """Why the control variate cannot adjust ``s``'s geometric mean (its expectation is exact for
+    discrete spots, the theoretical threshold and ideal amplitudes only, and it adjusts the
+    geometric mean of an insulating film's ensemble), as the end of a refusal; None where it can."""
     from g2tom.models import contact_model, models_that  # here: the command line imports this module before numpy
 
     if not contact_model(s).has_clean_share:
-        raise ConfigError(f"contact.model = {s.contact.model!r} is not allowed with fits.control_variate = "
-                          f"{s.fits.control_variate!r}: must be {models_that(lambda m: m.has_clean_share)} "
-                          f"(the control is the discrete spots' clean share)")
+        return (f"contact.model = {s.contact.model!r} is not allowed with fits.control_variate = 'clean_share': "
+                f"must be {models_that(lambda m: m.has_clean_share)} (the control is the discrete spots' clean share)")
     for name, value, allowed, why in (
         ("oxide.threshold", s.oxide.threshold, "theoretical", "its expectation needs one threshold for every field"),
         ("oxide.amplitudes", s.oxide.amplitudes, "ideal",
@@ -82,8 +80,24 @@ def _check_control_variate(s: Scenario) -> None:
         ("oxide.film", s.oxide.film, "insulating", "a resistive film conducts where the control counts no share"),
     ):
         if value != allowed:
-            raise ConfigError(f"{name} = {value!r} is not allowed with fits.control_variate = "
-                              f"{s.fits.control_variate!r}: must be {allowed!r} ({why})")
+            return (f"{name} = {value!r} is not allowed with fits.control_variate = 'clean_share': "
+                    f"must be {allowed!r} ({why})")
+    return None
+
+
+def _check_control_variate(s: Scenario) -> None:
+    """``fits.control_variate = "clean_share"`` only where :func:`_control_variate_conflict` finds none."""
+    if s.fits.control_variate == "clean_share" and (conflict := _control_variate_conflict(s)):
+        raise ConfigError(conflict)
+
+
+def with_control_variate(s: Scenario) -> Scenario:
+    """``s`` with ``fits.control_variate = "auto"`` settled: ``"clean_share"`` where the control
+    variate applies (:func:`_control_variate_conflict`), else ``"none"``; any other value kept."""
+    if s.fits.control_variate != "auto":
+        return s
+    chosen = "none" if _control_variate_conflict(s) else "clean_share"
+    return dataclasses.replace(s, fits=dataclasses.replace(s.fits, control_variate=chosen))
 
 
 def _check_hardness(s: Scenario) -> None:
@@ -173,7 +187,8 @@ def _warn_plasticity(s: Scenario) -> None:
 
 def load_scenario(config: str | Path = "paper", overrides: Iterable[str] | Mapping[str, Any] = (), *,
                   rough_scene: bool = True) -> Scenario:
-    """Load a bundled scenario by name or a TOML file, apply overrides, and check every value and
+    """Load a bundled scenario by name or a TOML file, apply overrides, settle
+    ``fits.control_variate = "auto"`` (:func:`with_control_variate`), and check every value and
     every combination (:func:`check_scenario`).
 
     Parameters
@@ -192,6 +207,6 @@ def load_scenario(config: str | Path = "paper", overrides: Iterable[str] | Mappi
     ConfigError
         Naming the parameter, its value and the allowed range.
     """
-    scenario = read_scenario(config, overrides)
+    scenario = with_control_variate(read_scenario(config, overrides))
     check_scenario(scenario, rough_scene)
     return scenario

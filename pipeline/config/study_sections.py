@@ -177,8 +177,9 @@ class Fits:
     control_variate: str = param(
         "none", "1", "control variate of the geometric mean: none, or clean_share (ln R of each step regressed on "
         "the realization's radius-weighted clean share of its spots, whose expectation is known exactly; needs "
-        "discrete asperities, the theoretical threshold, ideal amplitudes and the geometric mean)",
-        choices=("none", "clean_share"),
+        "discrete asperities, the theoretical threshold, ideal amplitudes and the geometric mean), or auto: "
+        "clean_share where those hold, else none (g2tom params shows the value used)",
+        choices=("none", "clean_share", "auto"),
     )
     n_bootstrap: int = param(400, "1", "bootstrap resamples over realizations", ge=10)
     confidence: float = param(0.95, "1", "confidence level of the intervals", gt=0, lt=1)
