@@ -13,7 +13,7 @@ import logging
 import os
 import signal
 import threading
-from contextlib import ExitStack, contextmanager
+from contextlib import ExitStack, contextmanager, suppress
 from dataclasses import dataclass
 from multiprocessing import resource_tracker
 from typing import Any, Callable, Iterator, TypeVar
@@ -122,6 +122,21 @@ def _quiet_when_interrupted(kind: type[BaseException] | None, *_: object) -> Non
         logging.getLogger("asyncio").setLevel(logging.CRITICAL)
 
 
+#: Seconds a cluster interrupted while it starts is given to close.
+ABANDON_TIMEOUT = 2.0
+
+
+def _abandon(clusters: set[Any]) -> None:
+    """Close clusters whose start was interrupted (SIGTERM, or Ctrl-C taken by the main thread), as
+    far as they close, and take them off ``distributed``'s exit-time closing: closing a cluster
+    whose workers are still starting fails on their state, and at exit that failure printed a
+    traceback after the command's one line."""
+    for cluster in clusters:
+        with suppress(BaseException):
+            cluster.close(timeout=ABANDON_TIMEOUT)
+        cluster.shutdown_on_close = False
+
+
 def _client(stack: ExitStack, options: ComputeOptions) -> Any:
     """A ``distributed.Client`` for ``options``, or None for the local threaded scheduler (the workers
     of a local cluster never receive SIGINT: :func:`children_ignore_interrupts`)."""
@@ -131,10 +146,16 @@ def _client(stack: ExitStack, options: ComputeOptions) -> Any:
         return stack.enter_context(Client(options.scheduler, timeout=CONNECT_TIMEOUT))
     if options.workers is not None and options.workers > 1 and _distributed_available():
         from distributed import Client, LocalCluster
+        from distributed.deploy.spec import SpecCluster
 
-        with children_ignore_interrupts():
-            cluster = LocalCluster(n_workers=options.workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=":0", silence_logs=logging.CRITICAL)
+        before = set(SpecCluster._instances)
+        try:
+            with children_ignore_interrupts():
+                cluster = LocalCluster(n_workers=options.workers, threads_per_worker=1, processes=True,
+                                       dashboard_address=":0", silence_logs=logging.CRITICAL)
+        except BaseException:
+            _abandon(set(SpecCluster._instances) - before)
+            raise
         stack.enter_context(cluster)
         client = stack.enter_context(Client(cluster))
         stack.push(_quiet_when_interrupted)

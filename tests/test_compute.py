@@ -113,3 +113,29 @@ def test_tasks_start_in_the_given_order_one_per_thread() -> None:
     assert peak == 2  # both threads busy, never more
     # "mid" starts when "long2" ends (the first thread free), not before
     assert _LOG.index(("start", "mid")) > _LOG.index(("end", "long2"))
+
+
+def test_a_cluster_interrupted_while_it_starts_is_closed_and_not_left_to_close_at_exit(monkeypatch) -> None:
+    """SIGTERM (or Ctrl-C taken by the main thread) while the local cluster starts: the cluster is
+    closed as far as it goes and taken off distributed's exit-time closing, which printed a traceback
+    after the command's one line when the workers were still starting."""
+    distributed = pytest.importorskip("distributed")
+    from contextlib import ExitStack
+
+    from distributed.core import Status
+
+    import g2tom.compute as compute_module
+
+    started = []
+
+    class InterruptedWhileStarting(distributed.LocalCluster):
+        def __init__(self, *args, **kwargs) -> None:  # noqa: ANN002, ANN003
+            started.append(self)
+            super().__init__(*args, **kwargs)
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(distributed, "LocalCluster", InterruptedWhileStarting)
+    with pytest.raises(KeyboardInterrupt), ExitStack() as stack:
+        compute_module._client(stack, compute_module.ComputeOptions(workers=2, progress=False))
+    assert len(started) == 1
+    assert not started[0].shutdown_on_close and started[0].status == Status.closed
