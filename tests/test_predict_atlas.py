@@ -186,17 +186,18 @@ def test_a_format_two_surrogate_is_still_read(tmp_path, atlas_json) -> None:
         paper.resistance_scale * np.exp(np.log(g.mu) - 0.5 * np.log(f_n) + 0.1 * np.log(g.Pi) + z[1] + w[1]), rel=1e-9)
 
 
-def test_1e5_queries_over_10_surfaces_within_a_second(atlas_json) -> None:
-    import time
-
+def test_1e5_queries_over_10_surfaces_are_answered_each_as_alone(atlas_json) -> None:
+    """10^4 queries on each of 10 surfaces in one call per surface (`g2tom bench --only predict` times
+    this on the shipped atlas): every answer finite, and equal to the same query asked alone."""
     sur = load_atlas_surrogate(atlas_json)
     rng = np.random.default_rng(0)
     lo, hi = sur.domain["force_normalized"]
-    surfaces = [_surface(eta) for eta in np.linspace(1.1e8, 1.9e8, 10)]
-    start = time.perf_counter()
-    for scenario in surfaces:
+    for scenario in [_surface(eta) for eta in np.linspace(1.1e8, 1.9e8, 10)]:
         n = 10_000
         force = np.exp(rng.uniform(np.log(lo), np.log(hi), n)) * scenario.force_scale
-        out = predict_atlas(sur, scenario, force, rng.uniform(0.05, 0.5, n), rng.uniform(1.0, 5.0, n))
-    elapsed = time.perf_counter() - start
-    assert np.all(np.isfinite(out["resistance"].values)) and elapsed < 1.0, elapsed
+        xi, lam = rng.uniform(0.05, 0.5, n), rng.uniform(1.0, 5.0, n)
+        out = predict_atlas(sur, scenario, force, xi, lam)["resistance"].values
+        assert np.all(np.isfinite(out))
+        for i in rng.choice(n, 3, replace=False):
+            alone = float(predict_atlas(sur, scenario, force[i], xi[i], lam[i])["resistance"])
+            assert out[i] == pytest.approx(alone, rel=1e-12)

@@ -5,11 +5,15 @@ smooth band tables (the timing does not depend on their values), times
 :func:`g2tom.predict.predict` on 10^5 random queries inside the fitted ranges (median of
 repeated runs), and, as the reference in the same process, the same predictor called once per
 query on a few hundred of them; reports both, their ratio per query, and the largest relative
-difference between the two on the common queries (they must agree).
+difference between the two on the common queries (they must agree). Beside it, the shipped atlas
+surrogate (:func:`g2tom.predict.atlas.predict_atlas`) answering 10^5 queries spread over
+:data:`_ATLAS_SURFACES` surfaces (the scenario's with other asperity densities, inside the atlas),
+median of repeated runs.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
 from typing import Any
@@ -18,6 +22,7 @@ import numpy as np
 
 from g2tom.bench.timing import median_time
 from g2tom.config import Scenario
+from g2tom.predict.atlas import load_atlas_surrogate, predict_atlas, shipped_path
 from g2tom.predict.predictor import predict
 from g2tom.stages.surrogate_file import CURVE_TABLE, GRID_TABLES, STEP_TABLES, SurrogateTables
 from g2tom.scene import scene_groups
@@ -27,6 +32,10 @@ __all__ = ["run"]
 _REPEATS = 5
 _QUERIES = 100_000
 _LOOP_QUERIES = 300
+#: Surfaces the atlas timing spreads its queries over, and their asperity densities (m^-2): on the
+#: paper's scene mu 4.1-7.9 and Pi 20-38, inside the shipped atlas.
+_ATLAS_SURFACES = 10
+_ATLAS_ETA = (1.0e8, 1.9e8)
 
 
 
@@ -49,8 +58,29 @@ def _tables(scenario: Scenario) -> SurrogateTables:
     return SurrogateTables(coef, lam, xi, force_n, ranges, tables, {"method": "bench", "mu": scene.mu, "Pi": scene.Pi})
 
 
+def _atlas_seconds(scenario: Scenario) -> float | None:
+    """Median seconds of 10^5 atlas-surrogate queries over :data:`_ATLAS_SURFACES` surfaces (each a
+    tenth of them), None without a shipped atlas surrogate."""
+    path = shipped_path()
+    if path is None:
+        return None
+    surrogate = load_atlas_surrogate(path)
+    rng = np.random.default_rng(np.random.SeedSequence(20240531))
+    lo, hi = surrogate.domain["force_normalized"]
+    share = _QUERIES // _ATLAS_SURFACES
+    batches = []
+    for eta in np.linspace(*_ATLAS_ETA, _ATLAS_SURFACES):
+        surface = dataclasses.replace(scenario, roughness=dataclasses.replace(scenario.roughness, eta=float(eta)))
+        force = np.exp(rng.uniform(np.log(lo), np.log(hi), share)) * surface.force_scale
+        batches.append((surface, force, rng.uniform(*surrogate.domain["xi"], share),
+                        rng.uniform(*surrogate.domain["lambda"], share)))
+    seconds, _ = median_time(lambda: [predict_atlas(surrogate, *batch) for batch in batches], _REPEATS)
+    return seconds
+
+
 def run(scenario: Scenario) -> dict[str, Any]:
-    """Time 10^5 vectorized predictions against one-at-a-time calls; JSON-ready figures."""
+    """Time 10^5 vectorized predictions against one-at-a-time calls, and 10^5 atlas-surrogate
+    predictions over ten surfaces; JSON-ready figures."""
     tables = _tables(scenario)
     rng = np.random.default_rng(np.random.SeedSequence(20240531))
     lo, hi = (r * scenario.force_scale for r in tables.ranges["force_normalized"])
@@ -64,7 +94,11 @@ def run(scenario: Scenario) -> dict[str, Any]:
         single = [float(predict(tables, scenario, force[i], xi[i], lam[i])["resistance_mean_upper"]) for i in range(_LOOP_QUERIES)]
         loop_per_query = (time.perf_counter() - start) / _LOOP_QUERIES
     vector_per_query = vector_s / _QUERIES
+    atlas_s = _atlas_seconds(scenario)
     return {
+        "atlas_queries": _QUERIES,
+        "atlas_surfaces": _ATLAS_SURFACES,
+        "atlas_seconds": None if atlas_s is None else round(atlas_s, 4),
         "queries": _QUERIES,
         "vectorized_seconds": round(vector_s, 4),
         "vectorized_per_query_seconds": vector_per_query,
