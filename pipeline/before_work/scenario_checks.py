@@ -86,14 +86,15 @@ def _control_variate_conflict(s: Scenario) -> str | None:
 
 
 def _check_control_variate(s: Scenario) -> None:
-    """``fits.control_variate = "clean_share"`` only where :func:`_control_variate_conflict` finds none."""
+    """``fits.control_variate = "clean_share"`` only where ``_control_variate_conflict`` finds none."""
     if s.fits.control_variate == "clean_share" and (conflict := _control_variate_conflict(s)):
         raise ConfigError(conflict)
 
 
 def with_control_variate(s: Scenario) -> Scenario:
     """``s`` with ``fits.control_variate = "auto"`` settled: ``"clean_share"`` where the control
-    variate applies (:func:`_control_variate_conflict`), else ``"none"``; any other value kept."""
+    variate applies (discrete spots, the theoretical threshold, ideal amplitudes, the geometric mean, an
+    insulating film), else ``"none"``; any other value kept."""
     if s.fits.control_variate != "auto":
         return s
     chosen = "none" if _control_variate_conflict(s) else "clean_share"
@@ -188,8 +189,8 @@ def _warn_plasticity(s: Scenario) -> None:
 def load_scenario(config: str | Path = "paper", overrides: Iterable[str] | Mapping[str, Any] = (), *,
                   rough_scene: bool = True) -> Scenario:
     """Load a bundled scenario by name or a TOML file, apply overrides, settle
-    ``fits.control_variate = "auto"`` (:func:`with_control_variate`), and check every value and
-    every combination (:func:`check_scenario`).
+    ``fits.control_variate = "auto"`` (:func:`g2tom.before_work.scenario_checks.with_control_variate`),
+    and check every value and every combination (:func:`check_scenario`).
 
     Parameters
     ----------
