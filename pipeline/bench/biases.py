@@ -25,7 +25,10 @@ The steps' contact is not solved again where the contact stage's file holds it
 (:func:`stored_contact`): ``<data_dir>/contact.nc``, current for the run's scenario, serves each step
 whose contact parameters are the scenario's but for a smaller pool (on the default scenario, the
 discrete steps' 100 surfaces are the first 100 of its 256). The steps that differ only in their spots
-share one Greenwood-Tripp solve (:func:`g2tom.contact_solution.shared_solves`).
+share one Greenwood-Tripp solve (:func:`g2tom.contact_solution.shared_solves`), and the steps that meet
+the same spots one solve of the clean surface (:func:`g2tom.models.shared_clean.shared_cleans`: on the
+default scenario the spectral period's, the point model's and the spot rules' steps reuse the step
+before's).
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ from g2tom.compute import ComputeOptions
 from g2tom.contact_solution import shared_solves
 from g2tom.errors import StaleInputError
 from g2tom.models import Discrete
+from g2tom.models.shared_clean import shared_cleans
 from g2tom.config import ResolvedScenario, Scenario
 from g2tom.before_work import load_scenario
 from g2tom.before_work.domains import resolve, resolved
@@ -155,7 +159,7 @@ def run(scenario: Scenario, data_dir: str | Path | None = None) -> dict[str, Any
     contact.nc under ``data_dir``, where current, stands in for the steps' contact it holds)."""
     chain, overrides, contacts = [], {}, {}
     stored = _stored(scenario, data_dir)
-    with shared_solves():
+    with shared_solves(), shared_cleans():
         for label, change in STEPS:
             overrides = {**overrides, **change}
             chain.append({"step": label, "overrides": dict(change), **_one(overrides, contacts, stored)})

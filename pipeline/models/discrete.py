@@ -19,6 +19,7 @@ from g2tom.models.base import ContactModel, PlanWork, TypicalEnsemble
 from g2tom.models.cube_settings import CubeSettings
 from g2tom.models.discrete_cube import DiscretePool, clean_pool, discrete_chunk
 from g2tom.models.lattice_cube import TERMS
+from g2tom.models.shared_clean import once
 from g2tom.scene import FieldSource
 
 __all__ = ["Discrete", "MIN_TOUCHING"]
@@ -142,7 +143,9 @@ class Discrete(ContactModel):
 
     @staticmethod
     def _clean(pool: DiscretePool, rho: float, model: str) -> dict[str, np.ndarray]:
-        terms = clean_pool(pool, rho, model)
+        """:meth:`clean` by ``model`` (inside :func:`g2tom.models.shared_clean.shared_cleans`, the pool's
+        terms once per distinct input)."""
+        terms = once(lambda: clean_pool(pool, rho, model), "clean_pool", pool, rho, model)
         resistance = terms["resistance"]
         if pool.steps is None:
             mean, is_open = np.mean, np.isinf(resistance)

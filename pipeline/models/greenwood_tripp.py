@@ -14,6 +14,7 @@ from g2tom.config import Scenario
 from g2tom.models.base import ContactModel, TypicalEnsemble
 from g2tom.models.cube_settings import CubeSettings
 from g2tom.models.lattice_cube import asperity_spots, clean_terms, exact_terms, field_chunk, spots_of, terms
+from g2tom.models.shared_clean import once
 from g2tom.scene import FieldSource
 
 __all__ = ["GreenwoodTripp"]
@@ -52,7 +53,14 @@ class GreenwoodTripp(ContactModel):
     def clean(self, radius: Any, weights: Any, settings: CubeSettings, n_drawn: int) -> dict[str, np.ndarray]:
         """On the whole window (exact). For ``asperities`` spots, over the first ``n_drawn`` realizations of
         the heights: the resistance of the mean conductance (open circuits conduct nothing), the self term
-        of the mean self-conductance, and the probability of an open circuit."""
+        of the mean self-conductance, and the probability of an open circuit. Inside
+        :func:`g2tom.models.shared_clean.shared_cleans`, once per distinct input."""
+        return once(lambda: self._clean(radius, weights, settings, n_drawn),
+                    "greenwood_tripp clean", radius, weights, settings, n_drawn)
+
+    @staticmethod
+    def _clean(radius: Any, weights: Any, settings: CubeSettings, n_drawn: int) -> dict[str, np.ndarray]:
+        """:meth:`clean`, computed."""
         n_delta = radius.shape[0]
         if settings.spots != "asperities":
             res = clean_terms(radius, weights, settings)
