@@ -124,7 +124,7 @@ def clean_terms(radius: np.ndarray, weights: np.ndarray, settings: CubeSettings)
 
     ``radius`` and ``weights`` as in :func:`chunk_terms`: (delta, y, x) gives one map,
     (realization, delta, y, x) one map per realization. The point model's iterative solve runs on
-    the smallest centred squares that hold every spot (:meth:`SpotGeometry.spanning`, the whole
+    the smallest centred squares that hold every spot (:meth:`g2tom.physics.spot_geometry.SpotGeometry.spanning`, the whole
     window's system: on the spots bench's 400 drawn asperity maps 1.8 times faster, the mean
     conductance within 1e-14); Greenwood's closed form, one pass, on the whole window.
     """

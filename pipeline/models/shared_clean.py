@@ -1,12 +1,13 @@
-"""The clean surface's terms computed once per distinct input inside :func:`shared_cleans`.
+"""The clean surface's terms computed once per distinct input inside :func:`g2tom.models.shared_clean.shared_cleans`.
 
 The cube of every scenario solves its oxide-free surface (the contact model's
 :meth:`~g2tom.models.ContactModel.clean` and the conductances of Barber's check,
 :func:`g2tom.stages.cube.clean_conductances`). A benchmark that builds the cube of several
-scenarios on the same spots (:mod:`g2tom.bench.biases`: the steps that change only the oxide
+scenarios on the same spots (``g2tom bench --only biases``: the steps that change only the oxide
 fields, or only the cube's model, meet the surface of the step before) solves it once inside
-:func:`shared_cleans`: :func:`once` keeps each result by a digest of its inputs and gives the later
-calls a copy, equal to computing it again. Outside the block :func:`once` just computes.
+:func:`g2tom.models.shared_clean.shared_cleans`: :func:`g2tom.models.shared_clean.once` keeps
+each result by a digest of its inputs and gives the later calls a copy, equal to computing it
+again. Outside the block it just computes.
 """
 
 from __future__ import annotations
