@@ -4,11 +4,19 @@ Whoever calls :func:`compute` (the CLI or a notebook) gets the same thread layou
 BLAS/OpenMP thread per dask worker thread, set with ``threadpoolctl`` for the duration of
 the computation (the many small dense products of the stages are several times slower when
 every dask thread also starts one BLAS thread per core).
+
+:class:`SharedResults` keeps results computed once per distinct input while a block is open: what
+the benchmarks that build several scenarios on the same inputs share (the Greenwood–Tripp solve of
+:func:`g2tom.contact_solution.shared_solves`, the clean surface of
+:func:`g2tom.models.shared_clean.shared_cleans`).
 """
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import functools
+import hashlib
 import logging
 import os
 import signal
@@ -19,11 +27,12 @@ from multiprocessing import resource_tracker
 from typing import Any, Callable, Iterator, TypeVar
 
 import dask
+import numpy as np
 from threadpoolctl import threadpool_limits
 
 from g2tom.progress import DaskProgress, ProgressLine, watch_futures
 
-__all__ = ["ComputeOptions", "children_ignore_interrupts", "compute", "in_turn", "single_threaded"]
+__all__ = ["ComputeOptions", "SharedResults", "children_ignore_interrupts", "compute", "in_turn", "single_threaded"]
 
 #: Runs shorter than this (s) show no progress line.
 PROGRESS_AFTER = 3.0
@@ -32,6 +41,7 @@ CONNECT_TIMEOUT = 5.0
 
 
 _F = TypeVar("_F", bound=Callable[..., Any])
+_T = TypeVar("_T")
 
 
 def single_threaded(function: _F) -> _F:
@@ -236,3 +246,68 @@ def compute(*collections: Any, options: ComputeOptions, label: str = "computing"
         persisted = client.persist(list(collections))
         watch_futures(futures_of(persisted), line)
         return tuple(client.gather(client.compute(persisted)))
+
+
+def _update(digest: Any, part: Any) -> None:
+    """Feed ``part`` to ``digest``: arrays by dtype, shape and bytes, dataclasses by their compared
+    fields, tuples and lists item by item, anything else by its repr."""
+    if isinstance(part, np.ndarray):
+        digest.update(repr((part.dtype.str, part.shape)).encode())
+        digest.update(np.ascontiguousarray(part).tobytes())
+    elif dataclasses.is_dataclass(part) and not isinstance(part, type):
+        digest.update(type(part).__qualname__.encode())
+        for item in dataclasses.fields(part):
+            if item.compare:
+                _update(digest, getattr(part, item.name))
+    elif isinstance(part, (tuple, list)):
+        digest.update(f"{type(part).__name__}{len(part)}".encode())
+        for item in part:
+            _update(digest, item)
+    else:
+        digest.update(repr(part).encode())
+    digest.update(b"|")
+
+
+class SharedResults:
+    """Results kept by their inputs' digest while a :meth:`block` is open (nested blocks share the
+    outer one's results)."""
+
+    def __init__(self) -> None:
+        self._results: dict[str, Any] | None = None
+
+    @property
+    def active(self) -> bool:
+        """Whether a block is open (callers whose inputs are costly to gather skip it outside)."""
+        return self._results is not None
+
+    @contextmanager
+    def block(self) -> Iterator[None]:
+        """Keep results until the outermost block closes."""
+        outer = self._results
+        self._results = {} if outer is None else outer
+        try:
+            yield
+        finally:
+            self._results = outer
+
+    def once(self, compute: Callable[[], _T], *inputs: Any) -> _T:
+        """``compute()``; inside a block, a copy of the result of the first call whose ``inputs``
+        (everything ``compute`` reads, and a name for what it computes) were equal.
+
+        Parameters
+        ----------
+        compute
+            Computes the result from ``inputs`` alone.
+        inputs
+            Arrays, dataclasses (their compared fields), tuples and lists of them, or values whose
+            repr identifies them.
+        """
+        if self._results is None:
+            return compute()
+        digest = hashlib.sha256()
+        for part in inputs:
+            _update(digest, part)
+        key = digest.hexdigest()
+        if key not in self._results:
+            self._results[key] = compute()
+        return copy.deepcopy(self._results[key])

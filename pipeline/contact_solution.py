@@ -12,10 +12,8 @@ benchmarks that build the contact of several scenarios on one solve).
 
 from __future__ import annotations
 
-import copy
-import hashlib
-from contextlib import contextmanager
-from typing import Any, Iterator
+from contextlib import AbstractContextManager
+from typing import Any
 
 import numpy as np
 
@@ -24,13 +22,14 @@ from g2tom.physics import greenwood_tripp as gt
 from g2tom.physics import radial_grid as rg
 from g2tom.physics.asperity import area_fraction, asperity_pressure
 from g2tom.physics.indenter import profile
+from g2tom.compute import SharedResults
 
 __all__ = ["indenter_profile", "radial_grid", "layer", "solve", "solve_with_stiffness", "shared_solves", "fields"]
 
 #: Rigid gap (units of sigma) beyond which the graded grid coarsens: F_{3/2}(4) / F_{3/2}(0) ~ 1e-5.
 _FINE_GAP = 4.0
-#: The solutions :func:`solve_with_stiffness` keeps inside :func:`shared_solves`, by their inputs; None outside.
-_SHARED: dict[str, tuple[np.ndarray, list[gt.Solution], np.ndarray]] | None = None
+#: The solutions :func:`solve_with_stiffness` keeps inside :func:`shared_solves`, by their inputs.
+_SOLVES = SharedResults()
 
 
 def indenter_profile(scenario: Scenario, r: np.ndarray) -> np.ndarray:
@@ -111,28 +110,17 @@ def solve_with_stiffness(scenario: Scenario) -> tuple[np.ndarray, list[gt.Soluti
     """:func:`solve` and the contact stiffness ``K = -dF/d delta`` of every approach (N/m), by the
     exact linearisation of the discretised system (:func:`g2tom.physics.greenwood_tripp.stiffness`);
     inside :func:`shared_solves`, a copy of the solution of an earlier scenario with the same inputs."""
-    key = _system_key(scenario) if _SHARED is not None else None
-    if key is not None and key in _SHARED:
-        return copy.deepcopy(_SHARED[key])
-    r, matrix, sols = _solve(scenario, None, None, None)
-    stiffness = gt.stiffness(matrix, indenter_profile(scenario, r), scenario.deltas, layer(scenario), sols, r)
-    if key is not None:
-        _SHARED[key] = copy.deepcopy((r, sols, stiffness))
-    return r, sols, stiffness
+    def compute() -> tuple[np.ndarray, list[gt.Solution], np.ndarray]:
+        r, matrix, sols = _solve(scenario, None, None, None)
+        return r, sols, gt.stiffness(matrix, indenter_profile(scenario, r), scenario.deltas, layer(scenario), sols, r)
 
-
-def _system_key(scenario: Scenario) -> str:
-    """A digest of every input of the scenario's solve (:func:`_system`, the approaches and the layer)."""
+    if not _SOLVES.active:  # gathering the inputs costs a grid and a profile: only where they are kept
+        return compute()
     r, z, settings = _system(scenario, None, None, None)
-    digest = hashlib.sha256()
-    for part in (r, z, np.asarray(scenario.deltas, float)):
-        digest.update(np.ascontiguousarray(part, float).tobytes())
-    digest.update(repr((layer(scenario), sorted(settings.items()))).encode())
-    return digest.hexdigest()
+    return _SOLVES.once(compute, r, z, np.asarray(scenario.deltas, float), layer(scenario), sorted(settings.items()))
 
 
-@contextmanager
-def shared_solves() -> Iterator[None]:
+def shared_solves() -> AbstractContextManager[None]:
     """Inside the block, :func:`solve_with_stiffness` solves each distinct system once.
 
     Scenarios whose solves have the same inputs (radial nodes, profile, approaches, layer and solver
@@ -140,13 +128,7 @@ def shared_solves() -> Iterator[None]:
     solve: the later ones get a copy of its nodes (m), solutions and stiffness (N/m), equal to
     solving again. Nested blocks share the outer one's solutions.
     """
-    global _SHARED
-    outer = _SHARED
-    _SHARED = {} if outer is None else outer
-    try:
-        yield
-    finally:
-        _SHARED = outer
+    return _SOLVES.block()
 
 
 def fields(scenario: Scenario, r: np.ndarray, sols: list[gt.Solution]) -> dict[str, np.ndarray]:
