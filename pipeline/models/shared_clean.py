@@ -28,7 +28,7 @@ _CLEANS = SharedResults()
 def once(compute: Callable[[], T], *inputs: Any) -> T:
     """``compute()``; inside :func:`shared_cleans`, a copy of the result of the first call whose
     ``inputs`` (everything ``compute`` reads, and a name for what it computes) were equal
-    (:meth:`g2tom.compute.SharedResults.once`)."""
+    (``g2tom.compute.SharedResults.once``)."""
     return _CLEANS.once(compute, *inputs)
 
 
