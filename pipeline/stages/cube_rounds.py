@@ -96,14 +96,16 @@ RULE_MARGIN = 0.9
 
 
 def _decide(scenario: Scenario, resistance: np.ndarray, rule: dict[str, Any],
-            clean_share: np.ndarray | None = None, expected: np.ndarray | None = None) -> list[int | None]:
+            clean_share: np.ndarray | None = None, expected: np.ndarray | None = None,
+            checked: int = 0) -> list[int | None]:
     """Realizations each xi keeps once ``resistance`` (xi, delta, r) is known (None: more needed);
-    ``clean_share`` and ``expected``: the control variate, as in :func:`half_widths`."""
+    ``clean_share`` and ``expected``: the control variate, as in :func:`half_widths`; ``checked``:
+    the prefixes an earlier round found short of the target (not evaluated again)."""
     ox = scenario.oxide
     computed = resistance.shape[-1]
     if ox.ensemble == "fixed":
         return [ox.n_realizations] * resistance.shape[0]
-    alpha, _ = half_widths(resistance, rule, clean_share, expected, ox.min_realizations)
+    alpha, _ = half_widths(resistance, rule, clean_share, expected, max(ox.min_realizations, checked + 1))
     alpha = np.nan_to_num(alpha, nan=np.inf)
     out: list[int | None] = []
     for row in alpha:
@@ -244,14 +246,14 @@ def compute_cells(
             active = [z for z in range(n_xi) if is_open(a, z)]
             if not active:
                 continue
-            done[a] = want[a]
+            checked, done[a] = done[a], want[a]
             undecided = [z for z in active if kept[a][z] is None]
             if undecided:
                 resistance = np.stack([_joined(pieces[a], z, "resistance") for z in undecided])
                 share = (np.stack([_joined(pieces[a], z, "clean_share") for z in undecided])
                          if settings.control_variate else None)
                 expected = None if share is None else rule["expected"][undecided, a]
-                for z, count in zip(undecided, _decide(scenario, resistance, rule, share, expected)):
+                for z, count in zip(undecided, _decide(scenario, resistance, rule, share, expected, checked)):
                     kept[a][z] = count
             for z in active:
                 if per_step and kept[a][z] is not None:
