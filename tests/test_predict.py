@@ -237,6 +237,7 @@ def test_bench_vectorized_agrees_with_one_at_a_time(small: ResolvedScenario, mon
         monkeypatch.setattr(bench_predict, name, value)
     result = bench_predict.run(small)
     assert result["queries"] == 2000 and result["max_rel_difference_upper"] < 1e-12
+    assert result["atlas_queries"] == 2000 and result["atlas_surfaces"] == 10 and result["atlas_seconds"] > 0
 
 
 def test_json_round_trips_every_table_value(data_dir) -> None:
