@@ -96,3 +96,47 @@ def small_discrete_atlas(tmp_path_factory) -> Path:
     design = AtlasDesign(mu=(2.0, 8.0), Pi=(10.0, 40.0), n_mu=2, n_pi=2, n_heldout=1)
     return _shared(tmp_path_factory, "small_discrete_atlas",
                    lambda folder: atlas.run_atlas(load_scenario("paper", {**BASE, **DISCRETE_ATLAS}), design, folder))
+
+
+#: Seconds each slow test file took with ``make test`` (its tests' setup, call and teardown summed, on
+#: one of two workers of a quiet 2-core machine). Only the order matters: the scheduler below starts
+#: the longest files first so that the two workers finish together; a file missing here runs after
+#: them, in pytest-xdist's order (most tests first). Stale numbers cost balance, never correctness.
+FILE_SECONDS = {
+    "test_validate.py": 60, "test_atlas.py": 39, "test_signals.py": 36, "test_discrete_contact.py": 29,
+    "test_surface.py": 24, "test_atlas_design.py": 22, "test_figures_style.py": 21,
+    "test_pipeline_end_to_end.py": 21, "test_cap_overlap.py": 20, "test_cube_stage.py": 16,
+    "test_atlas_loads.py": 15, "test_bad_inputs.py": 14, "test_oxide_stage.py": 13, "test_plan.py": 11,
+    "test_stability.py": 9, "test_point_model.py": 9, "test_ensemble.py": 8, "test_constriction.py": 8,
+    "test_frontier.py": 7, "test_bench_output.py": 7, "test_predict_chain.py": 7, "test_reference_capped.py": 7,
+    "test_predict_atlas.py": 7, "test_barber_spots.py": 7, "test_compute.py": 6, "test_small_grids.py": 6,
+    "test_layers.py": 6, "test_oxide_field.py": 5, "test_predict.py": 5, "test_report.py": 5,
+    "test_discrete_resistance.py": 4, "test_contact_stage.py": 4, "test_reference_fft.py": 4,
+    "test_surrogate.py": 4, "test_api_arguments.py": 3, "test_cap_law.py": 3, "test_domains.py": 3,
+    "test_figures_point.py": 3, "test_step_ensemble.py": 3, "test_point_lattice.py": 3,
+    "test_figures_contact.py": 3, "test_frontier_prefix.py": 3,
+}
+
+
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadfile`` with the files handed out longest first (:data:`FILE_SECONDS`) instead of
+    pytest-xdist's most tests first: the slow files were last alphabetically (signals, validate) and
+    ran at the end on one worker while the other idled. A file still runs whole on one worker, in order."""
+    if config.getoption("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class LongestFileFirst(LoadFileScheduling):
+        _ordered = False
+
+        def _assign_work_unit(self, node) -> None:
+            if not self._ordered:  # the first assignment: the queue of files is complete, reorder it
+                self._ordered = True
+                files = list(self.workqueue)
+                order = sorted(range(len(files)), key=lambda k: (-FILE_SECONDS.get(Path(files[k]).name, 0), k))
+                units = list(self.workqueue.items())
+                self.workqueue.clear()
+                self.workqueue.update(units[k] for k in order)
+            super()._assign_work_unit(node)
+
+    return LongestFileFirst(config, log)
