@@ -98,6 +98,28 @@ def small_discrete_atlas(tmp_path_factory) -> Path:
                    lambda folder: atlas.run_atlas(load_scenario("paper", {**BASE, **DISCRETE_ATLAS}), design, folder))
 
 
+@pytest.fixture(scope="session")
+def small_stages(tmp_path_factory, small) -> Path:
+    """The ``small`` study's stage files (contact, oxide, cube, fits, surrogate, each run by the CLI),
+    computed once for the whole run: tests/test_figures_style.py draws on them and
+    tests/test_figures_point.py takes them as its Greenwood model's comparison run (the same
+    arguments, ``cube.model`` = greenwood being small's). Read it only: copy it to change it."""
+    import warnings
+
+    from g2tom.cli.main import main
+
+    from tests.test_fits_stage import cli_overrides
+
+    def build(folder: Path) -> Path:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # surrogate orders reduced on a 3 x 3 grid
+            for stage in ("contact", "oxide", "cube", "fits", "surrogate"):
+                assert main([stage, "--data-dir", str(folder), "--no-progress", *cli_overrides(small)]) == 0
+        return folder
+
+    return _shared(tmp_path_factory, "small_stages", build)
+
+
 #: Seconds each slow test file took with ``make test`` (its tests' setup, call and teardown summed, on
 #: one of two workers of a quiet 2-core machine). Only the order matters: the scheduler below starts
 #: the longest files first so that the two workers finish together; a file missing here runs after

@@ -16,12 +16,19 @@ from tests.test_fits_stage import cli_overrides
 
 
 @pytest.fixture(scope="module")
-def compare_dir(tmp_path_factory, small: ResolvedScenario) -> Path:
-    """The stages run by the CLI once per model under <data>/compare/<model>, as `make compare` does."""
+def compare_dir(tmp_path_factory, small: ResolvedScenario, small_stages: Path) -> Path:
+    """The stages run by the CLI once per model under <data>/compare/<model>, as `make compare` does
+    (greenwood, small's own cube.model: conftest's ``small_stages``, the same arguments, copied)."""
+    import shutil
+
+    assert small.cube.model == "greenwood"
     data = tmp_path_factory.mktemp("data")
+    shutil.copytree(small_stages, data / figures_point.COMPARE / "greenwood")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # surrogate orders reduced on a 3 x 3 grid
         for model in figures_point.MODELS:
+            if model == "greenwood":
+                continue
             target = data / figures_point.COMPARE / model
             for stage in ("contact", "oxide", "cube", "fits", "surrogate"):
                 args = [stage, "--data-dir", str(target), "--no-progress", *cli_overrides(small),

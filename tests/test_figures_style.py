@@ -6,7 +6,6 @@ from __future__ import annotations
 import itertools
 import json
 import re
-import warnings
 from pathlib import Path
 
 import matplotlib.figure
@@ -20,23 +19,21 @@ from matplotlib.transforms import Bbox
 
 from g2tom.analysis import figures_results, figures_validate, style
 from g2tom.analysis.figures import write_figures
-from g2tom.cli.main import main
 from g2tom.config import ResolvedScenario
 from g2tom.store import read_stage
-from tests.test_fits_stage import cli_overrides
 
 #: ASCII spellings of symbols that belong in mathtext (whole words, outside $...$).
 RAW_SYMBOLS = re.compile(r"\b(lambda|kappa|sqrt|sigma|xi|alpha|gamma|eta|rho|delta|psi|ohm)\b|\^|_", re.IGNORECASE)
 
 
 @pytest.fixture(scope="module")
-def run_dir(tmp_path_factory, small: ResolvedScenario) -> Path:
-    """The small run's stage files, the spots benchmark's file and a synthetic validate.nc."""
-    data = tmp_path_factory.mktemp("data")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # surrogate orders reduced on a 3 x 3 grid
-        for stage in ("contact", "oxide", "cube", "fits", "surrogate"):
-            assert main([stage, "--data-dir", str(data), "--no-progress", *cli_overrides(small)]) == 0
+def run_dir(tmp_path_factory, small_stages: Path) -> Path:
+    """The small run's stage files (conftest's ``small_stages``, copied), the spots benchmark's file
+    and a synthetic validate.nc."""
+    import shutil
+
+    data = tmp_path_factory.mktemp("data") / "data"
+    shutil.copytree(small_stages, data)
     force = np.geomspace(1.0, 300.0, 5)
     spots = {name: {"force_N": force.tolist(),
                     "barber_ratio": {"greenwood": (shift * force**0.02).tolist(), "point": np.full(force.size, 0.98 * shift).tolist()}}
