@@ -23,7 +23,7 @@ def test_plan_prints_psi_and_first_yield_of_capped_caps(capsys) -> None:
     # the paper's steel: E* = 2.1e11 / (2 (1 - 0.09)) = 115.4 GPa, sigma 20 um, beta 30 um
     assert "caps: capped at H = 2 GPa (perfectly plastic surface); plasticity index psi = 47.1" in out
     assert "first yield at omega_c = 22.2 nm = 0.00111 sigma" in out
-    assert "capped caps: the times below assume caps that stay apart" in out
+    assert "capped caps: the times below are the elastic caps' cost models" in out
 
 
 def test_plan_of_an_elastic_scene_says_its_index_is_unknown(capsys) -> None:
@@ -83,20 +83,3 @@ def test_a_hardness_no_cap_reaches_warns_that_the_answer_is_elastic() -> None:
         warnings.simplefilter("error")
         _warn_no_yield(cap, [{"radius": np.full((3, 4), 1.1 * cap.a_c)}])
         _warn_no_yield(HertzCap(1.154e11, 3e-5), below)
-
-
-def test_overlapping_capped_caps_are_counted_and_warned_about() -> None:
-    from g2tom.models.discrete_pool import _warn_overlap, overlap_shares
-    from g2tom.physics.cap_law import CappedCap, HertzCap
-
-    # three caps on a line 10 um apart: none, two, then all three overlap as they grow
-    x, y = np.array([0.0, 10e-6, 20e-6]), np.zeros(3)
-    radius = np.array([[4e-6, 4e-6, 0.0], [6e-6, 4.5e-6, 0.0], [6e-6, 6e-6, 6e-6]])
-    pool = [{"x": x, "y": y, "radius": radius, "delta": np.zeros(3)}]
-    np.testing.assert_allclose(overlap_shares(pool), [0.0, 1.0, 1.0])
-    cap = CappedCap(1.154e11, 3e-5, 2e9)
-    with pytest.warns(UserWarning, match=r"capped caps overlap: from 2 N \(step 2\) 100 % of the touching caps"):
-        _warn_overlap(cap, pool, np.array([1.0, 2.0, 3.0]))
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        _warn_overlap(HertzCap(1.154e11, 3e-5), pool, np.array([1.0, 2.0, 3.0]))  # elastic caps: as before

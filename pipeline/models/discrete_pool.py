@@ -38,17 +38,18 @@ from g2tom.physics import discrete_contact as dc
 from g2tom.physics.cap_law import CapLaw, CappedCap, HertzCap
 from g2tom.variables import entry
 
-__all__ = ["CHUNK", "DOMAIN_MARGIN", "cap_contact", "domain", "surface_spots", "solve_pool", "grow_pool",
-           "pool_half_widths", "variables"]
+__all__ = ["CHUNK", "DOMAIN_MARGIN", "CAPPED_DOMAIN_MARGIN", "cap_contact", "domain", "capped_disc",
+           "surface_spots", "solve_pool", "grow_pool", "pool_half_widths", "variables"]
 
 #: Surfaces per dask task.
 CHUNK = 16
 #: The disc serves approaches down to the Greenwood–Tripp solution's lowest minus this many sigma
 #: (the coupled caps' approach at the same force lies within a fraction of sigma of it).
 DOMAIN_MARGIN = 1.0
-#: The same margin for caps capped at a hardness, whose approach at a force lies deeper than the elastic
-#: layer's (yielding caps carry less at the same interference): 1.02 sigma below it at 10 N on
-#: ``gold_connector`` (psi 4.5).
+#: Caps capped at a hardness sink deeper than the elastic layer by an amount the layer does not know
+#: (yielding caps carry less at the same interference, and flattened caps share their discs: 1 sigma
+#: at psi 4.5, 6 sigma at psi 50): their disc serves this many sigma below the lowest approach of
+#: surface 0 solved first on the elastic layer's disc (:func:`capped_disc`).
 CAPPED_DOMAIN_MARGIN = 4.0
 #: Expected number of asperities left outside the disc that could touch at that approach.
 DOMAIN_OUTSIDE = 1e-6
@@ -74,11 +75,31 @@ def cap_law(scenario: Scenario) -> CapLaw:
 
 
 def domain(scenario: Scenario, lowest_delta: float) -> tuple[float, float]:
-    """The asperity disc's radius (m) and the lowest approach (m) it serves."""
+    """The asperity disc's radius (m) and the lowest approach (m) it serves: :data:`DOMAIN_MARGIN` sigma
+    below ``lowest_delta`` (m)."""
+    return _disc(scenario, lowest_delta - DOMAIN_MARGIN * scenario.roughness.sigma)
+
+
+def _disc(scenario: Scenario, served: float) -> tuple[float, float]:
+    """The asperity disc's radius (m) that serves approaches down to ``served`` (m), and ``served``."""
     rough = scenario.roughness
-    margin = DOMAIN_MARGIN if scenario.material.hardness is None else CAPPED_DOMAIN_MARGIN
-    served = lowest_delta - margin * rough.sigma
     return dc.domain_radius(cap_contact(scenario)[0], served, rough.sigma, rough.eta, DOMAIN_OUTSIDE), served
+
+
+def capped_disc(scenario: Scenario, settings: dict[str, Any]) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """The disc of capped caps, from surface 0's own solve: the settings with the disc that serves
+    :data:`CAPPED_DOMAIN_MARGIN` sigma below the lowest approach of surface 0 solved on the elastic
+    layer's disc, and surface 0's solution on that disc (:func:`surface_spots`).
+
+    Raises
+    ------
+    ValueError
+        If surface 0 on the new disc falls below what it serves (the margin did not hold).
+    """
+    pilot = _surface_solution(settings, 0)[1]
+    radius, served = _disc(scenario, float(pilot.delta.min()) - CAPPED_DOMAIN_MARGIN * scenario.roughness.sigma)
+    settings = {**settings, "radius": radius, "served": served}
+    return settings, surface_spots(settings, 0)
 
 
 def surface_spots(settings: dict[str, Any], k: int) -> dict[str, np.ndarray]:
@@ -89,9 +110,7 @@ def surface_spots(settings: dict[str, Any], k: int) -> dict[str, np.ndarray]:
     ValueError
         If the solved approach falls below the one the disc serves (asperities may be missing).
     """
-    asp = dc.draw_asperities(settings["seed"], k, settings["radius"], settings["eta"], settings["sigma"])
-    sol = dc.solve_forces(asp, settings["profile"], settings["forces"][: settings.get("steps")], settings["e_star"],
-                          settings["beta"], settings["floor"], cap=settings["cap"])
+    asp, sol = _surface_solution(settings, k)
     if sol.delta.min() < settings["served"]:
         raise ValueError(f"surface {k}: the approach {sol.delta.min():.4g} m falls below the "
                          f"{settings['served']:.4g} m its asperity disc serves")
@@ -100,6 +119,13 @@ def surface_spots(settings: dict[str, Any], k: int) -> dict[str, np.ndarray]:
             "delta": sol.delta, "stiffness": sol.stiffness, "unloading_stiffness": sol.unloading_stiffness,
             "iterations": sol.iterations,
             "residual": sol.residual, "candidates": sol.candidates}
+
+
+def _surface_solution(settings: dict[str, Any], k: int) -> tuple[dc.Asperities, dc.DiscreteContact]:
+    """Surface ``k``'s asperities on the settings' disc and its solution at every force."""
+    asp = dc.draw_asperities(settings["seed"], k, settings["radius"], settings["eta"], settings["sigma"])
+    return asp, dc.solve_forces(asp, settings["profile"], settings["forces"][: settings.get("steps")],
+                                settings["e_star"], settings["beta"], settings["floor"], cap=settings["cap"])
 
 
 def _chunk(settings: dict[str, Any], surfaces: np.ndarray) -> list[dict[str, np.ndarray]]:
@@ -125,14 +151,17 @@ def solve_pool(scenario: Scenario, forces: np.ndarray, lowest_delta: float,
                 "profile": cap_profile, "forces": np.asarray(forces, float),
                 "floor": dc.coupling_floor(rough.beta, rough.sigma), "cap": cap_law(scenario)}
     n = scenario.contact.surfaces
-    pool = _solve(dask.delayed(settings), 0, n, options, f"contact: {n} discrete surfaces")
+    first: list[dict[str, np.ndarray]] = []
+    if scenario.material.hardness is not None:
+        settings, pilot = capped_disc(scenario, settings)
+        first, radius = [pilot], settings["radius"]
+    pool = first + _solve(dask.delayed(settings), len(first), n, options, f"contact: {n} discrete surfaces")
     target = scenario.contact.pool_half_width
     if target > 0:
         pool = grow_pool(pool, target, lambda first, stop, steps: _solve(
             dask.delayed({**settings, "steps": steps}), first, stop, options,
             f"contact: pool surfaces {first}-{stop - 1} at the {steps} lightest steps"))
     _warn_no_yield(settings["cap"], pool)
-    _warn_overlap(settings["cap"], pool, settings["forces"])
     return pool, radius
 
 
@@ -146,44 +175,6 @@ def _warn_no_yield(cap: CapLaw, pool: list[dict[str, np.ndarray]]) -> None:
         warnings.warn(f"material.hardness = {cap.hardness:g} Pa: no cap of the pool reaches first yield at any load "
                       f"(largest contact radius {largest:.3g} m, first yield at {cap.a_c:.3g} m): the answer is the "
                       "elastic one", stacklevel=4)
-
-
-#: Share of touching caps whose contact disc overlaps a neighbour's above which capped caps are
-#: warned about by the contact stage.
-OVERLAP_SHARE = 0.1
-
-
-def overlap_shares(pool: list[dict[str, np.ndarray]]) -> np.ndarray:
-    """Share of the pool's touching caps whose contact disc overlaps another's (``a_i + a_j > d_ij``) at
-    every step (NaN where none touches)."""
-    steps = pool[0]["delta"].size
-    overlapping, touching = np.zeros(steps), np.zeros(steps)
-    for r in pool:
-        d = np.hypot(r["x"][:, None] - r["x"][None, :], r["y"][:, None] - r["y"][None, :])
-        np.fill_diagonal(d, np.inf)
-        for k, a in enumerate(r["radius"]):
-            on = a > 0
-            touching[k] += on.sum()
-            overlapping[k] += ((a[:, None] + a[None, :] > d) & on[:, None] & on[None, :]).any(axis=1).sum()
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(touching > 0, overlapping / np.maximum(touching, 1), np.nan)
-
-
-def _warn_overlap(cap: CapLaw, pool: list[dict[str, np.ndarray]], forces: np.ndarray) -> None:
-    """One warning where capped caps flatten into their neighbours: from the lightest step at which more
-    than :data:`OVERLAP_SHARE` of the touching caps overlap another's disc, the discrete model counts
-    merged contacts as separate spots (and its point solve takes the slow path of indefinite
-    matrices)."""
-    if not isinstance(cap, CappedCap):
-        return
-    shares = overlap_shares(pool)
-    crowded = np.flatnonzero(shares > OVERLAP_SHARE)
-    if crowded.size:
-        k = int(crowded[0])
-        warnings.warn(f"capped caps overlap: from {forces[k]:.4g} N (step {k + 1}) {100 * shares[k]:.0f} % of the "
-                      f"touching caps' discs overlap a neighbour's ({100 * np.nanmax(shares):.0f} % at most), where "
-                      "the discrete model counts merged contacts as separate spots: its R is too high there "
-                      "(g2tom validate measures by how much) and its cube is slow", stacklevel=4)
 
 
 def pool_half_widths(pool: list[dict[str, np.ndarray]]) -> np.ndarray:

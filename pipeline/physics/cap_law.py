@@ -160,6 +160,9 @@ class CapLaw(Protocol):
     def radius(self, w: ArrayLike) -> np.ndarray:
         """Contact radius, m, at the interferences ``w`` (m); 0 for ``w <= 0``."""
 
+    def radius_slope(self, w: ArrayLike) -> np.ndarray:
+        """``da/dw``, dimensionless, the derivative of :meth:`radius`; 0 for ``w <= 0``."""
+
     def interference(self, load: ArrayLike) -> np.ndarray:
         """The interference, m, at which the cap carries ``load`` (N); 0 for ``load <= 0``."""
 
@@ -178,6 +181,9 @@ class HertzCap:
 
     e_star: float
     beta: float
+    #: Whether neighbouring caps' contact discs share their overlaps (no: Hertz's discs are the
+    #: validated elastic model's, with the caps' point-load coupling).
+    shares_overlap = False
 
     def __post_init__(self) -> None:
         for name, value in (("e_star", self.e_star), ("beta", self.beta)):
@@ -195,6 +201,11 @@ class HertzCap:
     def radius(self, w: ArrayLike) -> np.ndarray:
         """Contact radius ``sqrt(beta max(w, 0))``, m, at the interferences ``w`` (m)."""
         return np.sqrt(self.beta * np.maximum(w, 0.0))
+
+    def radius_slope(self, w: ArrayLike) -> np.ndarray:
+        """``da/dw = sqrt(beta / w) / 2``, dimensionless, at the interferences ``w`` (m); 0 for ``w <= 0``."""
+        w = np.asarray(w, dtype=float)
+        return np.where(w > 0.0, 0.5 * np.sqrt(self.beta / np.where(w > 0.0, w, 1.0)), 0.0)[()]
 
     def interference(self, load: ArrayLike) -> np.ndarray:
         """The interference, m, at which the cap carries ``load`` (N); 0 for ``load <= 0``."""
@@ -218,6 +229,7 @@ class CappedCap:
     e_star: float
     beta: float
     hardness: float
+    shares_overlap = True
 
     def __post_init__(self) -> None:
         critical_scales(self.beta, self.e_star, self.hardness)  # refuses parameters that are not > 0
@@ -271,6 +283,18 @@ class CappedCap:
         table = a_c * np.exp(_hermite(np.log(np.clip(ratio, 1.0, top)), _LOG_W, _LOG_A, _SLOPE_A)[0])
         far = a_c * uniform_disc_radius(np.maximum(ratio, top))
         return np.where(w <= omega_c, self._elastic().radius(w), np.where(ratio <= top, table, far))[()]
+
+    def radius_slope(self, w: ArrayLike) -> np.ndarray:
+        """``da/dw``, dimensionless, the derivative of :meth:`radius`, at the interferences ``w`` (m);
+        0 for ``w <= 0``."""
+        w = np.asarray(w, dtype=float)
+        omega_c, a_c, _ = critical_scales(self.beta, self.e_star, self.hardness)
+        ratio, top = w / omega_c, CAP_INTERFERENCE[-1]
+        inside = np.clip(ratio, 1.0, top)
+        value, slope = _hermite(np.log(inside), _LOG_W, _LOG_A, _SLOPE_A)
+        table = a_c / omega_c * np.exp(value) / inside * slope
+        far = a_c / omega_c / (uniform_disc_radius(np.maximum(ratio, top)) + 8.0 / np.pi**2)
+        return np.where(w <= omega_c, self._elastic().radius_slope(w), np.where(ratio <= top, table, far))[()]
 
     def interference(self, load: ArrayLike) -> np.ndarray:
         """The interference, m, at which the cap carries ``load`` (N): the inverse of :meth:`load`;

@@ -36,6 +36,10 @@ biased when a handful do. This model keeps one realization's asperities:
 * Candidates: since every displacement is >= 0, an asperity can touch only where ``g_i > delta``;
   the solve starts from a candidate set ``g_i > threshold`` and grows it until the solved
   ``delta`` lies above the threshold, so the answer is the one on the whole set, exactly.
+* Capped caps (:mod:`g2tom.physics.cap_law`) share overlapping discs: cap ``i`` carries its law's
+  force times the share ``A_i / (pi a_i^2)`` of its disc that lies in its power cell
+  (:mod:`g2tom.physics.cap_overlap`), so a merged contact is counted once, and ``D = dP/dw`` gains
+  the neighbours' terms; Newton then solves ``(I + C D)`` as it is, on the exact derivative.
 * Stiffness ``K = -dF/d delta = d^T (I + C D)^-1 1`` on the contacting set (``D = diag(dP/dw) =
   diag(2 E* a_i)``), i.e. ``K = E* 1^T M^-1 1`` with ``M_ii = 1/(2 a_i)``, ``M_ij = 1/(pi
   max(d_ij, l))``: Barber's theorem holds exactly against the point-interaction conductance on
@@ -45,7 +49,7 @@ biased when a handful do. This model keeps one realization's asperities:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -133,7 +137,8 @@ class DiscreteContact:
     candidates
         Candidates in the final solve of each force, shape (n_f,).
     radii
-        Contact radii of the caps by their law (Hertz: ``sqrt(beta w)``), m, shape (n_f, n) (0 off contact).
+        Contact radii of the caps by their law (Hertz: ``sqrt(beta w)``), m, shape (n_f, n) (0 off contact);
+        capped caps: the radius of the area they own, ``sqrt(A_i / pi)``.
     unloading_stiffness
         The elastic stiffness of the contact set, ``1^T (D_u^-1 + C)^-1 1`` with ``D_u = diag(2 E* a_i)``
         (N/m, shape (n_f,)): the slope of unloading, which Barber's theorem ties to the conductance. It
@@ -333,6 +338,64 @@ class _GrowingKernel:
         return self.table[:m, :m]
 
 
+class _SharedCaps:
+    """Capped caps whose contact discs share their overlaps (:mod:`g2tom.physics.cap_overlap`).
+
+    Cap ``i`` of the first ``m`` candidates (positions ``x``, ``y``, m) carries its law's load times
+    the share of its disc it owns, ``s_i = A_i / (pi a_i^2)``, and conducts through a spot of the
+    owned area, radius ``sqrt(s_i) a_i``; a cap whose disc overlaps none is its law's. The load
+    depends on the neighbours' interferences through the owned areas: :meth:`jacobian` gives the
+    exact derivative, so Newton keeps its quadratic convergence.
+    """
+
+    def __init__(self, law: CapLaw, x: np.ndarray, y: np.ndarray) -> None:
+        self.law, self.x, self.y = law, x, y
+
+    def _owned(self, w: np.ndarray) -> tuple[np.ndarray, ...]:
+        """The law's radii (m), the discs' areas (m^2) and
+        :func:`g2tom.physics.cap_overlap.owned_area_derivatives` at ``w``."""
+        from g2tom.physics.cap_overlap import owned_area_derivatives
+
+        w = np.maximum(w, 0.0)
+        m = w.shape[-1]
+        radius = self.law.radius(w)
+        return (radius, np.pi * radius * radius) + owned_area_derivatives(self.x[:m], self.y[:m], radius)
+
+    def share(self, w: np.ndarray) -> np.ndarray:
+        """Each cap's owned share of its disc at the interferences ``w`` (m) of the first caps (1 off contact)."""
+        _, disc, owned = self._owned(w)[:3]
+        return np.clip(np.where(disc > 0.0, owned / np.where(disc > 0.0, disc, 1.0), 1.0), 0.0, 1.0)
+
+    def load(self, w: np.ndarray) -> np.ndarray:
+        """Loads, N, at the interferences ``w`` (m) of the first caps."""
+        return self.share(w) * self.law.load(w)
+
+    def radius(self, w: np.ndarray) -> np.ndarray:
+        """Spot radii of the owned areas, m, at the interferences ``w`` (m) of the first caps."""
+        return np.sqrt(self.share(w)) * self.law.radius(w)
+
+    def interference(self, load: float) -> float:
+        """One cap's interference at ``load`` (N): the law's (a lone cap owns its disc)."""
+        return self.law.interference(load)
+
+    def jacobian(self, w: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, Any]:
+        """``dP/dw`` on the ``active`` caps (N/m): its diagonal and the rest (a sparse matrix)."""
+        from scipy.sparse import csr_matrix
+
+        radius, disc, owned, own_slope, rows, cols, values = self._owned(w)
+        safe = np.where(disc > 0.0, disc, 1.0)
+        share = np.clip(np.where(disc > 0.0, owned / safe, 1.0), 0.0, 1.0)
+        scale = np.where(disc > 0.0, self.law.load(w) / safe, 0.0)  # F / (pi a^2), Pa
+        radius_slope = self.law.radius_slope(w)
+        diagonal = share * self.law.slope(w) + scale * (own_slope - 2.0 * np.pi * radius * share) * radius_slope
+        index = np.full(w.shape[-1], -1)
+        index[active] = np.arange(active.size)
+        keep = (index[rows] >= 0) & (index[cols] >= 0)
+        rest = csr_matrix((scale[rows[keep]] * values[keep] * radius_slope[cols[keep]],
+                           (index[rows[keep]], index[cols[keep]])), shape=(active.size,) * 2)
+        return diagonal[active], rest
+
+
 def _hessian(kernel: np.ndarray, s: np.ndarray, active: np.ndarray, e_star: float, cap: CapLaw) -> tuple[
         np.ndarray, np.ndarray]:
     """The energy's Hessian ``D^-1 + C`` on the ``active`` caps (m/N) and their ``dP/ds`` (N/m)."""
@@ -352,10 +415,11 @@ def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, cap:
     residual, and whether it stalled (no step of the line search lowered the residual).
     """
     s, delta = state.s.copy(), state.delta
+    shared = isinstance(cap, _SharedCaps)
 
     def residuals(s: np.ndarray, delta: float) -> tuple[np.ndarray, float, np.ndarray]:
         load = cap.load(s)
-        active = np.flatnonzero(load > 0)
+        active = np.flatnonzero(s > 0 if shared else load > 0)  # shared: a cap that owns nothing is held too
         return s - g + delta + kernel[:, active] @ load[active] / e_star, load.sum() - force, active
 
     res, res_f, active = residuals(s, delta)
@@ -367,16 +431,32 @@ def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, cap:
             continue
         scale = float(s[active].max())
         error = max(float(np.abs(res).max()) / scale, abs(res_f) / force)
-        system, slope = _hessian(kernel, s, active, e_star, cap)
-        solved = symmetric_solve(system, np.column_stack([np.ones(active.size), res[active]]))
-        unit, along = solved[:, 0], solved[:, 1]
-        stiffness = float(unit.sum())
-        if error <= tolerance or iteration == max_iterations:
-            return _State(s, delta), stiffness, iteration, error, False
-        # (I + C D)^-1 = D^-1 (D^-1 + C)^-1 on the contacting rows
-        step_delta = (res_f - along.sum()) / stiffness
-        step_active = -(along + step_delta * unit) / slope
-        step = -res - step_delta - kernel[:, active] @ (slope * step_active) / e_star
+        if shared:  # D = dP/ds is not diagonal (and has zero rows, caps that own nothing): (I + C D) as it is
+            diagonal, rest = cap.jacobian(s, active)
+            coupling = kernel[np.ix_(active, active)] / e_star
+            system = coupling * diagonal + (rest.T @ coupling).T
+            system[np.diag_indices_from(system)] += 1.0
+            solved = np.linalg.solve(system, np.column_stack([np.ones(active.size), res[active]]))
+            unit, along = solved[:, 0], solved[:, 1]
+            column = diagonal + np.asarray(rest.sum(axis=0)).ravel()  # 1^T D
+            stiffness = float(column @ unit)
+            if error <= tolerance or iteration == max_iterations:
+                return _State(s, delta), stiffness, iteration, error, False
+            step_delta = (res_f - column @ along) / stiffness
+            step_active = -(along + step_delta * unit)
+            load_step = diagonal * step_active + rest @ step_active
+        else:
+            system, slope = _hessian(kernel, s, active, e_star, cap)
+            solved = symmetric_solve(system, np.column_stack([np.ones(active.size), res[active]]))
+            unit, along = solved[:, 0], solved[:, 1]
+            stiffness = float(unit.sum())
+            if error <= tolerance or iteration == max_iterations:
+                return _State(s, delta), stiffness, iteration, error, False
+            # (I + C D)^-1 = D^-1 (D^-1 + C)^-1 on the contacting rows
+            step_delta = (res_f - along.sum()) / stiffness
+            step_active = -(along + step_delta * unit) / slope
+            load_step = slope * step_active
+        step = -res - step_delta - kernel[:, active] @ load_step / e_star
         step[active] = step_active
         merit = (np.linalg.norm(res) / scale) ** 2 + (res_f / force) ** 2
         t = 1.0
@@ -401,9 +481,10 @@ def _convex_at(kernel: np.ndarray, state: _State, e_star: float, cap: CapLaw) ->
 def _unloading_stiffness(kernel: np.ndarray, s: np.ndarray, e_star: float, cap: CapLaw) -> float:
     """``1^T (D_u^-1 + C)^-1 1`` on the contacting caps, ``D_u = diag(2 E* a_i)`` (N/m): the elastic
     stiffness of the contact set (:class:`DiscreteContact`)."""
-    active = np.flatnonzero(s > 0)
+    radius = cap.radius(s)
+    active = np.flatnonzero(radius > 0)
     system = kernel[np.ix_(active, active)] / e_star
-    system[np.diag_indices_from(system)] += 1.0 / (2.0 * e_star * cap.radius(s[active]))
+    system[np.diag_indices_from(system)] += 1.0 / (2.0 * e_star * radius[active])
     return float(symmetric_solve(system, np.ones(active.size)).sum())
 
 
@@ -475,7 +556,8 @@ class _Walker:
             state, stiffness, its, error, stalled = _newton(g[:m], coupling, force, e_star, self.cap, start,
                                                             self.tolerance, self.max_iterations)
             iterations += its
-            if stalled and error > STALL_TOLERANCE and not _convex_at(coupling, state, e_star, self.cap):
+            if stalled and error > STALL_TOLERANCE and (isinstance(self.cap, _SharedCaps)
+                                                         or not _convex_at(coupling, state, e_star, self.cap)):
                 state, stiffness, its, error, stalled = _proximal(g[:m], coupling, force, e_star, self.cap,
                                                                   state, self.tolerance, self.max_iterations)
                 iterations += its
@@ -559,7 +641,9 @@ def solve_forces(
         Solve on every asperity of the surface (the slow reference of the candidate selection).
     cap
         The caps' force and radius against their interference (:mod:`g2tom.physics.cap_law`);
-        Hertz's of radius ``beta`` by default.
+        Hertz's of radius ``beta`` by default. Where the law shares overlaps (capped caps), each cap
+        carries its law's force times the share of its disc it owns and conducts through a spot of
+        that area (:mod:`g2tom.physics.cap_overlap`).
 
     Raises
     ------
@@ -576,25 +660,27 @@ def solve_forces(
     g = asperities.z - profile(np.hypot(asperities.x, asperities.y))
     order = np.argsort(-g, kind="stable")  # candidates are a prefix of the descending gaps
     cap = HertzCap(e_star, beta) if cap is None else cap
-    walker = _Walker(g[order], _GrowingKernel(asperities.x[order], asperities.y[order], floor), e_star, cap,
+    caps = _SharedCaps(cap, asperities.x[order], asperities.y[order]) if cap.shares_overlap else cap
+    walker = _Walker(g[order], _GrowingKernel(asperities.x[order], asperities.y[order], floor), e_star, caps,
                      tolerance, max_iterations, all_candidates)
     n, n_f = g.size, forces.size
     elastic = isinstance(cap, HertzCap)  # whose loading slope is its unloading slope: D = diag(2 E* a)
     names = ("delta", "stiffness", "unloading_stiffness", "iterations", "residual", "candidates")
     out = {name: np.zeros(n_f) for name in names}
-    interference, load = np.zeros((n_f, n)), np.zeros((n_f, n))
+    interference, load, radii = np.zeros((n_f, n)), np.zeros((n_f, n)), np.zeros((n_f, n))
     for index, force in enumerate(forces):
         iterations = walker.climb(force)
         m = walker.loads.size
+        radii[index, order[:m]] = caps.radius(np.maximum(walker.s, 0.0))
         interference[index, order[:m]] = np.maximum(walker.s, 0.0)
         load[index, order[:m]] = walker.loads
         out["delta"][index], out["stiffness"][index] = walker.delta, walker.stiffness
         out["unloading_stiffness"][index] = (walker.stiffness if elastic else
-                                             _unloading_stiffness(walker.kernel(m), walker.s, e_star, cap))
+                                             _unloading_stiffness(walker.kernel(m), walker.s, e_star, caps))
         out["iterations"][index], out["residual"][index], out["candidates"][index] = iterations, walker.error, m
     return DiscreteContact(
         force=forces, delta=out["delta"], interference=interference, load=load, stiffness=out["stiffness"],
         iterations=out["iterations"].astype(np.int32), residual=out["residual"],
-        candidates=out["candidates"].astype(np.int32), radii=cap.radius(interference),
+        candidates=out["candidates"].astype(np.int32), radii=radii,
         unloading_stiffness=out["unloading_stiffness"],
     )
