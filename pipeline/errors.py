@@ -5,11 +5,19 @@ from __future__ import annotations
 import shlex
 import sys
 
-__all__ = ["StaleInputError", "WriteError", "install_hint"]
+__all__ = ["StaleInputError", "WriteError", "SolveError", "install_hint"]
 
 
 class StaleInputError(RuntimeError):
     """A stage input is missing or was built from a different configuration."""
+
+
+class SolveError(RuntimeError):
+    """A numerical solve of a stage failed (it did not converge, or left the domain it was set up for).
+
+    The message names what failed, where, and what to try; the CLI prints it as one line, exit
+    status 1, and the stage writes nothing.
+    """
 
 
 class WriteError(Exception):

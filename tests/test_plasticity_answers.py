@@ -83,3 +83,18 @@ def test_a_hardness_no_cap_reaches_warns_that_the_answer_is_elastic() -> None:
         warnings.simplefilter("error")
         _warn_no_yield(cap, [{"radius": np.full((3, 4), 1.1 * cap.a_c)}])
         _warn_no_yield(HertzCap(1.154e11, 3e-5), below)
+
+
+def test_a_pool_solve_that_fails_is_one_line_and_exit_1(tmp_path, capsys, monkeypatch) -> None:
+    """A discrete solve that does not converge (here made to fail) ends the contact stage with one line
+    naming the surface, exit status 1, no traceback and no contact.nc."""
+    from g2tom.physics import discrete_contact as dc
+
+    def fails(*args, **kwargs):
+        raise dc.NotConverged("force 1 N: relative residual 0.1 (stalled)")
+
+    monkeypatch.setattr(dc, "solve_forces", fails)
+    assert main(["contact", "--config", "gold_connector", "--data-dir", str(tmp_path), "--no-progress"]) == 1
+    err = capsys.readouterr().err
+    assert "g2tom: error: contact: the discrete solve of pool surface 0 did not converge (force 1 N" in err
+    assert "Traceback" not in err and not (tmp_path / "contact.nc").exists()

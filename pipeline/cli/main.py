@@ -80,7 +80,7 @@ from g2tom.cli.arguments import attach_negative_values, build_parser, default_co
 from g2tom.cli.commands import compute_options  # noqa: E402
 from g2tom.config import ConfigError, Scenario  # noqa: E402
 from g2tom.before_work import load_scenario  # noqa: E402
-from g2tom.errors import StaleInputError, WriteError  # noqa: E402
+from g2tom.errors import SolveError, StaleInputError, WriteError  # noqa: E402
 
 __all__ = ["main"]
 
@@ -185,7 +185,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ConfigError as exc:
         print(f"g2tom: error: {exc}", file=sys.stderr)
         return 2
-    except (StaleInputError, WriteError) as exc:  # an input to rebuild, an output that could not be written
+    except (StaleInputError, SolveError, WriteError) as exc:  # an input to rebuild, a solve that failed, an
+        # output that could not be written
         print(f"g2tom: error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt as exc:

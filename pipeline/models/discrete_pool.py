@@ -35,6 +35,7 @@ from g2tom import config
 from g2tom.config import POOL_CONFIDENCE, Scenario
 from g2tom.fitting.ensemble import mean_half_width, z_value
 from g2tom.physics import discrete_contact as dc
+from g2tom.errors import SolveError
 from g2tom.physics.cap_law import CapLaw, CappedCap, HertzCap
 from g2tom.variables import entry
 
@@ -93,8 +94,8 @@ def capped_disc(scenario: Scenario, settings: dict[str, Any]) -> tuple[dict[str,
 
     Raises
     ------
-    ValueError
-        If surface 0 on the new disc falls below what it serves (the margin did not hold).
+    g2tom.errors.SolveError
+        As :func:`surface_spots`.
     """
     pilot = _surface_solution(settings, 0)[1]
     radius, served = _disc(scenario, float(pilot.delta.min()) - CAPPED_DOMAIN_MARGIN * scenario.roughness.sigma)
@@ -107,13 +108,14 @@ def surface_spots(settings: dict[str, Any], k: int) -> dict[str, np.ndarray]:
 
     Raises
     ------
-    ValueError
-        If the solved approach falls below the one the disc serves (asperities may be missing).
+    g2tom.errors.SolveError
+        If the solve does not converge, or its approach falls below the one the disc serves
+        (asperities may be missing).
     """
     asp, sol = _surface_solution(settings, k)
     if sol.delta.min() < settings["served"]:
-        raise ValueError(f"surface {k}: the approach {sol.delta.min():.4g} m falls below the "
-                         f"{settings['served']:.4g} m its asperity disc serves")
+        raise SolveError(f"contact: pool surface {k} sinks to the approach {sol.delta.min():.4g} m, below the "
+                         f"{settings['served']:.4g} m its asperity disc serves (asperities may be missing)")
     touching = np.flatnonzero((sol.interference > 0).any(axis=0))
     return {"x": asp.x[touching], "y": asp.y[touching], "radius": sol.radii[:, touching],
             "delta": sol.delta, "stiffness": sol.stiffness, "unloading_stiffness": sol.unloading_stiffness,
@@ -122,10 +124,19 @@ def surface_spots(settings: dict[str, Any], k: int) -> dict[str, np.ndarray]:
 
 
 def _surface_solution(settings: dict[str, Any], k: int) -> tuple[dc.Asperities, dc.DiscreteContact]:
-    """Surface ``k``'s asperities on the settings' disc and its solution at every force."""
+    """Surface ``k``'s asperities on the settings' disc and its solution at every force.
+
+    Raises
+    ------
+    g2tom.errors.SolveError
+        If the solve does not converge.
+    """
     asp = dc.draw_asperities(settings["seed"], k, settings["radius"], settings["eta"], settings["sigma"])
-    return asp, dc.solve_forces(asp, settings["profile"], settings["forces"][: settings.get("steps")],
-                                settings["e_star"], settings["beta"], settings["floor"], cap=settings["cap"])
+    try:
+        return asp, dc.solve_forces(asp, settings["profile"], settings["forces"][: settings.get("steps")],
+                                    settings["e_star"], settings["beta"], settings["floor"], cap=settings["cap"])
+    except dc.NotConverged as exc:
+        raise SolveError(f"contact: the discrete solve of pool surface {k} did not converge ({exc})") from None
 
 
 def _chunk(settings: dict[str, Any], surfaces: np.ndarray) -> list[dict[str, np.ndarray]]:
