@@ -21,13 +21,15 @@ def raster_owned(x, y, a, n=2400):
     lo, hi = min((x - a).min(), (y - a).min()), max((x + a).max(), (y + a).max())
     c = np.linspace(lo, hi, n)
     pixel = c[1] - c[0]
-    gx, gy = np.meshgrid(c, c)
-    least = np.full(gx.shape, np.inf)
-    owner = np.full(gx.shape, -1)
-    for i in range(x.size):
-        power = (gx - x[i]) ** 2 + (gy - y[i]) ** 2 - a[i] ** 2
-        wins = (power <= 0) & (power < least)
-        least[wins], owner[wins] = power[wins], i
+    least = np.full((n, n), np.inf)
+    owner = np.full((n, n), -1)
+    for i in range(x.size):  # each disc's bounding box of pixels
+        cols = slice(*np.searchsorted(c, [x[i] - a[i], x[i] + a[i]]))
+        rows = slice(*np.searchsorted(c, [y[i] - a[i], y[i] + a[i]]))
+        power = (c[cols][None, :] - x[i]) ** 2 + (c[rows][:, None] - y[i]) ** 2 - a[i] ** 2
+        box, who = least[rows, cols], owner[rows, cols]
+        wins = (power <= 0) & (power < box)
+        box[wins], who[wins] = power[wins], i
     return np.bincount(owner[owner >= 0], minlength=x.size) * pixel * pixel, pixel
 
 
