@@ -127,7 +127,7 @@ def small_stages(tmp_path_factory, small) -> Path:
 FILE_SECONDS = {
     "test_validate.py": 60, "test_atlas.py": 39, "test_signals.py": 36, "test_discrete_contact.py": 29,
     "test_surface.py": 24, "test_atlas_design.py": 22, "test_figures_style.py": 21,
-    "test_pipeline_end_to_end.py": 21, "test_cap_overlap.py": 20, "test_cube_stage.py": 16,
+    "test_pipeline_end_to_end.py": 21, "test_cap_overlap.py": 1, "test_cube_stage.py": 16,
     "test_atlas_loads.py": 15, "test_bad_inputs.py": 14, "test_oxide_stage.py": 13, "test_plan.py": 11,
     "test_stability.py": 9, "test_point_model.py": 9, "test_ensemble.py": 8, "test_constriction.py": 8,
     "test_frontier.py": 7, "test_bench_output.py": 7, "test_predict_chain.py": 7, "test_reference_capped.py": 7,
