@@ -231,3 +231,15 @@ def test_slope_is_the_derivative_of_load(params: tuple[float, float, float]) -> 
     h = 1e-5 * w
     difference = (cap.load(w + h) - cap.load(w - h)) / (2.0 * h)
     np.testing.assert_allclose(cap.slope(w), difference, rtol=1e-7)
+
+
+@pytest.mark.parametrize("law", [cl.HertzCap(1e11, 1e-4), cl.CappedCap(1e11, 1e-4, 2e9)], ids=["hertz", "capped"])
+def test_slopes_are_the_derivatives_of_load_and_radius(law) -> None:
+    """dP/dw and da/dw equal central differences of load and radius from below the onset through the
+    table to the uniform disc beyond it (W 0.1 ... 200), and vanish off contact."""
+    omega_c = cl.CappedCap(1e11, 1e-4, 2e9).omega_c
+    w = np.geomspace(0.1 * omega_c, 200 * omega_c, 400)
+    h = 1e-7 * w
+    np.testing.assert_allclose((law.load(w + h) - law.load(w - h)) / (2 * h), law.slope(w), rtol=1e-7)
+    np.testing.assert_allclose((law.radius(w + h) - law.radius(w - h)) / (2 * h), law.radius_slope(w), rtol=1e-7)
+    assert law.slope(-1e-9) == 0.0 and law.radius_slope(-1e-9) == 0.0 and law.radius_slope(0.0) == 0.0

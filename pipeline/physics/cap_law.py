@@ -33,7 +33,7 @@ an elasto-plastic volume model.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Callable, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -265,15 +265,9 @@ class CappedCap:
     def slope(self, w: ArrayLike) -> np.ndarray:
         """Stiffness ``dP/dw``, N/m, the derivative of :meth:`load`, at the interferences ``w`` (m);
         0 for ``w <= 0``. It rises from Hertz's toward the plastic ``2 pi beta H``."""
-        w = np.asarray(w, dtype=float)
-        omega_c, _, f_c = critical_scales(self.beta, self.e_star, self.hardness)
-        ratio, top = w / omega_c, CAP_INTERFERENCE[-1]
-        inside = np.clip(ratio, 1.0, top)
-        value, slope = _hermite(np.log(inside), _LOG_W, _LOG_F, _SLOPE_F)
-        table = f_c / omega_c * np.exp(value) / inside * slope
-        x = uniform_disc_radius(np.maximum(ratio, top))
-        far = f_c / omega_c * 3.0 * x / (x + 8.0 / np.pi**2)
-        return np.where(w <= omega_c, self._elastic().slope(w), np.where(ratio <= top, table, far))[()]
+        f_c = critical_scales(self.beta, self.e_star, self.hardness)[2]
+        return self._tabulated_slope(w, f_c, _LOG_F, _SLOPE_F, lambda x, scale: scale * 3.0 * x / (x + 8.0 / np.pi**2),
+                                     self._elastic().slope)
 
     def radius(self, w: ArrayLike) -> np.ndarray:
         """Contact radius, m, at the interferences ``w`` (m); 0 for ``w <= 0``."""
@@ -287,14 +281,24 @@ class CappedCap:
     def radius_slope(self, w: ArrayLike) -> np.ndarray:
         """``da/dw``, dimensionless, the derivative of :meth:`radius`, at the interferences ``w`` (m);
         0 for ``w <= 0``."""
+        a_c = critical_scales(self.beta, self.e_star, self.hardness)[1]
+        return self._tabulated_slope(w, a_c, _LOG_A, _SLOPE_A, lambda x, scale: scale / (x + 8.0 / np.pi**2),
+                                     self._elastic().radius_slope)
+
+    def _tabulated_slope(self, w: ArrayLike, unit: float, log_values: np.ndarray, log_slopes: np.ndarray,
+                         far: Callable[[np.ndarray, float], np.ndarray],
+                         elastic: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+        """The derivative in ``w`` (m) of a quantity tabulated as ``ln(q / unit)`` against ``ln W``:
+        Hertz's (``elastic``) up to the onset, the table's to its end, and beyond it ``far(x,
+        unit / omega_c)`` with ``x = a / a_c`` of the uniform disc."""
         w = np.asarray(w, dtype=float)
-        omega_c, a_c, _ = critical_scales(self.beta, self.e_star, self.hardness)
+        omega_c = critical_scales(self.beta, self.e_star, self.hardness)[0]
         ratio, top = w / omega_c, CAP_INTERFERENCE[-1]
         inside = np.clip(ratio, 1.0, top)
-        value, slope = _hermite(np.log(inside), _LOG_W, _LOG_A, _SLOPE_A)
-        table = a_c / omega_c * np.exp(value) / inside * slope
-        far = a_c / omega_c / (uniform_disc_radius(np.maximum(ratio, top)) + 8.0 / np.pi**2)
-        return np.where(w <= omega_c, self._elastic().radius_slope(w), np.where(ratio <= top, table, far))[()]
+        value, slope = _hermite(np.log(inside), _LOG_W, log_values, log_slopes)
+        table = unit / omega_c * np.exp(value) / inside * slope
+        far_value = far(uniform_disc_radius(np.maximum(ratio, top)), unit / omega_c)
+        return np.where(w <= omega_c, elastic(w), np.where(ratio <= top, table, far_value))[()]
 
     def interference(self, load: ArrayLike) -> np.ndarray:
         """The interference, m, at which the cap carries ``load`` (N): the inverse of :meth:`load`;
