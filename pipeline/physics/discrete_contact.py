@@ -350,16 +350,20 @@ class _SharedCaps:
 
     def __init__(self, law: CapLaw, x: np.ndarray, y: np.ndarray) -> None:
         self.law, self.x, self.y = law, x, y
+        self._last: tuple[np.ndarray, tuple[np.ndarray, ...]] | None = None
 
     def _owned(self, w: np.ndarray) -> tuple[np.ndarray, ...]:
         """The law's radii (m), the discs' areas (m^2) and
-        :func:`g2tom.physics.cap_overlap.owned_area_derivatives` at ``w``."""
+        :func:`g2tom.physics.cap_overlap.owned_area_derivatives` at ``w``; those of the last ``w`` are
+        kept (Newton asks for the loads, the Jacobian and the spots at one point)."""
         from g2tom.physics.cap_overlap import owned_area_derivatives
 
         w = np.maximum(w, 0.0)
-        m = w.shape[-1]
-        radius = self.law.radius(w)
-        return (radius, np.pi * radius * radius) + owned_area_derivatives(self.x[:m], self.y[:m], radius)
+        if self._last is None or not np.array_equal(self._last[0], w):
+            radius = self.law.radius(w)
+            m = w.shape[-1]
+            self._last = w, (radius, np.pi * radius * radius) + owned_area_derivatives(self.x[:m], self.y[:m], radius)
+        return self._last[1]
 
     def share(self, w: np.ndarray) -> np.ndarray:
         """Each cap's owned share of its disc at the interferences ``w`` (m) of the first caps (1 off contact)."""
@@ -382,10 +386,9 @@ class _SharedCaps:
         """``dP/dw`` on the ``active`` caps (N/m): its diagonal and the rest (a sparse matrix)."""
         from scipy.sparse import csr_matrix
 
-        radius, disc, owned, own_slope, rows, cols, values = self._owned(w)
-        safe = np.where(disc > 0.0, disc, 1.0)
-        share = np.clip(np.where(disc > 0.0, owned / safe, 1.0), 0.0, 1.0)
-        scale = np.where(disc > 0.0, self.law.load(w) / safe, 0.0)  # F / (pi a^2), Pa
+        radius, disc, _, own_slope, rows, cols, values = self._owned(w)
+        share = self.share(w)
+        scale = np.where(disc > 0.0, self.law.load(w) / np.where(disc > 0.0, disc, 1.0), 0.0)  # F / (pi a^2), Pa
         radius_slope = self.law.radius_slope(w)
         diagonal = share * self.law.slope(w) + scale * (own_slope - 2.0 * np.pi * radius * share) * radius_slope
         index = np.full(w.shape[-1], -1)
