@@ -725,3 +725,16 @@ def test_a_round_adds_main_grid_pairs_where_the_proxy_and_the_full_field_disagre
     todo, stand_goal = ensemble.plan_round(vset, state, False, np.array([0.075, 3.5]), model, *stand, costs)
     added = max([c.realization + 1 for c in todo if not c.ensemble and c.load == 0], default=P)
     assert stand_goal >= added
+
+
+def test_an_open_clean_contact_of_drawn_asperities_is_inf_without_a_warning() -> None:
+    """At F' 0.075 no drawn asperity of the quick set touches: the clean R is inf, its interaction part
+    NaN, and no RuntimeWarning (inf - inf) reaches the user."""
+    import warnings
+
+    vset = dataclasses.replace(scene.QUICK, deltas=(2.0, 0.5))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        result = scene.g2tom_resistances(vset, "point", "asperities")
+    clean = result["resistance_clean"].values
+    assert np.isinf(clean[0]) and np.isfinite(clean[1])

@@ -69,10 +69,12 @@ class GreenwoodTripp(ContactModel):
         drawn = asperity_spots(settings, np.arange(n_drawn))
         res = clean_terms(drawn, drawn, settings)
         rho = settings.rho
-        with np.errstate(divide="ignore"):
+        # a step where no drawn spot conducts is an open circuit: R = inf, its interaction part inf - inf = NaN
+        with np.errstate(divide="ignore", invalid="ignore"):
             total = rho / np.mean(rho / res.resistance, axis=0)
             own = rho / np.mean(rho / res.resistance_self, axis=0)
-        return {"resistance": total, "self": own, "interaction": total - own,
+            interaction = total - own
+        return {"resistance": total, "self": own, "interaction": interaction,
                 "open": np.mean(np.isinf(res.resistance), axis=0), "n_drawn": n_drawn}
 
     def clean_conductance(self, radius: Any, weights: Any, settings: CubeSettings, n_drawn: int,
