@@ -51,8 +51,43 @@ def test_every_path_equals_the_direct_solve(nested, floor):
         paths.add(path)
         np.testing.assert_allclose(got, direct(kernel, radii), rtol=1e-10, atol=0.0)
     if floor < 1e-5:
-        assert dr.INDEFINITE in paths  # the LU path was exercised
+        assert dr.INDEFINITE in paths  # sets solved alone (here: wide partial sets) on an indefinite union
     assert dr.NESTED in paths
+
+
+def test_an_indefinite_union_shares_its_signed_factor():
+    """Large caps crowded closer than their radii (flattened capped caps): the union is indefinite,
+    its nested sets still share one (signed) factorization, with the direct answer."""
+    rng = np.random.default_rng(23)
+    for _ in range(20):
+        n, sets = rng.integers(20, 90), rng.integers(2, 10)
+        x, y = rng.uniform(0.0, 2e-4, (2, n))
+        kernel = interaction_kernel(x, y, 1e-6)
+        top = rng.uniform(1e-5, 2e-5, n)
+        cover = np.sort(rng.uniform(size=(sets, n)) < np.linspace(0.9, 0.2, sets)[:, None], axis=0)[::-1]
+        radii = top * cover
+        radii[0] = top  # every spot conducts in the first set
+        union = kernel.copy()
+        union[np.diag_indices(n)] = 0.5 / top
+        assert np.linalg.eigvalsh(union)[0] < 0
+        got, path = solved(kernel, radii)
+        assert path == dr.SIGNED
+        np.testing.assert_allclose(got, direct(kernel, radii), rtol=1e-10, atol=0.0)
+
+
+def test_a_pivot_near_zero_leaves_the_signed_factor_for_lu():
+    """Two caps closer than the floor, sized so that the union's second pivot is -1e-5 of its
+    diagonal: the signed factor gives up (it would amplify rounding) and every set is solved
+    alone with the direct answer; a little further from singular, the signed path answers."""
+    floor = 1e-6
+    coupling = 1.0 / (np.pi * floor)
+    kernel = np.array([[0.0, coupling], [coupling, 0.0]])
+    for margin, path_wanted in ((1e-5, dr.INDEFINITE), (0.5, dr.SIGNED)):
+        radius = np.sqrt(1.0 + margin) / (2.0 * coupling)  # second pivot 1/(2a) (1 - (2a k)^2) = -margin / (2a)
+        radii = np.array([[radius, radius], [radius, 0.7 * radius], [radius, radius]])
+        got, path = solved(kernel, radii)
+        assert path == path_wanted
+        np.testing.assert_allclose(got, direct(kernel, radii), rtol=1e-9)
 
 
 def test_wide_partial_sets_are_solved_alone_with_the_same_answer():

@@ -25,9 +25,14 @@ exact in exact arithmetic (``G`` is ``(L[:m, :m]^-1 M[:m, P])^T``: a Cholesky fa
 below a leading block). ``L^-1 1`` comes with the factor, as the last row of the factor of ``U``
 bordered by ones (corner :data:`CORNER`). A step whose partial sets are so wide that
 factorizing every set by itself takes fewer operations (``m^3 / 3 + sum_s (p_s^2 m + p_s^3) >
-sum_s c_s^3 / 3``, ``c_s`` the set's conducting spots), or whose ``U`` is not positive definite
-(large caps closer than the coupling floor), has every set solved by itself: Cholesky, or LU
-with partial pivoting where the set's ``M`` is not positive definite either.
+sum_s c_s^3 / 3``, ``c_s`` the set's conducting spots) has every set solved by itself (Cholesky).
+
+Large caps closer than the coupling floor (flattened capped caps) can leave ``U`` indefinite.
+Then the same Schur complements run on its signed factor ``U = L D L^T``, ``D = diag(+-1)``
+(Cholesky without pivoting, each negative pivot's sign kept), with ``|z|^2`` and ``G G^T``
+weighted by ``D``. Without pivoting a small pivot would amplify rounding, so the factorization
+gives up at a pivot below :data:`SIGNED_PIVOT_FLOOR` of its diagonal entry, and then every set
+is solved by itself: Cholesky, its signed factor, or LU with partial pivoting.
 
 The loops are compiled (numba, ``nogil``: the cube's dask threads run them side by side), one
 surface at a time, so a realization's answer never depends on the chunk it is computed in.
@@ -52,8 +57,13 @@ CORNER = 1e300
 
 #: Paths of :func:`currents` per step: no spot conducts; one union factorization and Schur
 #: complements; every set by itself (wide partial sets); every set by itself (indefinite union);
-#: conjugate gradients on every set at once (large unions).
-NONE, NESTED, WHOLE, INDEFINITE, ITERATIVE = 0, 1, 2, 3, 4
+#: conjugate gradients on every set at once (large unions); one signed factorization of an
+#: indefinite union and Schur complements.
+NONE, NESTED, WHOLE, INDEFINITE, ITERATIVE, SIGNED = 0, 1, 2, 3, 4, 5
+#: A signed factorization (:func:`_signed_cholesky`) gives up at a pivot smaller than this share of
+#: its diagonal entry: without pivoting, a small pivot would amplify rounding by about its inverse.
+#: Then the step (or set) is solved by LU with partial pivoting instead.
+SIGNED_PIVOT_FLOOR = 1e-3
 
 #: Union size from which a step's sets are solved by conjugate gradients (``_iterative``)
 #: rather than factorized: O(m^2) a sweep against O(m^3). Measured on the atlas's d22 scene
@@ -127,7 +137,7 @@ def currents(kernel: np.ndarray, radius: np.ndarray,
     tuple of numpy.ndarray
         ``1^T M^-1 1`` over each set's conducting spots, m, shape (sets, steps) (0 where none
         conducts), and the path each step took, shape (steps,): ``NONE``, ``NESTED``,
-        ``WHOLE``, ``INDEFINITE`` or ``ITERATIVE``.
+        ``WHOLE``, ``INDEFINITE``, ``ITERATIVE`` or ``SIGNED``.
     """
     kernel = np.ascontiguousarray(kernel, dtype=np.float64)
     radius = np.ascontiguousarray(radius, dtype=np.float64)
@@ -183,10 +193,16 @@ def _step(kernel: np.ndarray, a: np.ndarray, out: np.ndarray, iterative_from: in
         shared += width[s] ** 2 * m + width[s] ** 3
     if shared <= alone:
         factor = _bordered(kernel, top, union)
-        if _cholesky(factor, m + 1):
+        signs = np.ones(m + 1)
+        path = NESTED
+        if not _cholesky(factor, m + 1):  # an indefinite union: its signed factor, or every set alone
+            factor = _bordered(kernel, top, union)
+            path = SIGNED if _signed_cholesky(factor, m + 1, signs) else INDEFINITE
+        if path != INDEFINITE:
             for s in range(sets):
-                out[s] = _schur_total(kernel, a[s], union, factor, inside[s], width[s])
-            return NESTED
+                total, ok = _schur_total(kernel, a[s], union, factor, signs, inside[s], width[s])
+                out[s] = total if ok else _set_total(kernel, a[s], union)[0]
+            return path
     definite = True
     for s in range(sets):
         total, ok = _set_total(kernel, a[s], union)
@@ -270,15 +286,18 @@ def _iterative(kernel: np.ndarray, a: np.ndarray, union: np.ndarray, out: np.nda
 
 
 @numba.njit(cache=True, nogil=True)
-def _schur_total(kernel: np.ndarray, a: np.ndarray, union: np.ndarray, factor: np.ndarray, inside: int,
-                 width: int) -> float:
-    """``|z|^2 + b^T S^-1 b`` of one set (radii ``a``) from the union's bordered factor."""
+def _schur_total(kernel: np.ndarray, a: np.ndarray, union: np.ndarray, factor: np.ndarray, signs: np.ndarray,
+                 inside: int, width: int) -> tuple[float, bool]:
+    """``z^T D z + b^T S^-1 b`` of one set (radii ``a``) from the union's bordered factor ``U = L D L^T``
+    (``D = diag(signs)``, all ones for a Cholesky factor): ``z`` the border's row of ``L``,
+    ``S = M[P, P] - G D G^T``, ``b = 1 - G D z``. ``False`` where ``S`` has no factor either (the set
+    is then solved alone)."""
     m = union.size
     total = 0.0
     for k in range(inside):
-        total += factor[m, k] ** 2
+        total += signs[k] * factor[m, k] ** 2
     if width == 0:
-        return total
+        return total, True
     rest = np.empty(width, np.int64)  # positions in the union's order
     j = 0
     for q in range(inside, m):
@@ -290,21 +309,28 @@ def _schur_total(kernel: np.ndarray, a: np.ndarray, union: np.ndarray, factor: n
         px = rest[x]
         b = 1.0
         for k in range(inside):
-            b -= factor[px, k] * factor[m, k]
+            b -= factor[px, k] * factor[m, k] * signs[k]
         schur[width, x] = b
         for y in range(x + 1):
             py = rest[y]
             g = 0.0
             for k in range(inside):
-                g += factor[px, k] * factor[py, k]
+                g += factor[px, k] * factor[py, k] * signs[k]
             coupling = 0.5 / a[union[px]] if x == y else kernel[union[px], union[py]]
             schur[x, y] = coupling - g
     schur[width, width] = CORNER
-    _cholesky(schur, width + 1)  # S is positive definite with U (its diagonal only grows)
+    own = np.ones(width + 1)
+    if signs.min() > 0.0:
+        _cholesky(schur, width + 1)  # S is positive definite with U (its diagonal only grows)
+    else:
+        saved = schur.copy()
+        if not _cholesky(schur, width + 1):
+            schur[:, :] = saved
+            if not _signed_cholesky(schur, width + 1, own):
+                return total, False
     for x in range(width):
-        total += schur[width, x] ** 2
-    return total
-
+        total += own[x] * schur[width, x] ** 2
+    return total, True
 
 @numba.njit(cache=True, nogil=True)
 def _set_total(kernel: np.ndarray, a: np.ndarray, union: np.ndarray) -> tuple[float, bool]:
@@ -321,6 +347,13 @@ def _set_total(kernel: np.ndarray, a: np.ndarray, union: np.ndarray) -> tuple[fl
         for k in range(c):
             total += bordered[c, k] ** 2
         return total, True
+    bordered[:, :] = matrix
+    signs = np.ones(c + 1)
+    if _signed_cholesky(bordered, c + 1, signs):
+        total = 0.0
+        for k in range(c):
+            total += signs[k] * bordered[c, k] ** 2
+        return total, False
     return _lu_sum(matrix[:c, :c].copy()), False
 
 
@@ -383,6 +416,36 @@ def _cholesky_loop(matrix: np.ndarray, size: int) -> bool:
             for k in range(j):
                 value -= matrix[i, k] * matrix[j, k]
             matrix[i, j] = value / pivot
+    return True
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _signed_cholesky(matrix: np.ndarray, size: int, signs: np.ndarray) -> bool:
+    """Signed Cholesky factor ``matrix[:size, :size] = L D L^T`` (``D = diag(signs)``, +-1) in place
+    from the lower triangle, without pivoting: ``L`` in the lower triangle, ``signs`` filled.
+
+    The symmetric indefinite matrices of close large spots have a few negative pivots. ``False``
+    where a pivot falls below :data:`SIGNED_PIVOT_FLOOR` of its diagonal entry (``matrix`` and
+    ``signs`` then unspecified). Inner products may be reassociated, as in :func:`_cholesky_loop`.
+    """
+    row = np.empty(size)
+    for j in range(size):
+        diagonal = matrix[j, j]
+        pivot = diagonal
+        for k in range(j):
+            row[k] = signs[k] * matrix[j, k]
+            pivot -= row[k] * matrix[j, k]
+        if not abs(pivot) > SIGNED_PIVOT_FLOOR * abs(diagonal):
+            return False
+        signs[j] = 1.0 if pivot > 0.0 else -1.0
+        scale = np.sqrt(abs(pivot))
+        matrix[j, j] = scale
+        divisor = signs[j] * scale
+        for i in range(j + 1, size):
+            value = matrix[i, j]
+            for k in range(j):
+                value -= matrix[i, k] * row[k]
+            matrix[i, j] = value / divisor
     return True
 
 
