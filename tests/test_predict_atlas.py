@@ -22,15 +22,18 @@ from g2tom.stages import fits, surrogate
 from g2tom.scene import scene_groups
 from g2tom.store import write_dataset
 from tests.conftest import SMALL_OVERRIDES
-from tests.test_atlas import BASE, DESIGN
+from tests.test_atlas import BASE
 from tests.test_fits_stage import cli_overrides, synthetic_cube
 from tests.test_predict import _rows
 
 
 @pytest.fixture(scope="module")
-def atlas_json(tmp_path_factory):
-    data = tmp_path_factory.mktemp("atlas")
-    target, _ = write_atlas_surrogate(atlas.run_atlas(load_scenario("paper_gt", BASE), DESIGN, data))
+def atlas_json(tmp_path_factory, small_atlas):
+    """The surrogate of conftest's small atlas (run_atlas on paper_gt with test_atlas's ``BASE`` and
+    ``DESIGN``, computed once for the whole run), fitted on a copy of its atlas.nc."""
+    folder = tmp_path_factory.mktemp("atlas") / "atlas"
+    folder.mkdir()
+    target, _ = write_atlas_surrogate(shutil.copy(small_atlas, folder / atlas.ATLAS_FILE))
     return target
 
 
