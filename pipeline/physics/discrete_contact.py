@@ -350,52 +350,58 @@ class _SharedCaps:
 
     def __init__(self, law: CapLaw, x: np.ndarray, y: np.ndarray) -> None:
         self.law, self.x, self.y = law, x, y
-        self._last: tuple[np.ndarray, tuple[np.ndarray, ...]] | None = None
+        self._last: tuple[np.ndarray, dict[str, Any]] | None = None
 
-    def _owned(self, w: np.ndarray) -> tuple[np.ndarray, ...]:
-        """The law's radii (m), the discs' areas (m^2) and
+    def _at(self, w: np.ndarray) -> dict[str, Any]:
+        """The law's radii (m) and loads (N), the discs' areas (m^2), the owned shares and
         :func:`g2tom.physics.cap_overlap.owned_area_derivatives` at ``w``; those of the last ``w`` are
         kept (Newton asks for the loads, the Jacobian and the spots at one point)."""
         from g2tom.physics.cap_overlap import owned_area_derivatives
 
-        w = np.maximum(w, 0.0)
+        w = np.maximum(w, 0.0)  # the law gives nothing off contact
         if self._last is None or not np.array_equal(self._last[0], w):
             radius = self.law.radius(w)
+            disc = np.pi * radius * radius
             m = w.shape[-1]
-            self._last = w, (radius, np.pi * radius * radius) + owned_area_derivatives(self.x[:m], self.y[:m], radius)
+            owned, own_slope, rows, cols, values = owned_area_derivatives(self.x[:m], self.y[:m], radius)
+            share = np.clip(np.where(disc > 0.0, owned / np.where(disc > 0.0, disc, 1.0), 1.0), 0.0, 1.0)
+            self._last = w, {"radius": radius, "disc": disc, "share": share, "own_slope": own_slope,
+                             "pairs": (rows, cols, values), "law_load": self.law.load(w)}
         return self._last[1]
 
     def share(self, w: np.ndarray) -> np.ndarray:
         """Each cap's owned share of its disc at the interferences ``w`` (m) of the first caps (1 off contact)."""
-        _, disc, owned = self._owned(w)[:3]
-        return np.clip(np.where(disc > 0.0, owned / np.where(disc > 0.0, disc, 1.0), 1.0), 0.0, 1.0)
+        return self._at(w)["share"]
 
     def load(self, w: np.ndarray) -> np.ndarray:
         """Loads, N, at the interferences ``w`` (m) of the first caps."""
-        return self.share(w) * self.law.load(w)
+        at = self._at(w)
+        return at["share"] * at["law_load"]
 
     def radius(self, w: np.ndarray) -> np.ndarray:
         """Spot radii of the owned areas, m, at the interferences ``w`` (m) of the first caps."""
-        return np.sqrt(self.share(w)) * self.law.radius(w)
+        at = self._at(w)
+        return np.sqrt(at["share"]) * at["radius"]
 
     def interference(self, load: float) -> float:
         """One cap's interference at ``load`` (N): the law's (a lone cap owns its disc)."""
         return self.law.interference(load)
 
-    def jacobian(self, w: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, Any]:
-        """``dP/dw`` on the ``active`` caps (N/m): its diagonal and the rest (a sparse matrix)."""
-        from scipy.sparse import csr_matrix
-
-        radius, disc, _, own_slope, rows, cols, values = self._owned(w)
-        share = self.share(w)
-        scale = np.where(disc > 0.0, self.law.load(w) / np.where(disc > 0.0, disc, 1.0), 0.0)  # F / (pi a^2), Pa
+    def jacobian(self, w: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+        """``dP/dw`` on the ``active`` caps (N/m): its diagonal, and the rest as coordinates
+        ``(rows, cols, values)`` into the active caps (``dP_row / dw_col``, pairs of overlapping caps),
+        ordered by column."""
+        at = self._at(w)
+        radius, disc, share = at["radius"], at["disc"], at["share"]
+        rows, cols, values = at["pairs"]
+        scale = np.where(disc > 0.0, at["law_load"] / np.where(disc > 0.0, disc, 1.0), 0.0)  # F / (pi a^2), Pa
         radius_slope = self.law.radius_slope(w)
-        diagonal = share * self.law.slope(w) + scale * (own_slope - 2.0 * np.pi * radius * share) * radius_slope
+        diagonal = share * self.law.slope(w) + scale * (at["own_slope"] - 2.0 * np.pi * radius * share) * radius_slope
         index = np.full(w.shape[-1], -1)
         index[active] = np.arange(active.size)
-        keep = (index[rows] >= 0) & (index[cols] >= 0)
-        rest = csr_matrix((scale[rows[keep]] * values[keep] * radius_slope[cols[keep]],
-                           (index[rows[keep]], index[cols[keep]])), shape=(active.size,) * 2)
+        keep = np.flatnonzero((index[rows] >= 0) & (index[cols] >= 0))
+        keep = keep[np.argsort(index[cols[keep]], kind="stable")]
+        rest = (index[rows[keep]], index[cols[keep]], scale[rows[keep]] * values[keep] * radius_slope[cols[keep]])
         return diagonal[active], rest
 
 
@@ -435,19 +441,22 @@ def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, cap:
         scale = float(s[active].max())
         error = max(float(np.abs(res).max()) / scale, abs(res_f) / force)
         if shared:  # D = dP/ds is not diagonal (and has zero rows, caps that own nothing): (I + C D) as it is
-            diagonal, rest = cap.jacobian(s, active)
+            diagonal, (rows, cols, values) = cap.jacobian(s, active)
             coupling = kernel[np.ix_(active, active)] / e_star
-            system = coupling * diagonal + (rest.T @ coupling).T
+            system = coupling * diagonal  # C D: the diagonal's columns, then the pairs' C[:, row] v summed by column
+            if cols.size:
+                columns, first = np.unique(cols, return_index=True)
+                system[:, columns] += np.add.reduceat(coupling[:, rows] * values, first, axis=1)
             system[np.diag_indices_from(system)] += 1.0
             solved = np.linalg.solve(system, np.column_stack([np.ones(active.size), res[active]]))
             unit, along = solved[:, 0], solved[:, 1]
-            column = diagonal + np.asarray(rest.sum(axis=0)).ravel()  # 1^T D
+            column = diagonal + np.bincount(cols, values, active.size)  # 1^T D
             stiffness = float(column @ unit)
             if error <= tolerance or iteration == max_iterations:
                 return _State(s, delta), stiffness, iteration, error, False
             step_delta = (res_f - column @ along) / stiffness
             step_active = -(along + step_delta * unit)
-            load_step = diagonal * step_active + rest @ step_active
+            load_step = diagonal * step_active + np.bincount(rows, values * step_active[cols], active.size)
         else:
             system, slope = _hessian(kernel, s, active, e_star, cap)
             solved = symmetric_solve(system, np.column_stack([np.ones(active.size), res[active]]))
