@@ -327,7 +327,7 @@ def format_plan(scenario: ResolvedScenario, workers: int | None = None) -> list[
     lines.append(plastic.line(scenario.roughness.sigma))
     if plastic.hardness is not None:
         lines.append("capped caps: the times below are the elastic caps' cost models; caps that flatten and share "
-                     "their discs take longer (gold_connector on 2 cores: contact 68 s and cube 291 s, planned "
+                     "their discs take longer (gold_connector on 2 cores: contact 63 s and cube 193 s, planned "
                      "7.9 s and 36 s), and the ensemble may need more realizations than typical where few caps "
                      "touch")
     lines += model.plan_lines(scenario)
