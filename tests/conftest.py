@@ -120,6 +120,21 @@ def small_stages(tmp_path_factory, small) -> Path:
     return _shared(tmp_path_factory, "small_stages", build)
 
 
+@pytest.fixture(scope="session")
+def cluster_address():
+    """The scheduler address of a local ``dask.distributed`` cluster of two single-threaded worker
+    processes, started once per pytest worker (3 s): the tests of a stage's bits on worker processes
+    hand it to the stage as ``ComputeOptions(scheduler=...)`` (as `--scheduler` does) instead of
+    each starting its own. The cluster g2tom starts itself (``--workers 2``) is still tested whole
+    by tests/test_validate.py, tests/test_atlas.py, tests/test_compute.py and tests/test_signals.py."""
+    import logging
+
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                  silence_logs=logging.CRITICAL) as cluster:
+        yield cluster.scheduler_address
+
+
 #: Seconds each slow test file took with ``make test`` (its tests' setup, call and teardown summed, on
 #: one of two workers of a quiet 2-core machine). Only the order matters: the scheduler below starts
 #: the longest files first so that the two workers finish together; a file missing here runs after

@@ -63,18 +63,17 @@ def test_progress_bar_stays_out_of_logs(monkeypatch, capfd) -> None:
     assert "\r" not in out + err and "[#" not in out + err
 
 
-def test_multi_process_cluster_gives_identical_cube(tmp_path, small) -> None:
-    """Two worker processes (as `dask scheduler` + `dask worker` would give) reproduce the local cube."""
+def test_multi_process_cluster_gives_identical_cube(tmp_path, small, cluster_address) -> None:
+    """Two worker processes (as `dask scheduler` + `dask worker` would give: conftest's cluster)
+    reproduce the local cube."""
     from g2tom.stages import contact, cube
 
     quiet = ComputeOptions(progress=False)
     expected = cube.build(small, contact.build(small), oxide.build(small, quiet), quiet)
     overrides = list(SMALL_ARGS)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
-        for stage in ("contact", "oxide", "cube"):
-            assert main([stage, "--data-dir", str(tmp_path), "--scheduler", cluster.scheduler_address,
-                         "--no-progress", *overrides]) == 0
+    for stage in ("contact", "oxide", "cube"):
+        assert main([stage, "--data-dir", str(tmp_path), "--scheduler", cluster_address,
+                     "--no-progress", *overrides]) == 0
     with xr.open_dataset(tmp_path / "cube.nc") as ds:
         for name in ("resistance", "resistance_self", "resistance_interaction", "n_conducting"):
             np.testing.assert_array_equal(ds[name].values, expected[name].values)

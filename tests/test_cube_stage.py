@@ -202,9 +202,8 @@ def test_resistance_grows_with_xi_on_average(inputs, built):
     assert np.all(mean.diff("xi") > 0)
 
 
-def test_same_cube_on_a_local_distributed_cluster(inputs, built):
-    pytest.importorskip("distributed")
-    ds = _build(_scenario(chunk=3), *inputs, ComputeOptions(workers=2, progress=False))
+def test_same_cube_on_a_local_distributed_cluster(inputs, built, cluster_address):
+    ds = _build(_scenario(chunk=3), *inputs, ComputeOptions(scheduler=cluster_address, progress=False))
     # Workers run single-threaded BLAS; this process may not (the CLI pins it to one thread,
     # where the two agree bit for bit), and a multi-threaded GEMM may round differently.
     np.testing.assert_allclose(ds["resistance"].values, built["resistance"].values, rtol=1e-14)
@@ -258,12 +257,12 @@ def asperity_inputs(small):
     return asperities, contact.build(asperities), oxide_stage.build(asperities, options)
 
 
-def test_asperity_spots_independent_of_chunks_and_workers(asperity_inputs):
+def test_asperity_spots_independent_of_chunks_and_workers(asperity_inputs, cluster_address):
     scenario, contact_ds, oxide_ds = asperity_inputs
     base = cube.build(scenario, contact_ds, oxide_ds)
-    for chunk, workers in ((1, None), (8, 2)):
+    for chunk, scheduler in ((1, None), (8, cluster_address)):  # threads, two worker processes
         other_scenario = dataclasses.replace(scenario, compute=dataclasses.replace(scenario.compute, cube_chunk=chunk))
-        other = cube.build(other_scenario, contact_ds, oxide_ds, ComputeOptions(progress=False, workers=workers))
+        other = cube.build(other_scenario, contact_ds, oxide_ds, ComputeOptions(progress=False, scheduler=scheduler))
         for name in ("resistance", "n_conducting", "resistance_clean"):
             np.testing.assert_array_equal(other[name].values, base[name].values)
 

@@ -79,13 +79,13 @@ def test_psi_does_not_depend_on_chunking(small: ResolvedScenario, built: xr.Data
     np.testing.assert_array_equal(other["oxide_fraction"], built["oxide_fraction"])
 
 
-@pytest.mark.parametrize(
-    "options",
-    [ComputeOptions(workers=1, progress=False), ComputeOptions(workers=2, progress=False)],
-    ids=["1-thread", "2-distributed-workers"],
-)
-def test_psi_does_not_depend_on_workers(small: ResolvedScenario, built: xr.Dataset, options: ComputeOptions) -> None:
-    # `built` used the threaded scheduler with one thread per core.
+@pytest.mark.parametrize("processes", [False, True], ids=["1-thread", "2-distributed-workers"])
+def test_psi_does_not_depend_on_workers(small: ResolvedScenario, built: xr.Dataset, processes: bool,
+                                        request: pytest.FixtureRequest) -> None:
+    # `built` used the threaded scheduler with one thread per core; the other: one thread, or
+    # conftest's cluster of two worker processes
+    options = (ComputeOptions(scheduler=request.getfixturevalue("cluster_address"), progress=False) if processes
+               else ComputeOptions(workers=1, progress=False))
     np.testing.assert_array_equal(oxide.build(small, options)["psi"], built["psi"])
 
 

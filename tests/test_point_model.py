@@ -277,10 +277,10 @@ def test_stage_point_model_matches_dense_and_records_the_solver(inputs):
     assert np.all(greenwood[np.isfinite(greenwood)] >= ds["resistance"].values[np.isfinite(greenwood)] * (1 - 1e-6))
 
 
-def test_stage_point_model_invariant_under_chunking_and_scheduler(inputs):
+def test_stage_point_model_invariant_under_chunking_and_scheduler(inputs, cluster_address):
     base = _build(_scenario(**{"cube.model": "point", "compute.cube_chunk": 3}), *inputs)
-    for chunk, workers in ((1, 1), (N_REAL, None), (4, 2)):  # one thread, threads, local cluster
-        options = ComputeOptions(progress=False, workers=workers)
+    for chunk, workers, scheduler in ((1, 1, None), (N_REAL, None, None), (4, None, cluster_address)):
+        options = ComputeOptions(progress=False, workers=workers, scheduler=scheduler)  # one thread, threads, local cluster
         other = _build(_scenario(**{"cube.model": "point", "compute.cube_chunk": chunk}), *inputs, options)
         for name in ("resistance", "iterations", "residual", "error_estimate", "n_conducting"):
             np.testing.assert_array_equal(other[name].values, base[name].values)
