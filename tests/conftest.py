@@ -82,20 +82,40 @@ def small_atlas(tmp_path_factory) -> Path:
 #: model with the disc rule, a fixed pool of 8 surfaces) and its design: mu 2 .. 8, Pi 10 .. 40.
 DISCRETE_ATLAS = {"contact.model": "discrete", "oxide.spot_rule": "disc", "cube.model": "point",
                   "contact.surfaces": 8}
+DISCRETE_ATLAS_DESIGN = {"atlas.mu_min": 2.0, "atlas.mu_max": 8.0, "atlas.pi_min": 10.0, "atlas.pi_max": 40.0,
+                         "atlas.n_mu": 2, "atlas.n_pi": 2, "atlas.n_heldout": 1}
+
+
+def discrete_atlas_args() -> list[str]:
+    """``g2tom atlas``'s arguments for the small atlas on discrete asperities (``paper``, test_atlas's
+    ``BASE``, :data:`DISCRETE_ATLAS` and :data:`DISCRETE_ATLAS_DESIGN`), one scene after another."""
+    from tests.test_atlas import BASE
+
+    sets = {**BASE, **DISCRETE_ATLAS, **DISCRETE_ATLAS_DESIGN}
+    return ["atlas", "--config", "paper", "--workers", "1", "--no-progress",
+            *(a for k, v in sets.items() for a in ("--set", f"{k}={v}"))]
 
 
 @pytest.fixture(scope="session")
 def small_discrete_atlas(tmp_path_factory) -> Path:
-    """``atlas.nc`` of the small atlas on discrete asperities (:data:`DISCRETE_ATLAS`), computed once for
-    the whole run (tests/test_atlas.py checks it, tests/test_predict_chain.py answers with its
-    surrogate). Read it only: copy it to change it."""
-    from g2tom.atlas import run as atlas
-    from g2tom.atlas.design import AtlasDesign
-    from tests.test_atlas import BASE
+    """``atlas.nc`` of the small atlas on discrete asperities, run once for the whole run by the CLI
+    (:func:`discrete_atlas_args`: its scenes, atlas.nc, surrogate.json and heldout.csv under
+    ``<folder>/atlas``; its exit status and standard error in ``<folder>/atlas_cli.txt``, which
+    tests/test_atlas.py's test of the CLI reads). tests/test_atlas.py checks it,
+    tests/test_predict_chain.py answers with its surrogate. Read it only: copy it to change it."""
+    import contextlib
+    import io
 
-    design = AtlasDesign(mu=(2.0, 8.0), Pi=(10.0, 40.0), n_mu=2, n_pi=2, n_heldout=1)
-    return _shared(tmp_path_factory, "small_discrete_atlas",
-                   lambda folder: atlas.run_atlas(load_scenario("paper", {**BASE, **DISCRETE_ATLAS}), design, folder))
+    from g2tom.cli.main import main
+
+    def build(folder: Path) -> Path:
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err):
+            status = main([*discrete_atlas_args(), "--data-dir", str(folder)])
+        (folder / "atlas_cli.txt").write_text(f"{status}\n{err.getvalue()}")
+        return folder / "atlas" / "atlas.nc"
+
+    return _shared(tmp_path_factory, "small_discrete_atlas", build)
 
 
 @pytest.fixture(scope="session")

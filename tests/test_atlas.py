@@ -296,26 +296,27 @@ def test_surrogate_json_and_heldout_csv_are_written(tmp_path, uninterrupted) -> 
     assert tables[2].rows[1][-1] == f"{held['steps_within']} of {held['steps']}"
 
 
-def test_cli_runs_fits_and_summarizes(tmp_path, capsys) -> None:
-    from g2tom.cli.main import main
-
-    small = {"atlas.mu_min": DESIGN.mu[0], "atlas.mu_max": DESIGN.mu[1], "atlas.pi_min": DESIGN.Pi[0],
-             "atlas.pi_max": DESIGN.Pi[1], "atlas.n_mu": DESIGN.n_mu, "atlas.n_pi": DESIGN.n_pi,
-             "atlas.n_heldout": DESIGN.n_heldout}  # the small design, not the default
-    # the bundled atlas's discrete pools small and fixed, as test_the_atlas_runs_on_discrete_asperities's: grown
-    # to 2 % (tests/test_pool_growth.py) they took most of this test's minute
-    fixed_pools = {"contact.pool_half_width": 0.0, "atlas.heldout_pool_half_width": 0.0, "contact.surfaces": 8}
-    sets = [a for k, v in {**BASE, **small, **fixed_pools}.items() for a in ("--set", f"{k}={v}")]
-    assert main(["atlas", "--data-dir", str(tmp_path), "--workers", "1", "--no-progress", *sets]) == 0
-    err = capsys.readouterr().err
-    assert err.count("atlas: scene ") == 6 and "held out: " in err and "cells within max(5 %, interval)" in err
+def test_cli_runs_fits_and_summarizes(tmp_path, capsys, small_discrete_atlas) -> None:
+    """`g2tom atlas` on a small design: conftest's ``small_discrete_atlas`` is that command's run
+    (``discrete_atlas_args``: paper's discrete model, BASE, a small fixed pool of 8 surfaces, mu 2 .. 8,
+    Pi 10 .. 40), its exit status and standard error kept beside it."""
     import json
-    ceiling = json.loads((tmp_path / "atlas" / "surrogate.json").read_text())["heldout"]["noise_ceiling"]
+    import shutil
+
+    from g2tom.cli.main import main
+    from tests.conftest import discrete_atlas_args
+
+    folder = small_discrete_atlas.parents[1]
+    status, err = (folder / "atlas_cli.txt").read_text().split("\n", 1)
+    assert status == "0", err
+    assert err.count("atlas: scene ") == 6 and "held out: " in err and "cells within max(5 %, interval)" in err
+    ceiling = json.loads((folder / "atlas" / "surrogate.json").read_text())["heldout"]["noise_ceiling"]
     assert (f"the noise ceiling at this precision {100 * ceiling['independent_steps']:.0f}-"
             f"{100 * ceiling['correlated_steps']:.0f} % of the cells") in err
-    assert (tmp_path / "atlas" / "atlas.nc").is_file() and (tmp_path / "atlas" / "surrogate.json").is_file()
-    # a second run has nothing left to compute
-    assert main(["atlas", "--data-dir", str(tmp_path), "--workers", "1", "--no-progress", *sets]) == 0
+    assert (folder / "atlas" / "atlas.nc").is_file() and (folder / "atlas" / "surrogate.json").is_file()
+    # a second run (on a copy) has nothing left to compute
+    shutil.copytree(folder / "atlas", tmp_path / "atlas")
+    assert main([*discrete_atlas_args(), "--data-dir", str(tmp_path)]) == 0
     assert "atlas: scene " not in capsys.readouterr().err
 
 
