@@ -119,23 +119,25 @@ def small_discrete_atlas(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="session")
-def small_stages(tmp_path_factory, small) -> Path:
-    """The ``small`` study's stage files (contact, oxide, cube, fits, surrogate, each run by the CLI),
-    computed once for the whole run: tests/test_figures_style.py draws on them and
-    tests/test_figures_point.py takes them as its Greenwood model's comparison run (the same
-    arguments, ``cube.model`` = greenwood being small's). Read it only: copy it to change it."""
+def small_stages(tmp_path_factory) -> Path:
+    """The ``small`` study run whole by ``g2tom run --no-bench`` (:data:`SMALL_ARGS`): every stage file
+    (contact, oxide, cube, fits, surrogate), the figures and the report, computed once for the whole
+    run; the warnings the run gave, one a line, in ``<folder>/../warnings.txt``.
+    tests/test_pipeline_end_to_end.py checks it, tests/test_bad_inputs.py runs its catalog on it,
+    tests/test_figures_style.py draws on it and tests/test_figures_point.py takes it as its Greenwood
+    model's comparison run (``cube.model`` = greenwood being small's). Read it only: copy it to change it."""
     import warnings
 
     from g2tom.cli.main import main
 
-    from tests.test_fits_stage import cli_overrides
-
     def build(folder: Path) -> Path:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # surrogate orders reduced on a 3 x 3 grid
-            for stage in ("contact", "oxide", "cube", "fits", "surrogate"):
-                assert main([stage, "--data-dir", str(folder), "--no-progress", *cli_overrides(small)]) == 0
-        return folder
+        data = folder / "run"
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            status = main(["run", "--data-dir", str(data), "--no-progress", "--no-bench", *SMALL_ARGS])
+        assert status == 0
+        (folder / "warnings.txt").write_text("".join(f"{w.category.__name__}: {w.message}\n" for w in caught))
+        return data
 
     return _shared(tmp_path_factory, "small_stages", build)
 

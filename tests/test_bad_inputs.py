@@ -15,7 +15,6 @@ import hashlib
 import math
 import os
 import shutil
-import warnings
 from pathlib import Path
 from typing import Any, Callable
 
@@ -25,7 +24,7 @@ import pytest
 from g2tom.cli.main import main
 from g2tom.config import SECTIONS, parameter_key
 from g2tom.before_work import load_scenario
-from g2tom.store import stage_path, write_dataset
+from g2tom.store import stage_path
 from tests.conftest import SMALL_ARGS, SMALL_OVERRIDES
 
 
@@ -269,21 +268,11 @@ def _snapshot(root: Path) -> dict[str, tuple[int, str]]:
 
 
 @pytest.fixture(scope="module")
-def results(tmp_path_factory, small) -> Path:
-    """A data directory with every stage file and figure of a small run (synthetic cube)."""
-    from g2tom.compute import ComputeOptions
-    from g2tom.stages import contact, oxide
-    from tests.test_fits_stage import synthetic_cube
-
+def results(tmp_path_factory, small_stages) -> Path:
+    """A data directory with every stage file, figure and the report of the small run (conftest's
+    ``small_stages``, copied), and a file beside it."""
     data = tmp_path_factory.mktemp("results") / "data"
-    write_dataset(contact.build(small), data, "contact", small)
-    write_dataset(oxide.build(small, ComputeOptions(progress=False)), data, "oxide", small)
-    write_dataset(synthetic_cube(small, open_share=0.2), data, "cube", small)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # surrogate orders reduced on a 3 x 3 grid
-        for stage in ("fits", "surrogate"):
-            assert main([stage, "--data-dir", str(data), "--no-progress", *_SMALL]) == 0
-        assert main(["figures", "--data-dir", str(data), *_SMALL]) == 0
+    shutil.copytree(small_stages, data)
     (data.parent / "a_file").write_text("not a directory")
     return data
 

@@ -18,7 +18,7 @@ from tests.test_fits_stage import cli_overrides
 @pytest.fixture(scope="module")
 def compare_dir(tmp_path_factory, small: ResolvedScenario, small_stages: Path) -> Path:
     """The stages run by the CLI once per model under <data>/compare/<model>, as `make compare` does
-    (greenwood, small's own cube.model: conftest's ``small_stages``, the same arguments, copied)."""
+    (greenwood, small's own cube.model: conftest's ``small_stages``, the same scenario, copied)."""
     import shutil
 
     assert small.cube.model == "greenwood"

@@ -24,12 +24,15 @@ def _set_args() -> list[str]:
 
 
 @pytest.fixture(scope="module")
-def run_dir(tmp_path_factory):
-    data = tmp_path_factory.mktemp("run")
-    with pytest.warns(UserWarning, match=r"surrogate for alpha: rank/orders .* reduced to"):
-        # the physics benchmarks (about a minute) are tested apart: test_a_second_run_computes_nothing
-        status = main(["run", "--data-dir", str(data), "--no-progress", "--no-bench", *_set_args()])
-    assert status == 0
+def run_dir(tmp_path_factory, small_stages):
+    """A copy of conftest's ``small_stages``: ``g2tom run --no-bench`` with :func:`_set_args`, exit 0
+    (the physics benchmarks, about a minute, are tested apart: test_a_second_run_computes_nothing)."""
+    import shutil
+
+    warned = (small_stages.parent / "warnings.txt").read_text()
+    assert re.search(r"^UserWarning: surrogate for alpha: rank/orders .* reduced to", warned, re.MULTILINE), warned
+    data = tmp_path_factory.mktemp("run") / "data"
+    shutil.copytree(small_stages, data)
     return data
 
 
