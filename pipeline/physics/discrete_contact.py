@@ -51,6 +51,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 
+import numba
 import numpy as np
 
 from g2tom.physics import indenter
@@ -389,8 +390,7 @@ class _SharedCaps:
 
     def jacobian(self, w: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
         """``dP/dw`` on the ``active`` caps (N/m): its diagonal, and the rest as coordinates
-        ``(rows, cols, values)`` into the active caps (``dP_row / dw_col``, pairs of overlapping caps),
-        ordered by column."""
+        ``(rows, cols, values)`` into the active caps (``dP_row / dw_col``, pairs of overlapping caps)."""
         at = self._at(w)
         radius, disc, share = at["radius"], at["disc"], at["share"]
         rows, cols, values = at["pairs"]
@@ -399,10 +399,27 @@ class _SharedCaps:
         diagonal = share * self.law.slope(w) + scale * (at["own_slope"] - 2.0 * np.pi * radius * share) * radius_slope
         index = np.full(w.shape[-1], -1)
         index[active] = np.arange(active.size)
-        keep = np.flatnonzero((index[rows] >= 0) & (index[cols] >= 0))
-        keep = keep[np.argsort(index[cols[keep]], kind="stable")]
+        keep = (index[rows] >= 0) & (index[cols] >= 0)
         rest = (index[rows[keep]], index[cols[keep]], scale[rows[keep]] * values[keep] * radius_slope[cols[keep]])
         return diagonal[active], rest
+
+
+@numba.njit(cache=True, nogil=True)
+def _coupled_jacobian(coupling: np.ndarray, diagonal: np.ndarray, rows: np.ndarray, cols: np.ndarray,
+                      values: np.ndarray) -> np.ndarray:
+    """``C D`` for ``D = diag(diagonal) + R``, ``R`` given as coordinates (``R[rows, cols] = values``),
+    ``C`` symmetric (m/N): built as its transpose ``D^T C`` row by row, which reads and writes
+    contiguous memory (each pair adds ``v C[row]`` to row ``col``), and returned transposed (a view)."""
+    n = diagonal.size
+    transposed = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            transposed[i, j] = diagonal[i] * coupling[i, j]
+    for k in range(rows.size):
+        r, c, v = rows[k], cols[k], values[k]
+        for j in range(n):
+            transposed[c, j] += v * coupling[r, j]
+    return transposed.T
 
 
 def _hessian(kernel: np.ndarray, s: np.ndarray, active: np.ndarray, e_star: float, cap: CapLaw) -> tuple[
@@ -443,10 +460,7 @@ def _newton(g: np.ndarray, kernel: np.ndarray, force: float, e_star: float, cap:
         if shared:  # D = dP/ds is not diagonal (and has zero rows, caps that own nothing): (I + C D) as it is
             diagonal, (rows, cols, values) = cap.jacobian(s, active)
             coupling = kernel[np.ix_(active, active)] / e_star
-            system = coupling * diagonal  # C D: the diagonal's columns, then the pairs' C[:, row] v summed by column
-            if cols.size:
-                columns, first = np.unique(cols, return_index=True)
-                system[:, columns] += np.add.reduceat(coupling[:, rows] * values, first, axis=1)
+            system = _coupled_jacobian(coupling, diagonal, rows, cols, values)
             system[np.diag_indices_from(system)] += 1.0
             solved = np.linalg.solve(system, np.column_stack([np.ones(active.size), res[active]]))
             unit, along = solved[:, 0], solved[:, 1]
