@@ -327,8 +327,8 @@ def format_plan(scenario: ResolvedScenario, workers: int | None = None) -> list[
     lines.append(plastic.line(scenario.roughness.sigma))
     if plastic.hardness is not None:
         lines.append("capped caps: the times below are the elastic caps' cost models; caps that flatten and share "
-                     "their discs take longer (on 2 cores: gold_connector, psi 4.5, contact 63 s and cube 193 s, planned "
-                     "7.9 s and 36 s; the paper's scene with hardness 2e9, psi 47, contact 353 s, planned 10.8 s), "
+                     "their discs take longer (on 2 cores: gold_connector, psi 4.5, contact 55 s and cube 193 s, planned "
+                     "7.9 s and 36 s; the paper's scene with hardness 2e9, psi 47, contact 204 s, planned 10.8 s), "
                      "and the ensemble may need more realizations than typical where few caps touch")
     lines += model.plan_lines(scenario)
     lines.append(f"{'stage':10s} {'peak memory':>14s} {'time':>12s}")
