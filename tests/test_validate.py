@@ -662,12 +662,15 @@ def test_plan_validate_prints_both_surfaces_cases_grids_and_estimate(capsys) -> 
     assert out.count("validate: estimated") == 2 and "on 2 worker(s)" in out
 
 
-def test_cases_on_a_local_cluster_give_the_serial_run(tiny_run, g2tom_once, tmp_path) -> None:
+def test_cases_on_a_local_cluster_give_the_serial_run(tiny_run, g2tom_once, tmp_path, cluster_address) -> None:
+    """The cases on conftest's cluster of two worker processes, reached by its address (--scheduler),
+    planned for its two workers (the cluster g2tom starts itself: tests/test_atlas.py, test_signals.py)."""
     from g2tom.compute import ComputeOptions
 
     out, _ = tiny_run
     log = io.StringIO()
-    run_validation(TINY, tmp_path, stream=log, options=ComputeOptions(workers=2, progress=False))
+    run_validation(TINY, tmp_path, stream=log, options=ComputeOptions(scheduler=cluster_address, workers=2,
+                                                                      progress=False))
     assert "estimated" in log.getvalue() and "on 2 worker(s)" in log.getvalue()
     with xr.open_dataset(out / "validate.nc") as serial, xr.open_dataset(tmp_path / "validate.nc") as cluster:
         _same(serial.load(), cluster.load())
