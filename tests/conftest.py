@@ -183,19 +183,18 @@ def cluster_address():
 #: one of two workers of a quiet 2-core machine). Only the order matters: the scheduler below starts
 #: the longest files first so that the two workers finish together; a file missing here runs after
 #: them, in pytest-xdist's order (most tests first). Stale numbers cost balance, never correctness.
+#: A file that asks first for a session fixture above carries its cost (test_figures_style.py:
+#: small_stages, test_atlas.py: small_atlas and small_discrete_atlas, test_validate.py: cluster_address).
 FILE_SECONDS = {
-    "test_validate.py": 60, "test_atlas.py": 39, "test_signals.py": 36, "test_discrete_contact.py": 29,
-    "test_surface.py": 24, "test_atlas_design.py": 22, "test_figures_style.py": 21,
-    "test_pipeline_end_to_end.py": 21, "test_cap_overlap.py": 1, "test_cube_stage.py": 16,
-    "test_atlas_loads.py": 15, "test_bad_inputs.py": 14, "test_oxide_stage.py": 13, "test_plan.py": 11,
-    "test_stability.py": 9, "test_point_model.py": 9, "test_ensemble.py": 8, "test_constriction.py": 8,
-    "test_frontier.py": 7, "test_bench_output.py": 7, "test_predict_chain.py": 7, "test_reference_capped.py": 7,
-    "test_predict_atlas.py": 7, "test_barber_spots.py": 7, "test_compute.py": 6, "test_small_grids.py": 6,
-    "test_layers.py": 6, "test_oxide_field.py": 5, "test_predict.py": 5, "test_report.py": 5,
-    "test_discrete_resistance.py": 4, "test_contact_stage.py": 4, "test_reference_fft.py": 4,
-    "test_surrogate.py": 4, "test_api_arguments.py": 3, "test_cap_law.py": 3, "test_domains.py": 3,
-    "test_figures_point.py": 3, "test_step_ensemble.py": 3, "test_point_lattice.py": 3,
-    "test_figures_contact.py": 3, "test_frontier_prefix.py": 3,
+    "test_validate.py": 30, "test_signals.py": 30, "test_figures_style.py": 29, "test_atlas.py": 24,
+    "test_surface.py": 18, "test_atlas_loads.py": 14, "test_atlas_design.py": 11, "test_plan.py": 10,
+    "test_stability.py": 10, "test_frontier.py": 9, "test_pipeline_end_to_end.py": 8, "test_predict_chain.py": 8,
+    "test_ensemble.py": 8, "test_reference_capped.py": 8, "test_bad_inputs.py": 8, "test_small_grids.py": 7,
+    "test_barber_spots.py": 7, "test_discrete_contact.py": 7, "test_cube_stage.py": 6, "test_constriction.py": 6,
+    "test_report.py": 6, "test_bench_output.py": 4, "test_reference_fft.py": 4, "test_compute.py": 4,
+    "test_figures_contact.py": 4, "test_layers.py": 4, "test_domains.py": 4, "test_cap_law.py": 3,
+    "test_frontier_prefix.py": 3, "test_step_ensemble.py": 3, "test_api_arguments.py": 3, "test_figures_point.py": 3,
+    "test_surrogate.py": 3, "test_contact_stage.py": 3, "test_oxide_stage.py": 3, "test_bench_spots.py": 3,
 }
 
 
