@@ -47,7 +47,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["MODELS", "CORNER", "resistances", "currents"]
+__all__ = ["MODELS", "CORNER", "SIGNED_PIVOT_FLOOR", "resistances", "currents"]
 
 #: The resistance models on discrete spots.
 MODELS = ("point", "greenwood")
@@ -60,9 +60,9 @@ CORNER = 1e300
 #: conjugate gradients on every set at once (large unions); one signed factorization of an
 #: indefinite union and Schur complements.
 NONE, NESTED, WHOLE, INDEFINITE, ITERATIVE, SIGNED = 0, 1, 2, 3, 4, 5
-#: A signed factorization (:func:`_signed_cholesky`) gives up at a pivot smaller than this share of
-#: its diagonal entry: without pivoting, a small pivot would amplify rounding by about its inverse.
-#: Then the step (or set) is solved by LU with partial pivoting instead.
+#: A signed factorization (Cholesky without pivoting, ``L D L^T``) gives up at a pivot smaller than
+#: this share of its diagonal entry: without pivoting, a small pivot would amplify rounding by about
+#: its inverse. Then the step (or set) is solved by LU with partial pivoting instead.
 SIGNED_PIVOT_FLOOR = 1e-3
 
 #: Union size from which a step's sets are solved by conjugate gradients (``_iterative``)
