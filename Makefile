@@ -121,8 +121,8 @@ test: | $(VENV)/.installed
 # The reference's GPU path (pytest marker `gpu`) and its benchmark: CuPy and a GPU needed
 # (`pip install -e '.[gpu]'`, never by make); elsewhere the tests skip and the bench says why.
 test-gpu: | $(VENV)/.installed
-	$(VENV)/bin/python -m pytest -m gpu -rs tests/test_reference_fft.py
-	$(G2TOM) bench --only gpu --verbose
+	$(VENV)/bin/python -m pytest -m gpu -rs tests/test_reference_fft.py tests/test_reference_capped.py tests/test_surface.py
+	$(G2TOM) bench --only gpu --only surface_gpu --verbose
 
 # Long sweeps (pytest marker `stress`, in any test file; a fast variant of each runs in `make test`).
 stress: | $(VENV)/.installed

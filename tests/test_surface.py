@@ -14,15 +14,17 @@ import xarray as xr
 from g2tom.cli.main import main
 from g2tom.config import ConfigError
 from g2tom.physics.hertz import hertz_radius
-from g2tom.reference import scene, surfaces, window
+from g2tom.reference import devices, scene, surfaces, window
 from g2tom.reference.punch import punch_conductance
 from g2tom.surface import surface_resistance
+from g2tom.surface.solve import PUNCH_TOLERANCE
 from g2tom.surface.windows import choose_positions, valid_corners
 
 PIXEL = 0.5e-6
 #: A gold-like pair: E* (Pa), rho* (ohm m), sphere radius R* (m).
 E_STAR, RHO, RADIUS = 5e10, 2.2e-8, 1e-3
 PAIR = {"material.modulus": E_STAR, "material.rho": RHO, "indenter.radius": RADIUS}
+GPU_MISSING = devices.gpu_missing()
 
 
 def rough_map(n: int = 256, rms: float = 0.2e-6, seed: int = 3) -> np.ndarray:
@@ -358,3 +360,76 @@ def test_maps_that_are_not_height_maps_are_refused(tmp_path, capsys, name, heigh
     err = capsys.readouterr().err
     assert code == 2 and message in err and err.count("\n") == 1, err
     assert not (tmp_path / "surface").exists()
+
+
+def test_device_gpu_without_one_is_refused_before_work(tmp_path, map_file, capsys, monkeypatch) -> None:
+    monkeypatch.setattr(devices, "gpu_missing", lambda: "CuPy is not installed")
+    code = main(["surface", map_file, "--pixel-size", str(PIXEL), "--force", "0.05", "--device", "gpu",
+                 "--data-dir", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 2 and err == "g2tom: error: --device gpu cannot be used: CuPy is not installed\n", err
+    assert not (tmp_path / "surface").exists()
+    with pytest.raises(ConfigError, match="--device 'tpu' is not allowed"):
+        surface_resistance(map_file, 0.05, overrides=PAIR, pixel_size=PIXEL, device="tpu")
+
+
+def test_device_gpu_builds_every_position_on_the_gpu_namespace(map_file, monkeypatch) -> None:
+    """The GPU path's wiring, on any machine: every position's operator asks for the ``gpu`` namespace
+    (NumPy stands in for CuPy here, so the answer equals the CPU's exactly) and one at a time."""
+    asked = []
+
+    def namespace(device: str):
+        asked.append(device)
+        return np
+
+    kwargs = dict(overrides=PAIR, pixel_size=PIXEL, positions=2, fields=1, xi=[0.3], correlation_length=[4e-6])
+    on_cpu = surface_resistance(map_file, [0.05, 0.2], **kwargs)
+    assert set(asked) <= {"cpu"}
+    monkeypatch.setattr(devices, "gpu_missing", lambda: None)
+    monkeypatch.setattr(devices, "namespace", namespace)
+    asked.clear()
+    on_gpu = surface_resistance(map_file, [0.05, 0.2], device="gpu", **kwargs)
+    assert asked == ["gpu", "gpu"] and on_gpu.attrs["device"] == "gpu" and on_cpu.attrs["device"] == "cpu"
+    for name in ("resistance_clean", "resistance", "contact_area"):
+        np.testing.assert_array_equal(on_gpu[name].values, on_cpu[name].values)
+
+
+@pytest.mark.gpu
+@pytest.mark.skipif(GPU_MISSING is not None, reason=f"no GPU to test on: {GPU_MISSING}")
+@pytest.mark.parametrize("hardness", [None, 1e9])
+def test_gpu_positions_equal_the_cpu(map_file, hardness) -> None:
+    """The same positions on CuPy and on NumPy, elastic and capped. The FFTs round differently, so the
+    conjugate gradients stop at different iterates inside their tolerances: R agrees within the punch's
+    relative residual (1e-5; 3.1e-6 measured on an H200), the contact areas within a few rim pixels."""
+    kwargs = dict(overrides={**PAIR, "material.hardness": hardness or "none"}, pixel_size=PIXEL, positions=2,
+                  fields=2, xi=[0.3], correlation_length=[4e-6])
+    on_gpu, on_cpu = (surface_resistance(map_file, [0.05, 0.2], device=d, **kwargs) for d in ("gpu", "cpu"))
+    assert on_gpu.attrs["device"] == "gpu"
+    assert ("plastic_share" in on_cpu) == (hardness is not None)
+    tolerances = {"resistance_clean": PUNCH_TOLERANCE, "resistance": PUNCH_TOLERANCE, "contact_area": 1e-3,
+                  "plastic_share": 1e-3}
+    differences = {name: float(np.max(np.abs(on_gpu[name].values / on_cpu[name].values - 1)))
+                   for name in tolerances if name in on_cpu}
+    assert all(differences[name] <= tolerances[name] for name in differences), differences
+
+
+def test_the_gpu_benchmark_says_when_there_is_no_gpu(monkeypatch) -> None:
+    from g2tom.bench import surface_gpu
+
+    monkeypatch.setattr(devices, "gpu_missing", lambda: "CuPy is not installed")
+    assert surface_gpu.run(None) == {"skipped": "no GPU: CuPy is not installed"}
+
+
+@pytest.mark.parametrize("window, measured", [(256, 2.14), (512, 2.20), (1024, 5.12)])
+def test_the_gpu_plan_of_a_position_is_within_one_and_a_half_of_the_h200s(window, measured) -> None:
+    """One position of make bench's surface_gpu case (10 forces, 8 oxide fields), measured on an H200 (2026-11-29)."""
+    from g2tom.before_work import load_scenario
+    from g2tom.bench.surface import CASE, PAIR
+    from g2tom.surface.run import Prepared, estimate
+    from g2tom.surface.study import study_of
+    from g2tom.surface.windows import Positions
+
+    study = study_of(load_scenario("paper", PAIR, rough_scene=False), CASE["forces"], xi=CASE["xi"],
+                     correlation_lengths=CASE["correlation_length"], fields=CASE["fields"])
+    prepared = Prepared(study, None, window, Positions(np.zeros((1, 2), int), np.ones(1, bool), 1), None)
+    assert 1 / 1.5 < estimate(prepared, 1, "gpu")[0] / measured < 1.5

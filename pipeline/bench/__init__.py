@@ -28,7 +28,7 @@ __all__ = ["BENCHMARKS", "PHYSICS_BENCH", "bench_problem", "physics_benchmarks",
 
 BENCHMARKS: tuple[str, ...] = (
     "contact", "oxide", "cube", "point", "scaling", "predict", "convergence", "stability", "frontier", "spots",
-    "biases", "discrete", "gpu", "solver", "surface",
+    "biases", "discrete", "gpu", "solver", "surface", "surface_gpu",
 )
 #: The physics benchmarks the report shows beside the study: ``g2tom run`` and ``make run`` (its
 #: PHYSICS_BENCH) run them before the figures and the report.

@@ -23,10 +23,10 @@ from g2tom.surface import surface_resistance
 from g2tom.surface.oxide import oxide_masks
 from g2tom.surface.run import prepare
 from g2tom.surface.solve import solve_position
-from g2tom.surface.study import study_of
+from g2tom.surface.study import SurfaceStudy, study_of
 from g2tom.before_work import load_scenario
 
-__all__ = ["CASE", "REPEATS", "run"]
+__all__ = ["CASE", "PAIR", "REPEATS", "write_map", "first_position", "run"]
 
 #: The reference case: map pixels a side, pixel (m), window (pixels), forces (N), positions, fields.
 CASE = {"map": 1024, "pixel": 0.5e-6, "window": 256, "forces": [float(f) for f in np.geomspace(0.02, 3.0, 10)],
@@ -37,24 +37,33 @@ PAIR = {"material.bodies": ["hard_gold"], "material.hardness": "none", "indenter
 REPEATS = 3
 
 
-def _write_map(folder: Path) -> Path:
-    n, pixel = CASE["map"], CASE["pixel"]
+def write_map(folder: Path, refine: int = 1) -> Path:
+    """The case's map, its pixel divided by ``refine`` on the same side (finer content of the same
+    spectrum, the same rms), saved as ``.npy`` in ``folder``."""
+    n, pixel = CASE["map"] * refine, CASE["pixel"] / refine
     rng = np.random.default_rng(20261129)
     heights = surfaces.random_process(n, pixel, 0.8, 8 * np.pi / (n * pixel), np.pi / (2 * pixel), CASE["rms"], rng)
-    path = folder / "self_affine.npy"
+    path = folder / f"self_affine_{refine}.npy"
     np.save(path, heights)
     return path
 
 
-def _one_position(path: Path, solver: str) -> tuple[float, np.ndarray]:
-    """Median seconds of the first position's work on ``solver``, and its resistances (clean, then oxidized)."""
+def first_position(path: Path, refine: int = 1) -> tuple[SurfaceStudy, np.ndarray, np.ndarray]:
+    """The case's study, its first position's window of heights (m, (n, n)) and oxide masks, on the
+    map of :func:`write_map` with ``refine`` (the window ``refine`` times the case's)."""
     scenario = load_scenario("paper", PAIR, rough_scene=False)
     study = study_of(scenario, CASE["forces"], xi=CASE["xi"], correlation_lengths=CASE["correlation_length"],
-                     fields=CASE["fields"], positions=1, window=CASE["window"])
-    prepared = prepare(study, [path], CASE["pixel"])
+                     fields=CASE["fields"], positions=1, window=CASE["window"] * refine)
+    pixel = CASE["pixel"] / refine
+    prepared = prepare(study, [path], pixel)
     (row, col), n = prepared.positions.corners[0], prepared.n
-    window = prepared.surface.heights[row:row + n, col:col + n]
-    masks = oxide_masks(study, n, CASE["pixel"], 0)
+    return study, prepared.surface.heights[row:row + n, col:col + n], oxide_masks(study, n, pixel, 0)
+
+
+def _one_position(path: Path, solver: str) -> tuple[float, np.ndarray]:
+    """Median seconds of the first position's work on ``solver``, and its resistances (clean, then oxidized)."""
+    study, window, masks = first_position(path)
+    n = window.shape[0]
     seconds, result = [], None
     for _ in range(REPEATS):
         operator = elastic.free_surface(n, CASE["pixel"], study.e_star, "cpu", solver)
@@ -67,7 +76,7 @@ def _one_position(path: Path, solver: str) -> tuple[float, np.ndarray]:
 def run(scenario: Scenario) -> dict[str, Any]:
     """The case's wall time and the per-position comparison (``scenario`` names the study only)."""
     with tempfile.TemporaryDirectory() as folder:
-        path = _write_map(Path(folder))
+        path = write_map(Path(folder))
         start = time.perf_counter()
         ds = surface_resistance(path, CASE["forces"], xi=CASE["xi"], correlation_length=CASE["correlation_length"],
                                 overrides=PAIR, pixel_size=CASE["pixel"], fields=CASE["fields"],

@@ -48,6 +48,13 @@ def _compute_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
 
+def _device_arg(p: argparse.ArgumentParser, what: str) -> None:
+    """``--device``: where the full field's solves of ``what`` run (:mod:`g2tom.reference.devices`)."""
+    p.add_argument("--device", default="cpu",
+                   help=f"where {what} compute: cpu (default), gpu (CuPy, the optional extra 'gpu'; one at a time "
+                        "unless --workers) or auto (gpu when CuPy sees one, else cpu)")
+
+
 def _version() -> str:
     """``--version``'s line: the package version and, in a git checkout, its commit."""
     from g2tom.store import git_commit
@@ -164,10 +171,7 @@ def build_parser() -> argparse.ArgumentParser:
     validate.add_argument("--plan", action="store_true",
                           help="print this set's cases, grids and estimate (as the run prints first), then stop: "
                                "no work, nothing written")
-    validate.add_argument("--device", default="cpu",
-                          help="where the reference's cases compute: cpu (default), gpu (CuPy, the optional "
-                               "extra 'gpu'; one case at a time unless --workers) or auto (gpu when CuPy sees one, "
-                               "else cpu)")
+    _device_arg(validate, "the reference's cases")
     validate.add_argument("--solver", default=None,
                           help="the reference's contact and punch solver: g2tom (our own, the default: equal to "
                                "tamaas within 1e-7 and on the CPU about twice as fast; the GPU's) or tamaas "
@@ -212,6 +216,7 @@ def build_parser() -> argparse.ArgumentParser:
     surface.add_argument("--extend", choices=("none", "spectrum"), default="none",
                          help="a map smaller than the window: refused (none, default) or windows drawn from its own "
                               "isotropic power spectrum, longer wavelengths at the plateau of its longest (spectrum)")
+    _device_arg(surface, "the positions")
     surface.add_argument("--plan", action="store_true",
                          help="print the map, window, positions, work and its estimated time and memory, then stop")
     surface.add_argument("--output", type=Path, default=None, help="folder of the outputs (default <data-dir>/surface)")

@@ -278,12 +278,28 @@ def atlas(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
           f"{100 * held['noise_ceiling']['correlated_steps']:.0f} % of the cells", file=sys.stderr)
 
 
+def _device(args: argparse.Namespace) -> str:
+    """``--device`` resolved (``cpu`` or ``gpu``; a refused one is a ConfigError naming why), and
+    ``--workers`` defaulted for it: one per core on the CPU, one on the GPU (its solves take the
+    whole device, one after another)."""
+    from g2tom.reference.devices import resolve
+
+    try:
+        device = resolve(args.device)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+    if args.workers is None and args.scheduler is None and device == "gpu":
+        args.workers = 1
+    return device
+
+
 def surface(args: argparse.Namespace, scenario: Scenario) -> None:
     """``g2tom surface``: the full-field resistance of a measured height map (the scenario's materials,
     indenter and oxide spectrum)."""
     from g2tom.cli.surface import surface_cli
 
-    surface_cli(args, scenario, compute_options(args))
+    device = _device(args)
+    surface_cli(args, scenario, compute_options(args), device)
 
 
 def roughness(args: argparse.Namespace, scenario: Scenario) -> None:
@@ -331,12 +347,12 @@ def validate(args: argparse.Namespace, scenario: Scenario) -> None:
     from g2tom.before_work.preflight import check_data_dir, check_scheduler
     from g2tom.reference.validate import chosen_set, output_folder, plan_lines, run_validation
 
-    from g2tom.reference.devices import resolve, solver_for
+    from g2tom.reference.devices import solver_for
 
     vset = chosen_set(args.quick, args.surface, realizations=args.realizations, loads=args.loads,
                       steps=_steps(args.steps), precision=_precision(args))
+    device = _device(args)
     try:
-        device = resolve(args.device)
         vset = dataclasses.replace(vset, device=device, solver=solver_for(args.solver, device))
     except ValueError as exc:
         raise ConfigError(str(exc)) from None
@@ -350,8 +366,8 @@ def validate(args: argparse.Namespace, scenario: Scenario) -> None:
     if problem:
         raise ConfigError(problem)
     if args.workers is None and args.scheduler is None:
-        # on the CPU a local cluster, one single-threaded case per core (as the atlas); on the GPU one case at a time
-        args.workers = (os.cpu_count() or 1) if vset.device == "cpu" else 1
+        # on the CPU a local cluster, one single-threaded case per core (as the atlas)
+        args.workers = os.cpu_count() or 1
     from g2tom.analysis.figures_validate import figure
 
     run_validation(vset, output_folder(args.data_dir, args.surface), progress=not args.no_progress, draw=figure,

@@ -59,9 +59,9 @@ def summary_lines(ds: xr.Dataset) -> list[str]:
     return lines
 
 
-def surface_cli(args: argparse.Namespace, scenario: Scenario, options: ComputeOptions) -> None:
-    """Check everything, print the plan, solve every position where ``options`` says, write surface.nc,
-    surface.csv, surface.png.
+def surface_cli(args: argparse.Namespace, scenario: Scenario, options: ComputeOptions, device: str = "cpu") -> None:
+    """Check everything, print the plan, solve every position where ``options`` says on ``device``
+    (``cpu`` or ``gpu``, resolved), write surface.nc, surface.csv, surface.png.
 
     Raises
     ------
@@ -86,15 +86,15 @@ def surface_cli(args: argparse.Namespace, scenario: Scenario, options: ComputeOp
     prepared = prepare(study, [args.heightmap] + ([args.second] if args.second else []), args.pixel_size)
     workers = options.workers or os.cpu_count() or 1
     if args.plan:
-        print("\n".join(plan_lines(prepared, workers)))
+        print("\n".join(plan_lines(prepared, workers, device)))
         return
     folder = Path(args.output) if args.output else Path(args.data_dir) / "surface"
     from g2tom.store import atomic_path, check_writable
 
     check_writable(folder, "nothing is written")
-    for line in plan_lines(prepared, workers):
+    for line in plan_lines(prepared, workers, device):
         print(line, file=sys.stderr)
-    ds = attach_statistical(compute(prepared, options), scenario, prepared.summits, args.data_dir)
+    ds = attach_statistical(compute(prepared, options, device), scenario, prepared.summits, args.data_dir)
     written = write_outputs(ds, folder)
     written.append(figure(ds, folder / "surface.png"))
     report = folder / "surface.md"

@@ -17,6 +17,7 @@ from g2tom.physics.plasticity import plasticity_index
 from g2tom.physics.spectrum_synthesis import IsotropicSpectrum, isotropic_spectrum, synthesize
 from g2tom.physics.surface_spectrum import SummitParameters
 from g2tom.progress import format_duration
+from g2tom.reference import devices
 from g2tom.reference.fft_surface import fft_surface
 from g2tom.store import atomic_path
 from g2tom.surface import windows
@@ -27,7 +28,7 @@ from g2tom.surface.solve import PositionResult, solve_position
 from g2tom.surface.statistical import attach_statistical
 from g2tom.surface.study import DEFAULT_POSITIONS, Spot, SurfaceStudy, stream, study_of
 
-__all__ = ["SECONDS_CONTACT", "SECONDS_CONDUCTANCE", "COST_EXPONENT", "BYTES_PER_PADDED_PIXEL", "EXTEND_KEY",
+__all__ = ["SECONDS_CONTACT", "SECONDS_CONDUCTANCE", "SECONDS_SOLVE_GPU", "COST_EXPONENT", "BYTES_PER_PADDED_PIXEL", "EXTEND_KEY",
            "FILES", "Prepared", "prepare", "window_of", "compute", "estimate", "plan_lines", "write_outputs",
            "surface_resistance"]
 
@@ -40,6 +41,11 @@ SECONDS_CONTACT = 0.226
 SECONDS_CONDUCTANCE = 0.042
 #: Both grow as the window's side to this power (x5 and x5.6 at 512^2: larger windows hold larger contacts).
 COST_EXPONENT = 2.5
+#: Seconds of one solve (a contact or a punch) on a GPU: a floor of kernel launches and host round
+#: trips, plus this much at a 1024^2 window, growing as :data:`COST_EXPONENT`. Measured on an H200 by
+#: ``g2tom bench --only surface_gpu`` (the bench case, elastic: 2.1, 2.2 and 5.1 s a position of 10
+#: forces x 10 solves at 256^2, 512^2 and 1024^2).
+SECONDS_SOLVE_GPU = (0.020, 0.031)
 #: Bytes a task holds per (2n)^2 pixel of its padded grid (about ten complex arrays in the solvers).
 BYTES_PER_PADDED_PIXEL = 160
 #: The files ``g2tom surface`` writes in its folder.
@@ -100,22 +106,27 @@ def prepare(study: SurfaceStudy, paths: Sequence[str | Path], pixel_size: float 
     return Prepared(study, surface, n, positions, summits(surface))
 
 
-def estimate(prepared: Prepared, workers: int) -> tuple[float, float]:
-    """The run's wall time (s) on ``workers`` cores and one task's memory (bytes): the constants
-    :data:`SECONDS_CONTACT`, :data:`SECONDS_CONDUCTANCE` scaled to the window."""
+def estimate(prepared: Prepared, workers: int, device: str = "cpu") -> tuple[float, float]:
+    """The run's wall time (s) on ``workers`` CPU cores, or on the GPU one position at a time, and one
+    task's memory (bytes): the constants :data:`SECONDS_CONTACT`, :data:`SECONDS_CONDUCTANCE` (CPU) or
+    :data:`SECONDS_SOLVE_GPU` scaled to the window."""
     s, n = prepared.study, prepared.n
     cases = len(s.xi) * len(s.correlation_lengths) * s.fields
-    per_force = SECONDS_CONTACT + SECONDS_CONDUCTANCE * (1 + cases)
     positions = len(prepared.positions.corners)
-    rounds = -(-positions // max(1, workers))
-    seconds = rounds * len(s.forces) * per_force * (n / 256) ** COST_EXPONENT
+    if device == "gpu":
+        floor, at_1024 = SECONDS_SOLVE_GPU
+        seconds = positions * len(s.forces) * (2 + cases) * (floor + at_1024 * (n / 1024) ** COST_EXPONENT)
+    else:
+        per_force = SECONDS_CONTACT + SECONDS_CONDUCTANCE * (1 + cases)
+        rounds = -(-positions // max(1, workers))
+        seconds = rounds * len(s.forces) * per_force * (n / 256) ** COST_EXPONENT
     memory = BYTES_PER_PADDED_PIXEL * (2 * n) ** 2 + (cases + 1) * n * n * 9
     return seconds, memory
 
 
-def plan_lines(prepared: Prepared, workers: int = 1) -> list[str]:
-    """What the run will compute and about how long it takes on ``workers`` cores, in a few lines
-    (printed before work)."""
+def plan_lines(prepared: Prepared, workers: int = 1, device: str = "cpu") -> list[str]:
+    """What the run will compute and about how long it takes on ``workers`` cores (or the GPU, for
+    ``device`` ``gpu``), in a few lines (printed before work)."""
     s, m, n = prepared.study, prepared.surface, prepared.n
     count = len(prepared.positions.corners)
     independent = int(prepared.positions.independent.sum())
@@ -136,10 +147,14 @@ def plan_lines(prepared: Prepared, workers: int = 1) -> list[str]:
         + (f" and {len(s.xi)} x {len(s.correlation_lengths)} oxide cases x {s.fields} fields" if cases else "")
         + f": {count * len(s.forces)} contact solves, {count * len(s.forces) * (1 + cases)} conductances",
     ]
-    seconds, memory = estimate(prepared, workers)
+    seconds, memory = estimate(prepared, workers, device)
     took = "under 1 s" if seconds < 0.5 else f"about {format_duration(seconds)}"
-    lines.append(f"surface: {took} on {workers} core(s), {memory / 2**20:.0f} MiB a task "
-                 "(the constants of make bench's surface case; contacts larger than its can take longer)")
+    if device == "gpu":
+        lines.append(f"surface: {took} on the GPU, one position at a time, {memory / 2**20:.0f} MiB of its memory "
+                     "(an H200's constants from make bench's surface_gpu case; other GPUs differ)")
+    else:
+        lines.append(f"surface: {took} on {workers} core(s), {memory / 2**20:.0f} MiB a task "
+                     "(the constants of make bench's surface case; contacts larger than its can take longer)")
     if prepared.summits is not None:
         z = prepared.summits
         psi = prepared.plasticity_index
@@ -158,23 +173,30 @@ def window_of(prepared: Prepared, index: int) -> np.ndarray:
     return m.heights[row:row + n, col:col + n].copy()
 
 
-def _solve(study: SurfaceStudy, window: np.ndarray, pixel: float, index: int) -> PositionResult:
-    """One position's task: its operator, oxide fields and solve (each task owns its operator)."""
+def _solve(study: SurfaceStudy, window: np.ndarray, pixel: float, index: int, device: str) -> PositionResult:
+    """One position's task: its operator (on ``device``), oxide fields and solve (each task owns its operator)."""
     n = window.shape[0]
-    operator = fft_surface(n, pixel, study.e_star, np)
+    operator = fft_surface(n, pixel, study.e_star, devices.namespace(device))
     masks = oxide_masks(study, n, pixel, index) if study.oxidized else np.zeros((0, 0, 0, n, n), bool)
     return solve_position(study, operator, window, masks)
 
 
-def compute(prepared: Prepared, options: ComputeOptions | None = None) -> xr.Dataset:
+def compute(prepared: Prepared, options: ComputeOptions | None = None, device: str = "cpu") -> xr.Dataset:
     """Solve every position, one dask task each, where ``options`` says (default: one thread per
-    core; the FFTs release the GIL), and return the Dataset."""
+    core, the FFTs release the GIL; on the ``gpu``, one position at a time), and return the Dataset.
+
+    ``device`` is ``cpu`` or ``gpu`` (resolved, :func:`g2tom.reference.devices.resolve`): where each
+    position's operator, contact solves and punches run (the same arithmetic on CuPy).
+    """
     s, m, n = prepared.study, prepared.surface, prepared.n
-    tasks = [dask.delayed(_solve, pure=False)(s, window_of(prepared, index), m.pixel, index)
+    if options is None:
+        options = ComputeOptions(progress=False, workers=1 if device == "gpu" else None)
+    tasks = [dask.delayed(_solve, pure=False)(s, window_of(prepared, index), m.pixel, index, device)
              for index in range(len(prepared.positions.corners))]
-    results = list(run_tasks(*tasks, options=options or ComputeOptions(progress=False), label="surface"))
+    results = list(run_tasks(*tasks, options=options, label="surface"))
     masks = oxide_masks(s, n, m.pixel, 0) if s.oxidized else np.zeros((0, 0, 0, n, n), bool)
     ds = surface_dataset(s, m, n, prepared.positions, results, window_of(prepared, 0), masks)
+    ds.attrs["device"] = device
     if prepared.synthesized:
         sp = prepared.spectrum
         ds["position_x"][:] = np.nan
@@ -228,7 +250,7 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
                        overrides: Mapping[str, Any] | None = None, pixel_size: float | None = None, fields: int = 8,
                        positions: int | None = None, at: tuple[float, float] | str | None = None, window: int | None = None,
                        detrend: str = "plane", extend: str = "none", options: ComputeOptions | None = None,
-                       data_dir: str | Path = "data") -> xr.Dataset:
+                       device: str = "cpu", data_dir: str | Path = "data") -> xr.Dataset:
     """The full-field resistance of a measured surface, as ``g2tom surface`` computes it.
 
     Parameters
@@ -258,7 +280,10 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
         from the map's own isotropic power spectrum, :mod:`g2tom.physics.spectrum_synthesis`).
     options
         Where the positions compute (``g2tom.compute.ComputeOptions``; default one thread per
-        core, no progress line).
+        core, no progress line; one on the GPU).
+    device
+        ``cpu`` (default), ``gpu`` (CuPy: the optional extra ``gpu``) or ``auto`` (``gpu`` where
+        CuPy sees one): where the full field's solves run.
     data_dir
         A run's data directory, whose own surrogate gives the statistical answer where it was
         fitted on the map's summits (:mod:`g2tom.surface.statistical`; else the atlas's).
@@ -275,6 +300,10 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
     """
     from g2tom.before_work import load_scenario
 
+    try:
+        device = devices.resolve(device)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
     paths = [maps] if isinstance(maps, (str, Path)) else list(maps)
     scenario = load_scenario(config, dict(overrides or {}), rough_scene=False)
     spot = None
@@ -283,4 +312,4 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
     study = study_of(scenario, force, xi=xi, correlation_lengths=correlation_length, fields=fields,
                      positions=positions, at=spot, window=window, detrend=detrend, extend=extend)
     prepared = prepare(study, paths, pixel_size)
-    return attach_statistical(compute(prepared, options), scenario, prepared.summits, data_dir)
+    return attach_statistical(compute(prepared, options, device), scenario, prepared.summits, data_dir)
