@@ -87,3 +87,31 @@ def test_run_stops_with_one_line_and_resumes_to_the_same_numbers(tmp_path, capsy
     err = capsys.readouterr().err
     assert status == 0, err
     assert "cube: up to date" in err and (tmp_path / "cube.nc").read_bytes() == cube
+
+
+@pytest.mark.parametrize("signal_exc, status, word", [(KeyboardInterrupt, 130, "interrupted"),
+                                                      (None, 143, "terminated")])
+def test_a_signal_wrapped_by_a_compiled_extension_is_still_one_line(monkeypatch, capsys, signal_exc, status,
+                                                                      word) -> None:
+    """A signal that comes while numba calls back into Python reaches us as SystemError("... returned a
+    result with an exception set") caused by the signal's exception; other SystemErrors still raise."""
+    from g2tom.cli import commands, main as cli
+
+    cause = signal_exc() if signal_exc else cli.Terminated()
+
+    def wrapped(args, scenario) -> None:
+        try:
+            raise cause
+        except BaseException as inner:
+            raise SystemError("CPUDispatcher(<function f>) returned a result with an exception set") from inner
+
+    monkeypatch.setattr(commands, "params", wrapped)
+    assert cli.main(["params"]) == status
+    assert capsys.readouterr().err == f"g2tom: {word}: stopped before the end; run the command again\n"
+
+    def broken(args, scenario) -> None:
+        raise SystemError("a bug")
+
+    monkeypatch.setattr(commands, "params", broken)
+    with pytest.raises(SystemError, match="a bug"):
+        cli.main(["params"])

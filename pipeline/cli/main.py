@@ -160,6 +160,25 @@ def _kept(args: argparse.Namespace) -> str:
     return "stopped before the end; run the command again"
 
 
+def _interruption_in(exc: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C or SIGTERM (:class:`Terminated`) that caused ``exc``, through its chain of causes, or None."""
+    seen: set[int] = set()
+    link: BaseException | None = exc
+    while link is not None and id(link) not in seen:
+        if isinstance(link, KeyboardInterrupt):
+            return link
+        seen.add(id(link))
+        link = link.__cause__ or link.__context__
+    return None
+
+
+def _stopped(args: argparse.Namespace, signal_exc: KeyboardInterrupt) -> int:
+    """One line for Ctrl-C or SIGTERM, saying what was kept; the exit status a shell reports for it."""
+    terminated = isinstance(signal_exc, Terminated)
+    print(f"g2tom: {'terminated' if terminated else 'interrupted'}: {_kept(args)}", file=sys.stderr)
+    return TERMINATED if terminated else INTERRUPTED
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``g2tom`` console script; returns the exit status."""
     words = list(sys.argv[1:] if argv is None else argv)
@@ -190,9 +209,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"g2tom: error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt as exc:
-        terminated = isinstance(exc, Terminated)
-        print(f"g2tom: {'terminated' if terminated else 'interrupted'}: {_kept(args)}", file=sys.stderr)
-        return TERMINATED if terminated else INTERRUPTED
+        return _stopped(args, exc)
+    except SystemError as exc:
+        # a signal that came while a compiled extension called back into Python (numba loading a
+        # cached function, say) arrives wrapped: the extension reports "a result with an exception set"
+        cause = _interruption_in(exc)
+        if cause is None:
+            raise
+        return _stopped(args, cause)
     except BrokenPipeError:
         # the reader of standard output went away (`g2tom plan | head`): no traceback, and none
         # again when Python flushes the closed pipe at exit
