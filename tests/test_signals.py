@@ -27,9 +27,11 @@ _ATLAS = [*_SMALL, *(a for k, v in {"oxide.xi": [0.5], "oxide.lambda": [1.0, 5.0
                                     "atlas.n_heldout": 1}.items() for a in ("--set", f"{k}={v}"))]
 
 
-def _signalled(args: list[str], after: str, sig: int, data_dir: Path, delay: float = 1.0) -> tuple[int, str]:
+def _signalled(args: list[str], after: str, sig: int, data_dir: Path, delay: float = 1.0,
+               again_after: float | None = None) -> tuple[int, str]:
     """Run ``g2tom args`` in a new session, send ``sig`` to its group ``delay`` s after a line holding
-    ``after``; its exit status and everything it wrote (stdout and stderr)."""
+    ``after`` (and once more ``again_after`` s later, if given); its exit status and everything it
+    wrote (stdout and stderr)."""
     proc = subprocess.Popen([sys.executable, "-m", "g2tom.cli.main", *args, "--data-dir", str(data_dir)],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
     lines = []
@@ -39,6 +41,9 @@ def _signalled(args: list[str], after: str, sig: int, data_dir: Path, delay: flo
             if after in line:
                 time.sleep(delay)
                 os.killpg(proc.pid, sig)
+                if again_after is not None:
+                    time.sleep(again_after)
+                    os.killpg(proc.pid, sig)
                 break
         lines.append(proc.stdout.read())
         return proc.wait(timeout=60), "".join(lines)
@@ -115,3 +120,19 @@ def test_a_signal_wrapped_by_a_compiled_extension_is_still_one_line(monkeypatch,
     monkeypatch.setattr(commands, "params", broken)
     with pytest.raises(SystemError, match="a bug"):
         cli.main(["params"])
+
+
+
+@pytest.mark.parametrize("sig, status, word", [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")])
+@pytest.mark.parametrize("gap", [0.02, 0.2])
+def test_a_second_signal_while_the_first_unwinds_adds_nothing(tmp_path, sig, status, word, gap) -> None:
+    """Ctrl-C pressed twice, or `timeout`, which signals the command and then its whole group: one line,
+    the first signal's status, no traceback."""
+    import numpy as np
+
+    np.save(tmp_path / "map.npy", np.random.default_rng(1).normal(size=(256, 256)) * 2e-7)
+    args = ["surface", str(tmp_path / "map.npy"), "--pixel-size", "5e-7", "--force", "0.01", "--positions", "400",
+            "--set", "indenter.radius=1e-3", "--set", "material.modulus=5e10"]
+    rc, out = _signalled(args, "MiB a task", sig, tmp_path, delay=0.5, again_after=gap)
+    assert rc == status and "Traceback" not in out, out
+    assert _after_signal(out, "MiB a task")[-1] == f"g2tom: {word}: stopped before the end; run the command again", out

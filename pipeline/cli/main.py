@@ -139,9 +139,25 @@ class Terminated(KeyboardInterrupt):
     """SIGTERM, raised where the main thread is, to unwind (and clean up) as Ctrl-C does."""
 
 
+def _ignore_further_signals() -> None:
+    """Ignore Ctrl-C and SIGTERM from now on: the first one unwinds the command, and a second (Ctrl-C
+    pressed twice; ``timeout``, which signals the command and then its whole process group) would
+    otherwise break into that unwinding with a traceback. :func:`main` restores the handlers when
+    called from Python."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+
+
 def _terminate(signum: int, frame: object) -> None:
-    """The SIGTERM handler: :class:`Terminated`."""
+    """The SIGTERM handler: :class:`Terminated`, the signals ignored while it unwinds."""
+    _ignore_further_signals()
     raise Terminated
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    """The SIGINT handler: KeyboardInterrupt, as Python's own, the signals ignored while it unwinds."""
+    _ignore_further_signals()
+    raise KeyboardInterrupt
 #: Exit status when standard output's reader has gone (128 + SIGPIPE, as a shell reports it).
 BROKEN_PIPE = 141
 
@@ -188,6 +204,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     formatwarning = warnings.formatwarning
     warnings.formatwarning = _one_line_warning
     on_term = signal.signal(signal.SIGTERM, _terminate)
+    on_int = signal.signal(signal.SIGINT, _interrupt)
     try:
         if _NUMBA_THREADS:
             raise ConfigError(_NUMBA_THREADS)
@@ -224,7 +241,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return BROKEN_PIPE
     finally:
         warnings.formatwarning = formatwarning
-        signal.signal(signal.SIGTERM, on_term)
+        # As the command (argv None) the process exits next, joining the threads still finishing their
+        # tasks: after a signal, the signals stay ignored through that. Called from Python, restored.
+        if argv is not None or signal.getsignal(signal.SIGTERM) is not signal.SIG_IGN:
+            signal.signal(signal.SIGTERM, on_term)
+            signal.signal(signal.SIGINT, on_int)
     return 0
 
 
