@@ -108,3 +108,15 @@ def test_slope_is_minus_the_derivative(n):
     f = lambda y: np.exp(log_asperity_integral(y, n))  # noqa: E731
     numeric = -(f(x + step) - f(x - step)) / (2 * step)
     np.testing.assert_allclose(asperity_integral_slope(x, n), numeric, rtol=1e-6)
+
+
+@pytest.mark.parametrize("n", [0.5, 1.5])
+def test_repeated_separations_give_pbdv_own_bits(n):
+    """The central range evaluates scipy's D_v once per distinct separation: a symmetric cell grid
+    (each value up to eight times, +0 and -0 among them) gets exactly pbdv's values (tolerance 0)."""
+    from scipy.special import gammaln, pbdv
+
+    c = np.arange(-6, 7) * 0.37
+    x = np.concatenate([np.hypot(c[None, :], c[:, None]).ravel() - 2.0, [0.0, -0.0]])
+    expected = gammaln(n + 1.0) - 0.5 * np.log(2.0 * np.pi) - 0.25 * x * x + np.log(pbdv(-n - 1.0, x)[0])
+    assert np.array_equal(log_asperity_integral(x, n).view(np.int64), expected.view(np.int64))

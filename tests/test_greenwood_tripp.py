@@ -260,3 +260,17 @@ def test_stiffness_needs_one_solution_per_approach():
     with pytest.raises(ValueError, match="1 solutions for 2 approaches"):
         gt.stiffness(np.eye(2), np.zeros(2), [0.0, 1.0], layer,
                      gt.solve(np.eye(2), np.zeros(2), [0.0], layer), np.array([0.0, 1.0]))
+
+
+def test_influence_matrix_of_repeated_nodes_is_a_fresh_copy_of_the_same_bits():
+    """The matrix kept for a node set is the one computed afresh, bit for bit (tolerance 0), and
+    each call gets its own writable array: changing one leaves the next call's intact."""
+    r = rg.graded_nodes(97, 3.0e-3, 1.0e-3)
+    first = rg.influence_matrix(r, 7.0e10)
+    fresh = 4.0 / (np.pi * 7.0e10) * rg._unscaled_matrix(r)
+    assert np.array_equal(first.view(np.int64), fresh.view(np.int64))
+    first[:] = 0.0
+    again = rg.influence_matrix(r.copy(), 7.0e10)
+    assert again.flags.writeable and np.array_equal(again.view(np.int64), fresh.view(np.int64))
+    other = rg.influence_matrix(r, 1.4e11)  # the same nodes, another modulus: the factor alone changes
+    assert np.array_equal(other.view(np.int64), (4.0 / (np.pi * 1.4e11) * rg._unscaled_matrix(r)).view(np.int64))

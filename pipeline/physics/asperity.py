@@ -71,8 +71,18 @@ def _log_central(x: np.ndarray, n: float) -> np.ndarray:
             np.exp(-0.5 * x * x) * (1.0 / np.sqrt(2.0 * np.pi) - 0.5 * x * erfcx(y)),
         )
         return np.log(bracket)
-    d, _ = pbdv(-n - 1.0, x)
-    return gammaln(n + 1.0) - _LOG_SQRT_2PI - 0.25 * x * x + np.log(d)
+    return gammaln(n + 1.0) - _LOG_SQRT_2PI - 0.25 * x * x + np.log(_distinct_pbdv(-n - 1.0, x))
+
+
+def _distinct_pbdv(v: float, x: np.ndarray) -> np.ndarray:
+    """D_v(x) of ``scipy.special.pbdv``, evaluated once per distinct x (dimensionless, 1-D).
+
+    The cell grids repeat each separation up to eight times (the square window's symmetry about
+    the axis); the distinct values are found by their bits, so every value is pbdv's own.
+    """
+    x = np.ascontiguousarray(x, dtype=float)
+    _, first, inverse = np.unique(x.view(np.int64), return_index=True, return_inverse=True)
+    return pbdv(v, x[first])[0][inverse]
 
 
 def log_asperity_integral(x: ArrayLike, n: float) -> np.ndarray:

@@ -18,6 +18,8 @@ with a product rule that is exact for polynomial integrands times the logarithm.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.special import eval_sh_legendre, ellipkm1
@@ -28,6 +30,10 @@ __all__ = ["radial_nodes", "graded_nodes", "influence_matrix", "force_weights"]
 _N_GAUSS = 8
 #: Target rows assembled at once (bounds the memory of the influence matrix build).
 _BLOCK = 256
+#: Largest grid whose matrix is kept for the next solve on the same nodes (8 MiB), and how many
+#: such matrices are kept (64 MiB at most): a study and its tests solve the same grids again.
+_KEPT_NODES = 1024
+_KEPT_MATRICES = 8
 
 
 def radial_nodes(n: int, r_max: float) -> np.ndarray:
@@ -142,11 +148,25 @@ def influence_matrix(r: ArrayLike, e_star: float) -> np.ndarray:
         raise ValueError("r must be a 1-D, strictly increasing array of >= 2 nodes starting at 0 (m)")
     if not (np.isfinite(e_star) and e_star > 0):
         raise ValueError(f"e_star = {e_star!r} is out of range: must be > 0 (Pa)")
+    unscaled = _kept_matrix(r.tobytes()) if len(r) <= _KEPT_NODES else _unscaled_matrix(r)
+    return 4.0 / (np.pi * e_star) * unscaled
+
+
+def _unscaled_matrix(r: np.ndarray) -> np.ndarray:
+    """The influence matrix of the nodes ``r`` (m) without the 4/(pi E*) factor, m."""
     x, w = np.polynomial.legendre.leggauss(_N_GAUSS)
     t, w = 0.5 * (x + 1.0), 0.5 * w
     v = _log_product_weights(t)
-    rows = [_block(r[i:i + _BLOCK], r, t, w, v, i) for i in range(0, len(r), _BLOCK)]
-    return 4.0 / (np.pi * e_star) * np.vstack(rows)
+    return np.vstack([_block(r[i:i + _BLOCK], r, t, w, v, i) for i in range(0, len(r), _BLOCK)])
+
+
+@lru_cache(maxsize=_KEPT_MATRICES)
+def _kept_matrix(nodes: bytes) -> np.ndarray:
+    """:func:`_unscaled_matrix` of the nodes given as their float64 bytes, m, computed once per
+    node set (the last :data:`_KEPT_MATRICES` kept; safe from several threads) and read only."""
+    matrix = _unscaled_matrix(np.frombuffer(nodes, dtype=float))
+    matrix.flags.writeable = False
+    return matrix
 
 
 def force_weights(r: ArrayLike) -> np.ndarray:
