@@ -248,6 +248,23 @@ def _hand_cases() -> list[Case]:
     for value in ("0", "-1e-6", "inf", "nan"):
         c.append(Case(f"--pixel-size {value}", ("roughness", "--pixel-size", value, f"{outside}none.npy"),
                       ("--pixel-size", "> 0")))
+    # extreme values: a refusal naming the input, in plain numbers, never an overflow
+    surface = ("surface", f"{outside}rough.npy", "--pixel-size", "5e-7", "--force", "0.01", "--set", "indenter.radius=1e-3")
+    rough = _npy("rough.npy", np.random.default_rng(1).normal(size=(256, 256)) * 2e-7)
+    c += [
+        Case("plan with a sphere of 1e300 m", ("plan", "--set", "indenter.radius=1e300"),
+             ("indenter.radius = 1e+300", "<= about 195", "1.68e+153 x 1.68e+153 cells")),
+        Case("plan with a cone of 1e-300 rad", ("plan", "--set", "indenter.shape=cone", "--set", "indenter.cone_angle=1e-300"),
+             ("indenter.cone_angle = 1e-300", ">= about 0.00148")),
+        Case("plan with eta 1e300", ("plan", "--set", "roughness.eta=1e300"), ("roughness.eta = 1e+300", "<= about 1.8")),
+        Case("surface --at nan,nan", (*surface, "--at", "nan,nan"), ("--at = nan,nan", "finite"), setup=rough),
+        Case("surface --correlation-length 1e300", (*surface, "--xi", "0.3", "--correlation-length", "1e300"),
+             ("--correlation-length = 1e+300", "[5e-07, 0.128]"), setup=rough),
+        Case("surface --pixel-size 1e-300", ("surface", f"{outside}rough.npy", "--pixel-size", "1e-300", "--force", "0.01"),
+             ("--pixel-size = 1e-300", "[1e-12, 1]"), setup=rough),
+        Case("surface on an unreachable scheduler", (*surface, "--scheduler", "tcp://127.0.0.1:1"),
+             ("--scheduler 'tcp://127.0.0.1:1'", "no dask scheduler"), setup=rough),
+    ]
     for flag, value in (("--force", "-5"), ("--force", "nan"), ("--force", "0"), ("--xi", "0"), ("--xi", "1"),
                         ("--xi", "1.5"), ("--xi", "nan"), ("--lambda", "0"), ("--lambda", "-2"), ("--lambda", "inf")):
         args = {"--force": "100", "--xi": "0.3", "--lambda": "5", flag: value}

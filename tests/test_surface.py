@@ -433,3 +433,14 @@ def test_the_gpu_plan_of_a_position_is_within_one_and_a_half_of_the_h200s(window
                      correlation_lengths=CASE["correlation_length"], fields=CASE["fields"])
     prepared = Prepared(study, None, window, Positions(np.zeros((1, 2), int), np.ones(1, bool), 1), None)
     assert 1 / 1.5 < estimate(prepared, 1, "gpu")[0] / measured < 1.5
+
+
+def test_the_study_checks_do_not_refuse_a_surface(tmp_path, map_file, capsys) -> None:
+    """`g2tom surface` uses the scenario's materials, indenter and oxide spectrum, not its study: a
+    roughness or worker count the study's stages could not hold is no reason to refuse it."""
+    code = main(["surface", map_file, "--pixel-size", str(PIXEL), "--force", "0.05", "--set", f"material.modulus={E_STAR}",
+                 "--set", f"indenter.radius={RADIUS}", "--set", "roughness.eta=1e20", "--workers", "100000",
+                 "--data-dir", str(tmp_path), "--plan"])
+    captured = capsys.readouterr()
+    assert code == 0 and "stage" not in captured.err, captured.err
+    assert "surface: window" in captured.out

@@ -163,26 +163,30 @@ def _departure(value: float, default: float, sign: int) -> float:
 def _indenter_fit(scenario: Scenario, name: str, sign: int, memory: float) -> float:
     """The value of ``indenter.<name>`` nearest the scenario's at which the rigid-gap grid fits ``memory``.
 
-    Found by halving (or doubling) the value until the grid fits, then bisecting in log; a cone's
-    angle stays below pi/2. NaN if no value fits.
+    Found by stepping away from the value by factors 2, 4, 16, 256, ... (the square of the last, so
+    that any finite value is reached in a dozen steps) until the grid fits, then bisecting in log; a
+    cone's angle stays below pi/2. NaN if no value fits.
     """
     def fits(value: float) -> bool:
         trial = Scenario.of(scenario, indenter=dataclasses.replace(scenario.indenter, **{name: value}))
-        return _GRID_BYTES * _rigid_grid_side(trial) ** 2 <= memory
+        side = _rigid_grid_side(trial)
+        return _GRID_BYTES * side * side <= memory  # a float product: the side can exceed 1e154
 
     bad = getattr(scenario.indenter, name)
     step = 2.0 ** -sign
     good = bad * step
-    for _ in range(200):
+    for _ in range(12):
         if name == "cone_angle":
             good = min(good, (bad + math.pi / 2) / 2)
+        if not 0.0 < good < math.inf:
+            return math.nan
         if fits(good):
             break
-        bad, good = good, good * step
+        bad, good, step = good, good * step * step, step * step
     else:
         return math.nan
-    for _ in range(40):
-        middle = math.sqrt(bad * good)
+    for _ in range(60):
+        middle = math.sqrt(bad) * math.sqrt(good)  # the product of two tiny values would underflow
         bad, good = (bad, middle) if fits(middle) else (middle, good)
     return good
 
@@ -211,8 +215,9 @@ def check_cell_count(scenario: Scenario, memory: float) -> None:
         return
     ind, defaults = scenario.indenter, type(scenario.indenter)()
     eta = scenario.roughness.eta
-    eta_fix = f"roughness.eta <= about {eta * memory / need:.3g} (m-2)"
-    grid = (f"the contact needs a grid of about {side} x {side} cells ({need / 2**30:.3g} GiB, "
+    eta_fix = f"roughness.eta <= about {eta * (memory / need):.3g} (m-2)"
+    cells = f"{side}" if side < 10**7 else f"{side:.3g}"
+    grid = (f"the contact needs a grid of about {cells} x {cells} cells ({need / 2**30:.3g} GiB, "
             f"{memory / 2**30:.3g} GiB available)")
     name, sign = max(_INDENTER_REACH[ind.shape], key=lambda ps: _departure(getattr(ind, ps[0]), getattr(defaults, ps[0]), ps[1]))
     value, unit = getattr(ind, name), _INDENTER_UNITS[name]

@@ -22,7 +22,7 @@ __all__ = ["MAX_SECONDS", "ANNOUNCE_AFTER", "check_resources", "prepare"]
 #: Longest estimated run time accepted (s): beyond it a run is refused before work.
 MAX_SECONDS = 7 * 24 * 3600.0
 #: Commands that need no resolved domains nor resource checks.
-_NO_DOMAINS = ("params", "predict", "roughness", "validate")
+_NO_DOMAINS = ("params", "predict", "roughness", "surface", "validate")
 #: Stages whose estimate is printed when they are expected to take longer than this (s).
 ANNOUNCE_AFTER = 10.0
 

@@ -296,9 +296,12 @@ def _device(args: argparse.Namespace) -> str:
 def surface(args: argparse.Namespace, scenario: Scenario) -> None:
     """``g2tom surface``: the full-field resistance of a measured height map (the scenario's materials,
     indenter and oxide spectrum)."""
+    from g2tom.before_work.preflight import check_scheduler
     from g2tom.cli.surface import surface_cli
 
     device = _device(args)
+    if args.scheduler:
+        check_scheduler(args.scheduler)
     surface_cli(args, scenario, compute_options(args), device)
 
 

@@ -23,10 +23,12 @@ from g2tom.heightmap import CUTOFF_PIXELS, PLAUSIBLE_SIGMA, Measured, area_momen
 from g2tom.physics.roughness import detrend, validated_heights
 from g2tom.physics.surface_spectrum import SummitParameters, summit_parameters
 
-__all__ = ["RESAMPLE_ORDER", "SurfaceMap", "load_map", "summits"]
+__all__ = ["RESAMPLE_ORDER", "PIXEL_RANGE", "SurfaceMap", "load_map", "summits"]
 
 #: Spline order of the resampling of oblong pixels onto square ones (1: linear).
 RESAMPLE_ORDER = 1
+#: The pixel sides a map may have, m (from atomic spacing to a metre).
+PIXEL_RANGE = (1e-12, 1.0)
 
 
 @dataclass(frozen=True)
@@ -96,8 +98,9 @@ def _square(path: Path, measured: Measured, pixel_size: float | None) -> tuple[n
     (linear interpolation between pixel centres, :data:`RESAMPLE_ORDER`)."""
     heights = _checked(path, measured)
     if pixel_size is not None:
-        if not (math.isfinite(pixel_size) and pixel_size > 0):
-            raise ConfigError(f"--pixel-size = {pixel_size!r} is out of range: must be > 0 (m)")
+        low, high = PIXEL_RANGE
+        if not (math.isfinite(pixel_size) and low <= pixel_size <= high):
+            raise ConfigError(f"--pixel-size = {pixel_size!r} is out of range: must be in [{low:g}, {high:g}] (m)")
         return heights, float(pixel_size), ""
     if measured.pixel_size is None:
         raise ConfigError(f"MAP {str(path)!r} carries no pixel size: give --pixel-size (m)")

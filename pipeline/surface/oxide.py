@@ -19,23 +19,33 @@ from g2tom.physics import oxide_band, oxide_field
 from g2tom.physics.grid import cell_centres
 from g2tom.surface.study import SurfaceStudy, stream
 
-__all__ = ["OXIDE_KEY", "check_lengths", "oxide_masks"]
+__all__ = ["OXIDE_KEY", "LONGEST", "check_lengths", "oxide_masks"]
 
 #: The spawn key of the oxide fields (the positions use another).
 OXIDE_KEY = 1
+#: The longest correlation length, in sides of the map.
+LONGEST = 1000.0
 
 
-def check_lengths(study: SurfaceStudy, pixel: float) -> None:
-    """Refuse a correlation length below one pixel (m): its islands would fall between the pixels.
+def check_lengths(study: SurfaceStudy, pixel: float, side: float) -> None:
+    """Refuse a correlation length below one pixel (m: its islands would fall between the pixels) or
+    above :data:`LONGEST` times the map's longer ``side`` (m: every window then lies inside one island
+    or one gap).
 
     Raises
     ------
     ConfigError
-        Naming the shortest length, the pixel and the allowed range.
+        Naming the length, and the allowed range for this map.
     """
-    if study.correlation_lengths and min(study.correlation_lengths) < pixel:
-        raise ConfigError(f"--correlation-length = {min(study.correlation_lengths):g} is out of range: must be >= "
-                          f"{pixel:.4g} (m: one pixel of the map; a finer map resolves shorter ones)")
+    if not study.correlation_lengths:
+        return
+    shortest, longest = min(study.correlation_lengths), max(study.correlation_lengths)
+    bounds = f"[{pixel:.4g}, {LONGEST * side:.4g}] (m: one pixel of the map to {LONGEST:g} times its side"
+    if shortest < pixel:
+        raise ConfigError(f"--correlation-length = {shortest:g} is out of range: must be in {bounds}; a finer map "
+                          "resolves shorter ones)")
+    if longest > LONGEST * side:
+        raise ConfigError(f"--correlation-length = {longest:g} is out of range: must be in {bounds})")
 
 
 def oxide_masks(study: SurfaceStudy, n: int, pixel: float, position: int) -> np.ndarray:

@@ -87,7 +87,7 @@ def prepare(study: SurfaceStudy, paths: Sequence[str | Path], pixel_size: float 
     """
     surface = load_map([Path(p) for p in paths], pixel_size, study.detrend)
     windows.check_resolution(study, surface)
-    check_lengths(study, surface.pixel)
+    check_lengths(study, surface.pixel, max(surface.inside.shape) * surface.pixel)
     n = windows.window_pixels(study, surface)
     if study.extend == "spectrum" and not windows.valid_corners(surface.inside, n).any():
         try:

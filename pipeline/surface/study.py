@@ -164,6 +164,9 @@ def study_of(scenario: Scenario, forces: object, *, xi: object = (), correlation
         raise ConfigError(f"--extend = {extend!r} is not allowed: must be one of {', '.join(EXTENDS)}")
     if extend != "none" and at is not None:
         raise ConfigError(f"--extend = {extend!r} is not allowed with --at: a chosen position is a measured window")
+    if at is not None and not at.centre and not (math.isfinite(at.x) and math.isfinite(at.y)):
+        raise ConfigError(f"--at = {at.x:g},{at.y:g} is out of range: must be finite (m from the centre of the map's "
+                          "first pixel), or 'centre'")
     m, ind, ox = scenario.material, scenario.indenter, scenario.oxide
     return SurfaceStudy(
         forces=force, xi=xis, correlation_lengths=lengths, fields=int(fields), positions=None if positions is None else int(positions),

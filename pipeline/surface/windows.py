@@ -31,7 +31,7 @@ from g2tom.physics.indenter import profile, smooth_contact_radius
 from g2tom.surface.maps import SurfaceMap
 from g2tom.surface.study import DEFAULT_POSITIONS, SurfaceStudy, stream
 
-__all__ = ["MARGIN", "ROUGHNESS_RMS", "MIN_RADIUS_PIXELS", "POSITIONS_KEY", "CANDIDATES", "LATTICE_LIMIT", "Positions", "contact_reach",
+__all__ = ["MARGIN", "ROUGHNESS_RMS", "MIN_RADIUS_PIXELS", "MAX_FORCE", "POSITIONS_KEY", "CANDIDATES", "LATTICE_LIMIT", "Positions", "contact_reach",
            "smooth_radius", "window_pixels", "check_resolution", "check_window", "valid_corners", "choose_positions", "spot_corner"]
 
 #: The window's half side over the heaviest force's contact reach.
@@ -41,6 +41,8 @@ MARGIN = 1.15
 ROUGHNESS_RMS = 3.0
 #: Pixels the lightest force's smooth contact radius must span.
 MIN_RADIUS_PIXELS = 8.0
+#: The heaviest force (N) a refusal suggests: beyond it, it says to measure a finer map instead.
+MAX_FORCE = 1e12
 #: The spawn key of the positions' random order (the oxide fields use others).
 POSITIONS_KEY = 0
 #: Most valid corners (in the seed's order) looked at to complete the independent windows and to
@@ -113,11 +115,14 @@ def check_resolution(study: SurfaceStudy, surface: SurfaceMap) -> None:
 
 
 def _force_for_radius(study: SurfaceStudy, radius: float) -> float | None:
-    """The force (N) whose smooth contact radius is ``radius`` (m), or None if none is (a flat punch)."""
+    """The force (N) whose smooth contact radius is ``radius`` (m), or None if none is (a flat punch) or
+    it exceeds :data:`MAX_FORCE`."""
     if study.shape == "flat_punch":
         return None
     low, high = 1e-12, 1.0
     while smooth_radius(study, high) < radius:
+        if high > MAX_FORCE:
+            return None
         high *= 10.0
     low, high = _bisect(lambda force: smooth_radius(study, force) < radius, low, high, steps=200, geometric=True)
     return high
@@ -217,7 +222,7 @@ def check_window(study: SurfaceStudy, surface: SurfaceMap, n: int) -> np.ndarray
     if valid.any():
         return valid
     largest = _largest_window(surface.inside)
-    side = f"{n} pixels ({n * surface.pixel:.3g} m)"
+    side = f"{n if n < 10**7 else format(n, '.3g')} pixels ({n * surface.pixel:.3g} m)"
     if study.window is not None:
         raise ConfigError(f"--window = {n} is out of range: the map's measured area holds no window of {side}; "
                           f"must be <= {largest}")
