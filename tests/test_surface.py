@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import signal
 
 import numpy as np
@@ -444,3 +445,16 @@ def test_the_study_checks_do_not_refuse_a_surface(tmp_path, map_file, capsys) ->
     captured = capsys.readouterr()
     assert code == 0 and "stage" not in captured.err, captured.err
     assert "surface: window" in captured.out
+
+
+@pytest.mark.parametrize("change, named", [
+    ({"maps": 42}, "maps = 42"), ({"maps": []}, "maps = []"), ({"force": "5N"}, "force = '5N'"),
+    ({"pixel_size": "5e-7"}, "pixel_size = '5e-7'"), ({"fields": 2.5}, "fields = 2.5"), ({"window": 10.5}, "window = 10.5"),
+    ({"at": (1.0,)}, "at = (1.0,)"), ({"at": "middle"}, "at = 'middle'"), ({"overrides": [1, 2]}, "overrides = [1, 2]"),
+    ({"data_dir": None}, "data_dir = None"), ({"options": "fast"}, "options = 'fast'"),
+    ({"xi": "0.3", "correlation_length": 5e-6}, "xi = '0.3'"),
+])
+def test_the_python_api_names_a_wrong_argument(map_file, change, named) -> None:
+    arguments = {"maps": map_file, "force": 0.05, "pixel_size": PIXEL, "overrides": PAIR, **change}
+    with pytest.raises(ConfigError, match=re.escape(named) + " is not allowed"):
+        surface_resistance(**arguments)

@@ -10,8 +10,6 @@ TOML file, or a measured height map. ``g2tom predict`` calls the same functions.
 
 from __future__ import annotations
 
-import numbers
-import os
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -20,6 +18,7 @@ import xarray as xr
 
 from g2tom.compute import single_threaded
 from g2tom.config import ConfigError, Scenario, bundled_scenarios, read_input_text
+from g2tom.config.arguments import holds_numbers, is_number, is_path, refuse_argument
 from g2tom.before_work import load_scenario
 from g2tom.predict import atlas as atlas_file  # atlas_file.shipped_path, looked up at each call (tests patch it)
 from g2tom.predict.atlas import NOT_IN_ATLAS, AtlasSurrogate, is_atlas_document, load_atlas_surrogate, predict_atlas
@@ -195,30 +194,10 @@ def surface_scenario(surface: Scenario | str | Path, overrides: Mapping[str, Any
     return with_measured_roughness(load_scenario("paper", overrides or {}), path, pixel_size)
 
 
-def _refuse(name: str, value: Any, allowed: str) -> ConfigError:
-    """The refusal of argument ``name``: its value and what is allowed."""
-    shown = repr(value) if len(repr(value)) <= 60 else f"{repr(value)[:57]}..."
-    return ConfigError(f"{name} = {shown} is not allowed: must be {allowed}")
-
-
 def _check_model(model: Any) -> None:
     """Refuse a ``model`` not in :data:`MODELS`."""
     if model not in MODELS:
-        raise _refuse("model", model, f"one of {', '.join(map(repr, MODELS))}")
-
-
-def _is_path(value: Any) -> bool:
-    return isinstance(value, (str, os.PathLike))
-
-
-def _numbers(value: Any) -> bool:
-    """A number, or an array or DataArray of numbers (not text, not booleans)."""
-    data = value.values if isinstance(value, xr.DataArray) else value
-    try:
-        kind = np.asarray(data).dtype.kind
-    except (TypeError, ValueError):  # ragged nested lists
-        return False
-    return kind in "iuf"
+        raise refuse_argument("model", model, f"one of {', '.join(map(repr, MODELS))}")
 
 
 def _check_arguments(**given: Any) -> None:
@@ -230,24 +209,24 @@ def _check_arguments(**given: Any) -> None:
         Naming the first argument of the wrong kind, its value and what is allowed.
     """
     surface = given["surface"]
-    if not (isinstance(surface, Scenario) or _is_path(surface)):
-        raise _refuse("surface", surface, "a Scenario, a bundled scenario's name "
+    if not (isinstance(surface, Scenario) or is_path(surface)):
+        raise refuse_argument("surface", surface, "a Scenario, a bundled scenario's name "
                       f"({', '.join(bundled_scenarios())}), a TOML file or a height map file")
     for name, unit in (("force", "N, > 0"), ("xi", "in (0, 1)"), ("lam", "> 0")):
-        if not _numbers(given[name]):
-            raise _refuse(name, given[name], f"a number ({unit}), an array of numbers or an xarray.DataArray")
-    if not _is_path(given["data_dir"]):
-        raise _refuse("data_dir", given["data_dir"], "a folder (a str or pathlib.Path)")
-    if not (given["surrogate"] is None or _is_path(given["surrogate"])):
-        raise _refuse("surrogate", given["surrogate"], "None or a surrogate file (a str or pathlib.Path)")
+        if not holds_numbers(given[name]):
+            raise refuse_argument(name, given[name], f"a number ({unit}), an array of numbers or an xarray.DataArray")
+    if not is_path(given["data_dir"]):
+        raise refuse_argument("data_dir", given["data_dir"], "a folder (a str or pathlib.Path)")
+    if not (given["surrogate"] is None or is_path(given["surrogate"])):
+        raise refuse_argument("surrogate", given["surrogate"], "None or a surrogate file (a str or pathlib.Path)")
     _check_model(given["model"])
     if not isinstance(given["extrapolate"], (bool, np.bool_)):
-        raise _refuse("extrapolate", given["extrapolate"], "True or False")
+        raise refuse_argument("extrapolate", given["extrapolate"], "True or False")
     if not (given["overrides"] is None or isinstance(given["overrides"], Mapping)):
-        raise _refuse("overrides", given["overrides"], 'None or a mapping {"section.key": value}')
+        raise refuse_argument("overrides", given["overrides"], 'None or a mapping {"section.key": value}')
     pixel = given["pixel_size"]
-    if not (pixel is None or (isinstance(pixel, numbers.Real) and not isinstance(pixel, bool) and pixel > 0)):
-        raise _refuse("pixel_size", pixel, "None or a number > 0 (m)")
+    if not (pixel is None or (is_number(pixel) and pixel > 0)):
+        raise refuse_argument("pixel_size", pixel, "None or a number > 0 (m)")
 
 
 @single_threaded

@@ -13,6 +13,7 @@ import xarray as xr
 from g2tom.compute import ComputeOptions
 from g2tom.compute import compute as run_tasks
 from g2tom.config import ConfigError
+from g2tom.config.arguments import holds_numbers, is_number, is_path, is_whole, refuse_argument
 from g2tom.physics.plasticity import plasticity_index
 from g2tom.physics.spectrum_synthesis import IsotropicSpectrum, isotropic_spectrum, synthesize
 from g2tom.physics.surface_spectrum import SummitParameters
@@ -245,6 +246,42 @@ def write_outputs(ds: xr.Dataset, folder: str | Path) -> list[Path]:
     return [nc, csv]
 
 
+def _check_arguments(**given: Any) -> None:
+    """:func:`surface_resistance`'s arguments checked at its entry, each refusal naming the argument.
+
+    Raises
+    ------
+    ConfigError
+        Naming the first argument of the wrong kind, its value and what is allowed.
+    """
+    maps = given["maps"]
+    listed = [maps] if is_path(maps) else maps
+    if not (isinstance(listed, (list, tuple)) and 1 <= len(listed) <= 2 and all(map(is_path, listed))):
+        raise refuse_argument("maps", maps, "a height map file, or a list of two (a str or pathlib.Path each)")
+    for name, unit in (("force", "N, > 0"), ("xi", "in (0, 1)"), ("correlation_length", "m, > 0")):
+        value = given[name]
+        if not (holds_numbers(value) or (name != "force" and np.size(value) == 0)):
+            raise refuse_argument(name, value, f"a number ({unit}) or a list of numbers")
+    for name, allowed in (("fields", "a whole number in [1, 1024]"), ("positions", "None or a whole number in [1, 4096]"),
+                          ("window", "None or a whole number of pixels in [8, 8192]")):
+        if not (is_whole(given[name]) or (name != "fields" and given[name] is None)):
+            raise refuse_argument(name, given[name], allowed)
+    at = given["at"]
+    if not (at is None or at == "centre" or (isinstance(at, (list, tuple)) and len(at) == 2 and all(map(is_number, at)))):
+        raise refuse_argument("at", at, "None, 'centre' or (x, y) in m from the centre of the map's first pixel")
+    pixel = given["pixel_size"]
+    if not (pixel is None or is_number(pixel)):
+        raise refuse_argument("pixel_size", pixel, "None or a number (m)")
+    if not (given["overrides"] is None or isinstance(given["overrides"], Mapping)):
+        raise refuse_argument("overrides", given["overrides"], 'None or a mapping {"section.key": value}')
+    for name in ("config", "data_dir"):
+        if not is_path(given[name]):
+            raise refuse_argument(name, given[name], "a name or file (a str or pathlib.Path)" if name == "config"
+                                  else "a folder (a str or pathlib.Path)")
+    if not (given["options"] is None or isinstance(given["options"], ComputeOptions)):
+        raise refuse_argument("options", given["options"], "None or a g2tom.compute.ComputeOptions")
+
+
 def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, xi: Any = (),
                        correlation_length: Any = (), config: str = "paper",
                        overrides: Mapping[str, Any] | None = None, pixel_size: float | None = None, fields: int = 8,
@@ -300,6 +337,9 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
     """
     from g2tom.before_work import load_scenario
 
+    _check_arguments(maps=maps, force=force, xi=xi, correlation_length=correlation_length, fields=fields,
+                     positions=positions, window=window, at=at, pixel_size=pixel_size, overrides=overrides,
+                     config=config, data_dir=data_dir, options=options)
     try:
         device = devices.resolve(device)
     except ValueError as exc:
