@@ -66,7 +66,7 @@ def test_toml_file_with_base(tmp_path) -> None:
 @pytest.mark.parametrize(
     ("override", "message"),
     [
-        ("roughness.sigma=-1e-6", "roughness.sigma = -1e-06 is out of range: must be > 0 (m)"),
+        ("roughness.sigma=-1e-6", "roughness.sigma = -1e-06 is out of range: must be > 0 and <= 1 (m)"),
         ("roughness.eta=0", "roughness.eta = 0 is out of range: must be > 0"),
         ("roughness.beta=-3", "roughness.beta"),
         ("indenter.radius=0", "indenter.radius"),

@@ -151,8 +151,8 @@ _INDENTER_REACH: dict[str, tuple[tuple[str, int], ...]] = {
     "cone": (("cone_angle", -1),),
     "flat_punch": (("punch_radius", 1), ("edge_radius", 1)),
 }
-#: Units of the indenter's parameters, for the message.
-_INDENTER_UNITS = {"radius": "m", "cone_angle": "rad", "punch_radius": "m", "edge_radius": "m"}
+#: Units of the parameters that set the reach, for the message.
+_REACH_UNITS = {"radius": "m", "cone_angle": "rad", "punch_radius": "m", "edge_radius": "m", "sigma": "m"}
 
 
 def _departure(value: float, default: float, sign: int) -> float:
@@ -160,19 +160,19 @@ def _departure(value: float, default: float, sign: int) -> float:
     return sign * math.log(value / default)
 
 
-def _indenter_fit(scenario: Scenario, name: str, sign: int, memory: float) -> float:
-    """The value of ``indenter.<name>`` nearest the scenario's at which the rigid-gap grid fits ``memory``.
+def _reach_fit(scenario: Scenario, section: str, name: str, sign: int, memory: float) -> float:
+    """The value of ``<section>.<name>`` nearest the scenario's at which the rigid-gap grid fits ``memory``.
 
     Found by stepping away from the value by factors 2, 4, 16, 256, ... (the square of the last, so
     that any finite value is reached in a dozen steps) until the grid fits, then bisecting in log; a
     cone's angle stays below pi/2. NaN if no value fits.
     """
     def fits(value: float) -> bool:
-        trial = Scenario.of(scenario, indenter=dataclasses.replace(scenario.indenter, **{name: value}))
+        trial = Scenario.of(scenario, **{section: dataclasses.replace(getattr(scenario, section), **{name: value})})
         side = _rigid_grid_side(trial)
         return _GRID_BYTES * side * side <= memory  # a float product: the side can exceed 1e154
 
-    bad = getattr(scenario.indenter, name)
+    bad = getattr(getattr(scenario, section), name)
     step = 2.0 ** -sign
     good = bad * step
     for _ in range(12):
@@ -196,15 +196,15 @@ def check_cell_count(scenario: Scenario, memory: float) -> None:
     cannot fit in ``memory``.
 
     The grid spans the radius at which the indenter's rigid gap reaches 40 sigma (set by the
-    indenter: its radius, cone angle or punch) in cells of 1/sqrt(eta). The refusal blames the
-    parameter that lies farthest from its bundled default towards a wider grid, with the value that
-    fits, and names the other way out.
+    indenter: its radius, cone angle or punch; and by sigma) in cells of 1/sqrt(eta). The refusal
+    blames the parameter that lies farthest from its bundled default towards a wider grid, with the
+    value that fits, and names the other way out.
 
     Raises
     ------
     ConfigError
-        Naming ``roughness.eta`` (the cell pitch is 1/sqrt(eta)) or the indenter's parameter
-        (``indenter.radius``, ``indenter.cone_angle``, ``indenter.punch_radius`` or
+        Naming ``roughness.eta`` (the cell pitch is 1/sqrt(eta)), ``roughness.sigma`` or the indenter's
+        parameter (``indenter.radius``, ``indenter.cone_angle``, ``indenter.punch_radius`` or
         ``indenter.edge_radius`` by shape), its value, and the value that fits.
     """
     if AUTO not in (scenario.contact.window, scenario.contact.r_max):
@@ -213,27 +213,33 @@ def check_cell_count(scenario: Scenario, memory: float) -> None:
     need = _GRID_BYTES * side * side
     if need <= memory:
         return
-    ind, defaults = scenario.indenter, type(scenario.indenter)()
+    ind = scenario.indenter
     eta = scenario.roughness.eta
     eta_fix = f"roughness.eta <= about {eta * (memory / need):.3g} (m-2)"
     cells = f"{side}" if side < 10**7 else f"{side:.3g}"
     grid = (f"the contact needs a grid of about {cells} x {cells} cells ({need / 2**30:.3g} GiB, "
             f"{memory / 2**30:.3g} GiB available)")
-    name, sign = max(_INDENTER_REACH[ind.shape], key=lambda ps: _departure(getattr(ind, ps[0]), getattr(defaults, ps[0]), ps[1]))
-    value, unit = getattr(ind, name), _INDENTER_UNITS[name]
-    fit = _indenter_fit(scenario, name, sign, memory)
-    indenter_fix = (f"indenter.{name} {'<=' if sign > 0 else '>='} about {fit:.3g} ({unit})" if math.isfinite(fit)
-                    else None)
+    candidates = [("indenter", name, sign) for name, sign in _INDENTER_REACH[ind.shape]] + [("roughness", "sigma", 1)]
+
+    def departure(candidate: tuple[str, str, int]) -> float:
+        section, name, sign = candidate
+        default = getattr(type(getattr(scenario, section))(), name)
+        return _departure(getattr(getattr(scenario, section), name), default, sign)
+
+    section, name, sign = max(candidates, key=departure)
+    key, value, unit = f"{section}.{name}", getattr(getattr(scenario, section), name), _REACH_UNITS[name]
+    fit = _reach_fit(scenario, section, name, sign, memory)
+    reach_fix = f"{key} {'<=' if sign > 0 else '>='} about {fit:.3g} ({unit})" if math.isfinite(fit) else None
     eta_departure = _departure(eta, type(scenario.roughness)().eta, 1)
-    if indenter_fix and _departure(value, getattr(defaults, name), sign) > eta_departure:
+    if reach_fix and departure((section, name, sign)) > eta_departure:
         raise ConfigError(
-            f"indenter.{name} = {value:g} ({unit}) is out of range for this machine: the {ind.shape.replace('_', ' ')}'s "
+            f"{key} = {value:g} ({unit}) is out of range for this machine: the {ind.shape.replace('_', ' ')}'s "
             f"rigid gap stays within 40 sigma of the asperities out to r = {_reach(scenario):.3g} m, so {grid}; "
-            f"it must be {indenter_fix.removeprefix(f'indenter.{name} ')} (or {eta_fix})"
+            f"it must be {reach_fix.removeprefix(f'{key} ')} (or {eta_fix})"
         )
     raise ConfigError(
         f"roughness.eta = {eta:g} is out of range for this machine: {grid}; it must be "
-        f"{eta_fix.removeprefix('roughness.eta ')}" + (f" (or {indenter_fix})" if indenter_fix else "")
+        f"{eta_fix.removeprefix('roughness.eta ')}" + (f" (or {reach_fix})" if reach_fix else "")
     )
 
 

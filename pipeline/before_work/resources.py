@@ -32,7 +32,7 @@ _DRIVERS: tuple[str, ...] = (
     "roughness.eta", "contact.window", "oxide.lambda", "oxide.ks_ratio", "oxide.n_realizations",
     "oxide.max_realizations", "oxide.target_half_width", "oxide.min_realizations", "oxide.ensemble",
     "oxide.spectral_resolution", "oxide.period",
-    "oxide.xi", "loading.n_delta", "contact.n_radial", "compute.oxide_chunk", "compute.cube_chunk",
+    "oxide.xi", "loading.n_delta", "loading.delta_min", "contact.n_radial", "contact.surfaces", "compute.oxide_chunk", "compute.cube_chunk",
     "fits.n_bootstrap", "indenter.radius", "indenter.shape", "roughness.sigma",
 )
 
@@ -71,7 +71,7 @@ def _refuse(scenario: Scenario, what: str, needed: float, limit: float, unit: st
         return ConfigError(
             f"{key} = {value} is out of range for this machine: the {what} would need about "
             f"{fmt(needed)}, more than the {fmt(limit)} available ({factor:.3g} x the paper's value "
-            f"{load_scenario('paper').flat()[key]!r}); lower it (see `g2tom plan`)"
+            f"{load_scenario('paper').flat()[key]!r}); bring it nearer that value (see `g2tom plan`)"
         )
     return ConfigError(f"the {what} would need about {fmt(needed)}, more than the {fmt(limit)} available "
                        f"(see `g2tom plan`)")

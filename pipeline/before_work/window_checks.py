@@ -102,6 +102,14 @@ def _check_ensemble(s: Scenario, n_cells: int) -> None:
     fields = max(s.compute.oxide_chunk, s.compute.cube_chunk)
     need = FIELD_BYTES_PER_ENTRY * fields * (top + 1) * (2 * top + 1)
     have = _physical_memory()
+    per_field = need / fields
+    defaults = type(s.compute)()
+    if need > have and fields > max(defaults.oxide_chunk, defaults.cube_chunk) and per_field <= have:
+        key = "compute.oxide_chunk" if s.compute.oxide_chunk >= s.compute.cube_chunk else "compute.cube_chunk"
+        raise ConfigError(
+            f"{key} = {fields} is out of range: a chunk of {fields} fields would need {need / 2**30:.3g} GiB, more "
+            f"than the machine's {have / 2**30:.3g} GiB; it must be <= {int(have // per_field)}"
+        )
     if need > have:
         raise ConfigError(
             f"oxide.spectral_resolution = {ox.spectral_resolution:g} is out of range: a chunk of "

@@ -34,7 +34,7 @@ class Material:
     )
     hardness: float | None = param(
         None, "Pa", "indentation hardness H of the softer body: asperity pressure is capped at H (perfectly plastic "
-        "surface); none: elastic asperities (the paper's model)", gt=0, unset=True,
+        "surface); none: elastic asperities (the paper's model)", gt=0, le=1e12, unset=True,
     )
     bodies: list[str] = param(
         [], "1", "named materials of the two bodies (one name: both); E*, rho* and H follow from the table where "
@@ -55,7 +55,7 @@ class Material:
 class Roughness:
     """Greenwood–Williamson asperity statistics (Table 1)."""
 
-    sigma: float = param(20e-6, "m", "standard deviation of asperity heights", gt=0)
+    sigma: float = param(20e-6, "m", "standard deviation of asperity heights", gt=0, le=1)
     eta: float = param(2e8, "m-2", "asperity density (asperities per unit area)", gt=0)
     beta: float = param(30e-6, "m", "mean asperity tip radius", gt=0)
 
@@ -79,9 +79,9 @@ class Indenter:
 class Loading:
     """Approaches delta: evenly spaced from ``delta_max`` down to ``delta_min`` (units of sigma)."""
 
-    delta_max: float = param(2.0, "sigma", "first (lightest) approach delta/sigma")
-    delta_min: float = param(-3.0, "sigma", "last (heaviest) approach delta/sigma")
-    n_delta: int = param(20, "1", "number of approaches", ge=1)
+    delta_max: float = param(2.0, "sigma", "first (lightest) approach delta/sigma", ge=-1e3, le=1e3)
+    delta_min: float = param(-3.0, "sigma", "last (heaviest) approach delta/sigma", ge=-1e3, le=1e3)
+    n_delta: int = param(20, "1", "number of approaches", ge=1, le=1000)
 
 
 @dataclass(frozen=True)
@@ -118,7 +118,7 @@ class Contact:
     )
     window: float | str = param(
         "auto", "R*", "side of the square spot window, in units of R*, or auto: every cell whose "
-        "spot can change R by more than cube.crop_tolerance at the heaviest load", gt=0, auto=True,
+        "spot can change R by more than cube.crop_tolerance at the heaviest load", gt=0, le=1e3, auto=True,
     )
     spots: str = param(
         "expected",

@@ -55,7 +55,7 @@ class Oxide:
     )
     max_realizations: int = param(30000, "1", "adaptive: cap on the realizations per (xi, lambda)", ge=2)
     target_half_width: float = param(
-        0.025, "1", "adaptive: target relative 95 % half-width of alpha in every cell", gt=0, lt=1
+        0.025, "1", "adaptive: target relative 95 % half-width of alpha in every cell", ge=1e-4, lt=1
     )
     step_half_width: float = param(
         0.0, "1", "adaptive, discrete: target relative 95 % half-width of the geometric mean of R at every "
@@ -74,7 +74,7 @@ class Oxide:
     )
     seed: int = param(20240531, "1", "root seed of every random stream", ge=0)
     hurst: float = param(0.5, "1", "Hurst exponent H of the spectrum k^-2(1+H)", gt=0, lt=1)
-    ks_ratio: float = param(3.0, "1", "upper to lower cut-off wavenumber ks/k1", gt=1)
+    ks_ratio: float = param(3.0, "1", "upper to lower cut-off wavenumber ks/k1", gt=1, le=1e3)
     amplitudes: str = param(
         "ideal", "1", "spectral amplitudes", choices=("ideal", "rayleigh")
     )
