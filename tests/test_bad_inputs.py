@@ -371,3 +371,16 @@ def test_a_reader_that_closes_the_pipe_early_gets_no_traceback() -> None:
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=120) == 141, err
     assert "Traceback" not in err and "BrokenPipeError" not in err and "Exception ignored" not in err, err
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full (a device that is always full)")
+def test_standard_output_on_a_full_disk_is_one_line() -> None:
+    """`g2tom params > file` on a full disk: one line naming standard output and why, status 1."""
+    import subprocess
+    import sys
+
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "g2tom.cli.main", "params"], stdout=full, stderr=subprocess.PIPE,
+                              text=True, timeout=120)
+    assert proc.returncode == 1
+    assert proc.stderr == "g2tom: error: cannot write standard output: No space left on device\n", proc.stderr

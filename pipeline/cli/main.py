@@ -239,6 +239,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         # again when Python flushes the closed pipe at exit
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return BROKEN_PIPE
+    except OSError as exc:
+        # a write the command's own checks did not name: standard output on a full or read-only disk
+        # (`g2tom params > /full/disk/file`) carries no file name
+        where = exc.filename if exc.filename is not None else "standard output"
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # nothing more to flush at exit
+        print(f"g2tom: error: cannot write {where}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
     finally:
         warnings.formatwarning = formatwarning
         # As the command (argv None) the process exits next, joining the threads still finishing their
