@@ -106,13 +106,17 @@ def _block(r_target: np.ndarray, r: np.ndarray, t: np.ndarray, w: np.ndarray, v:
     left, length = r[:-1], np.diff(r)
     rho = left[:, None] + length[:, None] * t[None, :]  # (element, point)
     rt = r_target[:, None, None]
-    ratio = rho / (rho + rt)
+    total = rho + rt
+    ratio = rho / total
     diff = np.abs(rho - rt)
-    m1 = (diff / (rho + rt)) ** 2  # 1 - m, formed without cancellation
-    g = ellipkm1(m1) + 0.5 * np.log(m1)
+    m1 = (diff / total) ** 2  # 1 - m, formed without cancellation
+    # The (target, element, point) arrays are updated in place: one allocation less each.
+    smooth = ellipkm1(m1)
+    smooth += 0.5 * np.log(m1)  # g
     off_axis = rt > 0
-    smooth = g + np.where(off_axis, np.log(rho + rt), 0.0)
-    log_w = w * np.log(np.where(off_axis, diff, 1.0))  # w_q ln|rho - r| (Gauss, regular elements)
+    smooth += np.where(off_axis, np.log(total, out=total), 0.0)
+    log_w = np.log(np.where(off_axis, diff, 1.0))
+    log_w *= w  # w_q ln|rho - r| (Gauss, regular elements)
     rows = np.arange(len(r_target))
     node = first + rows
     n_elem = len(length)
@@ -120,8 +124,12 @@ def _block(r_target: np.ndarray, r: np.ndarray, t: np.ndarray, w: np.ndarray, v:
     log_w[rows[right], node[right], :] = w * np.log(length[node[right]])[:, None] + v
     left_ok = (node >= 1) & (node <= n_elem)  # the element ending at the target node
     log_w[rows[left_ok], node[left_ok] - 1, :] = w * np.log(length[node[left_ok] - 1])[:, None] + v[::-1]
-    log_w = np.where(off_axis, log_w, 0.0)
-    kern = length[None, :, None] * ratio * (w * smooth - log_w)  # (target, element, point)
+    log_w[~off_axis[:, 0, 0]] = 0.0
+    smooth *= w
+    smooth -= log_w
+    kern = ratio
+    kern *= length[None, :, None]
+    kern *= smooth  # length ratio (w smooth - log_w), (target, element, point)
     out = np.zeros((len(r_target), len(r)))
     out[:, :-1] += kern @ (1.0 - t)
     out[:, 1:] += kern @ t
