@@ -1,5 +1,6 @@
-"""The Python API's arguments checked at its entry: each refusal a :class:`ConfigError` naming the
-argument, its value and what is allowed (the CLI prints it as its one ``g2tom: error:`` line)."""
+"""The Python API's arguments checked at its entry: each refusal a :class:`~g2tom.config.ConfigError`
+naming the argument, its value and what is allowed (the CLI prints it as its one ``g2tom: error:``
+line)."""
 
 from __future__ import annotations
 
