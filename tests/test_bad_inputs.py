@@ -262,6 +262,9 @@ def _hand_cases() -> list[Case]:
              ("--correlation-length = 1e+300", "[5e-07, 0.128]"), setup=rough),
         Case("surface --pixel-size 1e-300", ("surface", f"{outside}rough.npy", "--pixel-size", "1e-300", "--force", "0.01"),
              ("--pixel-size = 1e-300", "[1e-12, 1]"), setup=rough),
+        Case("predict --surrogate naming a file that is not one",
+             ("predict", "--force", "100", "--xi", "0.3", "--lambda", "5", "--surrogate", f"{outside}not_a_surrogate.nc"),
+             ("--surrogate", "not_a_surrogate.nc", "not a readable netCDF file"), setup=_write("not_a_surrogate.nc", b"x" * 64)),
         Case("surface on an unreachable scheduler", (*surface, "--scheduler", "tcp://127.0.0.1:1"),
              ("--scheduler 'tcp://127.0.0.1:1'", "no dask scheduler"), setup=rough),
     ]

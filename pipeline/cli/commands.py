@@ -243,12 +243,13 @@ def plan(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
 
 
 def predict(args: argparse.Namespace, scenario: Scenario) -> None:
-    """``g2tom predict``: the surrogate's resistances (an unreadable surrogate.nc refused first)."""
+    """``g2tom predict``: the surrogate's resistances (the run's own surrogate.nc, unreadable, refused
+    first as a file to rebuild; a ``--surrogate`` file the user names is refused as a bad input)."""
     from g2tom.cli.predict import predict_cli
     from g2tom.store import stage_path, unreadable
 
-    surrogate = args.surrogate or stage_path(args.data_dir, "surrogate")
-    problem = Path(surrogate).suffix != ".json" and Path(surrogate).is_file() and unreadable(surrogate, "surrogate")
+    own = stage_path(args.data_dir, "surrogate")
+    problem = args.surrogate is None and own.is_file() and unreadable(own, "surrogate")
     if problem:
         raise StaleInputError(problem)
 
