@@ -121,7 +121,8 @@ class DiscretePool:
         if kernel is None:
             x, y, _ = self.spots(s)
             kernel = interaction_kernel(x, y, self.floor)
-            if sum(k.nbytes for k in self._kernels.values()) + kernel.nbytes <= config.KERNEL_CACHE_BYTES:
+            kept = tuple(self._kernels.values())  # one step under the GIL: other threads add kernels meanwhile
+            if sum(k.nbytes for k in kept) + kernel.nbytes <= config.KERNEL_CACHE_BYTES:
                 self._kernels[s] = kernel
         return kernel
 
