@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.special import eval_sh_legendre, ellipkm1
 
-__all__ = ["radial_nodes", "graded_nodes", "influence_matrix", "force_weights"]
+__all__ = ["radial_nodes", "graded_nodes", "influence_matrix", "forget_kept_matrices", "force_weights"]
 
 #: Gauss-Legendre points per element.
 _N_GAUSS = 8
@@ -175,6 +175,12 @@ def _kept_matrix(nodes: bytes) -> np.ndarray:
     matrix = _unscaled_matrix(np.frombuffer(nodes, dtype=float))
     matrix.flags.writeable = False
     return matrix
+
+
+def forget_kept_matrices() -> None:
+    """Drop the influence matrices :func:`influence_matrix` keeps, so that the next solve on any nodes
+    builds its own (what the benchmarks time: a stage's one solve pays for it)."""
+    _kept_matrix.cache_clear()
 
 
 def force_weights(r: ArrayLike) -> np.ndarray:
