@@ -129,7 +129,7 @@ def test_window_check_of_the_stage_itself(small):
 @pytest.mark.parametrize(
     ("override", "message"),
     [
-        ("roughness.sigma=0", "roughness.sigma = 0 is out of range: must be > 0 (m)"),
+        ("roughness.sigma=0", "roughness.sigma = 0 is out of range: must be > 0 and <= 1 (m)"),
         ("roughness.sigma=-2e-5", "roughness.sigma = -2e-05 is out of range"),
         ("material.nu=0.5", "material.nu = 0.5 is out of range: must be > -1 and < 0.5"),
         ("material.nu=-1.2", "material.nu = -1.2 is out of range"),

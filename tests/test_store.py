@@ -73,7 +73,7 @@ def test_cli_rejects_bad_input_with_status_2_and_touches_nothing(tmp_path, capsy
     status = main(["contact", "--data-dir", str(tmp_path), "--set", "roughness.sigma=-2e-5"])
     assert status == 2
     err = capsys.readouterr().err
-    assert "roughness.sigma = -2e-05 is out of range: must be > 0 (m)" in err
+    assert "roughness.sigma = -2e-05 is out of range: must be > 0 and <= 1 (m)" in err
     assert existing.read_bytes() == b"previous result" and os.stat(existing).st_mtime_ns == stamp
     assert sorted(p.name for p in tmp_path.iterdir()) == ["contact.nc"]
     assert main(["contact", "--data-dir", str(tmp_path), "--set", "roughness.sigam=1"]) == 2
