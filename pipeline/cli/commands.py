@@ -280,9 +280,8 @@ def atlas(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
 
 
 def _device(args: argparse.Namespace) -> str:
-    """``--device`` resolved (``cpu`` or ``gpu``; a refused one is a ConfigError naming why), and
-    ``--workers`` defaulted for it: one per core on the CPU, one on the GPU (its solves take the
-    whole device, one after another)."""
+    """``--device`` resolved (``cpu`` or ``gpu``; a refused one is a ConfigError naming why); on the
+    GPU, ``--workers`` defaults to one (its solves take the whole device, one after another)."""
     from g2tom.reference.devices import resolve
 
     try:
