@@ -10,14 +10,18 @@ Open circuits (R = +inf) are policy, not noise:
 * ``median`` and ``quantile`` are taken over *all* realizations, an open circuit counting as
   +inf, so a quantile is +inf once more than the matching share of realizations is open.
 
-Every function works on numpy- or dask-backed arrays (the realization axis may be chunked
-for the means; the quantiles rechunk it into one block).
+Each reduction is a numpy kernel over the last axis (``*_of``) and its labelled wrapper over the
+``realization`` dimension; the wrappers work on numpy- or dask-backed arrays (a chunked
+realization axis is rechunked into one block).
 
 Normalization (Eq. 25): ``R' = R sqrt(R* sigma) / (2 rho*)`` and
 ``F' = 2 F / (E* sqrt(R* sigma^3))``.
 """
 
 from __future__ import annotations
+
+import warnings
+from typing import Callable
 
 import numpy as np
 import xarray as xr
@@ -28,6 +32,10 @@ from g2tom.variables import namespace
 __all__ = [
     "DIM",
     "QUANTILES",
+    "geometric_mean_of",
+    "arithmetic_mean_of",
+    "quantiles_of",
+    "open_share_of",
     "open_probability",
     "geometric_mean",
     "arithmetic_mean",
@@ -42,25 +50,63 @@ DIM = "realization"
 QUANTILES = (0.16, 0.5, 0.84)
 
 
+def _conducting(values: np.ndarray) -> np.ndarray:
+    """``values`` with NaN in place of open circuits (and of any other non-finite value)."""
+    return np.where(np.isfinite(values), values, np.nan)
+
+
+def _nanmean(values: np.ndarray) -> np.ndarray:
+    """Mean over the last axis of the non-NaN values; NaN (no warning) where there are none."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "Mean of empty slice", RuntimeWarning)
+        return np.nanmean(values, axis=-1)
+
+
+def geometric_mean_of(values: np.ndarray) -> np.ndarray:
+    """exp(mean(log R)) over the last axis of ``values`` (ohm), conducting samples only; NaN if none."""
+    return np.exp(_nanmean(np.log(_conducting(values))))
+
+
+def arithmetic_mean_of(values: np.ndarray) -> np.ndarray:
+    """Mean over the last axis of ``values`` (ohm), conducting samples only; NaN if none."""
+    return _nanmean(_conducting(values))
+
+
+def quantiles_of(values: np.ndarray, q: tuple[float, ...] = QUANTILES) -> np.ndarray:
+    """Linear-interpolation quantiles ``q`` over the last axis of ``values``, open circuits as +inf:
+    shape (..., len(q))."""
+    return np.stack([quantile_with_inf(values, qi) for qi in q], axis=-1)
+
+
+def open_share_of(values: np.ndarray) -> np.ndarray:
+    """Share of the samples on the last axis of ``values`` that are open circuits (+inf)."""
+    return np.isposinf(values).mean(axis=-1)
+
+
+def _over_realizations(kernel: Callable[..., np.ndarray], resistance: xr.DataArray, name: str,
+                       q: tuple[float, ...] | None = None) -> xr.DataArray:
+    """``kernel`` (a ``*_of`` function) over :data:`DIM` of ``resistance``, named ``name``; with ``q``, the
+    quantiles' new dimension ``quantile``."""
+    extra = {} if q is None else {"kwargs": {"q": tuple(q)}, "output_core_dims": [["quantile"]]}
+    sizes = {} if q is None else {"output_sizes": {"quantile": len(q)}}
+    out = xr.apply_ufunc(kernel, resistance, input_core_dims=[[DIM]], dask="parallelized", output_dtypes=[float],
+                         dask_gufunc_kwargs={**sizes, "allow_rechunk": True}, **extra)
+    return (out if q is None else out.assign_coords(quantile=list(q))).rename(name)
+
+
 def open_probability(resistance: xr.DataArray) -> xr.DataArray:
     """Share of realizations that are open circuits (R = +inf), dimensionless."""
-    return np.isposinf(resistance).mean(DIM).rename("open_probability")
+    return _over_realizations(open_share_of, resistance, "open_probability")
 
 
 def geometric_mean(resistance: xr.DataArray) -> xr.DataArray:
     """exp(mean(log R)) over the conducting realizations; NaN if none conducts."""
-    finite = resistance.where(np.isfinite(resistance))
-    return np.exp(np.log(finite).mean(DIM, skipna=True)).rename("geometric_mean")
+    return _over_realizations(geometric_mean_of, resistance, "geometric_mean")
 
 
 def arithmetic_mean(resistance: xr.DataArray) -> xr.DataArray:
     """Mean of R over the conducting realizations; NaN if none conducts."""
-    finite = resistance.where(np.isfinite(resistance))
-    return finite.mean(DIM, skipna=True).rename("arithmetic_mean")
-
-
-def _quantile_block(values: np.ndarray, q: tuple[float, ...]) -> np.ndarray:
-    return np.stack([quantile_with_inf(values, qi) for qi in q], axis=-1)
+    return _over_realizations(arithmetic_mean_of, resistance, "arithmetic_mean")
 
 
 def quantiles(resistance: xr.DataArray, q: tuple[float, ...] = QUANTILES) -> xr.DataArray:
@@ -71,17 +117,7 @@ def quantiles(resistance: xr.DataArray, q: tuple[float, ...] = QUANTILES) -> xr.
     xarray.DataArray
         The input's other dimensions plus ``quantile``.
     """
-    out = xr.apply_ufunc(
-        _quantile_block,
-        resistance,
-        kwargs={"q": tuple(q)},
-        input_core_dims=[[DIM]],
-        output_core_dims=[["quantile"]],
-        dask="parallelized",
-        output_dtypes=[float],
-        dask_gufunc_kwargs={"output_sizes": {"quantile": len(q)}, "allow_rechunk": True},
-    )
-    return out.assign_coords(quantile=list(q)).rename("resistance_quantile")
+    return _over_realizations(quantiles_of, resistance, "resistance_quantile", q)
 
 
 def median(resistance: xr.DataArray) -> xr.DataArray:
@@ -89,7 +125,35 @@ def median(resistance: xr.DataArray) -> xr.DataArray:
     return quantiles(resistance, (0.5,)).squeeze("quantile", drop=True).rename("median")
 
 
-def reduce_realizations(resistance: xr.DataArray, scale: float) -> xr.Dataset:
+#: The reductions of :func:`reduce_realizations`, each with its kernel (``quantile``'s adds a dimension).
+_KERNELS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
+    "geometric_mean": geometric_mean_of,
+    "arithmetic_mean": arithmetic_mean_of,
+    "median": lambda values: quantile_with_inf(values, 0.5),
+    "resistance_quantile": quantiles_of,
+    "open_probability": open_share_of,
+}
+
+
+def _by_counts(resistance: xr.DataArray, counts: np.ndarray) -> dict[str, xr.DataArray]:
+    """Every reduction of :data:`_KERNELS`, each point of ``resistance`` (its dimensions but
+    :data:`DIM`, which is last) over its own first ``counts`` realizations: one kernel call per
+    distinct count."""
+    values = resistance.values
+    out = {name: np.empty(counts.shape + ((len(QUANTILES),) if name == "resistance_quantile" else ()))
+           for name in _KERNELS}
+    for n in np.unique(counts):
+        at = counts == n
+        block = values[at][:, : int(n)]
+        for name, kernel in _KERNELS.items():
+            out[name][at] = kernel(block)
+    template = resistance.isel({DIM: 0}, drop=True)
+    return {name: (template.copy(data=value) if value.ndim == template.ndim
+                   else template.expand_dims(quantile=list(QUANTILES), axis=-1).copy(data=value)).rename(name)
+            for name, value in out.items()}
+
+
+def reduce_realizations(resistance: xr.DataArray, scale: float, counts: np.ndarray | None = None) -> xr.Dataset:
     """Every reduction of ``resistance`` and its normalized counterpart.
 
     Parameters
@@ -98,6 +162,10 @@ def reduce_realizations(resistance: xr.DataArray, scale: float) -> xr.Dataset:
         Resistance in ohm with a ``realization`` dimension (+inf = open circuit).
     scale
         :attr:`g2tom.config.Scenario.resistance_scale`, ohm.
+    counts
+        How many of the first realizations each point reduces over (the shape of ``resistance``
+        without ``realization``, which must then be its last dimension): the cells of an adaptive
+        ensemble. None: every realization everywhere.
 
     Returns
     -------
@@ -107,18 +175,18 @@ def reduce_realizations(resistance: xr.DataArray, scale: float) -> xr.Dataset:
         ``*_normalized`` counterparts R' = R / scale, and ``open_probability``; their units
         and long names are fits.nc's (registry namespace ``stages.fits``, :mod:`g2tom.variables`).
     """
-    reductions = {
-        "geometric_mean": geometric_mean(resistance),
-        "arithmetic_mean": arithmetic_mean(resistance),
-        "median": median(resistance),
-        "resistance_quantile": quantiles(resistance),
-    }
+    if counts is None:
+        reductions = {"geometric_mean": geometric_mean(resistance), "arithmetic_mean": arithmetic_mean(resistance),
+                      "median": median(resistance), "resistance_quantile": quantiles(resistance),
+                      "open_probability": open_probability(resistance)}
+    else:
+        reductions = _by_counts(resistance, counts)
     declared = namespace("stages.fits")
     ds = xr.Dataset()
     for name, value in reductions.items():
         ds[name] = value.assign_attrs(declared[name].attrs())
-        ds[f"{name}_normalized"] = (value / scale).assign_attrs(declared[f"{name}_normalized"].attrs())
-    ds["open_probability"] = open_probability(resistance).assign_attrs(declared["open_probability"].attrs())
+        if name != "open_probability":
+            ds[f"{name}_normalized"] = (value / scale).assign_attrs(declared[f"{name}_normalized"].attrs())
     ds["resistance_quantile"].attrs["policy"] = "over all realizations, open circuits as +inf"
     ds["geometric_mean"].attrs["policy"] = "over conducting realizations only"
     ds["arithmetic_mean"].attrs["policy"] = "over conducting realizations only"

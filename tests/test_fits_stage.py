@@ -127,6 +127,26 @@ def test_quantiles_treat_open_circuits_as_infinite() -> None:
     assert q[2] == np.inf and q[3] == 4.0
 
 
+def test_reductions_over_each_points_own_count_equal_those_of_its_slice() -> None:
+    """An adaptive ensemble's cells each reduce over their own first realizations (one kernel call per
+    distinct count): every point equals the reductions of its own slice, open circuits and all-open included."""
+    rng = np.random.default_rng(3)
+    values = rng.lognormal(0.0, 1.0, size=(3, 4, 5, 40))
+    values[rng.random(values.shape) < 0.2] = np.inf
+    values[0, 0, 0, :7] = np.inf
+    r = xr.DataArray(values, dims=("xi", "lambda", "delta", "realization"),
+                     coords={"xi": [0.1, 0.5, 0.9], "force": ("delta", np.arange(5.0))})
+    counts = rng.integers(1, 41, size=(3, 4, 5))
+    counts[0, 0, 0] = 7
+    fast = reduce_realizations(r, 2.0, counts=counts)
+    assert set(fast.coords) == {"xi", "force", "quantile"} and fast["resistance_quantile"].dims[-1] == "quantile"
+    for index in np.ndindex(counts.shape):
+        one = reduce_realizations(r[index].isel(realization=slice(0, int(counts[index]))), 2.0)
+        for name in one.data_vars:
+            np.testing.assert_allclose(fast[name].values[index], one[name].values, rtol=1e-15, err_msg=name)
+    assert np.isnan(fast["geometric_mean"].values[0, 0, 0]) and fast["open_probability"].values[0, 0, 0] == 1.0
+
+
 def test_reductions_are_dask_friendly(small: ResolvedScenario) -> None:
     cube = synthetic_cube(small, open_share=0.25)
     eager = reduce_realizations(cube["resistance"], 2.0)

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
-from scipy import stats
+from scipy import special
 
 from g2tom.compute import ComputeOptions, single_threaded
 from g2tom.config import Scenario
@@ -139,21 +139,8 @@ def _reduce(resistance: xr.DataArray, counts: np.ndarray, scale: float,
     own, with ``step_counts``)."""
     if step_counts is None and np.all(counts == resistance.sizes[DIM]):
         return reduce_realizations(resistance, scale)
-
-    def cell(z: int, a: int) -> xr.Dataset:
-        at = resistance.isel({"xi": [z], "lambda": [a]})
-        if step_counts is None or np.all(step_counts[z, a] == counts[z, a]):
-            return reduce_realizations(at.isel({DIM: slice(0, int(counts[z, a]))}), scale)
-        own = step_counts[z, a]
-        groups = [np.flatnonzero(own == n) for n in np.unique(own)]
-        parts = [reduce_realizations(at.isel({"delta": steps, DIM: slice(0, int(own[steps[0]]))}), scale)
-                 for steps in groups]
-        order = np.argsort(np.concatenate(groups))
-        return xr.concat(parts, dim="delta", combine_attrs="override").isel(delta=order)
-
-    rows = [xr.concat([cell(z, a) for a in range(counts.shape[1])], dim="lambda", combine_attrs="override")
-            for z in range(counts.shape[0])]
-    return xr.concat(rows, dim="xi", combine_attrs="override")
+    own = step_counts if step_counts is not None else np.broadcast_to(counts[:, :, None], resistance.shape[:-1])
+    return reduce_realizations(resistance, scale, counts=own)
 
 
 def _control(cube: xr.Dataset) -> tuple[np.ndarray, np.ndarray]:
@@ -207,7 +194,7 @@ def _clean_fit(scenario: Scenario, clean: np.ndarray, force_n: np.ndarray, mask:
     lx = np.log(force_n[np.isfinite(fit.residual)])  # the steps that entered the fit
     n = lx.size
     dof = n - 2  # no interval from two points: the line passes through both
-    t = stats.t.ppf(0.5 * (1.0 + scenario.fits.confidence), dof) if dof >= 1 else np.nan
+    t = special.stdtrit(dof, 0.5 * (1.0 + scenario.fits.confidence)) if dof >= 1 else np.nan
     s2 = np.nansum(fit.residual**2) / dof if dof >= 1 else np.nan
     sxx = np.sum((lx - lx.mean()) ** 2)
     se_slope = np.sqrt(s2 / sxx)
