@@ -15,7 +15,6 @@ import xarray as xr
 
 from g2tom.analysis.report_blocks import Block, table
 from g2tom.analysis.report_chain import chain_blocks
-from g2tom.atlas.fit import curve_words, verdict
 from g2tom.fitting.atlas_band import region_labels
 from g2tom.fitting.atlas_grid import FRAME_COORDINATES
 
@@ -94,6 +93,8 @@ def atlas_blocks(data_dir: Path) -> list[Block]:
     if not (folder / "surrogate.json").is_file() or not (folder / "heldout.csv").is_file():
         return blocks + [Block("p", "Not available: run `make atlas` (its plan first: `make atlas-plan`).")] + \
             chain_blocks(data_dir)
+    from g2tom.atlas.fit import curve_words, verdict  # here: scipy.stats, half a second, for an atlas only
+
     doc = json.loads((folder / "surrogate.json").read_text())
     if int(doc.get("format_version", 1)) < 2:
         return blocks + [Block("p", "The atlas surrogate is of format 1 (one polynomial in five logs, an earlier version's): "

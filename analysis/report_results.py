@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
-from scipy.stats import norm
+from scipy.special import ndtri
 
 from g2tom.analysis.report_blocks import Block, table as _table
 from g2tom.config import Scenario
@@ -57,7 +57,7 @@ def surrogate_misses(sur: xr.Dataset, parameter: str, z: float) -> list[str]:
 
 def surrogate_model_blocks(sur: xr.Dataset) -> list[Block]:
     """Method, model sizes, errors and the closed formulas of the surrogate."""
-    z_c = float(norm.ppf(0.5 + float(sur.attrs.get("fit_confidence", 0.95)) / 2.0))
+    z_c = float(ndtri(0.5 + float(sur.attrs.get("fit_confidence", 0.95)) / 2.0))
     method = sur.attrs.get("method", "paper")
     rows, misses = [], []
     for p in PARAMETERS:

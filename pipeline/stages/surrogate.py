@@ -54,7 +54,7 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
-from scipy.stats import norm
+from scipy.special import ndtri
 
 from g2tom.before_work.surrogate_grid import small_grid_note
 from g2tom.compute import ComputeOptions, single_threaded
@@ -100,7 +100,7 @@ def _half_width(fits: xr.Dataset, name: str) -> np.ndarray:
 
 def _fit_sigma(scenario: Scenario, fits: xr.Dataset, name: str) -> np.ndarray:
     """One standard deviation of ln alpha (name alpha) or of gamma from the fit's interval."""
-    z_c = norm.ppf(0.5 + scenario.fits.confidence / 2.0)
+    z_c = ndtri(0.5 + scenario.fits.confidence / 2.0)
     ci = fits[f"{name}_ci"].transpose("lambda", "xi", "bound")
     lower, upper = ci.sel(bound="lower").values, ci.sel(bound="upper").values
     if name == "alpha":

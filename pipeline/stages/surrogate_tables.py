@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
-from scipy.stats import norm
+from scipy.special import ndtri
 
 from g2tom.config import Scenario
 from g2tom.fitting import surrogate as sg
@@ -43,7 +43,7 @@ def curve_tables(scenario: Scenario, fits: xr.Dataset) -> dict[str, xr.DataArray
     coef = fits["curve_coefficients"].transpose("lambda", "xi", "power").values
     ln_r = evaluate_curve(coef, fits["force_normalized"].values[steps])
     ci = fits[f"{fits.attrs['reduction']}_normalized_ci"].isel(delta=steps).transpose("lambda", "xi", "delta", "bound")
-    z = norm.ppf(0.5 + scenario.fits.confidence / 2.0)
+    z = ndtri(0.5 + scenario.fits.confidence / 2.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         sigma = (np.log(ci.sel(bound="upper").values) - np.log(ci.sel(bound="lower").values)) / (2.0 * z)
     error = interpolation_error(ln_r, sg.to_w(fits["lambda"].values), sg.to_z(fits["xi"].values))
