@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 
 from g2tom.analysis.report_blocks import Block, table as _table
-from g2tom.config import STAGE_INPUTS, Scenario, parameter_table
+from g2tom.config import Scenario, parameter_table
 
 __all__ = ["FRONTIER_FIGURES", "frontier_blocks", "stability_blocks", "benchmark_blocks", "parameter_blocks",
            "timing_blocks"]
@@ -151,16 +151,14 @@ def timing_blocks(scenario: Scenario, data_dir: Path, report_seconds: float) -> 
     ``timings.json`` keeps the last time of every step with the configuration hash it ran
     with; steps run with another configuration (an earlier or a different run) are left out.
     """
-    from g2tom.analysis.report_summary import recorded_timings
+    from g2tom.analysis.report_summary import TIMED_STEPS, recorded_timings
 
     blocks = [Block("h2", "Timings")]
-    expected = {stage: scenario.config_hash(stage) for stage in STAGE_INPUTS}
-    expected["figures"] = scenario.config_hash()
     rows = [list(row) for row in recorded_timings(scenario, data_dir)]
     rows.append(["report", round(report_seconds, 3), "(this page)"])
     rows.append(["total", round(sum(r[1] for r in rows), 3), ""])
     blocks.append(_table(["step", "wall time (s)", "finished (UTC)"], rows))
-    left_out = [step for step in expected if step not in {r[0] for r in rows}]
+    left_out = [step for step in TIMED_STEPS if step not in {r[0] for r in rows}]
     if left_out:
         blocks.append(Block("p", "No time of this configuration's run for: " + ", ".join(left_out)
                             + " (run through another configuration, or not through the g2tom command)."))

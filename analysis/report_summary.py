@@ -22,7 +22,7 @@ from g2tom.models import contact_model
 from g2tom.scene import scene_plasticity
 from g2tom.stages.table3 import PARAMETERS
 
-__all__ = ["summary_blocks", "recorded_timings", "predict_command", "law_forces", "shown_cells"]
+__all__ = ["TIMED_STEPS", "summary_blocks", "recorded_timings", "predict_command", "law_forces", "shown_cells"]
 
 #: Sections whose parameters decide the surface (the force and resistance scales, the groups mu and
 #: Pi): the ``--set`` arguments of the predict command repeat those that differ from the bundled scenario.
@@ -35,10 +35,16 @@ def _span(values: np.ndarray, digits: int = 4) -> str:
     return f"{lo:.{digits}g}" if lo == hi else f"{lo:.{digits}g}-{hi:.{digits}g}"
 
 
-def recorded_timings(scenario: Scenario, data_dir: Path) -> list[tuple[str, float, str]]:
-    """``(step, wall time in s, finished)`` of every step in ``timings.json`` run with this configuration.
+#: The steps whose wall times the report shows: the stages, then the figures.
+TIMED_STEPS: tuple[str, ...] = (*STAGE_INPUTS, "figures")
 
-    ``timings.json`` keeps the last time of every step with the configuration hash it ran with;
+
+def recorded_timings(scenario: Scenario, data_dir: Path) -> list[tuple[str, float, str]]:
+    """``(step, wall time in s, finished)`` of every step in ``timings.json`` run with this configuration:
+    the stages in order, then the figures, their families' times summed.
+
+    ``timings.json`` keeps the last time of every step with the configuration hash it ran with
+    (each figure family apart, ``figures: <family>``, as ``g2tom figures --only`` draws some);
     steps run with another configuration (an earlier or a different run) are left out.
     """
     path = Path(data_dir) / "timings.json"
@@ -46,11 +52,15 @@ def recorded_timings(scenario: Scenario, data_dir: Path) -> list[tuple[str, floa
         recorded = json.loads(path.read_text()) if path.is_file() else {}
     except (OSError, ValueError):
         recorded = {}
-    expected = {stage: scenario.config_hash(stage) for stage in STAGE_INPUTS}
-    expected["figures"] = scenario.config_hash()
-    return [(step, float(recorded[step]["seconds"]), recorded[step].get("finished", ""))
-            for step in expected
-            if isinstance(recorded.get(step), dict) and recorded[step].get("config_hash") == expected[step]]
+    entries = {step: entry for step, entry in recorded.items() if isinstance(entry, dict)} if isinstance(recorded, dict) else {}
+    rows = [(stage, float(entries[stage]["seconds"]), entries[stage].get("finished", ""))
+            for stage in STAGE_INPUTS if entries.get(stage, {}).get("config_hash") == scenario.config_hash(stage)]
+    families = [entry for step, entry in entries.items()
+                if step.startswith("figures: ") and entry.get("config_hash") == scenario.config_hash()]
+    if families:
+        rows.append(("figures", sum(float(e["seconds"]) for e in families),
+                     max(str(e.get("finished", "")) for e in families)))
+    return rows
 
 
 def law_forces(fits: xr.Dataset) -> np.ndarray:

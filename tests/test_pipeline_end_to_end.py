@@ -48,7 +48,8 @@ def test_every_stage_output_is_labelled_and_traceable(run_dir, small) -> None:
                 continue
             assert var.attrs.get("units") is not None, f"{stage}.nc: {name} has no units"
             assert var.attrs.get("long_name"), f"{stage}.nc: {name} has no long_name"
-    assert json.loads((run_dir / "timings.json").read_text()).keys() >= set(STAGES) | {"figures"}
+    timed = json.loads((run_dir / "timings.json").read_text()).keys()
+    assert timed >= set(STAGES) | {"figures: contact", "figures: oxide", "figures: results"}  # a family each
 
 
 def test_cube_is_consistent_with_its_inputs(run_dir, small) -> None:
@@ -73,6 +74,54 @@ def test_figures_and_report_are_written(run_dir) -> None:
     for p in figures:
         assert f"figures/{p.name}" in report
     assert (run_dir / "report.html").stat().st_size > 1000
+
+
+def test_figures_only_draws_the_named_families_and_the_report_sums_their_times(run_dir, small, capsys) -> None:
+    """``g2tom figures --only`` (make draws two sets side by side): those families only, each one's wall
+    time recorded apart and summed into the report's one row; an unknown family exits 2 before drawing."""
+    from g2tom.analysis.report_summary import recorded_timings
+
+    def stamps() -> dict[str, int]:
+        return {p.name: p.stat().st_mtime_ns for p in (run_dir / "figures").glob("*.png")}
+
+    before = stamps()
+    capsys.readouterr()
+    assert main(["figures", "--only", "oxide", "--only", "contact", "--data-dir", str(run_dir), *_set_args()]) == 0
+    drawn = [line.rsplit("/", 1)[-1] for line in capsys.readouterr().err.splitlines() if line.startswith("figure: ")]
+    assert drawn == ["fig6_oxide.png", "fig4_contact.png", "fig5_spots.png"]
+    assert sorted(name for name, stamp in stamps().items() if stamp != before[name]) == sorted(drawn)
+    families = {step: entry["seconds"] for step, entry in json.loads((run_dir / "timings.json").read_text()).items()
+                if step.startswith("figures: ")}
+    assert families.keys() >= {"figures: oxide", "figures: contact", "figures: results"}
+    rows = {step: seconds for step, seconds, _ in recorded_timings(small, run_dir)}
+    assert list(rows) == [*STAGES, "figures"] and rows["figures"] == pytest.approx(sum(families.values()))
+
+    before = stamps()
+    assert main(["figures", "--only", "oxide", "--only", "nope", "--data-dir", str(run_dir), *_set_args()]) == 2
+    assert capsys.readouterr().err == ("g2tom: error: --only 'nope' is not a figure family: must be one of contact, "
+                                       "oxide, results, point, barber, validate\n")
+    assert stamps() == before
+
+
+def _add_steps(data_dir: str, worker: int) -> None:
+    from g2tom.cli.commands import _record_timing
+
+    for k in range(20):
+        _record_timing(data_dir, f"step {worker}.{k}", 1.0, "hash")
+
+
+def test_commands_finishing_together_keep_each_others_times(tmp_path) -> None:
+    """Four processes adding 20 steps each to one timings.json, as make's jobs do side by side: all 80 kept."""
+    import multiprocessing
+
+    context = multiprocessing.get_context("fork")
+    workers = [context.Process(target=_add_steps, args=(str(tmp_path), w)) for w in range(4)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join(timeout=60)
+    assert [w.exitcode for w in workers] == [0] * 4
+    assert len(json.loads((tmp_path / "timings.json").read_text())) == 80
 
 
 def test_rerun_of_a_stage_with_stale_input_is_refused(run_dir, capsys) -> None:
@@ -105,7 +154,7 @@ def test_a_second_run_computes_nothing(run_dir, monkeypatch, capsys) -> None:
 
     # the call is recorded, not drawn again: run_dir's run drew these figures from the same files (5 s)
     drawn = sorted((run_dir / "figures").glob("*.png"))
-    monkeypatch.setattr(g2tom.analysis.figures, "write_figures", lambda *a: order.append("figures") or drawn)
+    monkeypatch.setattr(g2tom.analysis.figures, "write_figures", lambda *a, **k: order.append("figures") or drawn)
     report = (run_dir / "report.md").stat().st_mtime_ns
     assert main(["run", "--data-dir", str(run_dir), "--no-progress", *_set_args()]) == 0
     err = capsys.readouterr().err

@@ -110,7 +110,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="only the checks a run makes before work (make run calls it before the first stage)")
     run.add_argument("--no-bench", action="store_true",
                      help="leave out the physics benchmarks the report shows (spots, biases; about a minute)")
-    add("figures", commands.figures, "write the figures under <data-dir>/figures")
+    figures = add("figures", commands.figures, "write the figures under <data-dir>/figures")
+    figures.add_argument("--only", action="append", default=None, metavar="FAMILY",
+                         help="draw only this family of figures (repeatable; an unknown name lists them)")
     add("report", commands.report, "write <data-dir>/report.md and report.html")
     bench = add("bench", commands.bench, "benchmarks: run time against error, printed and saved")
     bench.add_argument("--only", action="append", default=None, help="run only this benchmark")

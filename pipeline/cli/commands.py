@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import fcntl
 import importlib
 import json
 import os
@@ -74,19 +75,25 @@ def _record_timing(data_dir: Path, step: str, seconds: float, config_hash: str) 
     """Merge a step's wall time into ``<data_dir>/timings.json`` (read by the report).
 
     Each entry records the configuration hash it was run with, so the report shows only the
-    times of the outputs it describes.
+    times of the outputs it describes. The data folder is locked meanwhile (``flock``), so that
+    commands finishing together keep each other's entries.
     """
     from g2tom.store import atomic_path
 
     path = Path(data_dir) / "timings.json"
+    folder = os.open(path.parent, os.O_RDONLY)
     try:
-        timings = json.loads(path.read_text()) if path.is_file() else {}
-    except (OSError, ValueError):
-        timings = {}  # a damaged timings file is only a cache of wall times
-    timings[step] = {"seconds": round(seconds, 3), "config_hash": config_hash,
-                     "finished": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
-    with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(timings, indent=1, sort_keys=True) + "\n")
+        fcntl.flock(folder, fcntl.LOCK_EX)  # commands side by side (make's jobs) each add their step
+        try:
+            timings = json.loads(path.read_text()) if path.is_file() else {}
+        except (OSError, ValueError):
+            timings = {}  # a damaged timings file is only a cache of wall times
+        timings[step] = {"seconds": round(seconds, 3), "config_hash": config_hash,
+                         "finished": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+        with atomic_path(path) as tmp:
+            tmp.write_text(json.dumps(timings, indent=1, sort_keys=True) + "\n")
+    finally:
+        os.close(folder)  # and with it the lock
 
 
 def stage(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
@@ -122,7 +129,8 @@ def run(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
 
 
 def figures(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
-    """``g2tom figures``: the figures of current stage files (refused before any is drawn otherwise)."""
+    """``g2tom figures``: the figures of current stage files (refused before any is drawn otherwise); each
+    family's wall time recorded apart (``--only`` draws some families, e.g. side by side)."""
     from g2tom.analysis.figures import write_figures
 
     from g2tom.store import stage_problem
@@ -130,10 +138,14 @@ def figures(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     _preflight(args, scenario, scene=False)
     # checked before drawing, so that no figure is replaced by half a set
     _refuse_if("figures", [p for p in (stage_problem(args.data_dir, s, scenario) for s in STAGES) if p])
-    start = time.perf_counter()
-    for path in write_figures(scenario, args.data_dir):
-        print(f"figure: {path}", file=sys.stderr)
-    _record_timing(args.data_dir, "figures", time.perf_counter() - start, scenario.config_hash())
+
+    def drawn(family: str, files: list[Path], seconds: float) -> None:
+        for path in files:
+            print(f"figure: {path}", file=sys.stderr)
+        if files:
+            _record_timing(args.data_dir, f"figures: {family}", seconds, scenario.config_hash())
+
+    write_figures(scenario, args.data_dir, getattr(args, "only", None), on_family=drawn)
 
 
 def _refuse_if(what: str, problems: list[str]) -> None:
