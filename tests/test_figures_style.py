@@ -6,6 +6,8 @@ from __future__ import annotations
 import itertools
 import json
 import re
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import matplotlib.figure
@@ -66,19 +68,29 @@ def synthetic_validation(lightest: float = 0.075, heaviest: float = 18.8) -> xr.
     )
 
 
-@pytest.fixture(scope="module")
-def drawn(run_dir: Path, small: ResolvedScenario) -> dict[str, matplotlib.figure.Figure]:
-    """Every figure of ``write_figures`` on the small run, by file name, drawn (renderer ready)."""
+@contextmanager
+def drawn_not_saved() -> Iterator[dict[str, matplotlib.figure.Figure]]:
+    """Inside, ``Figure.savefig`` draws the figure on its canvas and keeps it by file name, writing nothing.
+
+    The layout and the text extents the tests read are the figure's own; encoding a PNG at 300 dpi
+    (half of the drawing time) tells them nothing (tests/test_report.py and
+    tests/test_pipeline_end_to_end.py check the written files)."""
     figures: dict[str, matplotlib.figure.Figure] = {}
-    real = matplotlib.figure.Figure.savefig
 
     def keep(self, path, *args, **kwargs):
         name = Path(path).name  # figures are written atomically: ".<name>.<random>.tmp", then renamed
         figures[name[1:].rsplit(".", 2)[0] if name.startswith(".") and name.endswith(".tmp") else name] = self
-        return real(self, path, *args, **kwargs)
+        self.canvas.draw()
 
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(matplotlib.figure.Figure, "savefig", keep)
+        yield figures
+
+
+@pytest.fixture(scope="module")
+def drawn(run_dir: Path, small: ResolvedScenario) -> dict[str, matplotlib.figure.Figure]:
+    """Every figure of ``write_figures`` on the small run, by file name, drawn (renderer ready)."""
+    with drawn_not_saved() as figures:
         written = write_figures(small, run_dir)
     assert sorted(p.name for p in written) == sorted(figures)
     return figures
@@ -159,14 +171,11 @@ def test_tick_labels_do_not_overlap(drawn) -> None:
 
 
 def _validate_figure(forces: tuple[float, float], path: Path) -> matplotlib.figure.Figure:
-    """validate.png of :func:`synthetic_validation` over ``forces``, kept open for inspection."""
-    figures: list[matplotlib.figure.Figure] = []
-    real = matplotlib.figure.Figure.savefig
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(matplotlib.figure.Figure, "savefig",
-                      lambda self, *a, **k: (figures.append(self), real(self, *a, **k))[1])
+    """validate.png of :func:`synthetic_validation` over ``forces``, drawn and kept open for inspection."""
+    with drawn_not_saved() as figures:
         figures_validate.figure(synthetic_validation(*forces), path)
-    return figures[0]
+    (figure,) = figures.values()
+    return figure
 
 
 @pytest.mark.parametrize("forces", [(0.075, 18.8), (0.4, 2.0), (0.9, 1.3)], ids=["decades", "one decade", "narrow"])
@@ -204,17 +213,13 @@ def _flag_boxes(ax, renderer: RendererBase) -> list[Bbox]:
 
 
 def _realizations_figure(run_dir: Path, small: ResolvedScenario, tmp_path: Path) -> matplotlib.figure.Figure:
-    """fig10_realizations with every cell flagged, kept open for inspection."""
+    """fig10_realizations with every cell flagged, drawn and kept open for inspection."""
     fits = read_stage(run_dir, "fits", small)
     fits["flagged"] = xr.ones_like(fits["flagged"])
-    figures: list[matplotlib.figure.Figure] = []
-    real = matplotlib.figure.Figure.savefig
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(matplotlib.figure.Figure, "savefig",
-                      lambda self, *a, **k: (figures.append(self), real(self, *a, **k))[1])
-        with style.context():
-            figures_results.fig10_realizations(tmp_path / "fig10_realizations.png", fits)
-    return figures[0]
+    with drawn_not_saved() as figures, style.context():
+        figures_results.fig10_realizations(tmp_path / "fig10_realizations.png", fits)
+    (figure,) = figures.values()
+    return figure
 
 
 def _overlaps(fig: matplotlib.figure.Figure) -> int:

@@ -123,16 +123,19 @@ def test_a_signal_wrapped_by_a_compiled_extension_is_still_one_line(monkeypatch,
 
 
 
-@pytest.mark.parametrize("sig, status, word", [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")])
-@pytest.mark.parametrize("gap", [0.02, 0.2])
+@pytest.mark.parametrize("sig, status, word, gap", [(signal.SIGINT, 130, "interrupted", 0.02),
+                                                     (signal.SIGTERM, 143, "terminated", 0.2)])
 def test_a_second_signal_while_the_first_unwinds_adds_nothing(tmp_path, sig, status, word, gap) -> None:
-    """Ctrl-C pressed twice, or `timeout`, which signals the command and then its whole group: one line,
-    the first signal's status, no traceback."""
+    """Ctrl-C pressed twice, or `timeout`, which signals the command and then its whole group, while
+    `g2tom surface` computes its positions and their oxide fields: one line, the first signal's status,
+    no traceback, nothing written."""
     import numpy as np
 
     np.save(tmp_path / "map.npy", np.random.default_rng(1).normal(size=(256, 256)) * 2e-7)
     args = ["surface", str(tmp_path / "map.npy"), "--pixel-size", "5e-7", "--force", "0.01", "--positions", "400",
+            "--xi", "0.3", "--correlation-length", "4e-6", "--fields", "2",
             "--set", "indenter.radius=1e-3", "--set", "material.modulus=5e10"]
     rc, out = _signalled(args, "MiB a task", sig, tmp_path, delay=0.5, again_after=gap)
-    assert rc == status and "Traceback" not in out, out
+    assert rc == status and "Traceback" not in out and "Error" not in out, out
     assert _after_signal(out, "MiB a task")[-1] == f"g2tom: {word}: stopped before the end; run the command again", out
+    assert [p.name for p in tmp_path.rglob("*") if p.is_file()] == ["map.npy"], list(tmp_path.rglob("*"))

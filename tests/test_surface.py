@@ -331,23 +331,6 @@ def test_default_positions_are_the_independent_windows_the_map_holds(tmp_path) -
     assert ds.sizes["position"] == ds.attrs["independent_positions"] == 1
 
 
-def test_ctrl_c_to_the_process_group_stops_with_one_line_and_writes_nothing(tmp_path, map_file) -> None:
-    """SIGINT to the group while the positions compute (SIGTERM takes the same path: tests/test_signals.py).
-
-    Four forces: the positions compute for about 5 s after the plan's line (the signal comes after 1 s),
-    and the tasks already running when it comes, which the process waits for, are short."""
-    from tests.test_signals import _after_signal, _signalled
-
-    args = ["surface", map_file, "--pixel-size", str(PIXEL), "--force", "0.02,0.05,0.1,0.2", "--positions", "4",
-            "--xi", "0.3", "--correlation-length", "4e-6", "--fields", "4", "--set", f"material.modulus={E_STAR}",
-            "--set", f"indenter.radius={RADIUS}"]
-    rc, out = _signalled(args, "MiB a task", signal.SIGINT, tmp_path, delay=1.0)  # the plan's estimate: working
-    assert rc == 130, out
-    assert "Traceback" not in out and "Error" not in out, out
-    assert _after_signal(out, "MiB a task")[-1] == "g2tom: interrupted: stopped before the end; run the command again"
-    assert not [p for p in tmp_path.rglob("*") if p.is_file()], list(tmp_path.rglob("*"))
-
-
 @pytest.mark.parametrize("name, heights, message", [
     ("str", np.array([["a"] * 4] * 4), "heights must be real numbers"),
     ("complex", np.ones((64, 64)) * (1 + 1j), "complex-valued"),
