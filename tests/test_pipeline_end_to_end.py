@@ -103,6 +103,43 @@ def test_figures_only_draws_the_named_families_and_the_report_sums_their_times(r
     assert stamps() == before
 
 
+def test_a_family_needs_only_the_stage_files_it_draws_and_is_out_of_date_only_after_them(run_dir, small, tmp_path,
+                                                                                         capsys) -> None:
+    """The contact and oxide figures are drawn from those two stage files alone (make draws them beside
+    the cube); the results' family is refused without the cube. The report refuses a figure older
+    than a stage file its family draws, and only then."""
+    import os
+    import shutil
+
+    from g2tom.analysis.figures import FAMILIES
+    from g2tom.cli.commands import _report_problems
+
+    early = tmp_path / "early"
+    early.mkdir()
+    for name in ("contact.nc", "oxide.nc"):
+        shutil.copy2(run_dir / name, early / name)
+    assert main(["figures", "--only", "contact", "--only", "oxide", "--data-dir", str(early), *_set_args()]) == 0
+    assert sorted(p.name for p in (early / "figures").glob("*.png")) == sorted(
+        FAMILIES["contact"].files + FAMILIES["oxide"].files)
+    capsys.readouterr()
+    assert main(["figures", "--only", "results", "--data-dir", str(early), *_set_args()]) == 1
+    assert f"figures not written: {early / 'cube.nc'}" in capsys.readouterr().err
+
+    assert _report_problems(run_dir, small) == []
+    figure = run_dir / "figures" / "fig4_contact.png"
+    stamp = figure.stat().st_mtime_ns
+    try:
+        contact, cube = ((run_dir / name).stat().st_mtime_ns for name in ("contact.nc", "cube.nc"))
+        assert contact < cube
+        os.utime(figure, ns=(stamp, (contact + cube) // 2))  # older than the cube, newer than the contact: fine
+        assert _report_problems(run_dir, small) == []
+        os.utime(figure, ns=(stamp, (run_dir / "contact.nc").stat().st_mtime_ns - 10**9))
+        assert _report_problems(run_dir, small) == [
+            f"{figure} is older than {run_dir / 'contact.nc'}: run `g2tom figures` (or `make figures`)"]
+    finally:
+        os.utime(figure, ns=(stamp, stamp))
+
+
 def _add_steps(data_dir: str, worker: int) -> None:
     from g2tom.cli.commands import _record_timing
 

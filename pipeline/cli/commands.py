@@ -131,13 +131,14 @@ def run(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
 def figures(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
     """``g2tom figures``: the figures of current stage files (refused before any is drawn otherwise); each
     family's wall time recorded apart (``--only`` draws some families, e.g. side by side)."""
-    from g2tom.analysis.figures import write_figures
-
+    from g2tom.analysis.figures import FAMILIES, family_names, write_figures
     from g2tom.store import stage_problem
 
     _preflight(args, scenario, scene=False)
+    names = family_names(getattr(args, "only", None))  # `g2tom run` draws them all
+    drawn_from = {stage for name in names for stage in FAMILIES[name].stages}
     # checked before drawing, so that no figure is replaced by half a set
-    _refuse_if("figures", [p for p in (stage_problem(args.data_dir, s, scenario) for s in STAGES) if p])
+    _refuse_if("figures", [p for p in (stage_problem(args.data_dir, s, scenario) for s in STAGES if s in drawn_from) if p])
 
     def drawn(family: str, files: list[Path], seconds: float) -> None:
         for path in files:
@@ -145,7 +146,7 @@ def figures(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
         if files:
             _record_timing(args.data_dir, f"figures: {family}", seconds, scenario.config_hash())
 
-    write_figures(scenario, args.data_dir, getattr(args, "only", None), on_family=drawn)
+    write_figures(scenario, args.data_dir, names, on_family=drawn)
 
 
 def _refuse_if(what: str, problems: list[str]) -> None:
@@ -156,19 +157,23 @@ def _refuse_if(what: str, problems: list[str]) -> None:
 
 
 def _report_problems(data_dir: Path, scenario: Scenario) -> list[str]:
-    """Why a report of ``data_dir`` would describe missing, stale or outdated results."""
+    """Why a report of ``data_dir`` would describe missing, stale or outdated results: the fits and the
+    surrogate not current, no figure of the study, or a figure older than a stage file it draws."""
+    from g2tom.analysis.figures import FAMILIES
     from g2tom.store import stage_path, stage_problem
 
     problems = [p for p in (stage_problem(data_dir, s, scenario) for s in ("fits", "surrogate")) if p]
-    stages = [stage_path(data_dir, s) for s in STAGES if stage_path(data_dir, s).is_file()]
-    drawn = sorted((data_dir / "figures").glob("fig*.png"))  # the study's figures, not the benchmarks'
-    if not drawn:
-        problems.append(f"{data_dir / 'figures'} holds no figures: run `g2tom figures` (or `make figures`)")
-    elif stages:
-        newest = max(stages, key=lambda p: p.stat().st_mtime_ns)
-        oldest = min(drawn, key=lambda p: p.stat().st_mtime_ns)
-        if oldest.stat().st_mtime_ns < newest.stat().st_mtime_ns:
-            problems.append(f"{oldest} is older than {newest}: run `g2tom figures` (or `make figures`)")
+    folder = data_dir / "figures"
+    if not any(folder.glob("fig*.png")):  # the study's figures, not the benchmarks'
+        return problems + [f"{folder} holds no figures: run `g2tom figures` (or `make figures`)"]
+    for family in FAMILIES.values():
+        sources = [stage_path(data_dir, s) for s in family.stages if stage_path(data_dir, s).is_file()]
+        drawn = [folder / name for name in family.files if (folder / name).is_file()]
+        if sources and drawn:
+            newest = max(sources, key=lambda p: p.stat().st_mtime_ns)
+            oldest = min(drawn, key=lambda p: p.stat().st_mtime_ns)
+            if oldest.stat().st_mtime_ns < newest.stat().st_mtime_ns:
+                problems.append(f"{oldest} is older than {newest}: run `g2tom figures` (or `make figures`)")
     return problems
 
 
