@@ -6,7 +6,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
-import signal
 
 import numpy as np
 import pytest
@@ -283,7 +282,7 @@ def test_a_map_smaller_than_the_window_is_extended_from_its_spectrum(tmp_path) -
     assert np.isnan(ds["position_x"].values).all() and np.isfinite(ds["resistance_clean"].values).all()
     again = surface_resistance(tmp_path / "small.npy", [0.03, 0.1], **args)
     np.testing.assert_array_equal(again["resistance_clean"].values, ds["resistance_clean"].values)
-    with pytest.raises(ConfigError, match="--force = 0.1 is out of range: its contact needs a window"):
+    with pytest.raises(ConfigError, match="^force = 0.1 is out of range: its contact needs a window"):
         surface_resistance(tmp_path / "small.npy", [0.03, 0.1], overrides=PAIR, pixel_size=PIXEL)
 
 
@@ -353,7 +352,7 @@ def test_device_gpu_without_one_is_refused_before_work(tmp_path, map_file, capsy
     err = capsys.readouterr().err
     assert code == 2 and err == "g2tom: error: --device gpu cannot be used: CuPy is not installed\n", err
     assert not (tmp_path / "surface").exists()
-    with pytest.raises(ConfigError, match="--device 'tpu' is not allowed"):
+    with pytest.raises(ConfigError, match="^device 'tpu' is not allowed"):
         surface_resistance(map_file, 0.05, overrides=PAIR, pixel_size=PIXEL, device="tpu")
 
 
@@ -441,3 +440,30 @@ def test_the_python_api_names_a_wrong_argument(map_file, change, named) -> None:
     arguments = {"maps": map_file, "force": 0.05, "pixel_size": PIXEL, "overrides": PAIR, **change}
     with pytest.raises(ConfigError, match=re.escape(named) + " is not allowed"):
         surface_resistance(**arguments)
+
+
+@pytest.mark.parametrize("change, python, command_line", [
+    ({"positions": 5000}, "positions = 5000 is out of range: must be in [1, 4096]", ["--positions", "5000"]),
+    ({"xi": 0.3, "correlation_length": 1e-9}, "correlation_length = 1e-09 is out of range",
+     ["--xi", "0.3", "--correlation-length", "1e-9"]),
+    ({"extend": "spectrum", "at": "centre"}, "extend = 'spectrum' is not allowed with at:",
+     ["--extend", "spectrum", "--at", "centre"]),
+])
+def test_the_checks_shared_with_the_command_line_name_the_python_arguments(tmp_path, map_file, capsys, change, python,
+                                                                             command_line) -> None:
+    """A refusal from the checks `g2tom surface` shares names ``positions``, ``correlation_length`` in
+    Python and ``--positions``, ``--correlation-length`` on the command line."""
+    with pytest.raises(ConfigError, match="^" + re.escape(python)):
+        surface_resistance(map_file, 0.05, overrides=PAIR, pixel_size=PIXEL, **change)
+    code = main(["surface", map_file, "--pixel-size", str(PIXEL), "--force", "0.05", "--set", f"material.modulus={E_STAR}",
+                 "--set", f"indenter.radius={RADIUS}", *command_line, "--data-dir", str(tmp_path)])
+    flag = python.split(" ", 1)[0].replace("_", "-")
+    assert code == 2 and capsys.readouterr().err.startswith(f"g2tom: error: --{flag} = "), flag
+
+
+def test_python_terms_keep_the_commands_to_run() -> None:
+    from g2tom.config.arguments import python_terms
+
+    assert python_terms("--pixel-size = 5 is out of range; give --window <= 8 or run `g2tom surface --plan --at x`"
+                        " (a-- b --)") == ("pixel_size = 5 is out of range; give window <= 8 or run "
+                                           "`g2tom surface --plan --at x` (a-- b --)")

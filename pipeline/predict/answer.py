@@ -18,7 +18,7 @@ import xarray as xr
 
 from g2tom.compute import single_threaded
 from g2tom.config import ConfigError, Scenario, bundled_scenarios, read_input_text
-from g2tom.config.arguments import holds_numbers, is_number, is_path, refuse_argument
+from g2tom.config.arguments import holds_numbers, in_python_terms, is_number, is_path, refuse_argument
 from g2tom.before_work import load_scenario
 from g2tom.predict import atlas as atlas_file  # atlas_file.shipped_path, looked up at each call (tests patch it)
 from g2tom.predict.atlas import NOT_IN_ATLAS, AtlasSurrogate, is_atlas_document, load_atlas_surrogate, predict_atlas
@@ -273,6 +273,7 @@ def predict_resistance(surface: Scenario | str | Path, force: Any, xi: Any, lam:
     """
     _check_arguments(surface=surface, force=force, xi=xi, lam=lam, data_dir=data_dir, surrogate=surrogate,
                      model=model, extrapolate=extrapolate, overrides=overrides, pixel_size=pixel_size)
-    scenario = surface_scenario(surface, overrides, pixel_size)
-    chosen = choose_surrogate(scenario, data_dir, surrogate)
-    return predict_with(chosen, scenario, force, xi, lam, model=model, extrapolate=extrapolate)
+    with in_python_terms():  # the checks `g2tom predict` shares name this function's arguments
+        scenario = surface_scenario(surface, overrides, pixel_size)
+        chosen = choose_surrogate(scenario, data_dir, surrogate)
+        return predict_with(chosen, scenario, force, xi, lam, model=model, extrapolate=extrapolate)

@@ -13,7 +13,7 @@ import xarray as xr
 from g2tom.compute import ComputeOptions
 from g2tom.compute import compute as run_tasks
 from g2tom.config import ConfigError
-from g2tom.config.arguments import holds_numbers, is_number, is_path, is_whole, refuse_argument
+from g2tom.config.arguments import holds_numbers, in_python_terms, is_number, is_path, is_whole, refuse_argument
 from g2tom.physics.plasticity import plasticity_index
 from g2tom.physics.spectrum_synthesis import IsotropicSpectrum, isotropic_spectrum, synthesize
 from g2tom.physics.surface_spectrum import SummitParameters
@@ -340,16 +340,17 @@ def surface_resistance(maps: str | Path | Sequence[str | Path], force: Any, *, x
     _check_arguments(maps=maps, force=force, xi=xi, correlation_length=correlation_length, fields=fields,
                      positions=positions, window=window, at=at, pixel_size=pixel_size, overrides=overrides,
                      config=config, data_dir=data_dir, options=options)
-    try:
-        device = devices.resolve(device)
-    except ValueError as exc:
-        raise ConfigError(str(exc)) from None
-    paths = [maps] if isinstance(maps, (str, Path)) else list(maps)
-    scenario = load_scenario(config, dict(overrides or {}), rough_scene=False)
-    spot = None
-    if at is not None:
-        spot = Spot(centre=True) if at == "centre" else Spot(x=float(at[0]), y=float(at[1]))
-    study = study_of(scenario, force, xi=xi, correlation_lengths=correlation_length, fields=fields,
-                     positions=positions, at=spot, window=window, detrend=detrend, extend=extend)
-    prepared = prepare(study, paths, pixel_size)
+    with in_python_terms():  # the checks `g2tom surface` shares name this function's arguments
+        try:
+            device = devices.resolve(device)
+        except ValueError as exc:
+            raise ConfigError(str(exc)) from None
+        paths = [maps] if isinstance(maps, (str, Path)) else list(maps)
+        scenario = load_scenario(config, dict(overrides or {}), rough_scene=False)
+        spot = None
+        if at is not None:
+            spot = Spot(centre=True) if at == "centre" else Spot(x=float(at[0]), y=float(at[1]))
+        study = study_of(scenario, force, xi=xi, correlation_lengths=correlation_length, fields=fields,
+                         positions=positions, at=spot, window=window, detrend=detrend, extend=extend)
+        prepared = prepare(study, paths, pixel_size)
     return attach_statistical(compute(prepared, options, device), scenario, prepared.summits, data_dir)
