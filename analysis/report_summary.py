@@ -52,7 +52,9 @@ def recorded_timings(scenario: Scenario, data_dir: Path) -> list[tuple[str, floa
         recorded = json.loads(path.read_text()) if path.is_file() else {}
     except (OSError, ValueError):
         recorded = {}
-    entries = {step: entry for step, entry in recorded.items() if isinstance(entry, dict)} if isinstance(recorded, dict) else {}
+    if not isinstance(recorded, dict):
+        recorded = {}
+    entries = {step: entry for step, entry in recorded.items() if isinstance(entry, dict)}
     rows = [(stage, float(entries[stage]["seconds"]), entries[stage].get("finished", ""))
             for stage in STAGE_INPUTS if entries.get(stage, {}).get("config_hash") == scenario.config_hash(stage)]
     families = [entry for step, entry in entries.items()

@@ -176,9 +176,9 @@ def reduce_realizations(resistance: xr.DataArray, scale: float, counts: np.ndarr
         and long names are fits.nc's (registry namespace ``stages.fits``, :mod:`g2tom.variables`).
     """
     if counts is None:
-        reductions = {"geometric_mean": geometric_mean(resistance), "arithmetic_mean": arithmetic_mean(resistance),
-                      "median": median(resistance), "resistance_quantile": quantiles(resistance),
-                      "open_probability": open_probability(resistance)}
+        reductions = {name: _over_realizations(kernel, resistance, name,
+                                               QUANTILES if name == "resistance_quantile" else None)
+                      for name, kernel in _KERNELS.items()}
     else:
         reductions = _by_counts(resistance, counts)
     declared = namespace("stages.fits")

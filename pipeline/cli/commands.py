@@ -136,9 +136,9 @@ def figures(args: argparse.Namespace, scenario: ResolvedScenario) -> None:
 
     _preflight(args, scenario, scene=False)
     names = family_names(getattr(args, "only", None))  # `g2tom run` draws them all
-    drawn_from = {stage for name in names for stage in FAMILIES[name].stages}
+    drawn_from = [s for s in STAGES if any(s in FAMILIES[name].stages for name in names)]
     # checked before drawing, so that no figure is replaced by half a set
-    _refuse_if("figures", [p for p in (stage_problem(args.data_dir, s, scenario) for s in STAGES if s in drawn_from) if p])
+    _refuse_if("figures", [p for p in (stage_problem(args.data_dir, s, scenario) for s in drawn_from) if p])
 
     def drawn(family: str, files: list[Path], seconds: float) -> None:
         for path in files:
